@@ -1,0 +1,81 @@
+//! The checkerboard sandal: pattern geometry and its mount on the sole (SPEC section 4).
+
+use super::pose::{Axis, Pose};
+
+/// A checkerboard sandal: the printed pattern and how it is mounted in the sole frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Board {
+    /// Squares along the board's x axis (columns of squares).
+    pub squares_x: u32,
+    /// Squares along the board's y axis (rows of squares).
+    pub squares_y: u32,
+    /// Edge length of one square [mm].
+    pub square: f64,
+    /// Pattern centre in the sole frame [mm].
+    pub mount_origin: [f64; 3],
+    /// Mount angles roll, pitch, yaw [rad].
+    pub mount_rpy: [f64; 3],
+}
+
+impl Default for Board {
+    /// The paper's sandal: 7 × 5 squares of 25 mm, centred 17 cm ahead of the ankle.
+    fn default() -> Self {
+        Board {
+            squares_x: 7,
+            squares_y: 5,
+            square: 25.0,
+            mount_origin: [170.0, 0.0, 0.0],
+            mount_rpy: [0.0; 3],
+        }
+    }
+}
+
+/// An inner vertex of the pattern, where four squares meet.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Vertex {
+    /// Row, `0 … squares_y − 2`.
+    pub row: u32,
+    /// Column, `0 … squares_x − 2`.
+    pub col: u32,
+}
+
+impl Board {
+    /// Number of vertex rows (`squares_y − 1`).
+    pub fn rows(&self) -> u32 {
+        self.squares_y - 1
+    }
+
+    /// Number of vertex columns (`squares_x − 1`).
+    pub fn cols(&self) -> u32 {
+        self.squares_x - 1
+    }
+
+    /// Every inner vertex, row by row.
+    pub fn vertices(&self) -> impl Iterator<Item = Vertex> + '_ {
+        (0..self.rows()).flat_map(move |row| (0..self.cols()).map(move |col| Vertex { row, col }))
+    }
+
+    /// Whether `(row, col)` is an inner vertex of this board.
+    pub fn contains(&self, v: Vertex) -> bool {
+        v.row < self.rows() && v.col < self.cols()
+    }
+
+    /// Position of a vertex in the board frame `B` [mm].
+    pub fn vertex_position(&self, v: Vertex) -> [f64; 3] {
+        [
+            (v.col as f64 - (self.squares_x as f64 - 2.0) / 2.0) * self.square,
+            (v.row as f64 - (self.squares_y as f64 - 2.0) / 2.0) * self.square,
+            0.0,
+        ]
+    }
+
+    /// `T_SB`: the board frame in the sole frame.
+    pub fn mount(&self) -> Pose<f64> {
+        let [x, y, z] = self.mount_origin;
+        let [roll, pitch, yaw] = self.mount_rpy;
+        Pose::translation(x, y, z)
+            .compose(&Pose::rotation(Axis::Z, yaw))
+            .compose(&Pose::rotation(Axis::Y, pitch))
+            .compose(&Pose::rotation(Axis::X, roll))
+    }
+}

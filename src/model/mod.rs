@@ -1,0 +1,89 @@
+//! The kinematic model of the NAO, its lower camera and the checkerboard sandals.
+//!
+//! Everything here is written once and generic over [`Scalar`], so the same code gives
+//! values and derivatives; the chains are data ([`Chain`]) so that the Ceres shim can
+//! evaluate the same model on Jets.
+
+pub mod board;
+pub mod camera;
+pub mod chain;
+pub mod parameters;
+pub mod pose;
+pub mod robot;
+pub mod scalar;
+
+pub use board::{Board, Vertex};
+pub use camera::Camera;
+pub use chain::{Affine, Chain, Step};
+pub use parameters::{FixedSet, PAPER_PARAMETERS, PARAMETER_COUNT, Param, Unit};
+pub use pose::{Axis, Pose};
+pub use robot::{JOINT_COUNT, Joint, JointAngles, RobotGeometry, Side};
+pub use scalar::Scalar;
+
+/// Everything fixed about one robot and its sandals: geometry, camera intrinsics, board.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Model {
+    /// Link lengths and fixed angles.
+    pub robot: RobotGeometry,
+    /// Lower camera intrinsics.
+    pub camera: Camera,
+    /// The sandal pattern and its mount (the same for both feet).
+    pub board: Board,
+}
+
+/// The two chains of one capture: origin → camera and origin → board of the leg in view.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StanceChains {
+    /// `T_OC` (SPEC eq. 3).
+    pub camera: Chain,
+    /// `T_OS · Rz(α_RotZ) · T(α_TransX, α_TransY, 0) · T_SB` (SPEC section 4).
+    pub board: Chain,
+}
+
+impl StanceChains {
+    /// `T_CB = T_OC⁻¹ · T_OB`: the board in the camera frame.
+    pub fn camera_to_board<T: Scalar>(&self, params: &[T]) -> Pose<T> {
+        self.camera.eval(params).inverse_then(&self.board.eval(params))
+    }
+
+    /// Both chains with the `held` parameters frozen at `values` (see [`Chain::freeze`]).
+    pub fn freeze(&self, held: &[bool; PARAMETER_COUNT], values: &[f64]) -> StanceChains {
+        StanceChains {
+            camera: self.camera.freeze(held, values),
+            board: self.board.freeze(held, values),
+        }
+    }
+}
+
+impl Model {
+    /// The chains of a capture of the board on `side`, with joint angles `joints`.
+    pub fn chains(&self, side: Side, joints: &JointAngles) -> StanceChains {
+        let [rot_z, trans_x, trans_y] = side.board_params();
+        let board = self
+            .robot
+            .sole_chain(side, joints)
+            .rotate(Axis::Z, Affine::param(rot_z))
+            .translate(Axis::X, Affine::param(trans_x))
+            .translate(Axis::Y, Affine::param(trans_y))
+            .fixed(self.board.mount());
+        StanceChains { camera: self.robot.camera_chain(joints), board }
+    }
+
+    /// Projects every vertex in `vertices` for parameters `params` (SPEC eq. 5); `None` for
+    /// a vertex behind the camera.
+    pub fn project<T: Scalar>(
+        &self,
+        chains: &StanceChains,
+        params: &[T],
+        vertices: &[Vertex],
+    ) -> Vec<Option<[T; 2]>> {
+        let pose = chains.camera_to_board(params);
+        vertices
+            .iter()
+            .map(|v| {
+                let p = self.board.vertex_position(*v).map(scalar::lift::<T>);
+                self.camera.project(&pose.apply(&p))
+            })
+            .collect()
+    }
+}

@@ -1,0 +1,238 @@
+//! The NAO's geometry, its measured joints, and the head→camera and hip→sole chains
+//! (SPEC section 2).
+
+use std::f64::consts::FRAC_PI_4;
+
+use super::chain::{Affine, Chain};
+use super::parameters::Param;
+use super::pose::{Axis, Pose};
+
+/// A leg, and so the sandal (board) strapped to its foot.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Side {
+    /// The left leg (`s = +1`).
+    Left,
+    /// The right leg (`s = −1`).
+    Right,
+}
+
+impl Side {
+    /// Both sides, left first.
+    pub const BOTH: [Side; 2] = [Side::Left, Side::Right];
+
+    /// The mirror sign `s` of SPEC section 2.
+    pub fn sign(self) -> f64 {
+        match self {
+            Side::Left => 1.0,
+            Side::Right => -1.0,
+        }
+    }
+
+    /// `left` or `right`, as in `captures.csv`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Side::Left => "left",
+            Side::Right => "right",
+        }
+    }
+
+    /// Parses `left` / `right`.
+    pub fn from_name(name: &str) -> Option<Side> {
+        match name {
+            "left" => Some(Side::Left),
+            "right" => Some(Side::Right),
+            _ => None,
+        }
+    }
+
+    /// The six joints of this leg, hip to ankle.
+    pub fn leg_joints(self) -> [Joint; 6] {
+        use Joint::*;
+        match self {
+            Side::Left => [
+                LHipYawPitch,
+                LHipRoll,
+                LHipPitch,
+                LKneePitch,
+                LAnklePitch,
+                LAnkleRoll,
+            ],
+            Side::Right => [
+                RHipYawPitch,
+                RHipRoll,
+                RHipPitch,
+                RKneePitch,
+                RAnklePitch,
+                RAnkleRoll,
+            ],
+        }
+    }
+
+    /// The board mounting parameters (RotZ, TransX, TransY) of this side's sandal.
+    pub fn board_params(self) -> [Param; 3] {
+        match self {
+            Side::Left => [Param::LBoardRotZ, Param::LBoardTransX, Param::LBoardTransY],
+            Side::Right => [Param::RBoardRotZ, Param::RBoardTransX, Param::RBoardTransY],
+        }
+    }
+}
+
+macro_rules! joints {
+    ($($name:ident),* $(,)?) => {
+        /// A measured joint, named as in NAOqi and the `captures.csv` header.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[repr(usize)]
+        pub enum Joint { $(#[doc = concat!("Joint `", stringify!($name), "`.")] $name,)* }
+
+        impl Joint {
+            /// Every measured joint, in `captures.csv` order.
+            pub const ALL: [Joint; [$(Joint::$name),*].len()] = [$(Joint::$name),*];
+
+            /// The joint's name (NAOqi).
+            pub fn name(self) -> &'static str {
+                match self { $(Joint::$name => stringify!($name),)* }
+            }
+
+            /// The calibration parameter that offsets this joint (`q = θ + α`).
+            pub fn offset(self) -> Param {
+                match self { $(Joint::$name => Param::$name,)* }
+            }
+        }
+    };
+}
+
+joints!(
+    HeadYaw,
+    HeadPitch,
+    LHipYawPitch,
+    LHipRoll,
+    LHipPitch,
+    LKneePitch,
+    LAnklePitch,
+    LAnkleRoll,
+    RHipYawPitch,
+    RHipRoll,
+    RHipPitch,
+    RKneePitch,
+    RAnklePitch,
+    RAnkleRoll,
+);
+
+/// Number of measured joints.
+pub const JOINT_COUNT: usize = Joint::ALL.len();
+
+impl Joint {
+    /// Index into [`JointAngles`].
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    /// The joint's mechanical range in radians (NAO H25 documentation).
+    pub fn limits(self) -> (f64, f64) {
+        use Joint::*;
+        match self {
+            HeadYaw => (-2.0857, 2.0857),
+            HeadPitch => (-0.6720, 0.5149),
+            LHipYawPitch | RHipYawPitch => (-1.145303, 0.740810),
+            LHipRoll => (-0.379472, 0.790477),
+            RHipRoll => (-0.790477, 0.379472),
+            LHipPitch | RHipPitch => (-1.535889, 0.484090),
+            LKneePitch => (-0.092346, 2.112528),
+            RKneePitch => (-0.103083, 2.120198),
+            LAnklePitch => (-1.189516, 0.922747),
+            RAnklePitch => (-1.186448, 0.932056),
+            LAnkleRoll => (-0.397880, 0.769001),
+            RAnkleRoll => (-0.768992, 0.397935),
+        }
+    }
+}
+
+/// The measured angles of every joint of one capture, in radians.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct JointAngles(pub [f64; JOINT_COUNT]);
+
+impl JointAngles {
+    /// The measured angle of `joint`.
+    pub fn get(&self, joint: Joint) -> f64 {
+        self.0[joint.index()]
+    }
+
+    /// Sets the measured angle of `joint`.
+    pub fn set(&mut self, joint: Joint, angle: f64) {
+        self.0[joint.index()] = angle;
+    }
+}
+
+/// The link lengths and fixed angles of the head and leg chains (SPEC section 2).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RobotGeometry {
+    /// Lateral distance of each hip joint from the origin [mm].
+    pub hip_offset_y: f64,
+    /// Height of the HeadYaw joint above the origin [mm].
+    pub hip_to_neck_z: f64,
+    /// Hip to knee [mm].
+    pub thigh: f64,
+    /// Knee to ankle [mm].
+    pub tibia: f64,
+    /// Ankle to sole [mm].
+    pub foot_height: f64,
+    /// Lower camera position in the HeadPitch frame [mm].
+    pub lower_camera_offset: [f64; 3],
+    /// Lower camera tilt about y, looking down [rad].
+    pub lower_camera_tilt: f64,
+}
+
+impl Default for RobotGeometry {
+    /// NAO H25 V4, V5 and V6.
+    fn default() -> Self {
+        RobotGeometry {
+            hip_offset_y: 50.0,
+            hip_to_neck_z: 211.5,
+            thigh: 100.0,
+            tibia: 102.9,
+            foot_height: 45.19,
+            lower_camera_offset: [50.71, 0.0, 17.74],
+            lower_camera_tilt: 39.7f64.to_radians(),
+        }
+    }
+}
+
+impl RobotGeometry {
+    /// `T_OC`: origin → lower camera (SPEC eq. 3), with the head joint offsets and the
+    /// camera rotation offsets as parameters.
+    pub fn camera_chain(&self, joints: &JointAngles) -> Chain {
+        let [x, y, z] = self.lower_camera_offset;
+        Chain::new()
+            .fixed(Pose::translation(0.0, 0.0, self.hip_to_neck_z))
+            .rotate(Axis::Z, Affine::joint(1.0, joints.get(Joint::HeadYaw), Param::HeadYaw))
+            .rotate(Axis::Y, Affine::joint(1.0, joints.get(Joint::HeadPitch), Param::HeadPitch))
+            .fixed(Pose::translation(x, y, z))
+            .rotate(Axis::Y, Affine::constant(self.lower_camera_tilt))
+            .rotate(Axis::Y, Affine::param(Param::CamPitch))
+            .rotate(Axis::X, Affine::param(Param::CamRoll))
+            .rotate(Axis::Z, Affine::param(Param::CamYaw))
+    }
+
+    /// `T_OS`: origin → sole of one leg (SPEC section 2), with the joint offsets as
+    /// parameters.
+    pub fn sole_chain(&self, side: Side, joints: &JointAngles) -> Chain {
+        let s = side.sign();
+        let [hip_yaw_pitch, hip_roll, hip_pitch, knee, ankle_pitch, ankle_roll] =
+            side.leg_joints().map(|j| (joints.get(j), j.offset()));
+        let joint = |(angle, param): (f64, Param)| Affine::joint(1.0, angle, param);
+        Chain::new()
+            .fixed(Pose::translation(0.0, s * self.hip_offset_y, 0.0))
+            .rotate(Axis::X, Affine::constant(s * FRAC_PI_4))
+            .rotate(Axis::Z, Affine::joint(-s, hip_yaw_pitch.0, hip_yaw_pitch.1))
+            .rotate(Axis::X, Affine::constant(-s * FRAC_PI_4))
+            .rotate(Axis::X, joint(hip_roll))
+            .rotate(Axis::Y, joint(hip_pitch))
+            .fixed(Pose::translation(0.0, 0.0, -self.thigh))
+            .rotate(Axis::Y, joint(knee))
+            .fixed(Pose::translation(0.0, 0.0, -self.tibia))
+            .rotate(Axis::Y, joint(ankle_pitch))
+            .rotate(Axis::X, joint(ankle_roll))
+            .fixed(Pose::translation(0.0, 0.0, -self.foot_height))
+    }
+}
