@@ -8,3 +8,4 @@
 //! Data flows one way: [`dataset`] → [`solve::Problem`] → [`solve::Solution`] → [`report`].
 
 pub mod model;
+pub mod solve;

@@ -1,0 +1,206 @@
+//! Solving the calibration: the [`Problem`], the backends, and the [`Solution`] with its
+//! uncertainty.
+//!
+//! Every backend turns a [`Problem`] into a [`BackendResult`]; [`solve`] then adds what
+//! does not depend on the backend (residual statistics, scaled covariance, std), so that the
+//! report sees a solution, not a solver.
+
+#[cfg(feature = "ceres")]
+pub mod ceres;
+pub mod covariance;
+pub mod problem;
+
+use std::time::Instant;
+
+use nalgebra::DMatrix;
+
+use crate::model::{FixedSet, PARAMETER_COUNT, Param};
+pub use problem::{CaptureTerm, Loss, Observation, Problem, Tolerances};
+
+/// Why a solve could not be done.
+#[derive(Debug, thiserror::Error)]
+pub enum SolveError {
+    /// The problem cannot be solved as posed (checked before any backend runs).
+    #[error("{0}")]
+    Invalid(String),
+    /// The backend itself failed (a C++ exception, a numerical failure).
+    #[error("{solver} failed: {message}")]
+    Backend {
+        /// Which backend.
+        solver: String,
+        /// What it said.
+        message: String,
+    },
+}
+
+/// The optimiser's account of a run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Summary {
+    /// Backend name (`ceres`, …).
+    pub solver: String,
+    /// Whether the backend reports convergence.
+    pub converged: bool,
+    /// Iterations taken.
+    pub iterations: usize,
+    /// `½‖r‖²` at the start (weighted residuals, robust loss applied).
+    pub initial_cost: f64,
+    /// `½‖r‖²` at the end.
+    pub final_cost: f64,
+    /// The backend's termination reason, in its words.
+    pub termination: String,
+    /// Wall time of the optimisation and covariance [s].
+    pub seconds: f64,
+}
+
+/// What a backend returns.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BackendResult {
+    /// Final values of the free parameters (order of [`Problem::free`]), internal units.
+    pub free_values: Vec<f64>,
+    /// `(JᵀJ)⁻¹` (pseudo-inverse) of the weighted problem over the free parameters, not yet
+    /// scaled by the residual variance; `None` when it could not be computed.
+    pub covariance: Option<DMatrix<f64>>,
+    /// The run's summary.
+    pub summary: Summary,
+}
+
+/// A least-squares solver that can run a [`Problem`].
+pub trait Backend {
+    /// Short name, as in `--solver` and the result JSON.
+    fn name(&self) -> &'static str;
+    /// Solves the problem from its initial values.
+    fn solve(&self, problem: &Problem) -> Result<BackendResult, SolveError>;
+}
+
+/// A calibration result: parameters with their uncertainty, and how well the model fits.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Solution {
+    /// The optimiser's summary.
+    pub summary: Summary,
+    /// All parameter values, internal units (rad / mm).
+    pub values: [f64; PARAMETER_COUNT],
+    /// One-sigma uncertainty of every parameter, internal units; 0 for held parameters.
+    pub std: [f64; PARAMETER_COUNT],
+    /// Covariance of all parameters (PARAMETER_COUNT²), internal units; zero rows and
+    /// columns for held parameters.
+    pub covariance: DMatrix<f64>,
+    /// Which parameters were held fixed.
+    pub fixed: FixedSet,
+    /// RMS of the unweighted residuals in u and v [px] at the solution.
+    pub rms_px: [f64; 2],
+    /// RMS in u and v at the start values [px].
+    pub initial_rms_px: [f64; 2],
+    /// Number of observed vertices.
+    pub observations: usize,
+    /// Number of captures with at least one vertex.
+    pub captures: usize,
+    /// Estimated residual variance `σ̂² = 2·cost / (m − n)` of the weighted residuals.
+    pub residual_variance: f64,
+    /// Wall time of the whole solve including the statistics [s].
+    pub seconds: f64,
+}
+
+impl Solution {
+    /// Value of one parameter in report units (deg / mm).
+    pub fn report_value(&self, p: Param) -> f64 {
+        p.unit().to_report(self.values[p.index()])
+    }
+
+    /// One-sigma of one parameter in report units (deg / mm).
+    pub fn report_std(&self, p: Param) -> f64 {
+        p.unit().to_report(self.std[p.index()])
+    }
+}
+
+/// Checks that a problem can be handed to a backend: enough residuals for the free
+/// parameters, every vertex in front of the camera at the start values, sane numbers.
+pub fn validate(problem: &Problem) -> Result<(), SolveError> {
+    let free = problem.free().len();
+    if free == 0 {
+        return Err(SolveError::Invalid("every parameter is held fixed: nothing to solve".into()));
+    }
+    let m = problem.residual_count();
+    if m <= free {
+        return Err(SolveError::Invalid(format!(
+            "too few corners: {} vertices give {m} residuals, but {free} parameters are free \
+             (need more than {free} residuals)",
+            problem.observation_count()
+        )));
+    }
+    if problem.initial.iter().any(|v| !v.is_finite()) {
+        return Err(SolveError::Invalid("a start value is not a finite number".into()));
+    }
+    for c in &problem.captures {
+        if c.observations.iter().any(|o| o.pixel.iter().chain(&o.point).any(|x| !x.is_finite())) {
+            return Err(SolveError::Invalid(format!(
+                "capture {}: an observation is not a finite number",
+                c.capture
+            )));
+        }
+        if c.residuals(&problem.camera, &problem.initial).is_none() {
+            return Err(SolveError::Invalid(format!(
+                "capture {}: a vertex of the {} lies behind the camera at the start values; \
+                 check the joint angles and the board column of this capture",
+                c.capture, "board"
+            )));
+        }
+        if let Some(w) = &c.whitening
+            && (w.nrows() != c.residual_count() || w.ncols() != c.residual_count())
+        {
+            return Err(SolveError::Invalid(format!(
+                "capture {}: whitening matrix is {}×{}, expected {}×{}",
+                c.capture,
+                w.nrows(),
+                w.ncols(),
+                c.residual_count(),
+                c.residual_count()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Solves `problem` with `backend` and derives the statistics of the result.
+pub fn solve(problem: &Problem, backend: &dyn Backend) -> Result<Solution, SolveError> {
+    let start = Instant::now();
+    validate(problem)?;
+    let result = backend.solve(problem)?;
+    let free = problem.free();
+    if result.free_values.len() != free.len() {
+        return Err(SolveError::Backend {
+            solver: backend.name().into(),
+            message: format!(
+                "returned {} values for {} free parameters",
+                result.free_values.len(),
+                free.len()
+            ),
+        });
+    }
+    let values = problem.expand(&result.free_values);
+    let rms_px = problem.rms(&values).ok_or_else(|| SolveError::Backend {
+        solver: backend.name().into(),
+        message: "the solution puts a vertex behind the camera".into(),
+    })?;
+    let initial_rms_px = problem.rms(&problem.initial).unwrap_or([f64::NAN; 2]);
+    let dof = problem.residual_count().saturating_sub(free.len()).max(1);
+    let residual_variance = 2.0 * result.summary.final_cost / dof as f64;
+    let covariance = covariance::embed(
+        &free,
+        &result.covariance.clone().unwrap_or_else(|| DMatrix::zeros(free.len(), free.len())),
+        residual_variance,
+    );
+    let std = std::array::from_fn(|i| covariance[(i, i)].max(0.0).sqrt());
+    Ok(Solution {
+        summary: result.summary,
+        values,
+        std,
+        covariance,
+        fixed: problem.fixed.clone(),
+        rms_px,
+        initial_rms_px,
+        observations: problem.observation_count(),
+        captures: problem.captures.len(),
+        residual_variance,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
