@@ -7,5 +7,6 @@
 //!
 //! Data flows one way: [`dataset`] → [`solve::Problem`] → [`solve::Solution`] → [`report`].
 
+pub mod dataset;
 pub mod model;
 pub mod solve;
