@@ -10,3 +10,5 @@
 pub mod dataset;
 pub mod model;
 pub mod solve;
+pub mod sim;
+pub mod report;

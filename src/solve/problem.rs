@@ -168,3 +168,56 @@ impl Problem {
         Some([(sum(0) / n).sqrt(), (sum(1) / n).sqrt()])
     }
 }
+
+impl Problem {
+    /// Turns a dataset's measurements into the least-squares problem: one term per capture
+    /// with at least one corner, all parameters starting at zero (SPEC section 5), and the
+    /// parameters in `fixed` held at zero (or at `initial` values set afterwards).
+    ///
+    /// Fails, naming the file and line, when a vertex lies behind the camera at the start
+    /// values (a sign of wrong joint angles or a wrong `board` column).
+    pub fn from_dataset(
+        dataset: &crate::dataset::Dataset,
+        fixed: FixedSet,
+    ) -> Result<Problem, super::SolveError> {
+        let model = &dataset.model;
+        let mut by_capture: std::collections::BTreeMap<u64, Vec<Observation>> =
+            Default::default();
+        for corner in &dataset.corners {
+            by_capture.entry(corner.capture).or_default().push(Observation {
+                vertex: corner.vertex,
+                point: model.board.vertex_position(corner.vertex),
+                pixel: corner.pixel,
+            });
+        }
+        let initial = [0.0; PARAMETER_COUNT];
+        let mut captures = Vec::new();
+        for capture in &dataset.captures {
+            let Some(observations) = by_capture.remove(&capture.id) else { continue };
+            let chains = model.chains(capture.side, &capture.joints);
+            let vertices: Vec<Vertex> = observations.iter().map(|o| o.vertex).collect();
+            let projected = model.project(&chains, &initial, &vertices);
+            if let Some(k) = projected.iter().position(Option::is_none) {
+                return Err(super::SolveError::Invalid(format!(
+                    "{} line {}, capture {}: vertex ({}, {}) of the {} board lies behind the \
+                     camera at the start values; check the joint angles and the board column",
+                    dataset.dir.join("captures.csv").display(),
+                    capture.line,
+                    capture.id,
+                    vertices[k].row,
+                    vertices[k].col,
+                    capture.side.name(),
+                )));
+            }
+            captures.push(CaptureTerm { capture: capture.id, chains, observations, whitening: None });
+        }
+        Ok(Problem {
+            camera: model.camera,
+            captures,
+            initial,
+            fixed,
+            loss: Loss::Squared,
+            tolerances: Tolerances::default(),
+        })
+    }
+}

@@ -1,0 +1,314 @@
+//! The simulator: realistic true offsets, stances in which a sandal is fully in view, and
+//! the vertices the camera would see, with pixel and joint-angle noise.
+//!
+//! As in the paper's measurement phase, each leg takes `stances` stances, and each stance is
+//! photographed with `heads` head postures (24 × 3 × 2 = 144 captures by default).
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+
+use crate::dataset::{Capture, Corner, Dataset, Truth};
+use crate::model::{Joint, JointAngles, Model, PARAMETER_COUNT, Param, Side, StanceChains};
+
+/// What to simulate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimOptions {
+    /// Seed of the random generator; the same seed gives the same dataset.
+    pub seed: u64,
+    /// Stances per leg.
+    pub stances: usize,
+    /// Head postures per stance.
+    pub heads: usize,
+    /// Pixel noise σ per coordinate [px].
+    pub px_noise: f64,
+    /// Joint-angle noise σ per joint and capture [rad].
+    pub joint_noise: f64,
+    /// True parameters (internal units); drawn at random when `None`.
+    pub truth: Option<[f64; PARAMETER_COUNT]>,
+    /// Seed for the noise alone, when it should differ from the stance seed (repeated
+    /// simulations of the same stances and truth with new noise).
+    pub noise_seed: Option<u64>,
+}
+
+impl Default for SimOptions {
+    fn default() -> Self {
+        SimOptions {
+            seed: 1,
+            stances: 24,
+            heads: 3,
+            px_noise: 0.1,
+            joint_noise: 0.0,
+            truth: None,
+            noise_seed: None,
+        }
+    }
+}
+
+/// Why a simulation could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// No stance with the board fully in view was found in many tries.
+    #[error(
+        "found only {found} of {wanted} stances for the {side} leg with the whole board in view; \
+         check the camera intrinsics and board geometry"
+    )]
+    NoStances {
+        /// The leg.
+        side: &'static str,
+        /// Stances found.
+        found: usize,
+        /// Stances wanted.
+        wanted: usize,
+    },
+    /// An option is out of range.
+    #[error("{0}")]
+    Options(String),
+}
+
+/// Draws plausible true offsets: camera ±3°, joints σ 1° (at most 2.5°), board rotation
+/// σ 0.5°, board translation σ 1.5 mm. Head offsets stay zero (held fixed by default).
+pub fn draw_truth(rng: &mut impl Rng) -> [f64; PARAMETER_COUNT] {
+    let mut truth = [0.0; PARAMETER_COUNT];
+    let joint = Normal::new(0.0, 1.0f64.to_radians()).expect("valid σ");
+    let board_rot = Normal::new(0.0, 0.5f64.to_radians()).expect("valid σ");
+    let board_trans = Normal::new(0.0, 1.5).expect("valid σ");
+    let limit = 2.5f64.to_radians();
+    for p in Param::ALL {
+        use Param::*;
+        truth[p.index()] = match p {
+            CamYaw | CamPitch | CamRoll => rng.random_range(-3.0f64..3.0).to_radians(),
+            LBoardRotZ | RBoardRotZ => board_rot.sample(rng),
+            LBoardTransX | LBoardTransY | RBoardTransX | RBoardTransY => board_trans.sample(rng),
+            HeadYaw | HeadPitch => 0.0,
+            _ => joint.sample(rng).clamp(-limit, limit),
+        };
+    }
+    truth
+}
+
+/// One stance with the head postures it is photographed in.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stance {
+    /// The leg whose board is in view.
+    pub side: Side,
+    /// Logged joint angles of every capture of this stance (legs equal, head differs).
+    pub postures: Vec<JointAngles>,
+}
+
+/// Smallest distance of a vertex from the image border [px].
+const MARGIN: f64 = 12.0;
+/// Smallest projected square edge [px], so that detection is realistic.
+const MIN_SQUARE_PX: f64 = 14.0;
+/// Largest angle between the board normal and the line of sight.
+const MAX_VIEW_ANGLE_DEG: f64 = 60.0;
+
+/// The projected vertices of the board on `side`, if the whole board is in view, facing the
+/// camera, and not too small.
+fn board_in_view(model: &Model, chains: &StanceChains, params: &[f64]) -> Option<Vec<[f64; 2]>> {
+    let pose = chains.camera_to_board(params);
+    // Line of sight from the board centre to the camera, in the board frame: −Rᵀ·t.
+    let to_camera: [f64; 3] = std::array::from_fn(|j| {
+        -(0..3).map(|i| pose.rotation[i][j] * pose.translation[i]).sum::<f64>()
+    });
+    let dist = to_camera.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if to_camera[2] < dist * MAX_VIEW_ANGLE_DEG.to_radians().cos() {
+        return None;
+    }
+    let vertices: Vec<_> = model.board.vertices().collect();
+    let uv: Vec<[f64; 2]> = model.project(chains, params, &vertices).into_iter().collect::<Option<_>>()?;
+    if !uv.iter().all(|p| model.camera.contains(*p, MARGIN)) {
+        return None;
+    }
+    let cols = model.board.cols() as usize;
+    let min_edge = (0..uv.len())
+        .filter(|k| (k + 1) % cols != 0)
+        .map(|k| ((uv[k][0] - uv[k + 1][0]).powi(2) + (uv[k][1] - uv[k + 1][1]).powi(2)).sqrt())
+        .fold(f64::INFINITY, f64::min);
+    (min_edge >= MIN_SQUARE_PX).then_some(uv)
+}
+
+/// Turns the head so that the board centre appears at `target` (pixels). Gauss–Newton on
+/// (HeadYaw, HeadPitch) with a numerical Jacobian; `None` if it leaves the joint limits.
+fn aim_head(
+    model: &Model,
+    side: Side,
+    joints: &JointAngles,
+    params: &[f64],
+    target: [f64; 2],
+) -> Option<JointAngles> {
+    let centre = |j: &JointAngles| -> Option<[f64; 2]> {
+        let chains = model.chains(side, j);
+        let pose = chains.camera_to_board(params);
+        model.camera.project(&pose.translation)
+    };
+    let mut j = *joints;
+    let sole = model.robot.sole_chain(side, joints).eval(params).translation;
+    j.set(Joint::HeadYaw, sole[1].atan2(sole[0]));
+    j.set(Joint::HeadPitch, 0.3);
+    for _ in 0..20 {
+        let c = centre(&j)?;
+        let e = [c[0] - target[0], c[1] - target[1]];
+        if e[0].abs() < 0.01 && e[1].abs() < 0.01 {
+            break;
+        }
+        let h = 1e-6;
+        let mut jac = [[0.0; 2]; 2];
+        for (k, joint) in [Joint::HeadYaw, Joint::HeadPitch].into_iter().enumerate() {
+            let mut jp = j;
+            jp.set(joint, j.get(joint) + h);
+            let cp = centre(&jp)?;
+            jac[0][k] = (cp[0] - c[0]) / h;
+            jac[1][k] = (cp[1] - c[1]) / h;
+        }
+        let det = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
+        if det.abs() < 1e-9 {
+            return None;
+        }
+        let d_yaw = (jac[1][1] * e[0] - jac[0][1] * e[1]) / det;
+        let d_pitch = (-jac[1][0] * e[0] + jac[0][0] * e[1]) / det;
+        j.set(Joint::HeadYaw, j.get(Joint::HeadYaw) - d_yaw.clamp(-0.3, 0.3));
+        j.set(Joint::HeadPitch, j.get(Joint::HeadPitch) - d_pitch.clamp(-0.3, 0.3));
+    }
+    let within = |joint: Joint| {
+        let (lo, hi) = joint.limits();
+        (lo..=hi).contains(&j.get(joint))
+    };
+    (within(Joint::HeadYaw) && within(Joint::HeadPitch)).then_some(j)
+}
+
+/// Draws a leg posture uniformly within (slightly inset) joint limits.
+fn random_leg(rng: &mut impl Rng, side: Side, joints: &mut JointAngles) {
+    for joint in side.leg_joints() {
+        let (lo, hi) = joint.limits();
+        let inset = 0.05 * (hi - lo);
+        joints.set(joint, rng.random_range(lo + inset..hi - inset));
+    }
+}
+
+/// Chooses `count` stances for `side`, each with `heads` head postures that keep the whole
+/// board in view, facing the camera. The other leg rests in a random relaxed posture; both
+/// HipYawPitch angles are equal (one motor).
+pub fn choose_stances(
+    model: &Model,
+    side: Side,
+    params: &[f64],
+    count: usize,
+    heads: usize,
+    rng: &mut impl Rng,
+) -> Result<Vec<Stance>, SimError> {
+    let mut stances = Vec::with_capacity(count);
+    let other = match side {
+        Side::Left => Side::Right,
+        Side::Right => Side::Left,
+    };
+    let (w, h) = (model.camera.width as f64, model.camera.height as f64);
+    let max_tries = 20_000 * count.max(1);
+    for _ in 0..max_tries {
+        if stances.len() == count {
+            break;
+        }
+        let mut joints = JointAngles::default();
+        random_leg(rng, side, &mut joints);
+        for joint in other.leg_joints() {
+            let (lo, hi) = joint.limits();
+            joints.set(joint, rng.random_range(lo * 0.2..hi * 0.2));
+        }
+        let hyp = joints.get(side.leg_joints()[0]);
+        joints.set(other.leg_joints()[0], hyp);
+        let mut postures = Vec::with_capacity(heads);
+        for k in 0..heads * 8 {
+            if postures.len() == heads {
+                break;
+            }
+            let target = if k == 0 {
+                [w / 2.0, h / 2.0]
+            } else {
+                [w * rng.random_range(0.3..0.7), h * rng.random_range(0.3..0.7)]
+            };
+            let Some(aimed) = aim_head(model, side, &joints, params, target) else {
+                if k == 0 {
+                    break;
+                }
+                continue;
+            };
+            if board_in_view(model, &model.chains(side, &aimed), params).is_some() {
+                postures.push(aimed);
+            } else if k == 0 {
+                break;
+            }
+        }
+        if postures.len() == heads {
+            stances.push(Stance { side, postures });
+        }
+    }
+    if stances.len() < count {
+        return Err(SimError::NoStances { side: side.name(), found: stances.len(), wanted: count });
+    }
+    Ok(stances)
+}
+
+/// Simulates a whole dataset for `model`: captures, noisy corners and the truth.
+pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError> {
+    if options.stances == 0 || options.heads == 0 {
+        return Err(SimError::Options("--stances and --heads must be at least 1".into()));
+    }
+    if !(options.px_noise >= 0.0 && options.px_noise.is_finite())
+        || !(options.joint_noise >= 0.0 && options.joint_noise.is_finite())
+    {
+        return Err(SimError::Options("noise levels must be finite and not negative".into()));
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
+    let truth = match options.truth {
+        Some(t) => t,
+        None => draw_truth(&mut rng),
+    };
+    let mut stances = Vec::new();
+    for side in Side::BOTH {
+        stances.extend(choose_stances(model, side, &truth, options.stances, options.heads, &mut rng)?);
+    }
+    let mut noise_rng = match options.noise_seed {
+        Some(seed) => ChaCha8Rng::seed_from_u64(seed),
+        None => rng,
+    };
+    let px = Normal::new(0.0, options.px_noise).map_err(|e| SimError::Options(e.to_string()))?;
+    let joint = Normal::new(0.0, options.joint_noise).map_err(|e| SimError::Options(e.to_string()))?;
+    let vertices: Vec<_> = model.board.vertices().collect();
+    let mut captures = Vec::new();
+    let mut corners = Vec::new();
+    for stance in &stances {
+        for logged in &stance.postures {
+            let id = captures.len() as u64;
+            let mut actual = *logged;
+            for j in Joint::ALL {
+                actual.set(j, logged.get(j) + joint.sample(&mut noise_rng));
+            }
+            let projected = model.project(&model.chains(stance.side, &actual), &truth, &vertices);
+            for (v, uv) in vertices.iter().zip(projected) {
+                let Some(uv) = uv else { continue };
+                let pixel = [uv[0] + px.sample(&mut noise_rng), uv[1] + px.sample(&mut noise_rng)];
+                corners.push(Corner { capture: id, vertex: *v, pixel, line: 0 });
+            }
+            captures.push(Capture { id, side: stance.side, image: None, joints: *logged, line: 0 });
+        }
+    }
+    let mut simulation = toml::Table::new();
+    simulation.insert("seed".into(), toml::Value::Integer(options.seed as i64));
+    if let Some(seed) = options.noise_seed {
+        simulation.insert("noise_seed".into(), toml::Value::Integer(seed as i64));
+    }
+    simulation.insert("stances_per_leg".into(), toml::Value::Integer(options.stances as i64));
+    simulation.insert("head_postures".into(), toml::Value::Integer(options.heads as i64));
+    simulation.insert("px_noise".into(), toml::Value::Float(options.px_noise));
+    simulation.insert(
+        "joint_noise_deg".into(),
+        toml::Value::Float(options.joint_noise.to_degrees()),
+    );
+    Ok(Dataset {
+        dir: Default::default(),
+        model: *model,
+        captures,
+        corners,
+        truth: Some(Truth { values: truth, simulation }),
+    })
+}
