@@ -15,7 +15,7 @@ pub mod scalar;
 pub use board::{Board, Vertex};
 pub use camera::Camera;
 pub use chain::{Affine, Chain, Step};
-pub use parameters::{FixedSet, PAPER_PARAMETERS, PARAMETER_COUNT, Param, Unit};
+pub use parameters::{FixedSet, PAPER_PARAMETERS, PARAMETER_COUNT, Param, ParamGroup, Unit};
 pub use pose::{Axis, Pose};
 pub use robot::{JOINT_COUNT, Joint, JointAngles, RobotGeometry, Side};
 pub use scalar::Scalar;

@@ -171,3 +171,54 @@ pub fn parse_param_list(list: &str) -> Result<Vec<Param>, String> {
         })
         .collect()
 }
+
+/// A group of parameters that move together in the model: one parameter block for the
+/// solvers (Ceres parameter blocks, tiny-solver variables).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum ParamGroup {
+    /// CamYaw, CamPitch, CamRoll.
+    Camera,
+    /// The six left leg joint offsets.
+    LeftLeg,
+    /// The six right leg joint offsets.
+    RightLeg,
+    /// The left sandal's mounting offsets.
+    LeftBoard,
+    /// The right sandal's mounting offsets.
+    RightBoard,
+    /// HeadYaw, HeadPitch.
+    Head,
+}
+
+impl ParamGroup {
+    /// Short name (used as a variable name).
+    pub fn name(self) -> &'static str {
+        match self {
+            ParamGroup::Camera => "camera",
+            ParamGroup::LeftLeg => "left_leg",
+            ParamGroup::RightLeg => "right_leg",
+            ParamGroup::LeftBoard => "left_board",
+            ParamGroup::RightBoard => "right_board",
+            ParamGroup::Head => "head",
+        }
+    }
+}
+
+impl Param {
+    /// The block this parameter belongs to.
+    pub fn group(self) -> ParamGroup {
+        use Param::*;
+        match self {
+            CamYaw | CamPitch | CamRoll => ParamGroup::Camera,
+            LHipYawPitch | LHipRoll | LHipPitch | LKneePitch | LAnklePitch | LAnkleRoll => {
+                ParamGroup::LeftLeg
+            }
+            RHipYawPitch | RHipRoll | RHipPitch | RKneePitch | RAnklePitch | RAnkleRoll => {
+                ParamGroup::RightLeg
+            }
+            LBoardRotZ | LBoardTransX | LBoardTransY => ParamGroup::LeftBoard,
+            RBoardRotZ | RBoardTransX | RBoardTransY => ParamGroup::RightBoard,
+            HeadYaw | HeadPitch => ParamGroup::Head,
+        }
+    }
+}

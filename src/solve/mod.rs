@@ -8,6 +8,8 @@
 #[cfg(feature = "ceres")]
 pub mod ceres;
 pub mod covariance;
+pub mod jacobian;
+pub mod lm;
 pub mod problem;
 
 use std::time::Instant;
