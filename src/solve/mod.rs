@@ -11,6 +11,7 @@ pub mod covariance;
 pub mod jacobian;
 pub mod lm;
 pub mod problem;
+pub mod tiny;
 
 use std::time::Instant;
 
@@ -119,7 +120,9 @@ impl Solution {
 pub fn validate(problem: &Problem) -> Result<(), SolveError> {
     let free = problem.free().len();
     if free == 0 {
-        return Err(SolveError::Invalid("every parameter is held fixed: nothing to solve".into()));
+        return Err(SolveError::Invalid(
+            "every parameter is held fixed: nothing to solve".into(),
+        ));
     }
     let m = problem.residual_count();
     if m <= free {
@@ -130,10 +133,15 @@ pub fn validate(problem: &Problem) -> Result<(), SolveError> {
         )));
     }
     if problem.initial.iter().any(|v| !v.is_finite()) {
-        return Err(SolveError::Invalid("a start value is not a finite number".into()));
+        return Err(SolveError::Invalid(
+            "a start value is not a finite number".into(),
+        ));
     }
     for c in &problem.captures {
-        if c.observations.iter().any(|o| o.pixel.iter().chain(&o.point).any(|x| !x.is_finite())) {
+        if c.observations
+            .iter()
+            .any(|o| o.pixel.iter().chain(&o.point).any(|x| !x.is_finite()))
+        {
             return Err(SolveError::Invalid(format!(
                 "capture {}: an observation is not a finite number",
                 c.capture
@@ -188,7 +196,10 @@ pub fn solve(problem: &Problem, backend: &dyn Backend) -> Result<Solution, Solve
     let residual_variance = 2.0 * result.summary.final_cost / dof as f64;
     let covariance = covariance::embed(
         &free,
-        &result.covariance.clone().unwrap_or_else(|| DMatrix::zeros(free.len(), free.len())),
+        &result
+            .covariance
+            .clone()
+            .unwrap_or_else(|| DMatrix::zeros(free.len(), free.len())),
         residual_variance,
     );
     let std = std::array::from_fn(|i| covariance[(i, i)].max(0.0).sqrt());
