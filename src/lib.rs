@@ -9,6 +9,6 @@
 
 pub mod dataset;
 pub mod model;
-pub mod solve;
-pub mod sim;
 pub mod report;
+pub mod sim;
+pub mod solve;

@@ -7,8 +7,9 @@ fn angles(values: [f64; 14]) -> JointAngles {
 }
 
 /// Pose A, in `Joint::ALL` order.
-const POSE_A: [f64; 14] =
-    [0.3, 0.2, -0.3, 0.1, -0.4, 0.8, -0.35, -0.05, -0.3, -0.1, -0.5, 0.9, -0.4, 0.07];
+const POSE_A: [f64; 14] = [
+    0.3, 0.2, -0.3, 0.1, -0.4, 0.8, -0.35, -0.05, -0.3, -0.1, -0.5, 0.9, -0.4, 0.07,
+];
 const POSE_B: [f64; 14] = [
     0.58, 0.422, 0.119, 0.761, -0.503, 1.694, -0.893, 0.647, 0.119, 0.235, -0.888, 1.285, 0.607,
     0.061,
@@ -32,7 +33,10 @@ fn run1() -> Vec<f64> {
 }
 
 fn assert_close(got: f64, want: f64, tol: f64, what: &str) {
-    assert!((got - want).abs() <= tol, "{what}: got {got:.6}, want {want:.6}");
+    assert!(
+        (got - want).abs() <= tol,
+        "{what}: got {got:.6}, want {want:.6}"
+    );
 }
 
 #[test]
@@ -45,7 +49,11 @@ fn pose_a_transforms_match_urdf() {
     for (i, want) in [50.8464, 15.7286, 218.8119].iter().enumerate() {
         assert_close(cam.translation[i], *want, 1e-3, "T_OC translation");
     }
-    let rows = [[0.5991, -0.2955, 0.7441], [0.1853, 0.9553, 0.2302], [-0.7789, 0.0, 0.6272]];
+    let rows = [
+        [0.5991, -0.2955, 0.7441],
+        [0.1853, 0.9553, 0.2302],
+        [-0.7789, 0.0, 0.6272],
+    ];
     for i in 0..3 {
         for j in 0..3 {
             assert_close(cam.rotation[i][j], rows[i][j], 1e-4, "T_OC rotation");
@@ -64,8 +72,13 @@ fn pose_a_transforms_match_urdf() {
 fn check_projections(side: Side, pose: [f64; 14], table: [([u32; 2], [f64; 2], [f64; 2]); 4]) {
     let model = Model::default();
     let chains = model.chains(side, &angles(pose));
-    let vertices: Vec<Vertex> =
-        table.iter().map(|(rc, _, _)| Vertex { row: rc[0], col: rc[1] }).collect();
+    let vertices: Vec<Vertex> = table
+        .iter()
+        .map(|(rc, _, _)| Vertex {
+            row: rc[0],
+            col: rc[1],
+        })
+        .collect();
     let zero = vec![0.0; PARAMETER_COUNT];
     let at_zero = model.project(&chains, &zero, &vertices);
     let at_run1 = model.project(&chains, &run1(), &vertices);

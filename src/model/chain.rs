@@ -21,17 +21,26 @@ pub struct Affine {
 impl Affine {
     /// A constant.
     pub fn constant(value: f64) -> Self {
-        Affine { constant: value, param: None }
+        Affine {
+            constant: value,
+            param: None,
+        }
     }
 
     /// `sign · (θ + α[param])`: a measured joint angle plus its offset, possibly mirrored.
     pub fn joint(sign: f64, measured: f64, param: Param) -> Self {
-        Affine { constant: sign * measured, param: Some((param, sign)) }
+        Affine {
+            constant: sign * measured,
+            param: Some((param, sign)),
+        }
     }
 
     /// `α[param]` alone.
     pub fn param(param: Param) -> Self {
-        Affine { constant: 0.0, param: Some((param, 1.0)) }
+        Affine {
+            constant: 0.0,
+            param: Some((param, 1.0)),
+        }
     }
 
     /// Evaluates the value for the parameter vector `params`.
@@ -121,11 +130,13 @@ impl Chain {
             Some((p, _)) if held[p.index()] => Affine::constant(a.eval(values)),
             _ => *a,
         };
-        self.steps.iter().fold(Chain::new(), |chain, step| match step {
-            Step::Fixed(p) => chain.fixed(p.clone()),
-            Step::Rotate(axis, a) => chain.rotate(*axis, freeze(a)),
-            Step::Translate(axis, a) => chain.translate(*axis, freeze(a)),
-        })
+        self.steps
+            .iter()
+            .fold(Chain::new(), |chain, step| match step {
+                Step::Fixed(p) => chain.fixed(p.clone()),
+                Step::Rotate(axis, a) => chain.rotate(*axis, freeze(a)),
+                Step::Translate(axis, a) => chain.translate(*axis, freeze(a)),
+            })
     }
 
     /// The parameters the chain depends on, in order of first use, without repeats.

@@ -43,7 +43,9 @@ pub struct StanceChains {
 impl StanceChains {
     /// `T_CB = T_OC⁻¹ · T_OB`: the board in the camera frame.
     pub fn camera_to_board<T: Scalar>(&self, params: &[T]) -> Pose<T> {
-        self.camera.eval(params).inverse_then(&self.board.eval(params))
+        self.camera
+            .eval(params)
+            .inverse_then(&self.board.eval(params))
     }
 
     /// Both chains with the `held` parameters frozen at `values` (see [`Chain::freeze`]).
@@ -66,7 +68,10 @@ impl Model {
             .translate(Axis::X, Affine::param(trans_x))
             .translate(Axis::Y, Affine::param(trans_y))
             .fixed(self.board.mount());
-        StanceChains { camera: self.robot.camera_chain(joints), board }
+        StanceChains {
+            camera: self.robot.camera_chain(joints),
+            board,
+        }
     }
 
     /// Projects every vertex in `vertices` for parameters `params` (SPEC eq. 5); `None` for

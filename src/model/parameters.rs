@@ -149,7 +149,11 @@ impl FixedSet {
 
     /// The free parameters, in order.
     pub fn free(&self) -> Vec<Param> {
-        Param::ALL.iter().copied().filter(|p| !self.is_fixed(*p)).collect()
+        Param::ALL
+            .iter()
+            .copied()
+            .filter(|p| !self.is_fixed(*p))
+            .collect()
     }
 
     /// A mask indexed by [`Param::index`].

@@ -39,7 +39,11 @@ impl<T: Scalar> Pose<T> {
         let one = || lift::<T>(1.0);
         let zero = || lift::<T>(0.0);
         Pose {
-            rotation: [[one(), zero(), zero()], [zero(), one(), zero()], [zero(), zero(), one()]],
+            rotation: [
+                [one(), zero(), zero()],
+                [zero(), one(), zero()],
+                [zero(), zero(), one()],
+            ],
             translation: [zero(), zero(), zero()],
         }
     }

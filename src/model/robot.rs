@@ -205,8 +205,14 @@ impl RobotGeometry {
         let [x, y, z] = self.lower_camera_offset;
         Chain::new()
             .fixed(Pose::translation(0.0, 0.0, self.hip_to_neck_z))
-            .rotate(Axis::Z, Affine::joint(1.0, joints.get(Joint::HeadYaw), Param::HeadYaw))
-            .rotate(Axis::Y, Affine::joint(1.0, joints.get(Joint::HeadPitch), Param::HeadPitch))
+            .rotate(
+                Axis::Z,
+                Affine::joint(1.0, joints.get(Joint::HeadYaw), Param::HeadYaw),
+            )
+            .rotate(
+                Axis::Y,
+                Affine::joint(1.0, joints.get(Joint::HeadPitch), Param::HeadPitch),
+            )
             .fixed(Pose::translation(x, y, z))
             .rotate(Axis::Y, Affine::constant(self.lower_camera_tilt))
             .rotate(Axis::Y, Affine::param(Param::CamPitch))
@@ -218,8 +224,14 @@ impl RobotGeometry {
     /// parameters.
     pub fn sole_chain(&self, side: Side, joints: &JointAngles) -> Chain {
         let s = side.sign();
-        let [hip_yaw_pitch, hip_roll, hip_pitch, knee, ankle_pitch, ankle_roll] =
-            side.leg_joints().map(|j| (joints.get(j), j.offset()));
+        let [
+            hip_yaw_pitch,
+            hip_roll,
+            hip_pitch,
+            knee,
+            ankle_pitch,
+            ankle_roll,
+        ] = side.leg_joints().map(|j| (joints.get(j), j.offset()));
         let joint = |(angle, param): (f64, Param)| Affine::joint(1.0, angle, param);
         Chain::new()
             .fixed(Pose::translation(0.0, s * self.hip_offset_y, 0.0))

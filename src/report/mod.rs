@@ -21,7 +21,11 @@ pub fn shown_parameters(solution: &Solution) -> Vec<Param> {
 /// truth is known), then RMS, iterations and time.
 pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
     let mut out = String::new();
-    let _ = write!(out, "{:<14} {:>10} {:>9}  {:<4}", "parameter", "value", "±1σ", "unit");
+    let _ = write!(
+        out,
+        "{:<14} {:>10} {:>9}  {:<4}",
+        "parameter", "value", "±1σ", "unit"
+    );
     if truth.is_some() {
         let _ = write!(out, " {:>10} {:>9} {:>6}", "truth", "error", "err/σ");
     }
@@ -30,8 +34,19 @@ pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
         let unit = p.unit();
         let value = solution.report_value(p);
         let fixed = solution.fixed.is_fixed(p);
-        let std = if fixed { "fixed".to_string() } else { format!("{:.4}", solution.report_std(p)) };
-        let _ = write!(out, "{:<14} {:>10.4} {:>9}  {:<4}", p.name(), value, std, unit.name());
+        let std = if fixed {
+            "fixed".to_string()
+        } else {
+            format!("{:.4}", solution.report_std(p))
+        };
+        let _ = write!(
+            out,
+            "{:<14} {:>10.4} {:>9}  {:<4}",
+            p.name(),
+            value,
+            std,
+            unit.name()
+        );
         if let Some(truth) = truth {
             let t = unit.to_report(truth[p.index()]);
             let err = value - t;
@@ -49,7 +64,11 @@ pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
         out,
         "\nsolver {}: {} after {} iterations ({})",
         s.solver,
-        if s.converged { "converged" } else { "NOT converged" },
+        if s.converged {
+            "converged"
+        } else {
+            "NOT converged"
+        },
         s.iterations,
         s.termination
     );

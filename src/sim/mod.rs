@@ -109,14 +109,19 @@ fn board_in_view(model: &Model, chains: &StanceChains, params: &[f64]) -> Option
     let pose = chains.camera_to_board(params);
     // Line of sight from the board centre to the camera, in the board frame: −Rᵀ·t.
     let to_camera: [f64; 3] = std::array::from_fn(|j| {
-        -(0..3).map(|i| pose.rotation[i][j] * pose.translation[i]).sum::<f64>()
+        -(0..3)
+            .map(|i| pose.rotation[i][j] * pose.translation[i])
+            .sum::<f64>()
     });
     let dist = to_camera.iter().map(|x| x * x).sum::<f64>().sqrt();
     if to_camera[2] < dist * MAX_VIEW_ANGLE_DEG.to_radians().cos() {
         return None;
     }
     let vertices: Vec<_> = model.board.vertices().collect();
-    let uv: Vec<[f64; 2]> = model.project(chains, params, &vertices).into_iter().collect::<Option<_>>()?;
+    let uv: Vec<[f64; 2]> = model
+        .project(chains, params, &vertices)
+        .into_iter()
+        .collect::<Option<_>>()?;
     if !uv.iter().all(|p| model.camera.contains(*p, MARGIN)) {
         return None;
     }
@@ -143,7 +148,11 @@ fn aim_head(
         model.camera.project(&pose.translation)
     };
     let mut j = *joints;
-    let sole = model.robot.sole_chain(side, joints).eval(params).translation;
+    let sole = model
+        .robot
+        .sole_chain(side, joints)
+        .eval(params)
+        .translation;
     j.set(Joint::HeadYaw, sole[1].atan2(sole[0]));
     j.set(Joint::HeadPitch, 0.3);
     for _ in 0..20 {
@@ -167,8 +176,14 @@ fn aim_head(
         }
         let d_yaw = (jac[1][1] * e[0] - jac[0][1] * e[1]) / det;
         let d_pitch = (-jac[1][0] * e[0] + jac[0][0] * e[1]) / det;
-        j.set(Joint::HeadYaw, j.get(Joint::HeadYaw) - d_yaw.clamp(-0.3, 0.3));
-        j.set(Joint::HeadPitch, j.get(Joint::HeadPitch) - d_pitch.clamp(-0.3, 0.3));
+        j.set(
+            Joint::HeadYaw,
+            j.get(Joint::HeadYaw) - d_yaw.clamp(-0.3, 0.3),
+        );
+        j.set(
+            Joint::HeadPitch,
+            j.get(Joint::HeadPitch) - d_pitch.clamp(-0.3, 0.3),
+        );
     }
     let within = |joint: Joint| {
         let (lo, hi) = joint.limits();
@@ -224,7 +239,10 @@ pub fn choose_stances(
             let target = if k == 0 {
                 [w / 2.0, h / 2.0]
             } else {
-                [w * rng.random_range(0.3..0.7), h * rng.random_range(0.3..0.7)]
+                [
+                    w * rng.random_range(0.3..0.7),
+                    h * rng.random_range(0.3..0.7),
+                ]
             };
             let Some(aimed) = aim_head(model, side, &joints, params, target) else {
                 if k == 0 {
@@ -243,7 +261,11 @@ pub fn choose_stances(
         }
     }
     if stances.len() < count {
-        return Err(SimError::NoStances { side: side.name(), found: stances.len(), wanted: count });
+        return Err(SimError::NoStances {
+            side: side.name(),
+            found: stances.len(),
+            wanted: count,
+        });
     }
     Ok(stances)
 }
@@ -251,12 +273,16 @@ pub fn choose_stances(
 /// Simulates a whole dataset for `model`: captures, noisy corners and the truth.
 pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError> {
     if options.stances == 0 || options.heads == 0 {
-        return Err(SimError::Options("--stances and --heads must be at least 1".into()));
+        return Err(SimError::Options(
+            "--stances and --heads must be at least 1".into(),
+        ));
     }
     if !(options.px_noise >= 0.0 && options.px_noise.is_finite())
         || !(options.joint_noise >= 0.0 && options.joint_noise.is_finite())
     {
-        return Err(SimError::Options("noise levels must be finite and not negative".into()));
+        return Err(SimError::Options(
+            "noise levels must be finite and not negative".into(),
+        ));
     }
     let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
     let truth = match options.truth {
@@ -265,14 +291,22 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
     };
     let mut stances = Vec::new();
     for side in Side::BOTH {
-        stances.extend(choose_stances(model, side, &truth, options.stances, options.heads, &mut rng)?);
+        stances.extend(choose_stances(
+            model,
+            side,
+            &truth,
+            options.stances,
+            options.heads,
+            &mut rng,
+        )?);
     }
     let mut noise_rng = match options.noise_seed {
         Some(seed) => ChaCha8Rng::seed_from_u64(seed),
         None => rng,
     };
     let px = Normal::new(0.0, options.px_noise).map_err(|e| SimError::Options(e.to_string()))?;
-    let joint = Normal::new(0.0, options.joint_noise).map_err(|e| SimError::Options(e.to_string()))?;
+    let joint =
+        Normal::new(0.0, options.joint_noise).map_err(|e| SimError::Options(e.to_string()))?;
     let vertices: Vec<_> = model.board.vertices().collect();
     let mut captures = Vec::new();
     let mut corners = Vec::new();
@@ -286,10 +320,24 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
             let projected = model.project(&model.chains(stance.side, &actual), &truth, &vertices);
             for (v, uv) in vertices.iter().zip(projected) {
                 let Some(uv) = uv else { continue };
-                let pixel = [uv[0] + px.sample(&mut noise_rng), uv[1] + px.sample(&mut noise_rng)];
-                corners.push(Corner { capture: id, vertex: *v, pixel, line: 0 });
+                let pixel = [
+                    uv[0] + px.sample(&mut noise_rng),
+                    uv[1] + px.sample(&mut noise_rng),
+                ];
+                corners.push(Corner {
+                    capture: id,
+                    vertex: *v,
+                    pixel,
+                    line: 0,
+                });
             }
-            captures.push(Capture { id, side: stance.side, image: None, joints: *logged, line: 0 });
+            captures.push(Capture {
+                id,
+                side: stance.side,
+                image: None,
+                joints: *logged,
+                line: 0,
+            });
         }
     }
     let mut simulation = toml::Table::new();
@@ -297,8 +345,14 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
     if let Some(seed) = options.noise_seed {
         simulation.insert("noise_seed".into(), toml::Value::Integer(seed as i64));
     }
-    simulation.insert("stances_per_leg".into(), toml::Value::Integer(options.stances as i64));
-    simulation.insert("head_postures".into(), toml::Value::Integer(options.heads as i64));
+    simulation.insert(
+        "stances_per_leg".into(),
+        toml::Value::Integer(options.stances as i64),
+    );
+    simulation.insert(
+        "head_postures".into(),
+        toml::Value::Integer(options.heads as i64),
+    );
     simulation.insert("px_noise".into(), toml::Value::Float(options.px_noise));
     simulation.insert(
         "joint_noise_deg".into(),
@@ -309,6 +363,9 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
         model: *model,
         captures,
         corners,
-        truth: Some(Truth { values: truth, simulation }),
+        truth: Some(Truth {
+            values: truth,
+            simulation,
+        }),
     })
 }

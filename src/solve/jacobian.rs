@@ -31,7 +31,10 @@ impl<'a> Evaluator<'a> {
             .captures
             .iter()
             .zip(problem.frozen_chains())
-            .map(|(term, chains)| CaptureTerm { chains, ..term.clone() })
+            .map(|(term, chains)| CaptureTerm {
+                chains,
+                ..term.clone()
+            })
             .collect();
         let free = problem.free();
         let mut column = [None; PARAMETER_COUNT];
@@ -51,7 +54,13 @@ impl<'a> Evaluator<'a> {
                 ps
             })
             .collect();
-        Evaluator { problem, terms, free, column, used }
+        Evaluator {
+            problem,
+            terms,
+            free,
+            column,
+            used,
+        }
     }
 
     /// The free parameters (the Jacobian's columns).
@@ -79,8 +88,11 @@ impl<'a> Evaluator<'a> {
         let mut row = 0;
         for (term, used) in self.terms.iter().zip(&self.used) {
             let rows = term.residual_count();
-            let chunks: Vec<&[Param]> =
-                if used.is_empty() { vec![&[][..]] } else { used.chunks(WIDTH).collect() };
+            let chunks: Vec<&[Param]> = if used.is_empty() {
+                vec![&[][..]]
+            } else {
+                used.chunks(WIDTH).collect()
+            };
             for chunk in chunks {
                 let (values, derivs) = capture_pass(term, &self.problem.camera, &params, chunk)?;
                 for (i, value) in values.iter().enumerate() {

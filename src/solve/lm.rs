@@ -36,7 +36,9 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Target<'_> {
     }
 
     fn jacobian(&self) -> Option<DMatrix<f64>> {
-        self.eval.residuals_and_jacobian(self.x.as_slice()).map(|(_, j)| j)
+        self.eval
+            .residuals_and_jacobian(self.x.as_slice())
+            .map(|(_, j)| j)
     }
 }
 
@@ -53,12 +55,21 @@ impl Backend for MinpackLm {
         let start = Instant::now();
         let eval = Evaluator::new(problem);
         let free = eval.free().to_vec();
-        let x0 = DVector::from_iterator(free.len(), free.iter().map(|p| problem.initial[p.index()]));
-        let fail = |message: String| SolveError::Backend { solver: self.name().into(), message };
-        let initial_cost =
-            cost(&eval.residuals(x0.as_slice()).ok_or_else(|| fail("a vertex is behind the camera at the start".into()))?);
+        let x0 =
+            DVector::from_iterator(free.len(), free.iter().map(|p| problem.initial[p.index()]));
+        let fail = |message: String| SolveError::Backend {
+            solver: self.name().into(),
+            message,
+        };
+        let initial_cost = cost(
+            &eval
+                .residuals(x0.as_slice())
+                .ok_or_else(|| fail("a vertex is behind the camera at the start".into()))?,
+        );
         if problem.loss != super::Loss::Squared {
-            return Err(fail("robust losses are not supported by this backend yet".into()));
+            return Err(fail(
+                "robust losses are not supported by this backend yet".into(),
+            ));
         }
         let tol = problem.tolerances;
         let lm = LevenbergMarquardt::new()
@@ -74,7 +85,10 @@ impl Backend for MinpackLm {
             .ok_or_else(|| fail("the solution puts a vertex behind the camera".into()))?;
         let (cov, _rank) = covariance::from_jacobian(&jac);
         let converged = report.termination.was_successful()
-            || matches!(report.termination, TerminationReason::NoImprovementPossible(_));
+            || matches!(
+                report.termination,
+                TerminationReason::NoImprovementPossible(_)
+            );
         Ok(BackendResult {
             free_values: x.iter().copied().collect(),
             covariance: Some(cov),

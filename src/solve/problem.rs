@@ -40,7 +40,11 @@ impl CaptureTerm {
 
     /// Unweighted residuals (projection − observation), `u₀, v₀, u₁, v₁, …`, or `None`
     /// when a vertex falls behind the camera.
-    pub fn residuals<T: Scalar>(&self, camera: &crate::model::Camera, params: &[T]) -> Option<Vec<T>> {
+    pub fn residuals<T: Scalar>(
+        &self,
+        camera: &crate::model::Camera,
+        params: &[T],
+    ) -> Option<Vec<T>> {
         let pose = self.chains.camera_to_board(params);
         let mut out = Vec::with_capacity(self.residual_count());
         for obs in &self.observations {
@@ -99,7 +103,12 @@ pub struct Tolerances {
 
 impl Default for Tolerances {
     fn default() -> Self {
-        Tolerances { max_iterations: 100, function: 1e-12, gradient: 1e-14, parameter: 1e-12 }
+        Tolerances {
+            max_iterations: 100,
+            function: 1e-12,
+            gradient: 1e-14,
+            parameter: 1e-12,
+        }
     }
 }
 
@@ -147,7 +156,10 @@ impl Problem {
 
     /// Each capture's chains with the held parameters frozen at their values.
     pub fn frozen_chains(&self) -> Vec<StanceChains> {
-        self.captures.iter().map(|c| c.chains.freeze(self.fixed.mask(), &self.initial)).collect()
+        self.captures
+            .iter()
+            .map(|c| c.chains.freeze(self.fixed.mask(), &self.initial))
+            .collect()
     }
 
     /// All unweighted residuals at `params` (full vector, internal units), or `None` when a
@@ -181,19 +193,23 @@ impl Problem {
         fixed: FixedSet,
     ) -> Result<Problem, super::SolveError> {
         let model = &dataset.model;
-        let mut by_capture: std::collections::BTreeMap<u64, Vec<Observation>> =
-            Default::default();
+        let mut by_capture: std::collections::BTreeMap<u64, Vec<Observation>> = Default::default();
         for corner in &dataset.corners {
-            by_capture.entry(corner.capture).or_default().push(Observation {
-                vertex: corner.vertex,
-                point: model.board.vertex_position(corner.vertex),
-                pixel: corner.pixel,
-            });
+            by_capture
+                .entry(corner.capture)
+                .or_default()
+                .push(Observation {
+                    vertex: corner.vertex,
+                    point: model.board.vertex_position(corner.vertex),
+                    pixel: corner.pixel,
+                });
         }
         let initial = [0.0; PARAMETER_COUNT];
         let mut captures = Vec::new();
         for capture in &dataset.captures {
-            let Some(observations) = by_capture.remove(&capture.id) else { continue };
+            let Some(observations) = by_capture.remove(&capture.id) else {
+                continue;
+            };
             let chains = model.chains(capture.side, &capture.joints);
             let vertices: Vec<Vertex> = observations.iter().map(|o| o.vertex).collect();
             let projected = model.project(&chains, &initial, &vertices);
@@ -209,7 +225,12 @@ impl Problem {
                     capture.side.name(),
                 )));
             }
-            captures.push(CaptureTerm { capture: capture.id, chains, observations, whitening: None });
+            captures.push(CaptureTerm {
+                capture: capture.id,
+                chains,
+                observations,
+                whitening: None,
+            });
         }
         Ok(Problem {
             camera: model.camera,
