@@ -104,3 +104,234 @@ pub mod ffi {
         fn evaluate(problem: &FfiProblem, params: &[f64]) -> Result<FfiEvaluation>;
     }
 }
+
+use nalgebra::DMatrix;
+
+use super::{Backend, BackendResult, Loss, Problem, SolveError, Summary};
+use crate::model::{Axis, PARAMETER_COUNT, Param, Step};
+
+/// The Ceres backend: Levenberg–Marquardt with dense QR and autodiff on Jets, through the
+/// C++ shim in `cpp/`. The covariance is Ceres' dense-SVD pseudo-inverse `(JᵀJ)⁺`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Ceres {
+    /// Print Ceres' per-iteration progress and its full report to stderr.
+    pub verbose: bool,
+}
+
+impl Backend for Ceres {
+    fn name(&self) -> &'static str {
+        "ceres"
+    }
+
+    fn solve(&self, problem: &Problem) -> Result<BackendResult, SolveError> {
+        let ffi_problem = to_ffi(problem)?;
+        let (loss, loss_scale) = match problem.loss {
+            Loss::Squared => (0, 0.0),
+            Loss::Huber(s) => (1, s),
+            Loss::Cauchy(s) => (2, s),
+        };
+        let t = &problem.tolerances;
+        let options = ffi::FfiOptions {
+            max_iterations: u32::try_from(t.max_iterations).unwrap_or(u32::MAX),
+            function_tolerance: t.function,
+            gradient_tolerance: t.gradient,
+            parameter_tolerance: t.parameter,
+            loss,
+            loss_scale,
+            covariance: true,
+            verbose: self.verbose,
+        };
+        let solution = ffi::solve(&ffi_problem, &options).map_err(backend_error)?;
+        let n = ffi_problem.params.len();
+        if solution.params.len() != n {
+            return Err(backend_error(format!(
+                "returned {} values for {n} free parameters",
+                solution.params.len()
+            )));
+        }
+        let covariance = (solution.covariance_ok && solution.covariance.len() == n * n)
+            .then(|| DMatrix::from_row_slice(n, n, &solution.covariance));
+        Ok(BackendResult {
+            free_values: solution.params,
+            covariance,
+            summary: Summary {
+                solver: self.name().into(),
+                converged: solution.converged,
+                iterations: solution.iterations as usize,
+                initial_cost: solution.initial_cost,
+                final_cost: solution.final_cost,
+                termination: solution.termination,
+                seconds: solution.seconds,
+            },
+        })
+    }
+}
+
+/// Evaluates the problem in Ceres at the free-parameter values `free_values` (order of
+/// [`Problem::free`]): the residuals as Ceres minimises them (whitened where a capture has
+/// a whitening; no robust loss) and their dense Jacobian with respect to the free
+/// parameters (one column per free parameter, same order). For comparing backends.
+pub fn evaluate(
+    problem: &Problem,
+    free_values: &[f64],
+) -> Result<(Vec<f64>, DMatrix<f64>), SolveError> {
+    let ffi_problem = to_ffi(problem)?;
+    let n = ffi_problem.params.len();
+    if free_values.len() != n {
+        return Err(backend_error(format!(
+            "got {} values for {n} free parameters",
+            free_values.len()
+        )));
+    }
+    let eval = ffi::evaluate(&ffi_problem, free_values).map_err(backend_error)?;
+    let m = eval.residuals.len();
+    if eval.jacobian.len() != m * n {
+        return Err(backend_error(format!(
+            "returned a Jacobian of {} entries for {m} residuals and {n} parameters",
+            eval.jacobian.len()
+        )));
+    }
+    let jacobian = DMatrix::from_row_slice(m, n, &eval.jacobian);
+    Ok((eval.residuals, jacobian))
+}
+
+fn backend_error(message: impl std::fmt::Display) -> SolveError {
+    SolveError::Backend {
+        solver: "ceres".into(),
+        message: message.to_string(),
+    }
+}
+
+/// The Ceres parameter block of a free parameter: the camera rotation, the head joints,
+/// each leg's joints and each board's mounting correction form one block each; any other
+/// parameter is a block of its own.
+fn param_block(p: Param) -> u32 {
+    use Param::*;
+    if matches!(p, CamYaw | CamPitch | CamRoll) {
+        0
+    } else if matches!(p, HeadYaw | HeadPitch) {
+        1
+    } else if matches!(
+        p,
+        LHipYawPitch | LHipRoll | LHipPitch | LKneePitch | LAnklePitch | LAnkleRoll
+    ) {
+        2
+    } else if matches!(
+        p,
+        RHipYawPitch | RHipRoll | RHipPitch | RKneePitch | RAnklePitch | RAnkleRoll
+    ) {
+        3
+    } else if matches!(p, LBoardRotZ | LBoardTransX | LBoardTransY) {
+        4
+    } else if matches!(p, RBoardRotZ | RBoardTransX | RBoardTransY) {
+        5
+    } else {
+        6 + p.index() as u32
+    }
+}
+
+fn count(n: usize, what: &str) -> Result<u32, SolveError> {
+    u32::try_from(n).map_err(|_| backend_error(format!("too many {what} for the bridge")))
+}
+
+fn ffi_step(
+    step: &Step,
+    free_index: &[Option<usize>; PARAMETER_COUNT],
+) -> Result<ffi::FfiStep, SolveError> {
+    let axis = |a: &Axis| a.index() as u8;
+    let mut out = ffi::FfiStep {
+        kind: 0,
+        axis: 0,
+        constant: 0.0,
+        param: -1,
+        scale: 0.0,
+        rotation: [0.0; 9],
+        translation: [0.0; 3],
+    };
+    match step {
+        Step::Fixed(pose) => {
+            for (i, row) in pose.rotation.iter().enumerate() {
+                out.rotation[3 * i..3 * i + 3].copy_from_slice(row);
+            }
+            out.translation = pose.translation;
+        }
+        Step::Rotate(a, amount) | Step::Translate(a, amount) => {
+            out.kind = if matches!(step, Step::Rotate(..)) {
+                1
+            } else {
+                2
+            };
+            out.axis = axis(a);
+            out.constant = amount.constant;
+            if let Some((p, scale)) = amount.param {
+                let index = free_index[p.index()].ok_or_else(|| {
+                    backend_error(format!("parameter {p} is held fixed but was not frozen"))
+                })?;
+                out.param =
+                    i32::try_from(index).map_err(|_| backend_error("too many parameters"))?;
+                out.scale = scale;
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Ships a problem across the bridge: chains with the held parameters frozen, parameter
+/// indices among [`Problem::free`], vertices, whitening and intrinsics.
+fn to_ffi(problem: &Problem) -> Result<ffi::FfiProblem, SolveError> {
+    let free = problem.free();
+    let mut free_index = [None; PARAMETER_COUNT];
+    for (i, p) in free.iter().enumerate() {
+        free_index[p.index()] = Some(i);
+    }
+    let c = &problem.camera;
+    let [k1, k2, p1, p2, k3] = c.distortion;
+    let mut out = ffi::FfiProblem {
+        params: free.iter().map(|p| problem.initial[p.index()]).collect(),
+        param_block: free.iter().map(|p| param_block(*p)).collect(),
+        steps: Vec::new(),
+        captures: Vec::with_capacity(problem.captures.len()),
+        points: Vec::with_capacity(3 * problem.observation_count()),
+        pixels: Vec::with_capacity(2 * problem.observation_count()),
+        weights: Vec::new(),
+        camera: [c.fx, c.fy, c.cx, c.cy, k1, k2, p1, p2, k3],
+    };
+    for (term, chains) in problem.captures.iter().zip(problem.frozen_chains()) {
+        let first_step = count(out.steps.len(), "steps")?;
+        for step in chains.camera.steps().iter().chain(chains.board.steps()) {
+            out.steps.push(ffi_step(step, &free_index)?);
+        }
+        let first_vertex = count(out.pixels.len() / 2, "vertices")?;
+        for o in &term.observations {
+            out.points.extend_from_slice(&o.point);
+            out.pixels.extend_from_slice(&o.pixel);
+        }
+        let first_weight = match &term.whitening {
+            None => -1,
+            Some(w) => {
+                let k = term.residual_count();
+                if w.nrows() != k || w.ncols() != k {
+                    return Err(backend_error(format!(
+                        "capture {}: whitening matrix is {}×{}, expected {k}×{k}",
+                        term.capture,
+                        w.nrows(),
+                        w.ncols()
+                    )));
+                }
+                let first = out.weights.len() as i64;
+                out.weights
+                    .extend((0..k).flat_map(|i| (0..k).map(move |j| w[(i, j)])));
+                first
+            }
+        };
+        out.captures.push(ffi::FfiCapture {
+            first_step,
+            camera_steps: count(chains.camera.steps().len(), "steps")?,
+            board_steps: count(chains.board.steps().len(), "steps")?,
+            first_vertex,
+            vertex_count: count(term.observations.len(), "vertices")?,
+            first_weight,
+        });
+    }
+    Ok(out)
+}

@@ -1,0 +1,596 @@
+// The Ceres backend of naocalib: interprets the chains shipped by Rust (src/solve/ceres.rs)
+// on Jets and runs Levenberg–Marquardt. See ceres_shim.h.
+//
+// The arithmetic below mirrors src/model/{pose,chain,camera}.rs operation by operation, so
+// that Rust and Ceres agree on residuals to rounding and on derivatives exactly.
+
+#include "naocalib/cpp/ceres_shim.h"
+
+#include <algorithm>
+#include <chrono>
+#include <climits>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <ceres/covariance.h>
+#include <ceres/crs_matrix.h>
+#include <ceres/dynamic_autodiff_cost_function.h>
+#include <ceres/jet.h>
+#include <ceres/loss_function.h>
+#include <ceres/problem.h>
+#include <ceres/solver.h>
+#include <ceres/types.h>
+#include <glog/logging.h>
+
+#include "naocalib/src/solve/ceres.rs.h"
+
+namespace naocalib {
+namespace {
+
+// Jet width of the autodiff passes: one capture references at most camera (3) + head (2)
+// + leg (6) + board (3) = 14 parameters, so two passes at most.
+constexpr int kStride = 12;
+
+// Step kinds and loss kinds, as documented in the bridge.
+constexpr std::uint8_t kFixed = 0;
+constexpr std::uint8_t kRotate = 1;
+constexpr std::uint8_t kTranslate = 2;
+constexpr std::uint8_t kNoLoss = 0;
+constexpr std::uint8_t kHuber = 1;
+constexpr std::uint8_t kCauchy = 2;
+
+[[noreturn]] void fail(const std::string& message) { throw std::invalid_argument(message); }
+
+// ---------------------------------------------------------------------------------------
+// Logging: glog is initialised once, to stderr, and kept silent unless asked to be verbose.
+
+void init_logging(bool verbose) {
+  static std::once_flag once;
+  static std::mutex mutex;
+  std::call_once(once, [] {
+    FLAGS_logtostderr = true;
+    FLAGS_minloglevel = google::GLOG_FATAL;
+    if (!google::IsGoogleLoggingInitialized()) google::InitGoogleLogging("naocalib");
+  });
+  std::lock_guard<std::mutex> lock(mutex);
+  FLAGS_minloglevel = verbose ? google::GLOG_INFO : google::GLOG_FATAL;
+  // Ceres prints its per-iteration progress through VLOG(1) unless sent to stdout.
+  FLAGS_v = verbose ? 1 : 0;
+}
+
+// ---------------------------------------------------------------------------------------
+// Validation: everything that could index out of range or trip a Ceres CHECK.
+
+bool finite(double x) { return std::isfinite(x); }
+
+std::size_t vertex_total(const FfiProblem& p) { return p.points.size() / 3; }
+
+void validate(const FfiProblem& p) {
+  const std::size_t n = p.params.size();
+  if (n == 0) fail("no free parameters");
+  if (n > static_cast<std::size_t>(INT_MAX)) fail("too many free parameters");
+  if (p.param_block.size() != n)
+    fail("param_block has " + std::to_string(p.param_block.size()) + " entries for " +
+         std::to_string(n) + " free parameters");
+  for (std::size_t i = 0; i < n; ++i)
+    if (!finite(p.params[i])) fail("start value of free parameter " + std::to_string(i) +
+                                   " is not finite");
+  if (p.points.size() % 3 != 0) fail("points must hold 3 numbers per vertex");
+  if (p.pixels.size() != 2 * vertex_total(p))
+    fail("pixels must hold 2 numbers per vertex (" + std::to_string(vertex_total(p)) +
+         " vertices, " + std::to_string(p.pixels.size()) + " numbers)");
+  for (double x : p.points)
+    if (!finite(x)) fail("a vertex position is not finite");
+  for (double x : p.pixels)
+    if (!finite(x)) fail("an observed pixel is not finite");
+  for (double x : p.weights)
+    if (!finite(x)) fail("a whitening weight is not finite");
+  for (double x : p.camera)
+    if (!finite(x)) fail("a camera intrinsic is not finite");
+
+  for (std::size_t s = 0; s < p.steps.size(); ++s) {
+    const FfiStep& step = p.steps[s];
+    const std::string where = "step " + std::to_string(s) + ": ";
+    if (step.kind > kTranslate) fail(where + "unknown kind " + std::to_string(step.kind));
+    if (step.kind == kFixed) {
+      for (double x : step.rotation)
+        if (!finite(x)) fail(where + "rotation is not finite");
+      for (double x : step.translation)
+        if (!finite(x)) fail(where + "translation is not finite");
+    } else {
+      if (step.axis > 2) fail(where + "unknown axis " + std::to_string(step.axis));
+      if (step.param < -1 || step.param >= static_cast<std::int64_t>(n))
+        fail(where + "parameter index " + std::to_string(step.param) + " out of range (" +
+             std::to_string(n) + " free parameters)");
+      if (!finite(step.constant) || !finite(step.scale))
+        fail(where + "constant or scale is not finite");
+    }
+  }
+
+  bool any_residual = false;
+  for (std::size_t c = 0; c < p.captures.size(); ++c) {
+    const FfiCapture& cap = p.captures[c];
+    const std::string where = "capture " + std::to_string(c) + ": ";
+    const std::uint64_t end_step = std::uint64_t{cap.first_step} + cap.camera_steps +
+                                   cap.board_steps;
+    if (end_step > p.steps.size()) fail(where + "steps out of range");
+    if (std::uint64_t{cap.first_vertex} + cap.vertex_count > vertex_total(p))
+      fail(where + "vertices out of range");
+    if (cap.vertex_count > 1u << 20) fail(where + "too many vertices");
+    any_residual = any_residual || cap.vertex_count > 0;
+    if (cap.first_weight < -1) fail(where + "first_weight must be -1 or an index");
+    if (cap.first_weight >= 0) {
+      const std::uint64_t m = 2 * std::uint64_t{cap.vertex_count};
+      if (static_cast<std::uint64_t>(cap.first_weight) + m * m > p.weights.size())
+        fail(where + "whitening matrix out of range of weights");
+    }
+  }
+  if (!any_residual) fail("no observed vertices");
+}
+
+void validate(const FfiProblem& p, const FfiOptions& o) {
+  if (o.loss > kCauchy) fail("unknown loss " + std::to_string(o.loss));
+  if (o.loss != kNoLoss) {
+    if (!(finite(o.loss_scale) && o.loss_scale > 0.0))
+      fail("robust loss scale must be a positive number, got " + std::to_string(o.loss_scale));
+    for (const FfiCapture& cap : p.captures)
+      if (cap.first_weight >= 0)
+        fail("a whitening matrix cannot be combined with a robust loss");
+  }
+  const double tolerances[] = {o.function_tolerance, o.gradient_tolerance,
+                               o.parameter_tolerance};
+  for (double t : tolerances)
+    if (!(finite(t) && t >= 0.0)) fail("tolerances must be finite and non-negative");
+}
+
+// ---------------------------------------------------------------------------------------
+// Parameter blocks: free parameters grouped by `param_block` id, in order of first
+// appearance; within a block in order of their index.
+
+struct Layout {
+  std::vector<std::vector<int>> members;  // per block: global free-parameter indices
+  std::vector<int> block_of;              // per free parameter
+  std::vector<int> offset_of;             // per free parameter: position in its block
+};
+
+Layout make_layout(const FfiProblem& p) {
+  Layout layout;
+  const int n = static_cast<int>(p.params.size());
+  std::vector<std::uint32_t> ids;
+  layout.block_of.resize(n);
+  layout.offset_of.resize(n);
+  for (int g = 0; g < n; ++g) {
+    const auto it = std::find(ids.begin(), ids.end(), p.param_block[g]);
+    const int b = static_cast<int>(it - ids.begin());
+    if (it == ids.end()) {
+      ids.push_back(p.param_block[g]);
+      layout.members.emplace_back();
+    }
+    layout.block_of[g] = b;
+    layout.offset_of[g] = static_cast<int>(layout.members[b].size());
+    layout.members[b].push_back(g);
+  }
+  return layout;
+}
+
+// ---------------------------------------------------------------------------------------
+// The model on any scalar (double or Jet).
+
+inline double value_of(double x) { return x; }
+template <typename T, int N>
+double value_of(const ceres::Jet<T, N>& x) {
+  return x.a;
+}
+
+template <typename T>
+struct Frame {
+  T R[3][3];
+  T t[3];
+};
+
+template <typename T>
+void set_fixed(Frame<T>& f, const FfiStep& s) {
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) f.R[i][j] = T(s.rotation[3 * i + j]);
+    f.t[i] = T(s.translation[i]);
+  }
+}
+
+// f ← f · F for a constant F (Pose::then_fixed).
+template <typename T>
+void then_fixed(Frame<T>& f, const FfiStep& s) {
+  const double* F = s.rotation.data();
+  const double* ft = s.translation.data();
+  for (int i = 0; i < 3; ++i) {
+    const T r0 = f.R[i][0], r1 = f.R[i][1], r2 = f.R[i][2];
+    for (int j = 0; j < 3; ++j) f.R[i][j] = r0 * F[j] + r1 * F[3 + j] + r2 * F[6 + j];
+    f.t[i] = r0 * ft[0] + r1 * ft[1] + r2 * ft[2] + f.t[i];
+  }
+}
+
+// f ← f · Rot_axis(angle) (Pose::rotate).
+template <typename T>
+void rotate(Frame<T>& f, int axis, const T& angle) {
+  using std::cos;
+  using std::sin;
+  const T s = sin(angle), c = cos(angle);
+  static constexpr int kA[3] = {1, 2, 0};
+  static constexpr int kB[3] = {2, 0, 1};
+  const int a = kA[axis], b = kB[axis];
+  for (int row = 0; row < 3; ++row) {
+    const T ra = f.R[row][a], rb = f.R[row][b];
+    f.R[row][a] = ra * c + rb * s;
+    f.R[row][b] = rb * c - ra * s;
+  }
+}
+
+// f ← f · Trans_axis(distance) (Pose::translate).
+template <typename T>
+void translate(Frame<T>& f, int axis, const T& distance) {
+  for (int i = 0; i < 3; ++i) f.t[i] += f.R[i][axis] * distance;
+}
+
+// One residual block: the vertices [first, first + count) of one capture.
+class CaptureFunctor {
+ public:
+  CaptureFunctor(const FfiProblem& problem, const FfiCapture& capture, std::uint32_t first,
+                 std::uint32_t count, std::vector<int> slot, std::vector<int> offset)
+      : problem_(problem),
+        capture_(capture),
+        first_(first),
+        count_(count),
+        whiten_(capture.first_weight >= 0),
+        slot_(std::move(slot)),
+        offset_(std::move(offset)) {}
+
+  template <typename T>
+  bool operator()(T const* const* parameters, T* residuals) const {
+    Frame<T> camera, board;
+    const FfiStep* steps = problem_.steps.data() + capture_.first_step;
+    chain(steps, capture_.camera_steps, parameters, camera);
+    chain(steps + capture_.camera_steps, capture_.board_steps, parameters, board);
+
+    // T_CB = T_OC⁻¹ · T_OB (Pose::inverse_then).
+    Frame<T> cb;
+    const T d[3] = {board.t[0] - camera.t[0], board.t[1] - camera.t[1],
+                    board.t[2] - camera.t[2]};
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j)
+        cb.R[i][j] = camera.R[0][i] * board.R[0][j] + camera.R[1][i] * board.R[1][j] +
+                     camera.R[2][i] * board.R[2][j];
+      cb.t[i] = camera.R[0][i] * d[0] + camera.R[1][i] * d[1] + camera.R[2][i] * d[2];
+    }
+
+    const std::size_t v0 = std::size_t{capture_.first_vertex} + first_;
+    const double* points = problem_.points.data() + 3 * v0;
+    const double* pixels = problem_.pixels.data() + 2 * v0;
+    std::vector<T> raw;
+    T* out = residuals;
+    if (whiten_) {
+      raw.resize(2 * std::size_t{count_});
+      out = raw.data();
+    }
+    for (std::uint32_t k = 0; k < count_; ++k) {
+      const double* pb = points + 3 * k;
+      T pc[3];
+      for (int i = 0; i < 3; ++i)
+        pc[i] = cb.R[i][0] * pb[0] + cb.R[i][1] * pb[1] + cb.R[i][2] * pb[2] + cb.t[i];
+      T uv[2];
+      if (!project(pc, uv)) return false;
+      out[2 * k] = uv[0] - pixels[2 * k];
+      out[2 * k + 1] = uv[1] - pixels[2 * k + 1];
+    }
+    if (whiten_) {
+      const std::size_t m = 2 * std::size_t{count_};
+      const double* w = problem_.weights.data() + capture_.first_weight;
+      for (std::size_t i = 0; i < m; ++i) {
+        T acc(0.0);
+        for (std::size_t j = 0; j < m; ++j) acc = acc + raw[j] * w[i * m + j];
+        residuals[i] = acc;
+      }
+    }
+    return true;
+  }
+
+ private:
+  // `constant + scale · α` (Affine::eval).
+  template <typename T>
+  T amount(const FfiStep& s, T const* const* parameters) const {
+    if (s.param < 0) return T(s.constant);
+    return parameters[slot_[s.param]][offset_[s.param]] * s.scale + s.constant;
+  }
+
+  // Chain::eval.
+  template <typename T>
+  void chain(const FfiStep* steps, std::uint32_t count, T const* const* parameters,
+             Frame<T>& f) const {
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) f.R[i][j] = T(i == j ? 1.0 : 0.0);
+      f.t[i] = T(0.0);
+    }
+    for (std::uint32_t k = 0; k < count; ++k) {
+      const FfiStep& s = steps[k];
+      switch (s.kind) {
+        case kFixed:
+          if (k == 0)
+            set_fixed(f, s);
+          else
+            then_fixed(f, s);
+          break;
+        case kRotate:
+          rotate(f, s.axis, amount(s, parameters));
+          break;
+        default:
+          translate(f, s.axis, amount(s, parameters));
+          break;
+      }
+    }
+  }
+
+  // Camera::project: pinhole with optional OpenCV distortion; false behind the camera.
+  template <typename T>
+  bool project(const T (&p)[3], T (&uv)[2]) const {
+    if (value_of(p[0]) <= 0.0) return false;
+    const auto& cam = problem_.camera;
+    const double fx = cam[0], fy = cam[1], cx = cam[2], cy = cam[3];
+    const T inv = T(1.0) / p[0];
+    T a = -(p[1] * inv);
+    T b = -(p[2] * inv);
+    const double k1 = cam[4], k2 = cam[5], p1 = cam[6], p2 = cam[7], k3 = cam[8];
+    if (k1 != 0.0 || k2 != 0.0 || p1 != 0.0 || p2 != 0.0 || k3 != 0.0) {
+      const T r2 = a * a + b * b;
+      const T radial = T(1.0) + r2 * (T(k1) + r2 * (T(k2) + r2 * k3));
+      const T ab = a * b;
+      const T da = ab * (2.0 * p1) + (r2 + a * a * 2.0) * p2;
+      const T db = (r2 + b * b * 2.0) * p1 + ab * (2.0 * p2);
+      a = a * radial + da;
+      b = b * radial + db;
+    }
+    uv[0] = a * fx + cx;
+    uv[1] = b * fy + cy;
+    return true;
+  }
+
+  const FfiProblem& problem_;
+  const FfiCapture& capture_;
+  std::uint32_t first_, count_;
+  bool whiten_;
+  std::vector<int> slot_;    // per free parameter: its block's position in this block list
+  std::vector<int> offset_;  // per free parameter: its position in the block
+};
+
+using CaptureCost = ceres::DynamicAutoDiffCostFunction<CaptureFunctor, kStride>;
+
+// ---------------------------------------------------------------------------------------
+// The ceres::Problem with its parameter block storage.
+
+class Built {
+ public:
+  Built(const FfiProblem& p, const double* values, std::uint8_t loss, double loss_scale)
+      : layout_(make_layout(p)) {
+    const int n = static_cast<int>(p.params.size());
+    const int blocks = static_cast<int>(layout_.members.size());
+    values_.resize(blocks);
+    for (int b = 0; b < blocks; ++b)
+      for (int g : layout_.members[b]) values_[b].push_back(values[g]);
+    std::vector<bool> used(blocks, false);
+
+    for (const FfiCapture& cap : p.captures) {
+      if (cap.vertex_count == 0) continue;
+      // The blocks this capture's steps reference, ascending.
+      std::vector<bool> referenced(blocks, false);
+      const std::uint32_t steps = cap.camera_steps + cap.board_steps;
+      for (std::uint32_t k = 0; k < steps; ++k) {
+        const FfiStep& s = p.steps[cap.first_step + k];
+        if (s.kind != kFixed && s.param >= 0) referenced[layout_.block_of[s.param]] = true;
+      }
+      // A capture that depends on no free parameter still contributes its (constant)
+      // residuals: attach it to block 0, whose Jacobian columns it leaves zero.
+      if (std::none_of(referenced.begin(), referenced.end(), [](bool r) { return r; }))
+        referenced[0] = true;
+      std::vector<int> slot(n, -1), offset(n, -1);
+      std::vector<double*> pointers;
+      std::vector<int> sizes;
+      for (int b = 0; b < blocks; ++b) {
+        if (!referenced[b]) continue;
+        for (int g : layout_.members[b]) {
+          slot[g] = static_cast<int>(pointers.size());
+          offset[g] = layout_.offset_of[g];
+        }
+        pointers.push_back(values_[b].data());
+        sizes.push_back(static_cast<int>(values_[b].size()));
+        if (!used[b]) {
+          used[b] = true;
+          problem_.AddParameterBlock(values_[b].data(), sizes.back());
+        }
+      }
+
+      const bool per_vertex = loss != kNoLoss;
+      const std::uint32_t groups = per_vertex ? cap.vertex_count : 1;
+      const std::uint32_t count = per_vertex ? 1 : cap.vertex_count;
+      for (std::uint32_t g = 0; g < groups; ++g) {
+        auto* cost = new CaptureCost(new CaptureFunctor(p, cap, g * count, count, slot, offset));
+        for (int size : sizes) cost->AddParameterBlock(size);
+        cost->SetNumResiduals(static_cast<int>(2 * count));
+        ceres::LossFunction* loss_function = nullptr;
+        if (loss == kHuber) loss_function = new ceres::HuberLoss(loss_scale);
+        if (loss == kCauchy) loss_function = new ceres::CauchyLoss(loss_scale);
+        problem_.AddResidualBlock(cost, loss_function, pointers);
+      }
+    }
+    for (int b = 0; b < blocks; ++b)
+      if (used[b]) used_.push_back(b);
+  }
+
+  Built(const Built&) = delete;
+  Built& operator=(const Built&) = delete;
+
+  ceres::Problem& problem() { return problem_; }
+  const Layout& layout() const { return layout_; }
+  // Blocks some residual depends on, ascending (the others keep their start values).
+  const std::vector<int>& used() const { return used_; }
+  double* block(int b) { return values_[b].data(); }
+
+  // The free parameters in their global order.
+  rust::Vec<double> gather() const {
+    rust::Vec<double> out;
+    const std::size_t n = layout_.block_of.size();
+    out.reserve(n);
+    for (std::size_t g = 0; g < n; ++g)
+      out.push_back(values_[layout_.block_of[g]][layout_.offset_of[g]]);
+    return out;
+  }
+
+  // Global free-parameter index of each column when the used blocks are concatenated.
+  std::vector<int> used_columns() const {
+    std::vector<int> columns;
+    for (int b : used_)
+      for (int g : layout_.members[b]) columns.push_back(g);
+    return columns;
+  }
+
+ private:
+  Layout layout_;
+  std::vector<std::vector<double>> values_;
+  std::vector<int> used_;
+  ceres::Problem problem_;
+};
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// (JᵀJ)⁺ over all free parameters, row-major; zero rows/columns for parameters no
+// residual depends on. Empty when Ceres cannot compute it.
+bool covariance(Built& built, std::size_t n, rust::Vec<double>& out) {
+  ceres::Covariance::Options options;
+  options.algorithm_type = ceres::DENSE_SVD;
+  options.null_space_rank = -1;
+  options.min_reciprocal_condition_number = 1e-14;
+  options.num_threads = 1;
+  ceres::Covariance cov(options);
+  std::vector<const double*> blocks;
+  for (int b : built.used()) blocks.push_back(built.block(b));
+  if (!cov.Compute(blocks, &built.problem())) return false;
+  const std::vector<int> columns = built.used_columns();
+  const std::size_t d = columns.size();
+  std::vector<double> dense(d * d);
+  if (!cov.GetCovarianceMatrix(blocks, dense.data())) return false;
+  std::vector<double> full(n * n, 0.0);
+  for (std::size_t i = 0; i < d; ++i)
+    for (std::size_t j = 0; j < d; ++j) {
+      const double x = dense[i * d + j];
+      if (!finite(x)) return false;
+      full[columns[i] * n + columns[j]] = x;
+    }
+  out.reserve(n * n);
+  for (double x : full) out.push_back(x);
+  return true;
+}
+
+}  // namespace
+
+FfiSolution solve(const FfiProblem& problem, const FfiOptions& options) {
+  try {
+    const auto start = std::chrono::steady_clock::now();
+    init_logging(options.verbose);
+    validate(problem);
+    validate(problem, options);
+    Built built(problem, problem.params.data(), options.loss, options.loss_scale);
+
+    ceres::Solver::Options so;
+    so.minimizer_type = ceres::TRUST_REGION;
+    so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+    so.linear_solver_type = ceres::DENSE_QR;
+    so.max_num_iterations = static_cast<int>(std::min<std::uint32_t>(options.max_iterations,
+                                                                     INT_MAX));
+    so.function_tolerance = options.function_tolerance;
+    so.gradient_tolerance = options.gradient_tolerance;
+    so.parameter_tolerance = options.parameter_tolerance;
+    so.num_threads = 1;
+    so.logging_type = options.verbose ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+    so.minimizer_progress_to_stdout = false;  // progress goes to stderr through glog
+    std::string invalid;
+    if (!so.IsValid(&invalid)) fail("invalid solver options: " + invalid);
+
+    ceres::Solver::Summary summary;
+    ceres::Solve(so, &built.problem(), &summary);
+    if (options.verbose) LOG(INFO) << summary.FullReport();
+    if (summary.termination_type == ceres::FAILURE)
+      throw std::runtime_error("Ceres failed: " + summary.message);
+
+    FfiSolution out;
+    out.params = built.gather();
+    out.covariance_ok = false;
+    if (options.covariance) {
+      rust::Vec<double> cov;
+      if (covariance(built, problem.params.size(), cov)) {
+        out.covariance = std::move(cov);
+        out.covariance_ok = true;
+      }
+    }
+    out.iterations = static_cast<std::uint32_t>(summary.num_successful_steps +
+                                                summary.num_unsuccessful_steps);
+    out.initial_cost = summary.initial_cost;
+    out.final_cost = summary.final_cost;
+    out.converged = summary.termination_type == ceres::CONVERGENCE;
+    out.termination = rust::String(
+        std::string(ceres::TerminationTypeToString(summary.termination_type)) + ": " +
+        summary.message);
+    out.seconds = seconds_since(start);
+    return out;
+  } catch (const std::exception& e) {
+    throw std::runtime_error(std::string("ceres solve: ") + e.what());
+  }
+}
+
+FfiEvaluation evaluate(const FfiProblem& problem, rust::Slice<const double> params) {
+  try {
+    init_logging(false);
+    validate(problem);
+    const std::size_t n = problem.params.size();
+    if (params.size() != n)
+      fail("got " + std::to_string(params.size()) + " values for " + std::to_string(n) +
+           " free parameters");
+    for (double x : params)
+      if (!finite(x)) fail("a parameter value is not finite");
+    Built built(problem, params.data(), kNoLoss, 0.0);
+
+    ceres::Problem::EvaluateOptions eo;
+    for (int b : built.used()) eo.parameter_blocks.push_back(built.block(b));
+    eo.num_threads = 1;
+    double cost = 0.0;
+    std::vector<double> residuals;
+    ceres::CRSMatrix jacobian;
+    if (!built.problem().Evaluate(eo, &cost, &residuals, nullptr, &jacobian))
+      fail("evaluation failed: a vertex lies behind the camera (x <= 0) at these values");
+
+    const std::vector<int> columns = built.used_columns();
+    if (jacobian.num_cols != static_cast<int>(columns.size()) ||
+        jacobian.num_rows != static_cast<int>(residuals.size()))
+      throw std::runtime_error("unexpected Jacobian shape from Ceres");
+    const std::size_t m = residuals.size();
+    std::vector<double> dense(m * n, 0.0);
+    for (std::size_t r = 0; r < m; ++r)
+      for (int k = jacobian.rows[r]; k < jacobian.rows[r + 1]; ++k)
+        dense[r * n + columns[jacobian.cols[k]]] = jacobian.values[k];
+
+    FfiEvaluation out;
+    out.cost = cost;
+    out.residuals.reserve(m);
+    for (double x : residuals) out.residuals.push_back(x);
+    out.jacobian.reserve(m * n);
+    for (double x : dense) out.jacobian.push_back(x);
+    return out;
+  } catch (const std::exception& e) {
+    throw std::runtime_error(std::string("ceres evaluate: ") + e.what());
+  }
+}
+
+}  // namespace naocalib
