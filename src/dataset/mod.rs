@@ -1,9 +1,38 @@
 //! Datasets on disk (SPEC section 6): `dataset.toml`, `captures.csv`, `corners.csv`,
 //! `truth.toml`, and an optional `images/` folder.
+//!
+//! [`Dataset::load`] reads and validates a dataset directory; every error is a
+//! [`DatasetError`] naming the file, the line and the field, e.g.
+//! `data/x/captures.csv line 7, field LKneePitch: 'abc' is not a number`.
+//! [`Dataset::write`] and [`write_corners`] write files atomically and never replace an
+//! existing file unless asked to (`force`).
 
-use std::path::PathBuf;
+mod captures;
+mod config;
+mod corners;
+mod csv_table;
+mod error;
+mod text;
+mod toml_doc;
+mod truth;
+mod units;
+mod write;
 
-use crate::model::{JointAngles, Model, PARAMETER_COUNT, Side, Vertex};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+pub use error::{DatasetError, Location};
+
+use crate::model::{JointAngles, Model, PARAMETER_COUNT, Param, Side, Vertex};
+
+/// File name of the camera, board and robot description (required).
+pub const DATASET_TOML: &str = "dataset.toml";
+/// File name of the captures table (required).
+pub const CAPTURES_CSV: &str = "captures.csv";
+/// File name of the corners table (optional when reading).
+pub const CORNERS_CSV: &str = "corners.csv";
+/// File name of the true parameters of a simulated dataset (optional).
+pub const TRUTH_TOML: &str = "truth.toml";
 
 /// One captured image: which board is in view and the logged joint angles.
 #[derive(Debug, Clone, PartialEq)]
@@ -14,7 +43,7 @@ pub struct Capture {
     pub side: Side,
     /// Image path relative to the dataset directory, if any.
     pub image: Option<PathBuf>,
-    /// Logged joint angles [rad].
+    /// Logged joint angles, in radians.
     pub joints: JointAngles,
     /// Line in `captures.csv` (1-based, header is line 1); 0 when not read from a file.
     pub line: u64,
@@ -27,7 +56,7 @@ pub struct Corner {
     pub capture: u64,
     /// Which vertex of the board.
     pub vertex: Vertex,
-    /// Its position in the image [px].
+    /// Its position in the image, in pixels (u, v).
     pub pixel: [f64; 2],
     /// Line in `corners.csv` (1-based, header is line 1); 0 when not read from a file.
     pub line: u64,
@@ -56,4 +85,346 @@ pub struct Dataset {
     pub corners: Vec<Corner>,
     /// `truth.toml`, when present.
     pub truth: Option<Truth>,
+}
+
+impl Truth {
+    /// The true value of `param`, internal units (rad / mm).
+    pub fn value(&self, param: Param) -> f64 {
+        self.values[param.index()]
+    }
+
+    /// The true value of `param`, report units (deg / mm).
+    pub fn report_value(&self, param: Param) -> f64 {
+        param.unit().to_report(self.value(param))
+    }
+}
+
+impl Dataset {
+    /// An empty dataset (no captures, corners or truth) for `model`, to live in `dir`.
+    pub fn new(dir: impl Into<PathBuf>, model: Model) -> Self {
+        Dataset {
+            dir: dir.into(),
+            model,
+            captures: Vec::new(),
+            corners: Vec::new(),
+            truth: None,
+        }
+    }
+
+    /// Reads and validates the dataset in `dir`.
+    ///
+    /// `dataset.toml` and `captures.csv` are required; a missing `corners.csv` gives no
+    /// corners, a missing `truth.toml` no truth. Rows keep their line numbers. Every
+    /// problem is an error naming the file, the line and the field; nothing panics.
+    pub fn load(dir: &Path) -> Result<Dataset, DatasetError> {
+        let path = dir.join(DATASET_TOML);
+        let bytes = text::read_file(&path, true, " (it needs at least a [camera] table)")?;
+        let model = config::parse(&path, &bytes.unwrap_or_default())?;
+
+        let path = dir.join(CAPTURES_CSV);
+        let bytes = text::read_file(&path, true, " (it needs at least its header line)")?;
+        let captures = captures::parse(&path, &bytes.unwrap_or_default())?;
+        let ids = captures::validate(&path, &captures, |_, c| c.line)?;
+
+        let path = dir.join(CORNERS_CSV);
+        let corners = match text::read_file(&path, false, " (it needs at least its header line)")? {
+            Some(bytes) => corners::parse(&path, &bytes)?,
+            None => Vec::new(),
+        };
+        corners::validate(&path, &corners, Some(&ids), Some(&model.board), |_, c| {
+            c.line
+        })?;
+
+        let path = dir.join(TRUTH_TOML);
+        let truth = match text::read_file(&path, false, " (it needs a [parameters] table)")? {
+            Some(bytes) => Some(truth::parse(&path, &bytes)?),
+            None => None,
+        };
+        Ok(Dataset {
+            dir: dir.to_path_buf(),
+            model,
+            captures,
+            corners,
+            truth,
+        })
+    }
+
+    /// Checks the dataset in memory against the rules [`Dataset::load`] applies (valid
+    /// camera and board, unique capture ids, finite numbers, relative image paths, corners
+    /// of known captures on the board, no vertex twice). Errors name the files in
+    /// [`Dataset::dir`] and the rows' `line` (or, for rows not read from a file, the line
+    /// they would be written to).
+    pub fn validate(&self) -> Result<(), DatasetError> {
+        self.check(&self.dir, false)
+    }
+
+    fn check(&self, dir: &Path, written: bool) -> Result<(), DatasetError> {
+        let line = |index: usize, recorded: u64| {
+            if written || recorded == 0 {
+                index as u64 + 2
+            } else {
+                recorded
+            }
+        };
+        config::validate(&dir.join(DATASET_TOML), &self.model)?;
+        let ids = captures::validate(&dir.join(CAPTURES_CSV), &self.captures, |i, c| {
+            line(i, c.line)
+        })?;
+        corners::validate(
+            &dir.join(CORNERS_CSV),
+            &self.corners,
+            Some(&ids),
+            Some(&self.model.board),
+            |i, c| line(i, c.line),
+        )?;
+        if let Some(truth) = &self.truth {
+            truth::validate(&dir.join(TRUTH_TOML), truth)?;
+        }
+        Ok(())
+    }
+
+    /// Writes the dataset into `dir` (created if missing): `dataset.toml` with every
+    /// camera, board and robot value, `captures.csv`, `corners.csv` (a header only when
+    /// there are no corners) and, when there is a truth, `truth.toml`.
+    ///
+    /// The dataset is validated first, so what is written can be read back: [`Dataset::load`]
+    /// of the directory gives this dataset again, with the rows' `line` fields set to their
+    /// lines and `dir` set to `dir`, every number bit for bit. One exception: angles stored
+    /// in degrees (truth parameters, mount angles, camera tilt) are written as the degrees
+    /// that read back to the very same radians, which exist for every angle that is the
+    /// conversion of some float of degrees; any other angle reads back within an ulp or two.
+    ///
+    /// Each file is written atomically. Unless `force`, nothing is written when any of the
+    /// files already exists, or when a `truth.toml` exists and this dataset has no truth;
+    /// with `force`, such a stale `truth.toml` is removed. `images/` is not touched.
+    pub fn write(&self, dir: &Path, force: bool) -> Result<(), DatasetError> {
+        self.check(dir, true)?;
+        let toml_path = dir.join(DATASET_TOML);
+        let captures_path = dir.join(CAPTURES_CSV);
+        let corners_path = dir.join(CORNERS_CSV);
+        let truth_path = dir.join(TRUTH_TOML);
+        let dataset_toml = config::render(&self.model);
+        let captures_csv = captures::render(&self.captures)
+            .map_err(|e| DatasetError::io(&captures_path, "write", e.into()))?;
+        let corners_csv = corners::render(&self.corners)
+            .map_err(|e| DatasetError::io(&corners_path, "write", e.into()))?;
+        let truth_toml = match &self.truth {
+            Some(t) => Some(truth::render(t).map_err(|e| {
+                DatasetError::invalid(
+                    Location::file(&truth_path).field("simulation"),
+                    format!("cannot be written as TOML: {e}"),
+                )
+            })?),
+            None => None,
+        };
+
+        write::create_dir(dir)?;
+        for path in [&toml_path, &captures_path, &corners_path] {
+            write::check_absent(path, force)?;
+        }
+        let stale_truth = truth_path.symlink_metadata().is_ok();
+        match &truth_toml {
+            Some(_) => write::check_absent(&truth_path, force)?,
+            None if stale_truth && !force => {
+                return Err(DatasetError::Exists {
+                    path: truth_path,
+                    reason: "exists, but the dataset being written has no truth",
+                });
+            }
+            None => {}
+        }
+
+        write::write_atomic(&toml_path, dataset_toml.as_bytes(), force)?;
+        write::write_atomic(&captures_path, &captures_csv, force)?;
+        write::write_atomic(&corners_path, &corners_csv, force)?;
+        match truth_toml {
+            Some(text) => write::write_atomic(&truth_path, text.as_bytes(), force)?,
+            None if stale_truth => std::fs::remove_file(&truth_path)
+                .map_err(|e| DatasetError::io(&truth_path, "remove", e))?,
+            None => {}
+        }
+        Ok(())
+    }
+
+    /// The capture with id `id`.
+    pub fn capture(&self, id: u64) -> Option<&Capture> {
+        self.captures.iter().find(|c| c.id == id)
+    }
+
+    /// The corners of every capture, by capture id, each list in file order. Every capture
+    /// has an entry, an empty one when none of its vertices was found.
+    pub fn corners_by_capture(&self) -> BTreeMap<u64, Vec<Corner>> {
+        let mut map: BTreeMap<u64, Vec<Corner>> =
+            self.captures.iter().map(|c| (c.id, Vec::new())).collect();
+        for corner in &self.corners {
+            map.entry(corner.capture).or_default().push(*corner);
+        }
+        map
+    }
+
+    /// The corners of capture `id`, in file order.
+    pub fn corners_of(&self, id: u64) -> impl Iterator<Item = &Corner> + '_ {
+        self.corners.iter().filter(move |c| c.capture == id)
+    }
+
+    /// The full path of a capture's image, if it has one.
+    pub fn image_path(&self, capture: &Capture) -> Option<PathBuf> {
+        capture.image.as_ref().map(|image| self.dir.join(image))
+    }
+}
+
+/// Reads a `truth.toml` file on its own (e.g. the true parameters to simulate with): the
+/// same format and checks as a dataset's `truth.toml`, but the file must exist.
+pub fn read_truth(path: &Path) -> Result<Truth, DatasetError> {
+    let bytes = text::read_file(path, true, " (it needs a [parameters] table)")?;
+    truth::parse(path, &bytes.unwrap_or_default())
+}
+
+/// Writes `corners.csv` into `dir` (created if missing), atomically; refuses to replace an
+/// existing file unless `force`. For detection, which adds corners to an existing dataset.
+///
+/// Checks what can be checked without the rest of the dataset (finite pixels, no vertex
+/// twice in a capture); [`Dataset::load`] checks the corners against the captures and the
+/// board.
+pub fn write_corners(dir: &Path, corners: &[Corner], force: bool) -> Result<(), DatasetError> {
+    let path = dir.join(CORNERS_CSV);
+    corners::validate(&path, corners, None, None, |i, _| i as u64 + 2)?;
+    let csv = corners::render(corners).map_err(|e| DatasetError::io(&path, "write", e.into()))?;
+    write::create_dir(dir)?;
+    write::write_atomic(&path, &csv, force)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Joint;
+
+    fn capture(id: u64, side: Side) -> Capture {
+        let mut joints = JointAngles::default();
+        joints.set(Joint::HeadYaw, id as f64 / 10.0);
+        Capture {
+            id,
+            side,
+            image: None,
+            joints,
+            line: 0,
+        }
+    }
+
+    fn corner(capture: u64, row: u32, col: u32) -> Corner {
+        Corner {
+            capture,
+            vertex: Vertex { row, col },
+            pixel: [row as f64, col as f64],
+            line: 0,
+        }
+    }
+
+    fn sample(dir: &Path) -> Dataset {
+        let mut ds = Dataset::new(dir, Model::default());
+        ds.captures = vec![
+            capture(5, Side::Left),
+            capture(2, Side::Right),
+            capture(9, Side::Left),
+        ];
+        ds.corners = vec![corner(2, 0, 0), corner(5, 1, 1), corner(2, 3, 5)];
+        ds
+    }
+
+    #[test]
+    fn lookups() {
+        let ds = sample(Path::new("d"));
+        assert_eq!(ds.capture(2).unwrap().side, Side::Right);
+        assert!(ds.capture(3).is_none());
+        let by = ds.corners_by_capture();
+        assert_eq!(by.keys().copied().collect::<Vec<_>>(), [2, 5, 9]);
+        assert_eq!(by[&2].len(), 2);
+        assert!(by[&9].is_empty());
+        assert_eq!(ds.corners_of(2).count(), 2);
+        let mut c = capture(1, Side::Left);
+        assert_eq!(ds.image_path(&c), None);
+        c.image = Some("images/1.png".into());
+        assert_eq!(ds.image_path(&c), Some(PathBuf::from("d/images/1.png")));
+    }
+
+    #[test]
+    fn validate_uses_recorded_or_written_lines() {
+        let mut ds = sample(Path::new("d"));
+        assert!(ds.validate().is_ok());
+        ds.corners.push(corner(7, 0, 0));
+        let e = ds.validate().unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "d/corners.csv line 5, field capture: capture 7 is not in captures.csv"
+        );
+        ds.corners[3].line = 12;
+        let e = ds.validate().unwrap_err();
+        assert_eq!(e.line(), Some(12));
+        let e = ds
+            .write(Path::new("/nonexistent/never"), false)
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "/nonexistent/never/corners.csv line 5, field capture: capture 7 is not in captures.csv"
+        );
+    }
+
+    #[test]
+    fn write_then_load() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("new/sub");
+        let ds = sample(&dir);
+        ds.write(&dir, false).unwrap();
+        let back = Dataset::load(&dir).unwrap();
+        assert_eq!(
+            back.captures.iter().map(|c| c.line).collect::<Vec<_>>(),
+            [2, 3, 4]
+        );
+        assert_eq!(
+            back.corners.iter().map(|c| c.line).collect::<Vec<_>>(),
+            [2, 3, 4]
+        );
+        assert_eq!(back.captures[1].id, 2);
+        assert_eq!(back.truth, None);
+        let e = ds.write(&dir, false).unwrap_err();
+        assert!(matches!(e, DatasetError::Exists { .. }), "{e}");
+        ds.write(&dir, true).unwrap();
+    }
+
+    #[test]
+    fn stale_truth_is_refused_then_removed() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
+        std::fs::write(dir.join(TRUTH_TOML), "[parameters]\n").unwrap();
+        let ds = sample(dir);
+        let e = ds.write(dir, false).unwrap_err();
+        assert!(
+            e.to_string().contains(
+                "truth.toml: exists, but the dataset being written has no truth; use --force"
+            ),
+            "{e}"
+        );
+        assert!(!dir.join(DATASET_TOML).exists(), "nothing written");
+        ds.write(dir, true).unwrap();
+        assert!(!dir.join(TRUTH_TOML).exists());
+        assert_eq!(Dataset::load(dir).unwrap().truth, None);
+    }
+
+    #[test]
+    fn write_corners_alone() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("d");
+        write_corners(&dir, &[corner(1, 0, 0), corner(1, 0, 1)], false).unwrap();
+        let text = std::fs::read_to_string(dir.join(CORNERS_CSV)).unwrap();
+        assert_eq!(text, "capture,row,col,u,v\n1,0,0,0,0\n1,0,1,0,1\n");
+        let e = write_corners(&dir, &[], false).unwrap_err();
+        assert!(matches!(e, DatasetError::Exists { .. }));
+        write_corners(&dir, &[], true).unwrap();
+        let e = write_corners(&dir, &[corner(1, 0, 0), corner(1, 0, 0)], true).unwrap_err();
+        assert_eq!(e.line(), Some(3));
+        let mut bad = corner(1, 0, 0);
+        bad.pixel[1] = f64::NAN;
+        let e = write_corners(&dir, &[bad], true).unwrap_err();
+        assert_eq!(e.field(), Some("v"));
+    }
 }

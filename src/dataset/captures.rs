@@ -1,0 +1,289 @@
+//! `captures.csv`: one row per captured image (SPEC section 6).
+
+use std::collections::HashMap;
+use std::path::{Component, Path, PathBuf};
+
+use crate::model::{Joint, JointAngles, Side};
+
+use super::Capture;
+use super::csv_table::CsvTable;
+use super::error::{DatasetError, Location};
+use super::units::csv_float;
+
+/// Reads the captures from the content of `captures.csv` at `path`.
+pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Vec<Capture>, DatasetError> {
+    let table = CsvTable::parse(path, bytes)?;
+    let id_col = table.require("capture")?;
+    let board_col = table.require("board")?;
+    let joint_cols = Joint::ALL.map(|j| table.require(j.name()));
+    let joint_cols: Vec<usize> = joint_cols.into_iter().collect::<Result<_, _>>()?;
+    let image_col = table.column("image")?;
+    let mut captures = Vec::new();
+    for row in table.rows() {
+        let id = row.uint::<u64>(id_col, "capture")?;
+        let board = row.str(board_col);
+        let side = Side::from_name(board).ok_or_else(|| {
+            let message = if board.is_empty() {
+                "missing value, expected 'left' or 'right'".to_string()
+            } else {
+                format!("unknown board '{board}', expected 'left' or 'right'")
+            };
+            DatasetError::invalid(row.at("board"), message)
+        })?;
+        let image = match image_col.map(|c| row.str(c)) {
+            None | Some("") => None,
+            Some(image) => {
+                let image = PathBuf::from(image);
+                check_image_path(&image).map_err(|m| DatasetError::invalid(row.at("image"), m))?;
+                Some(image)
+            }
+        };
+        let mut joints = JointAngles::default();
+        for (joint, &col) in Joint::ALL.iter().zip(&joint_cols) {
+            joints.set(*joint, row.f64(col, joint.name())?);
+        }
+        captures.push(Capture {
+            id,
+            side,
+            image,
+            joints,
+            line: row.line,
+        });
+    }
+    Ok(captures)
+}
+
+/// Checks that an image path is relative and stays inside the dataset directory.
+pub(crate) fn check_image_path(image: &Path) -> Result<(), String> {
+    let shown = image.display();
+    if image.as_os_str().is_empty() {
+        return Err("the image path is empty (leave the image out instead)".into());
+    }
+    let mut depth = 0usize;
+    for component in image.components() {
+        match component {
+            Component::Prefix(_) | Component::RootDir => {
+                return Err(format!(
+                    "image path '{shown}' is absolute; it must be relative to the dataset \
+                     directory"
+                ));
+            }
+            Component::CurDir => {}
+            Component::ParentDir if depth == 0 => {
+                return Err(format!(
+                    "image path '{shown}' leaves the dataset directory ('..'); it must stay \
+                     inside it"
+                ));
+            }
+            Component::ParentDir => depth -= 1,
+            Component::Normal(_) => depth += 1,
+        }
+    }
+    Ok(())
+}
+
+/// Checks captures in memory: unique ids, finite angles, valid image paths. `line` gives
+/// the line of each capture (by index) for the messages.
+pub(crate) fn validate(
+    path: &Path,
+    captures: &[Capture],
+    line: impl Fn(usize, &Capture) -> u64,
+) -> Result<HashMap<u64, u64>, DatasetError> {
+    let mut seen: HashMap<u64, u64> = HashMap::with_capacity(captures.len());
+    for (i, capture) in captures.iter().enumerate() {
+        let here = line(i, capture);
+        let at = |field: &str| Location::line(path, here).field(field);
+        if let Some(first) = seen.insert(capture.id, here) {
+            return Err(DatasetError::invalid(
+                at("capture"),
+                format!(
+                    "capture id {} is used twice: on line {first} and on line {here}",
+                    capture.id
+                ),
+            ));
+        }
+        for joint in Joint::ALL {
+            let angle = capture.joints.get(joint);
+            if !angle.is_finite() {
+                return Err(DatasetError::invalid(
+                    at(joint.name()),
+                    format!("{angle} is not a finite number"),
+                ));
+            }
+        }
+        if let Some(image) = &capture.image {
+            check_image_path(image).map_err(|m| DatasetError::invalid(at("image"), m))?;
+        }
+    }
+    Ok(seen)
+}
+
+/// The header of `captures.csv` as written.
+pub(crate) fn header() -> Vec<&'static str> {
+    let mut header = vec!["capture", "board", "image"];
+    header.extend(Joint::ALL.iter().map(|j| j.name()));
+    header
+}
+
+/// `captures.csv` for `captures` (already validated).
+pub(crate) fn render(captures: &[Capture]) -> Result<Vec<u8>, csv::Error> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(header())?;
+    for c in captures {
+        let mut record = vec![
+            c.id.to_string(),
+            c.side.name().to_string(),
+            c.image
+                .as_ref()
+                .map(|p| p.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+        ];
+        record.extend(Joint::ALL.iter().map(|&j| csv_float(c.joints.get(j))));
+        w.write_record(&record)?;
+    }
+    w.into_inner().map_err(|e| e.into_error().into())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn header_line() -> String {
+        header().join(",")
+    }
+
+    fn row(id: &str, board: &str, image: &str, knee: &str) -> String {
+        let mut fields = vec![id.to_string(), board.to_string(), image.to_string()];
+        fields.extend(Joint::ALL.iter().map(|j| {
+            if *j == Joint::LKneePitch {
+                knee.to_string()
+            } else {
+                format!("0.{}", j.index())
+            }
+        }));
+        fields.join(",")
+    }
+
+    fn parse_str(text: &str) -> Result<Vec<Capture>, String> {
+        parse(Path::new("d/captures.csv"), text.as_bytes()).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn reads_rows() {
+        let text = format!(
+            "{}\n{}\n\n{}\n",
+            header_line(),
+            row("3", "left", "images/3.png", "1.5"),
+            row("0", "right", "", "-0.25")
+        );
+        let c = parse_str(&text).unwrap();
+        assert_eq!(c.len(), 2);
+        assert_eq!((c[0].id, c[0].side, c[0].line), (3, Side::Left, 2));
+        assert_eq!(c[0].image.as_deref(), Some(Path::new("images/3.png")));
+        assert_eq!(c[0].joints.get(Joint::LKneePitch), 1.5);
+        assert_eq!(c[0].joints.get(Joint::HeadPitch), 0.1);
+        assert_eq!(
+            (c[1].id, c[1].side, c[1].line, c[1].image.clone()),
+            (0, Side::Right, 4, None)
+        );
+    }
+
+    #[test]
+    fn columns_by_name_in_any_order_extras_ignored() {
+        let mut names: Vec<&str> = Joint::ALL.iter().rev().map(|j| j.name()).collect();
+        names.insert(3, "note");
+        names.push("board");
+        names.push("capture");
+        let mut values: Vec<String> = Joint::ALL
+            .iter()
+            .rev()
+            .map(|j| format!("{}", j.index() as f64 / 10.0))
+            .collect();
+        values.insert(3, "hello".into());
+        values.push("right".into());
+        values.push("7".into());
+        let text = format!("{}\n{}\n", names.join(","), values.join(","));
+        let c = parse_str(&text).unwrap();
+        assert_eq!(c[0].id, 7);
+        assert_eq!(c[0].side, Side::Right);
+        assert_eq!(c[0].image, None);
+        for j in Joint::ALL {
+            assert_eq!(c[0].joints.get(j), j.index() as f64 / 10.0);
+        }
+    }
+
+    #[test]
+    fn row_errors() {
+        let h = header_line();
+        let cases = [
+            (
+                row("1", "left", "", "abc"),
+                "line 2, field LKneePitch: 'abc' is not a number",
+            ),
+            (
+                row("1", "left", "", "NaN"),
+                "line 2, field LKneePitch: 'NaN' is not a finite number",
+            ),
+            (
+                row("1", "left", "", ""),
+                "line 2, field LKneePitch: missing value, expected a number",
+            ),
+            (
+                row("-1", "left", "", "0"),
+                "line 2, field capture: must not be negative, got -1",
+            ),
+            (
+                row("x", "left", "", "0"),
+                "line 2, field capture: 'x' is not a non-negative integer",
+            ),
+            (
+                row("1", "Left", "", "0"),
+                "line 2, field board: unknown board 'Left', expected",
+            ),
+            (
+                row("1", "left", "/tmp/a.png", "0"),
+                "line 2, field image: image path '/tmp/a.png' is absolute",
+            ),
+            (
+                row("1", "left", "a/../../b.png", "0"),
+                "line 2, field image: image path 'a/../../b.png' leaves",
+            ),
+        ];
+        for (r, expected) in cases {
+            let e = parse_str(&format!("{h}\n{r}\n")).unwrap_err();
+            assert!(e.starts_with("d/captures.csv "), "{e}");
+            assert!(e.contains(expected), "{e:?} should contain {expected:?}");
+        }
+        let e = parse_str(&format!("{}\n", h.replace(",RAnkleRoll", ""))).unwrap_err();
+        assert_eq!(
+            e,
+            "d/captures.csv line 1, field RAnkleRoll: the header has no column 'RAnkleRoll'"
+        );
+    }
+
+    #[test]
+    fn image_paths() {
+        assert!(check_image_path(Path::new("images/a.png")).is_ok());
+        assert!(check_image_path(Path::new("./a/../b.png")).is_ok());
+        assert!(check_image_path(Path::new("../b.png")).is_err());
+        assert!(check_image_path(Path::new("/b.png")).is_err());
+        assert!(check_image_path(Path::new("")).is_err());
+    }
+
+    #[test]
+    fn duplicates_name_both_lines() {
+        let h = header_line();
+        let text = format!(
+            "{h}\n{}\n{}\n{}\n",
+            row("4", "left", "", "0"),
+            row("5", "left", "", "0"),
+            row("4", "right", "", "0")
+        );
+        let captures = parse_str(&text).unwrap();
+        let e = validate(Path::new("d/captures.csv"), &captures, |_, c| c.line).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "d/captures.csv line 4, field capture: capture id 4 is used twice: on line 2 and on line 4"
+        );
+    }
+}

@@ -1,0 +1,233 @@
+//! `truth.toml`: the true parameters of a simulated dataset (SPEC section 6).
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use crate::model::{PARAMETER_COUNT, Param};
+
+use super::Truth;
+use super::error::{DatasetError, Location};
+use super::toml_doc::TomlDoc;
+use super::units::{report_value, toml_float};
+
+/// Reads the truth from the content of `truth.toml` at `path`.
+pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Truth, DatasetError> {
+    let doc = TomlDoc::new(path, bytes)?;
+    let parsed = doc.parse()?;
+    let root = doc.root(&parsed);
+    root.deny_unknown(&["parameters", "simulation"])?;
+    let Some(parameters) = root.table("parameters")? else {
+        return Err(DatasetError::invalid(
+            Location::file(path).field("parameters"),
+            "missing table [parameters] (the true parameter values in deg / mm)",
+        ));
+    };
+    let mut values = [0.0; PARAMETER_COUNT];
+    for entry in parameters.entries() {
+        let name = entry.key.strip_prefix("parameters.").unwrap_or(&entry.key);
+        let Some(param) = Param::from_name(name) else {
+            let known: Vec<_> = Param::ALL.iter().map(|p| p.name()).collect();
+            return Err(DatasetError::invalid(
+                entry.at(),
+                format!("unknown parameter '{name}' (known: {})", known.join(", ")),
+            ));
+        };
+        values[param.index()] = param.unit().from_report(entry.f64()?);
+    }
+    let simulation = match root.get("simulation") {
+        None => toml::Table::new(),
+        Some(value) => {
+            value.table()?;
+            value.deny_non_finite()?;
+            let mut whole: toml::Table = toml::from_str(doc.text()).map_err(|e| {
+                DatasetError::invalid(
+                    Location::file(path),
+                    format!("invalid TOML: {}", e.message()),
+                )
+            })?;
+            match whole.remove("simulation") {
+                Some(toml::Value::Table(table)) => table,
+                _ => toml::Table::new(),
+            }
+        }
+    };
+    Ok(Truth { values, simulation })
+}
+
+/// Checks a truth in memory: finite values everywhere.
+pub(crate) fn validate(path: &Path, truth: &Truth) -> Result<(), DatasetError> {
+    for param in Param::ALL {
+        let x = truth.values[param.index()];
+        if !x.is_finite() {
+            return Err(DatasetError::invalid(
+                Location::file(path).field(format!("parameters.{param}")),
+                format!("{x} is not a finite number"),
+            ));
+        }
+    }
+    for (key, value) in &truth.simulation {
+        non_finite(&format!("simulation.{key}"), value).map_err(|(field, x)| {
+            DatasetError::invalid(
+                Location::file(path).field(field),
+                format!("{x} is not a finite number"),
+            )
+        })?;
+    }
+    Ok(())
+}
+
+fn non_finite(key: &str, value: &toml::Value) -> Result<(), (String, f64)> {
+    match value {
+        toml::Value::Float(x) if !x.is_finite() => Err((key.to_string(), *x)),
+        toml::Value::Array(items) => items
+            .iter()
+            .enumerate()
+            .try_for_each(|(i, item)| non_finite(&format!("{key}[{i}]"), item)),
+        toml::Value::Table(table) => table
+            .iter()
+            .try_for_each(|(k, item)| non_finite(&format!("{key}.{k}"), item)),
+        _ => Ok(()),
+    }
+}
+
+/// `truth.toml` for `truth` (already validated): every parameter in [`Param::ALL`] order,
+/// in report units, then the `[simulation]` table.
+pub(crate) fn render(truth: &Truth) -> Result<String, toml::ser::Error> {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# The true parameters of this simulated dataset, in report units (deg / mm)."
+    );
+    let _ = writeln!(s);
+    let _ = writeln!(s, "[parameters]");
+    for param in Param::ALL {
+        let value = report_value(param.unit(), truth.values[param.index()]);
+        let _ = writeln!(
+            s,
+            "{param} = {}   # {}",
+            toml_float(value),
+            param.unit().name()
+        );
+    }
+    let _ = writeln!(s);
+    let mut wrapper = toml::Table::new();
+    wrapper.insert(
+        "simulation".into(),
+        toml::Value::Table(truth.simulation.clone()),
+    );
+    s.push_str(&toml::to_string(&wrapper)?);
+    Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse_str(text: &str) -> Result<Truth, String> {
+        parse(Path::new("d/truth.toml"), text.as_bytes()).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn reads_report_units() {
+        let t = parse_str(
+            "[parameters]\nCamYaw = 0.4764\nLBoardTransX = -2\nHeadYaw = 1.5\n\n\
+             [simulation]\nseed = 7\npx_noise = 0.5\nnote = 'x'\nsub = { a = [1, 2] }\n",
+        )
+        .unwrap();
+        assert_eq!(t.values[Param::CamYaw.index()], 0.4764f64.to_radians());
+        assert_eq!(t.values[Param::LBoardTransX.index()], -2.0);
+        assert_eq!(t.values[Param::HeadYaw.index()], 1.5f64.to_radians());
+        assert_eq!(t.values[Param::CamPitch.index()], 0.0);
+        assert_eq!(t.simulation["seed"].as_integer(), Some(7));
+        assert_eq!(t.simulation["px_noise"].as_float(), Some(0.5));
+        assert_eq!(t.simulation.len(), 4);
+        let t = parse_str("[parameters]\n").unwrap();
+        assert!(t.simulation.is_empty());
+    }
+
+    #[test]
+    fn errors() {
+        let cases = [
+            (
+                "[parameters]\nCamYaw = 1\nCamYow = 2\n",
+                "d/truth.toml line 3, field parameters.CamYow: unknown parameter 'CamYow' (known: CamYaw, CamPitch",
+            ),
+            (
+                "[parameters]\nCamYaw = nan\n",
+                "d/truth.toml line 2, field parameters.CamYaw: nan is not a finite number",
+            ),
+            (
+                "[parameters]\nCamYaw = '1'\n",
+                "d/truth.toml line 2, field parameters.CamYaw: expected a number, found a string",
+            ),
+            (
+                "[simulation]\nseed = 1\n",
+                "d/truth.toml, field parameters: missing table [parameters]",
+            ),
+            (
+                "[parameters]\n[simulation]\nnoise = -inf\n",
+                "d/truth.toml line 3, field simulation.noise: -inf is not a finite number",
+            ),
+            (
+                "[parameters]\n[other]\n",
+                "d/truth.toml line 2, field other: unknown key 'other' at the top level",
+            ),
+            (
+                "[parameters]\nsimulation = 3\n",
+                "unknown parameter 'simulation'",
+            ),
+            (
+                "simulation = 3\n[parameters]\n",
+                "d/truth.toml line 1, field simulation: expected a table, found an integer",
+            ),
+        ];
+        for (text, expected) in cases {
+            let e = parse_str(text).unwrap_err();
+            assert!(e.contains(expected), "{e:?} should contain {expected:?}");
+        }
+    }
+
+    #[test]
+    fn render_round_trips() {
+        let mut values = [0.0; PARAMETER_COUNT];
+        let report = [
+            0.4764, -4.5627, -1.7991, -2.2938, 0.9692, 0.2299, -1.1442, 1.6708, 0.0267,
+        ];
+        for (i, r) in report.iter().enumerate() {
+            values[i] = Param::ALL[i].unit().from_report(*r);
+        }
+        values[Param::RBoardTransY.index()] = 2.2007;
+        let mut simulation = toml::Table::new();
+        simulation.insert("seed".into(), toml::Value::Integer(42));
+        simulation.insert("px_noise".into(), toml::Value::Float(0.1));
+        let truth = Truth { values, simulation };
+        let text = render(&truth).unwrap();
+        assert!(text.contains("\nCamYaw = 0.4764   # deg\n"), "{text}");
+        assert!(text.contains("\nRBoardTransY = 2.2007   # mm\n"), "{text}");
+        assert_eq!(parse(Path::new("t"), text.as_bytes()).unwrap(), truth);
+    }
+
+    #[test]
+    fn validate_in_memory() {
+        let mut truth = Truth {
+            values: [0.0; PARAMETER_COUNT],
+            simulation: toml::Table::new(),
+        };
+        assert!(validate(Path::new("t.toml"), &truth).is_ok());
+        truth.simulation.insert(
+            "n".into(),
+            toml::Value::Array(vec![toml::Value::Float(f64::NAN)]),
+        );
+        let e = validate(Path::new("t.toml"), &truth).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "t.toml, field simulation.n[0]: NaN is not a finite number"
+        );
+        truth.values[Param::CamRoll.index()] = f64::INFINITY;
+        let e = validate(Path::new("t.toml"), &truth).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "t.toml, field parameters.CamRoll: inf is not a finite number"
+        );
+    }
+}
