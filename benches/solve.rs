@@ -7,27 +7,19 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use naocalib::model::{FixedSet, Model};
 use naocalib::sim::{SimOptions, simulate};
-use naocalib::solve::{Backend, Problem, solve};
+use naocalib::solve::{Problem, backend, backend_names, solve};
 
 fn paper_sized() -> Problem {
     let dataset = simulate(&Model::default(), &SimOptions::default()).expect("simulated");
     Problem::from_dataset(&dataset, FixedSet::default()).expect("problem")
 }
 
-fn backends() -> Vec<Box<dyn Backend>> {
-    let mut list: Vec<Box<dyn Backend>> = Vec::new();
-    #[cfg(feature = "ceres")]
-    list.push(Box::new(naocalib::solve::ceres::Ceres { verbose: false }));
-    list.push(Box::new(naocalib::solve::lm::MinpackLm));
-    list.push(Box::new(naocalib::solve::tiny::Tiny));
-    list
-}
-
 fn bench_solve(c: &mut Criterion) {
     let problem = paper_sized();
     let mut group = c.benchmark_group("solve_paper_sized");
     group.sample_size(20);
-    for backend in backends() {
+    for name in backend_names() {
+        let backend = backend(name, false).expect("listed backend");
         group.bench_function(backend.name(), |b| {
             b.iter(|| solve(&problem, backend.as_ref()).expect("solved"))
         });

@@ -54,9 +54,9 @@ fn pose_a_transforms_match_urdf() {
         [0.1853, 0.9553, 0.2302],
         [-0.7789, 0.0, 0.6272],
     ];
-    for i in 0..3 {
-        for j in 0..3 {
-            assert_close(cam.rotation[i][j], rows[i][j], 1e-4, "T_OC rotation");
+    for (got, want) in cam.rotation.iter().zip(&rows) {
+        for (g, w) in got.iter().zip(want) {
+            assert_close(*g, *w, 1e-4, "T_OC rotation");
         }
     }
     let left = model.robot.sole_chain(Side::Left, &joints).eval(&zero);

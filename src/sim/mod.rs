@@ -277,9 +277,8 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
             "--stances and --heads must be at least 1".into(),
         ));
     }
-    if !(options.px_noise >= 0.0 && options.px_noise.is_finite())
-        || !(options.joint_noise >= 0.0 && options.joint_noise.is_finite())
-    {
+    let valid = |x: f64| x.is_finite() && x >= 0.0;
+    if !valid(options.px_noise) || !valid(options.joint_noise) {
         return Err(SimError::Options(
             "noise levels must be finite and not negative".into(),
         ));

@@ -129,7 +129,7 @@ fn capture_pass(
     let derivs = residuals
         .iter()
         .map(|d| {
-            let eps = d.eps.clone().unwrap_generic(Const::<WIDTH>, U1);
+            let eps = d.eps.unwrap_generic(Const::<WIDTH>, U1);
             std::array::from_fn(|c| eps[c])
         })
         .collect();

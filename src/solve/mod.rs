@@ -75,6 +75,28 @@ pub trait Backend {
     fn solve(&self, problem: &Problem) -> Result<BackendResult, SolveError>;
 }
 
+/// Names of the available backends, the default first.
+pub fn backend_names() -> Vec<&'static str> {
+    let mut names = Vec::new();
+    if cfg!(feature = "ceres") {
+        names.push("ceres");
+    }
+    names.extend(["lm", "tiny"]);
+    names
+}
+
+/// The backend called `name` (see [`backend_names`]); `verbose` lets it log progress.
+pub fn backend(name: &str, verbose: bool) -> Option<Box<dyn Backend>> {
+    let _ = verbose;
+    match name {
+        #[cfg(feature = "ceres")]
+        "ceres" => Some(Box::new(ceres::Ceres { verbose })),
+        "lm" => Some(Box::new(lm::MinpackLm)),
+        "tiny" => Some(Box::new(tiny::Tiny)),
+        _ => None,
+    }
+}
+
 /// A calibration result: parameters with their uncertainty, and how well the model fits.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Solution {

@@ -232,6 +232,17 @@ impl Problem {
                 whitening: None,
             });
         }
+        let free = fixed.free().len();
+        let residuals: usize = captures.iter().map(CaptureTerm::residual_count).sum();
+        if residuals <= free {
+            return Err(super::SolveError::Invalid(format!(
+                "{}: too few corners to calibrate: {} vertices of known captures give {residuals} \
+                 residuals, but {free} parameters are free (hold some fixed with --fix, or \
+                 add captures)",
+                dataset.dir.join("corners.csv").display(),
+                residuals / 2,
+            )));
+        }
         Ok(Problem {
             camera: model.camera,
             captures,

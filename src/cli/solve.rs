@@ -1,0 +1,79 @@
+//! `naocalib solve`: calibrate one dataset and print the result.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+use clap::Args;
+
+use super::DEFAULT_SOLVER;
+use crate::dataset::Dataset;
+use crate::model::{FixedSet, parameters::parse_param_list};
+use crate::solve::{self, Problem};
+
+#[derive(Debug, Args)]
+pub struct SolveArgs {
+    /// Dataset directory (dataset.toml, captures.csv, corners.csv).
+    dataset: PathBuf,
+    /// Print the result as JSON (SPEC section 7).
+    #[arg(long)]
+    json: bool,
+    /// Parameters to hold fixed at zero, comma-separated (e.g. CamYaw,LBoardRotZ).
+    #[arg(long, value_name = "NAMES")]
+    fix: Option<String>,
+    /// Parameters to estimate that are held fixed by default (HeadYaw,HeadPitch).
+    #[arg(long, value_name = "NAMES")]
+    free: Option<String>,
+    /// Least-squares backend: ceres (default), lm (levenberg-marquardt crate), tiny
+    /// (tiny-solver).
+    #[arg(long, default_value = DEFAULT_SOLVER)]
+    solver: String,
+}
+
+/// The held parameters for `--fix` and `--free`.
+pub fn fixed_set(fix: Option<&str>, free: Option<&str>) -> Result<FixedSet> {
+    let mut fixed = FixedSet::default();
+    for p in parse_param_list(free.unwrap_or(""))
+        .map_err(anyhow::Error::msg)
+        .context("--free")?
+    {
+        fixed.set(p, false);
+    }
+    for p in parse_param_list(fix.unwrap_or(""))
+        .map_err(anyhow::Error::msg)
+        .context("--fix")?
+    {
+        fixed.set(p, true);
+    }
+    Ok(fixed)
+}
+
+fn load(path: &Path) -> Result<Dataset> {
+    Ok(Dataset::load(path)?)
+}
+
+/// Runs `naocalib solve`.
+pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
+    let dataset = load(&args.dataset)?;
+    let fixed = fixed_set(args.fix.as_deref(), args.free.as_deref())?;
+    let backend = super::backend(&args.solver, verbose)?;
+    let problem = Problem::from_dataset(&dataset, fixed)?;
+    let solution = solve::solve(&problem, backend.as_ref())
+        .with_context(|| format!("solving {}", args.dataset.display()))?;
+    let truth = dataset.truth.as_ref().map(|t| &t.values[..]);
+    let mut stdout = std::io::stdout().lock();
+    if args.json {
+        let mut value = crate::report::json(&solution, truth);
+        value["dataset"] = serde_json::Value::String(args.dataset.display().to_string());
+        writeln!(stdout, "{}", serde_json::to_string_pretty(&value)?)?;
+    } else {
+        writeln!(stdout, "{}", args.dataset.display())?;
+        write!(stdout, "{}", crate::report::table(&solution, truth))?;
+    }
+    Ok(if solution.summary.converged {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(3)
+    })
+}

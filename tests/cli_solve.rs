@@ -1,0 +1,251 @@
+//! End to end through the `naocalib` binary: simulate → solve, and bad input that must end
+//! with a clear message (file, line, field) and exit code 1 — never a panic or an abort.
+
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+use assert_cmd::Command;
+use serde_json::Value;
+
+fn naocalib() -> Command {
+    Command::cargo_bin("naocalib").expect("binary built")
+}
+
+/// Simulates a small dataset (6 stances × 2 heads per leg) into `dir`.
+fn simulate_small(dir: &Path) {
+    let out = naocalib()
+        .args(["simulate", "--stances", "6", "--heads", "2", "--seed", "7"])
+        .arg(dir)
+        .output()
+        .expect("ran");
+    assert!(
+        out.status.success(),
+        "simulate failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+fn solve(dir: &Path, extra: &[&str]) -> Output {
+    naocalib()
+        .arg("solve")
+        .arg(dir)
+        .args(extra)
+        .output()
+        .expect("ran")
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// The run failed cleanly: exit code 1 (not a panic's 101, not a signal), one message.
+fn assert_clean_failure(out: &Output, needles: &[&str]) {
+    let err = stderr(out);
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "expected exit 1, got {:?}: {err}",
+        out.status
+    );
+    assert!(!err.contains("panicked"), "panic: {err}");
+    for needle in needles {
+        assert!(err.contains(needle), "message lacks '{needle}': {err}");
+    }
+}
+
+fn small_dataset() -> (tempfile::TempDir, PathBuf) {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let dir = tmp.path().join("ds");
+    simulate_small(&dir);
+    (tmp, dir)
+}
+
+fn edit(path: &Path, f: impl FnOnce(&str) -> String) {
+    let text = std::fs::read_to_string(path).expect("read");
+    std::fs::write(path, f(&text)).expect("write");
+}
+
+/// Replaces field `column` of data line `line` (1-based, header = 1) of a CSV file.
+fn set_field(path: &Path, line: usize, column: &str, value: &str) {
+    edit(path, |text| {
+        let mut lines: Vec<String> = text.lines().map(String::from).collect();
+        let col = lines[0]
+            .split(',')
+            .position(|c| c == column)
+            .expect("column");
+        let mut fields: Vec<String> = lines[line - 1].split(',').map(String::from).collect();
+        fields[col] = value.to_string();
+        lines[line - 1] = fields.join(",");
+        lines.join("\n") + "\n"
+    });
+}
+
+#[test]
+fn simulate_then_solve_recovers_truth_json() {
+    let (_tmp, dir) = small_dataset();
+    let out = solve(&dir, &["--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    assert_eq!(json["solver"], "ceres");
+    assert_eq!(json["converged"], true);
+    assert!(json["iterations"].as_u64().unwrap() > 0);
+    let rms = json["rms_px"].as_array().unwrap();
+    assert!(rms.iter().all(|r| r.as_f64().unwrap() < 0.2), "rms {rms:?}");
+    let params = json["parameters"].as_object().unwrap();
+    for name in [
+        "CamYaw",
+        "LHipPitch",
+        "RAnkleRoll",
+        "LBoardTransX",
+        "RBoardRotZ",
+    ] {
+        let p = &params[name];
+        let err = p["value"].as_f64().unwrap() - p["truth"].as_f64().unwrap();
+        let std = p["std"].as_f64().unwrap();
+        assert!(std > 0.0, "{name}: std {std}");
+        assert!(
+            err.abs() < 5.0 * std + 1e-9,
+            "{name}: error {err} vs std {std}"
+        );
+    }
+    assert_eq!(params["HeadYaw"]["fixed"], true);
+    assert_eq!(params["HeadYaw"]["std"], 0.0);
+}
+
+#[test]
+fn fix_holds_parameters_at_zero() {
+    let (_tmp, dir) = small_dataset();
+    let out = solve(&dir, &["--json", "--fix", "CamYaw,LBoardRotZ"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: Value = serde_json::from_slice(&out.stdout).unwrap();
+    for name in ["CamYaw", "LBoardRotZ"] {
+        assert_eq!(json["parameters"][name]["value"], 0.0);
+        assert_eq!(json["parameters"][name]["fixed"], true);
+    }
+}
+
+#[test]
+fn table_output_names_every_parameter() {
+    let (_tmp, dir) = small_dataset();
+    let out = solve(&dir, &[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    for name in ["CamYaw", "RBoardTransY", "rms x", "iterations", "truth"] {
+        assert!(text.contains(name), "table lacks {name}: {text}");
+    }
+    assert!(!text.contains("NaN"), "{text}");
+}
+
+#[test]
+fn unknown_fix_name_is_an_error() {
+    let (_tmp, dir) = small_dataset();
+    assert_clean_failure(&solve(&dir, &["--fix", "CamYawn"]), &["CamYawn", "--fix"]);
+}
+
+#[test]
+fn missing_column() {
+    let (_tmp, dir) = small_dataset();
+    let path = dir.join("captures.csv");
+    edit(&path, |t| t.replacen("LKneePitch", "LKnee", 1));
+    assert_clean_failure(&solve(&dir, &[]), &["captures.csv", "LKneePitch"]);
+}
+
+#[test]
+fn nan_joint_angle() {
+    let (_tmp, dir) = small_dataset();
+    set_field(&dir.join("captures.csv"), 3, "LHipRoll", "NaN");
+    assert_clean_failure(&solve(&dir, &[]), &["captures.csv", "line 3", "LHipRoll"]);
+}
+
+#[test]
+fn infinite_pixel() {
+    let (_tmp, dir) = small_dataset();
+    set_field(&dir.join("corners.csv"), 5, "u", "inf");
+    assert_clean_failure(&solve(&dir, &[]), &["corners.csv", "line 5", "u"]);
+}
+
+#[test]
+fn duplicate_capture_id() {
+    let (_tmp, dir) = small_dataset();
+    set_field(&dir.join("captures.csv"), 4, "capture", "0");
+    assert_clean_failure(&solve(&dir, &[]), &["captures.csv", "line 4", "capture"]);
+}
+
+#[test]
+fn corner_of_unknown_capture() {
+    let (_tmp, dir) = small_dataset();
+    set_field(&dir.join("corners.csv"), 2, "capture", "999");
+    assert_clean_failure(
+        &solve(&dir, &[]),
+        &["corners.csv", "line 2", "capture", "999"],
+    );
+}
+
+#[test]
+fn vertex_outside_board() {
+    let (_tmp, dir) = small_dataset();
+    set_field(&dir.join("corners.csv"), 6, "col", "6");
+    assert_clean_failure(&solve(&dir, &[]), &["corners.csv", "line 6", "col"]);
+}
+
+#[test]
+fn unknown_board_value() {
+    let (_tmp, dir) = small_dataset();
+    set_field(&dir.join("captures.csv"), 2, "board", "middle");
+    assert_clean_failure(
+        &solve(&dir, &[]),
+        &["captures.csv", "line 2", "board", "middle"],
+    );
+}
+
+#[test]
+fn empty_captures_file() {
+    let (_tmp, dir) = small_dataset();
+    std::fs::write(dir.join("captures.csv"), "").unwrap();
+    assert_clean_failure(&solve(&dir, &[]), &["captures.csv", "empty"]);
+}
+
+#[test]
+fn empty_dataset_toml() {
+    let (_tmp, dir) = small_dataset();
+    std::fs::write(dir.join("dataset.toml"), "").unwrap();
+    assert_clean_failure(&solve(&dir, &[]), &["dataset.toml", "camera"]);
+}
+
+#[test]
+fn missing_dataset_directory() {
+    let tmp = tempfile::tempdir().unwrap();
+    assert_clean_failure(&solve(&tmp.path().join("nope"), &[]), &["nope"]);
+}
+
+#[test]
+fn too_few_corners() {
+    let (_tmp, dir) = small_dataset();
+    edit(&dir.join("corners.csv"), |t| {
+        t.lines().take(9).collect::<Vec<_>>().join("\n") + "\n"
+    });
+    assert_clean_failure(&solve(&dir, &[]), &["corners.csv", "too few corners"]);
+}
+
+#[test]
+fn point_behind_camera() {
+    let (_tmp, dir) = small_dataset();
+    set_field(&dir.join("captures.csv"), 2, "HeadYaw", "3.1");
+    assert_clean_failure(
+        &solve(&dir, &[]),
+        &["captures.csv", "line 2", "behind the camera"],
+    );
+}
+
+#[test]
+fn simulate_refuses_to_overwrite() {
+    let (_tmp, dir) = small_dataset();
+    let before = std::fs::read(dir.join("corners.csv")).unwrap();
+    let out = naocalib()
+        .args(["simulate", "--seed", "9"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert_clean_failure(&out, &["--force"]);
+    assert_eq!(before, std::fs::read(dir.join("corners.csv")).unwrap());
+}
