@@ -123,6 +123,21 @@ pub struct Solution {
     pub residual_variance: f64,
     /// Wall time of the whole solve including the statistics [s].
     pub seconds: f64,
+    /// Every observed vertex's residual (projection − observation) before and after.
+    pub residuals: Vec<VertexResidual>,
+}
+
+/// The residual of one observed vertex at the start values and at the solution [px].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VertexResidual {
+    /// The capture id.
+    pub capture: u64,
+    /// Which vertex.
+    pub vertex: crate::model::Vertex,
+    /// `(u, v)` residual at the start values.
+    pub initial: [f64; 2],
+    /// `(u, v)` residual at the solution.
+    pub solved: [f64; 2],
 }
 
 impl Solution {
@@ -214,6 +229,7 @@ pub fn solve(problem: &Problem, backend: &dyn Backend) -> Result<Solution, Solve
         message: "the solution puts a vertex behind the camera".into(),
     })?;
     let initial_rms_px = problem.rms(&problem.initial).unwrap_or([f64::NAN; 2]);
+    let residuals = vertex_residuals(problem, &values);
     let dof = problem.residual_count().saturating_sub(free.len()).max(1);
     let residual_variance = 2.0 * result.summary.final_cost / dof as f64;
     let covariance = covariance::embed(
@@ -237,5 +253,29 @@ pub fn solve(problem: &Problem, backend: &dyn Backend) -> Result<Solution, Solve
         captures: problem.captures.len(),
         residual_variance,
         seconds: start.elapsed().as_secs_f64(),
+        residuals,
     })
+}
+
+/// Per-vertex residuals at the start values and at `values` (NaN where a vertex is behind
+/// the camera, which [`validate`] rules out at the start).
+fn vertex_residuals(problem: &Problem, values: &[f64]) -> Vec<VertexResidual> {
+    let mut out = Vec::with_capacity(problem.observation_count());
+    for term in &problem.captures {
+        let before = term.residuals(&problem.camera, &problem.initial);
+        let after = term.residuals(&problem.camera, values);
+        for (k, obs) in term.observations.iter().enumerate() {
+            let pick = |r: &Option<Vec<f64>>| {
+                r.as_ref()
+                    .map_or([f64::NAN; 2], |r| [r[2 * k], r[2 * k + 1]])
+            };
+            out.push(VertexResidual {
+                capture: term.capture,
+                vertex: obs.vertex,
+                initial: pick(&before),
+                solved: pick(&after),
+            });
+        }
+    }
+    out
 }
