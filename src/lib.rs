@@ -7,6 +7,7 @@
 //!
 //! Data flows one way: [`dataset`] → [`solve::Problem`] → [`solve::Solution`] → [`report`].
 
+pub mod batch;
 pub mod cli;
 pub mod dataset;
 pub mod model;

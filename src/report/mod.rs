@@ -1,6 +1,9 @@
 //! Reports of a [`Solution`]: the paper's Table 2 as text, and the result JSON of SPEC
 //! section 7. A report sees a solution (and optionally the truth), never a solver.
 
+pub mod export;
+pub mod plot;
+
 use std::fmt::Write as _;
 
 use serde_json::{Map, Value, json};

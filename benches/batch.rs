@@ -1,0 +1,2 @@
+//! Batch solving over many datasets (issue 6).
+fn main() {}

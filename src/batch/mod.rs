@@ -1,0 +1,1 @@
+//! Batch solving over many datasets.
