@@ -469,19 +469,27 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 // (JᵀJ)⁺ over all free parameters, row-major; zero rows/columns for parameters no
 // residual depends on. Empty when Ceres cannot compute it.
 bool covariance(Built& built, std::size_t n, rust::Vec<double>& out) {
-  ceres::Covariance::Options options;
-  options.algorithm_type = ceres::DENSE_SVD;
-  options.null_space_rank = -1;
-  options.min_reciprocal_condition_number = 1e-14;
-  options.num_threads = 1;
-  ceres::Covariance cov(options);
   std::vector<const double*> blocks;
   for (int b : built.used()) blocks.push_back(built.block(b));
-  if (!cov.Compute(blocks, &built.problem())) return false;
+  // Sparse QR is fast but refuses a rank-deficient Jacobian; the dense SVD then gives the
+  // pseudo-inverse, dropping directions with σ²_min/σ²_max below 1e-14.
+  auto compute = [&](ceres::CovarianceAlgorithmType algorithm) {
+    ceres::Covariance::Options options;
+    options.algorithm_type = algorithm;
+    options.null_space_rank = -1;
+    options.min_reciprocal_condition_number = 1e-14;
+    options.num_threads = 1;
+    auto cov = std::make_unique<ceres::Covariance>(options);
+    if (!cov->Compute(blocks, &built.problem())) cov.reset();
+    return cov;
+  };
+  std::unique_ptr<ceres::Covariance> cov = compute(ceres::SPARSE_QR);
+  if (!cov) cov = compute(ceres::DENSE_SVD);
+  if (!cov) return false;
   const std::vector<int> columns = built.used_columns();
   const std::size_t d = columns.size();
   std::vector<double> dense(d * d);
-  if (!cov.GetCovarianceMatrix(blocks, dense.data())) return false;
+  if (!cov->GetCovarianceMatrix(blocks, dense.data())) return false;
   std::vector<double> full(n * n, 0.0);
   for (std::size_t i = 0; i < d; ++i)
     for (std::size_t j = 0; j < d; ++j) {

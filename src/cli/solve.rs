@@ -25,6 +25,16 @@ pub struct SolveArgs {
     /// Parameters to estimate that are held fixed by default (HeadYaw,HeadPitch).
     #[arg(long, value_name = "NAMES")]
     free: Option<String>,
+    /// Pixel noise σ [px] for the noise model; estimated from the residuals if not given.
+    #[arg(long, value_name = "PX")]
+    px_noise: Option<f64>,
+    /// Joint-angle noise σ per joint and capture [deg]; estimated if not given.
+    #[arg(long, value_name = "DEG")]
+    joint_noise_deg: Option<f64>,
+    /// Report the plain σ̂²(JᵀJ)⁻¹ instead of the noise model (over-confident under joint
+    /// noise).
+    #[arg(long)]
+    plain_std: bool,
     /// Least-squares backend: ceres (default), lm (levenberg-marquardt crate), tiny
     /// (tiny-solver).
     #[arg(long, default_value = DEFAULT_SOLVER)]
@@ -59,7 +69,24 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     let fixed = fixed_set(args.fix.as_deref(), args.free.as_deref())?;
     let backend = super::backend(&args.solver, verbose)?;
     let problem = Problem::from_dataset(&dataset, fixed)?;
-    let solution = solve::solve(&problem, backend.as_ref())
+    for (name, value) in [
+        ("--px-noise", args.px_noise),
+        ("--joint-noise-deg", args.joint_noise_deg),
+    ] {
+        if let Some(v) = value
+            && !(v.is_finite() && v > 0.0)
+        {
+            anyhow::bail!("{name} must be a positive number, got {v}");
+        }
+    }
+    let options = solve::UncertaintyOptions {
+        noise_model: !args.plain_std,
+        noise: solve::noise::NoiseOptions {
+            px: args.px_noise,
+            joint: args.joint_noise_deg.map(f64::to_radians),
+        },
+    };
+    let solution = solve::calibrate(&problem, backend.as_ref(), &options)
         .with_context(|| format!("solving {}", args.dataset.display()))?;
     let truth = dataset.truth.as_ref().map(|t| &t.values[..]);
     let mut stdout = std::io::stdout().lock();

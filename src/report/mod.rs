@@ -85,6 +85,17 @@ pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
         solution.initial_rms_px[0],
         solution.initial_rms_px[1]
     );
+    if let Some(noise) = solution.noise {
+        let _ = writeln!(
+            out,
+            "noise model: pixel σ {:.3} px, joint σ {:.3}° per capture; χ²/dof {:.2}",
+            noise.px,
+            noise.joint.to_degrees(),
+            solution.residual_variance
+        );
+    } else {
+        let _ = writeln!(out, "uncertainty: plain σ̂²(JᵀJ)⁻¹ (no noise model)");
+    }
     let _ = writeln!(
         out,
         "time {:.1} ms (optimiser and covariance {:.1} ms)",
@@ -126,6 +137,10 @@ pub fn json(solution: &Solution, truth: Option<&[f64]>) -> Value {
         "vertices": solution.observations,
         "residual_sigma_px": solution.residual_variance.sqrt(),
         "seconds": solution.seconds,
+        "noise": solution.noise.map(|n| json!({
+            "px": n.px,
+            "joint_deg": n.joint.to_degrees(),
+        })),
         "parameters": Value::Object(params),
     })
 }

@@ -10,6 +10,7 @@ pub mod ceres;
 pub mod covariance;
 pub mod jacobian;
 pub mod lm;
+pub mod noise;
 pub mod problem;
 pub mod tiny;
 
@@ -125,6 +126,9 @@ pub struct Solution {
     pub seconds: f64,
     /// Every observed vertex's residual (projection − observation) before and after.
     pub residuals: Vec<VertexResidual>,
+    /// The noise levels the uncertainty is based on (estimated or given); `None` when the
+    /// plain `σ̂²(JᵀJ)⁻¹` was used.
+    pub noise: Option<noise::NoiseLevels>,
 }
 
 /// The residual of one observed vertex at the start values and at the solution [px].
@@ -254,7 +258,83 @@ pub fn solve(problem: &Problem, backend: &dyn Backend) -> Result<Solution, Solve
         residual_variance,
         seconds: start.elapsed().as_secs_f64(),
         residuals,
+        noise: None,
     })
+}
+
+/// How [`calibrate`] arrives at the reported uncertainty.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UncertaintyOptions {
+    /// Whiten each capture with the pixel + joint noise model (SPEC section 8). When off,
+    /// the plain `σ̂²(JᵀJ)⁻¹` is reported, which is over-confident under joint noise.
+    pub noise_model: bool,
+    /// Given noise levels; missing ones are estimated from the residuals.
+    pub noise: noise::NoiseOptions,
+}
+
+impl Default for UncertaintyOptions {
+    fn default() -> Self {
+        UncertaintyOptions {
+            noise_model: true,
+            noise: noise::NoiseOptions::default(),
+        }
+    }
+}
+
+/// The whole identification phase: a first least-squares fit from the start values, then
+/// (with the noise model) the noise levels from its residuals, and a second fit whitened
+/// by each capture's residual covariance, whose covariance is the reported uncertainty.
+pub fn calibrate(
+    problem: &Problem,
+    backend: &dyn Backend,
+    options: &UncertaintyOptions,
+) -> Result<Solution, SolveError> {
+    let start = Instant::now();
+    let first = solve(problem, backend)?;
+    if !options.noise_model || problem.loss != Loss::Squared {
+        return Ok(first);
+    }
+    let fitted = problem.free().len();
+    let (levels, captures) = noise::estimate(problem, &first.values, fitted, options.noise)
+        .ok_or_else(|| SolveError::Backend {
+            solver: backend.name().into(),
+            message: "the first fit puts a vertex behind the camera".into(),
+        })?;
+    if levels.px <= 0.0 || !levels.px.is_finite() {
+        // A perfect fit (noise-free data): nothing to weight by.
+        return Ok(Solution {
+            noise: Some(levels),
+            ..first
+        });
+    }
+    let mut weighted = problem.clone();
+    weighted.initial = first.values;
+    for (term, cn) in weighted.captures.iter_mut().zip(&captures) {
+        term.whitening = Some(cn.whitening(levels));
+    }
+    let mut second = solve(&weighted, backend)?;
+    let estimated = options.noise.px.is_none() || options.noise.joint.is_none();
+    if !estimated {
+        // Both noise levels given: trust them, do not rescale by the residuals.
+        let scale = 1.0 / second.residual_variance;
+        second.covariance *= scale;
+        second.std = std::array::from_fn(|i| second.covariance[(i, i)].max(0.0).sqrt());
+    }
+    for (after, before) in second.residuals.iter_mut().zip(&first.residuals) {
+        after.initial = before.initial;
+    }
+    second.initial_rms_px = first.initial_rms_px;
+    second.summary.iterations += first.summary.iterations;
+    // Costs as plain least squares (unweighted), like the RMS.
+    second.summary.initial_cost = first.summary.initial_cost;
+    second.summary.final_cost = 0.5
+        * problem
+            .residuals(&second.values)
+            .map_or(f64::NAN, |r| r.iter().map(|x| x * x).sum::<f64>());
+    second.summary.seconds += first.summary.seconds;
+    second.noise = Some(levels);
+    second.seconds = start.elapsed().as_secs_f64();
+    Ok(second)
 }
 
 /// Per-vertex residuals at the start values and at `values` (NaN where a vertex is behind

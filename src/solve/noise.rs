@@ -1,0 +1,222 @@
+//! The measurement noise model: pixel noise on every vertex plus joint-angle noise shared by
+//! all vertices of a capture (SPEC section 8).
+//!
+//! A capture's residuals `r_c` then have the covariance
+//! `Σ_c = σ_px² I + J_θ,c diag(σ_θ²) J_θ,cᵀ`, where `J_θ,c = ∂r_c/∂θ` is the Jacobian with
+//! respect to that capture's joint angles (head and the leg in view). The solve is whitened
+//! by `W_c = Σ_c^{-1/2}`; the noise levels are estimated from the residuals unless given.
+
+use nalgebra::{Const, DMatrix, DVector, U1};
+use num_dual::{Derivative, DualSVec64};
+
+use super::problem::{CaptureTerm, Problem};
+use crate::model::{Camera, JOINT_COUNT, Joint, PARAMETER_COUNT, Param};
+
+/// The joints that can move one capture's vertices: two head joints and six leg joints.
+const JOINTS_PER_CAPTURE: usize = 8;
+type Dual = DualSVec64<JOINTS_PER_CAPTURE>;
+
+/// Noise levels: given on the command line, or estimated from the residuals.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NoiseLevels {
+    /// Pixel noise σ per coordinate [px].
+    pub px: f64,
+    /// Joint-angle noise σ per joint and capture [rad].
+    pub joint: f64,
+}
+
+/// How the noise levels are chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct NoiseOptions {
+    /// Pixel noise σ [px]; estimated from the residuals when `None`.
+    pub px: Option<f64>,
+    /// Joint-angle noise σ [rad]; estimated from the residuals when `None`.
+    pub joint: Option<f64>,
+}
+
+/// Per-capture quantities for the noise model.
+#[derive(Debug, Clone)]
+pub struct CaptureNoise {
+    /// Left singular vectors of `J_θ,c` (2k × d).
+    u: DMatrix<f64>,
+    /// Its squared singular values (d).
+    s2: DVector<f64>,
+}
+
+/// `J_θ,c`: derivatives of a capture's unweighted residuals with respect to the joint angles
+/// of the joints its chains use (equal to the derivatives with respect to their offsets).
+pub fn joint_jacobian(term: &CaptureTerm, camera: &Camera, params: &[f64]) -> Option<DMatrix<f64>> {
+    let joints: Vec<Param> = term
+        .chains
+        .camera
+        .params()
+        .into_iter()
+        .chain(term.chains.board.params())
+        .filter(|p| Joint::ALL.iter().any(|j| j.offset() == *p))
+        .collect();
+    debug_assert!(joints.len() <= JOINTS_PER_CAPTURE && JOINT_COUNT >= joints.len());
+    let mut x: Vec<Dual> = params.iter().map(|&v| Dual::from(v)).collect();
+    for (k, p) in joints.iter().enumerate() {
+        x[p.index()] = Dual::new(
+            params[p.index()],
+            Derivative::derivative_generic(Const::<JOINTS_PER_CAPTURE>, U1, k),
+        );
+    }
+    let r = term.residuals(camera, &x)?;
+    let mut jac = DMatrix::zeros(r.len(), joints.len());
+    for (i, d) in r.iter().enumerate() {
+        let eps = d.eps.unwrap_generic(Const::<JOINTS_PER_CAPTURE>, U1);
+        for k in 0..joints.len() {
+            jac[(i, k)] = eps[k];
+        }
+    }
+    Some(jac)
+}
+
+impl CaptureNoise {
+    /// Decomposes `J_θ,c` for a capture at parameters `params`.
+    pub fn new(term: &CaptureTerm, camera: &Camera, params: &[f64]) -> Option<CaptureNoise> {
+        let jac = joint_jacobian(term, camera, params)?;
+        let svd = jac.svd(true, false);
+        let u = svd.u.expect("requested U");
+        let s2 = svd.singular_values.map(|s| s * s);
+        Some(CaptureNoise { u, s2 })
+    }
+
+    /// The whitening matrix `Σ_c^{-1/2}` (symmetric) for the given noise levels.
+    pub fn whitening(&self, levels: NoiseLevels) -> DMatrix<f64> {
+        let n = self.u.nrows();
+        let a = levels.px * levels.px;
+        let b = levels.joint * levels.joint;
+        // Σ = a·I + U·diag(b·s²)·Uᵀ ⇒ Σ^{-1/2} = (I − U·diag(1 − sqrt(a/(a + b·s²)))·Uᵀ)/√a.
+        let shrink = self.s2.map(|s2| 1.0 - (a / (a + b * s2)).sqrt());
+        let mut w = DMatrix::identity(n, n);
+        w -= &self.u * DMatrix::from_diagonal(&shrink) * self.u.transpose();
+        w / a.sqrt()
+    }
+}
+
+/// Sufficient statistics of one capture's residual for the variance-component fit.
+struct Components {
+    /// Squares of the residual's coordinates along the joint directions.
+    z2: Vec<f64>,
+    /// The joint directions' squared singular values.
+    s2: Vec<f64>,
+    /// Energy of the residual outside the joint directions.
+    rest: f64,
+    /// Number of residuals.
+    n: usize,
+}
+
+/// Estimates the noise levels from the residuals at a solution by maximum likelihood over
+/// the two variance components (pixel, joint), with `fitted` parameters' worth of degrees
+/// of freedom taken off the pixel part. Given levels are kept.
+pub fn estimate(
+    problem: &Problem,
+    params: &[f64; PARAMETER_COUNT],
+    fitted: usize,
+    given: NoiseOptions,
+) -> Option<(NoiseLevels, Vec<CaptureNoise>)> {
+    let mut noise = Vec::with_capacity(problem.captures.len());
+    let mut parts = Vec::with_capacity(problem.captures.len());
+    for term in &problem.captures {
+        let cn = CaptureNoise::new(term, &problem.camera, params)?;
+        let r = DVector::from_vec(term.residuals(&problem.camera, params)?);
+        let z = cn.u.transpose() * &r;
+        let z2: Vec<f64> = z.iter().map(|x| x * x).collect();
+        let rest = (r.norm_squared() - z2.iter().sum::<f64>()).max(0.0);
+        parts.push(Components {
+            z2,
+            s2: cn.s2.iter().copied().collect(),
+            rest,
+            n: r.len(),
+        });
+        noise.push(cn);
+    }
+    let total: usize = parts.iter().map(|c| c.n).sum();
+    let dof = total.saturating_sub(fitted).max(1) as f64;
+    // For a ratio ρ = σ_θ²/σ_px², the best σ_px² is closed-form; profile over ρ.
+    let px2_given = given.px.map(|p| p * p);
+    let px2_for = |rho: f64| -> f64 {
+        px2_given.unwrap_or_else(|| {
+            parts
+                .iter()
+                .map(|c| {
+                    c.rest
+                        + c.z2
+                            .iter()
+                            .zip(&c.s2)
+                            .map(|(z2, s2)| z2 / (1.0 + rho * s2))
+                            .sum::<f64>()
+                })
+                .sum::<f64>()
+                / dof
+        })
+    };
+    let neg_log_lik = |rho: f64| -> f64 {
+        let a = px2_for(rho).max(1e-300);
+        parts
+            .iter()
+            .map(|c| {
+                let mut v = c.n as f64 * a.ln() + c.rest / a;
+                for (z2, s2) in c.z2.iter().zip(&c.s2) {
+                    let var = a * (1.0 + rho * s2);
+                    v += var.ln() - a.ln() + z2 / var;
+                }
+                v
+            })
+            .sum()
+    };
+    let rho = match (given.joint, px2_given) {
+        (Some(j), Some(a)) => j * j / a,
+        (Some(j), None) => {
+            // σ_θ given, σ_px estimated: fixed point of σ_px² = px2_for(σ_θ² / σ_px²).
+            let mut a = px2_for(0.0).max(1e-300);
+            for _ in 0..100 {
+                a = px2_for(j * j / a).max(1e-300);
+            }
+            j * j / a
+        }
+        (None, _) => {
+            let best = golden_section(|l| neg_log_lik(l.exp()), -40.0, 20.0).exp();
+            if neg_log_lik(0.0) <= neg_log_lik(best) {
+                0.0
+            } else {
+                best
+            }
+        }
+    };
+    let px2 = px2_for(rho);
+    let levels = NoiseLevels {
+        px: px2.sqrt(),
+        joint: (rho * px2).sqrt(),
+    };
+    Some((levels, noise))
+}
+
+/// Minimises a unimodal function on `[lo, hi]` by golden-section search.
+fn golden_section(f: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> f64 {
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    let mut a = hi - g * (hi - lo);
+    let mut b = lo + g * (hi - lo);
+    let (mut fa, mut fb) = (f(a), f(b));
+    for _ in 0..100 {
+        if fa < fb {
+            hi = b;
+            b = a;
+            fb = fa;
+            a = hi - g * (hi - lo);
+            fa = f(a);
+        } else {
+            lo = a;
+            a = b;
+            fa = fb;
+            b = lo + g * (hi - lo);
+            fb = f(b);
+        }
+        if hi - lo < 1e-6 {
+            break;
+        }
+    }
+    (lo + hi) / 2.0
+}
