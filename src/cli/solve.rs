@@ -35,6 +35,9 @@ pub struct SolveArgs {
     /// noise).
     #[arg(long)]
     plain_std: bool,
+    /// Also estimate the uncertainty by a capture bootstrap with N refits.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    bootstrap: usize,
     /// Least-squares backend: ceres (default), lm (levenberg-marquardt crate), tiny
     /// (tiny-solver).
     #[arg(long, default_value = DEFAULT_SOLVER)]
@@ -85,6 +88,8 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
             px: args.px_noise,
             joint: args.joint_noise_deg.map(f64::to_radians),
         },
+        bootstrap: args.bootstrap,
+        seed: 1,
     };
     let solution = solve::calibrate(&problem, backend.as_ref(), &options)
         .with_context(|| format!("solving {}", args.dataset.display()))?;

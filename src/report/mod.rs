@@ -20,15 +20,31 @@ pub fn shown_parameters(solution: &Solution) -> Vec<Param> {
         .collect()
 }
 
-/// The human-readable table: value ± one sigma per parameter (and truth / error when the
-/// truth is known), then RMS, iterations and time.
+/// A one-sigma cell: the value, `fixed`, or `undet.` when the data do not determine it.
+fn sigma_cell(solution: &Solution, p: Param, std: Option<f64>) -> String {
+    if solution.fixed.is_fixed(p) {
+        "fixed".into()
+    } else if !solution.is_determined(p) {
+        "undet.".into()
+    } else {
+        std.map_or_else(|| "-".into(), |s| format!("{:.4}", p.unit().to_report(s)))
+    }
+}
+
+/// The human-readable table: value ± one sigma per parameter, the sandwich and bootstrap
+/// one-sigma beside it, truth and error when the truth is known; then fit statistics, the
+/// noise model and what the data cannot determine.
 pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
     let mut out = String::new();
+    let boot = solution.bootstrap.as_ref();
     let _ = write!(
         out,
-        "{:<14} {:>10} {:>9}  {:<4}",
-        "parameter", "value", "±1σ", "unit"
+        "{:<14} {:>10} {:>9}  {:<4} {:>9}",
+        "parameter", "value", "±1σ", "unit", "sandwich"
     );
+    if boot.is_some() {
+        let _ = write!(out, " {:>9}", "bootstrap");
+    }
     if truth.is_some() {
         let _ = write!(out, " {:>10} {:>9} {:>6}", "truth", "error", "err/σ");
     }
@@ -36,27 +52,30 @@ pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
     for p in shown_parameters(solution) {
         let unit = p.unit();
         let value = solution.report_value(p);
-        let fixed = solution.fixed.is_fixed(p);
-        let std = if fixed {
-            "fixed".to_string()
-        } else {
-            format!("{:.4}", solution.report_std(p))
-        };
+        let std = sigma_cell(solution, p, Some(solution.std[p.index()]));
+        let sandwich = sigma_cell(solution, p, solution.sandwich_std.map(|s| s[p.index()]));
         let _ = write!(
             out,
-            "{:<14} {:>10.4} {:>9}  {:<4}",
+            "{:<14} {:>10.4} {:>9}  {:<4} {:>9}",
             p.name(),
             value,
             std,
-            unit.name()
+            unit.name(),
+            sandwich
         );
+        if let Some(b) = boot {
+            let _ = write!(out, " {:>9}", sigma_cell(solution, p, Some(b.std[p.index()])));
+        }
         if let Some(truth) = truth {
             let t = unit.to_report(truth[p.index()]);
             let err = value - t;
-            let z = if fixed || solution.std[p.index()] == 0.0 {
-                String::from("-")
-            } else {
+            let usable = !solution.fixed.is_fixed(p)
+                && solution.is_determined(p)
+                && solution.std[p.index()] > 0.0;
+            let z = if usable {
                 format!("{:.2}", err / solution.report_std(p))
+            } else {
+                String::from("-")
             };
             let _ = write!(out, " {:>10.4} {:>9.4} {:>6}", t, err, z);
         }
@@ -96,6 +115,14 @@ pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
     } else {
         let _ = writeln!(out, "uncertainty: plain σ̂²(JᵀJ)⁻¹ (no noise model)");
     }
+    if let Some(b) = boot {
+        let _ = writeln!(
+            out,
+            "bootstrap: {} refits over resampled captures ({} failed)",
+            b.replicates, b.failed
+        );
+    }
+    out.push_str(&identifiability_text(solution));
     let _ = writeln!(
         out,
         "time {:.1} ms (optimiser and covariance {:.1} ms)",
@@ -110,11 +137,28 @@ pub fn json(solution: &Solution, truth: Option<&[f64]>) -> Value {
     let mut params = Map::new();
     for p in Param::ALL {
         let fixed = solution.fixed.is_fixed(p);
+        let determined = solution.is_determined(p);
+        let std = if fixed {
+            json!(0.0)
+        } else if determined {
+            json!(solution.report_std(p))
+        } else {
+            Value::Null
+        };
         let mut entry = json!({
             "value": solution.report_value(p),
-            "std": if fixed { 0.0 } else { solution.report_std(p) },
+            "std": std,
             "unit": p.unit().name(),
         });
+        if !fixed && !determined {
+            entry["determined"] = Value::Bool(false);
+        }
+        if let (Some(sw), false, true) = (solution.sandwich_std, fixed, determined) {
+            entry["std_sandwich"] = json!(p.unit().to_report(sw[p.index()]));
+        }
+        if let (Some(b), false, true) = (&solution.bootstrap, fixed, determined) {
+            entry["std_bootstrap"] = json!(p.unit().to_report(b.std[p.index()]));
+        }
         if fixed {
             entry["fixed"] = Value::Bool(true);
         }
@@ -141,6 +185,78 @@ pub fn json(solution: &Solution, truth: Option<&[f64]>) -> Value {
             "px": n.px,
             "joint_deg": n.joint.to_degrees(),
         })),
+        "identifiability": identifiability_json(solution),
         "parameters": Value::Object(params),
+    })
+}
+
+/// The identifiability part of the text report.
+pub fn identifiability_text(solution: &Solution) -> String {
+    let id = &solution.identifiability;
+    let mut out = String::new();
+    let condition = id
+        .condition_number
+        .map_or_else(|| "infinite".to_string(), |c| format!("{c:.0}"));
+    let _ = writeln!(
+        out,
+        "identifiability: rank {} of {} free parameters, condition number {} (column-scaled)",
+        id.rank, id.free, condition
+    );
+    if !id.correlated.is_empty() {
+        let pairs: Vec<String> = id
+            .correlated
+            .iter()
+            .take(6)
+            .map(|(a, b, r)| format!("{a}/{b} {r:+.2}"))
+            .collect();
+        let _ = writeln!(out, "  strongly correlated: {}", pairs.join(", "));
+    }
+    for d in &id.weak {
+        let _ = writeln!(
+            out,
+            "  weakly determined: {} (relative singular value {:.1e})",
+            d.describe(),
+            d.relative_singular_value
+        );
+    }
+    for p in &id.unobserved {
+        let _ = writeln!(out, "  NOT observed by any capture: {p}");
+    }
+    for d in &id.undetermined {
+        let _ = writeln!(out, "  NOT determined: {}", d.describe());
+    }
+    if !id.suggest_fix.is_empty() {
+        let names: Vec<&str> = id.suggest_fix.iter().map(|p| p.name()).collect();
+        let _ = writeln!(
+            out,
+            "  the data cannot determine every parameter; hold some fixed, e.g. --fix {}",
+            names.join(",")
+        );
+    }
+    out
+}
+
+/// The identifiability part of the JSON.
+fn identifiability_json(solution: &Solution) -> Value {
+    let id = &solution.identifiability;
+    let direction = |d: &crate::solve::uncertainty::Direction| {
+        json!({
+            "combination": d.describe(),
+            "relative_singular_value": d.relative_singular_value,
+            "terms": d.terms.iter().map(|(p, c)| json!([p.name(), c])).collect::<Vec<_>>(),
+        })
+    };
+    json!({
+        "rank": id.rank,
+        "free": id.free,
+        "condition_number": id.condition_number,
+        "singular_values": id.singular_values,
+        "correlated": id.correlated.iter()
+            .map(|(a, b, r)| json!({"a": a.name(), "b": b.name(), "r": r}))
+            .collect::<Vec<_>>(),
+        "weak": id.weak.iter().map(direction).collect::<Vec<_>>(),
+        "undetermined": id.undetermined.iter().map(direction).collect::<Vec<_>>(),
+        "unobserved": id.unobserved.iter().map(|p| p.name()).collect::<Vec<_>>(),
+        "suggest_fix": id.suggest_fix.iter().map(|p| p.name()).collect::<Vec<_>>(),
     })
 }

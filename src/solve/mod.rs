@@ -13,6 +13,7 @@ pub mod lm;
 pub mod noise;
 pub mod problem;
 pub mod tiny;
+pub mod uncertainty;
 
 use std::time::Instant;
 
@@ -129,6 +130,30 @@ pub struct Solution {
     /// The noise levels the uncertainty is based on (estimated or given); `None` when the
     /// plain `σ̂²(JᵀJ)⁻¹` was used.
     pub noise: Option<noise::NoiseLevels>,
+    /// One-sigma from the capture-clustered sandwich (internal units), beside `std`.
+    pub sandwich_std: Option<[f64; PARAMETER_COUNT]>,
+    /// One-sigma from the capture bootstrap, when asked for.
+    pub bootstrap: Option<BootstrapStd>,
+    /// What the data determine, and what not.
+    pub identifiability: uncertainty::Identifiability,
+}
+
+/// The capture bootstrap's one-sigma.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BootstrapStd {
+    /// One-sigma of every parameter, internal units.
+    pub std: [f64; PARAMETER_COUNT],
+    /// Refits done.
+    pub replicates: usize,
+    /// Refits that failed or did not converge (left out).
+    pub failed: usize,
+}
+
+impl Solution {
+    /// Whether the data determine `p` (a held parameter counts as determined).
+    pub fn is_determined(&self, p: Param) -> bool {
+        self.identifiability.determined.get(p.index()).copied().unwrap_or(true)
+    }
 }
 
 /// The residual of one observed vertex at the start values and at the solution [px].
@@ -245,6 +270,10 @@ pub fn solve(problem: &Problem, backend: &dyn Backend) -> Result<Solution, Solve
         residual_variance,
     );
     let std = std::array::from_fn(|i| covariance[(i, i)].max(0.0).sqrt());
+    let identifiability =
+        uncertainty::identifiability(problem, &result.free_values, &covariance);
+    let sandwich_std = uncertainty::sandwich(problem, &result.free_values)
+        .map(|c| std::array::from_fn(|i| c[(i, i)].max(0.0).sqrt()));
     Ok(Solution {
         summary: result.summary,
         values,
@@ -259,8 +288,14 @@ pub fn solve(problem: &Problem, backend: &dyn Backend) -> Result<Solution, Solve
         seconds: start.elapsed().as_secs_f64(),
         residuals,
         noise: None,
+        sandwich_std,
+        bootstrap: None,
+        identifiability,
     })
 }
+
+/// Rounds of (estimate the noise, whitened refit) after the first fit.
+const NOISE_ROUNDS: usize = 2;
 
 /// How [`calibrate`] arrives at the reported uncertainty.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -270,6 +305,10 @@ pub struct UncertaintyOptions {
     pub noise_model: bool,
     /// Given noise levels; missing ones are estimated from the residuals.
     pub noise: noise::NoiseOptions,
+    /// Capture-bootstrap refits (0: none).
+    pub bootstrap: usize,
+    /// Seed of the bootstrap's resampling.
+    pub seed: u64,
 }
 
 impl Default for UncertaintyOptions {
@@ -277,6 +316,8 @@ impl Default for UncertaintyOptions {
         UncertaintyOptions {
             noise_model: true,
             noise: noise::NoiseOptions::default(),
+            bootstrap: 0,
+            seed: 1,
         }
     }
 }
@@ -289,30 +330,64 @@ pub fn calibrate(
     backend: &dyn Backend,
     options: &UncertaintyOptions,
 ) -> Result<Solution, SolveError> {
+    let (mut solution, last) = fit(problem, backend, options)?;
+    if options.bootstrap > 0 {
+        let (std, failed) = uncertainty::bootstrap(
+            last.as_ref().unwrap_or(problem),
+            &solution,
+            backend,
+            options.bootstrap,
+            options.seed,
+        )?;
+        solution.bootstrap = Some(BootstrapStd { std, replicates: options.bootstrap, failed });
+    }
+    Ok(solution)
+}
+
+/// The fits of [`calibrate`]; also returns the last whitened problem, if any.
+fn fit(
+    problem: &Problem,
+    backend: &dyn Backend,
+    options: &UncertaintyOptions,
+) -> Result<(Solution, Option<Problem>), SolveError> {
     let start = Instant::now();
     let first = solve(problem, backend)?;
     if !options.noise_model || problem.loss != Loss::Squared {
-        return Ok(first);
+        return Ok((first, None));
     }
+    // The first (unweighted) fit is inefficient under joint noise, and its error looks like
+    // joint noise in every capture; so estimate, refit whitened, and estimate once more at
+    // the better fit before the final whitened fit.
     let fitted = problem.free().len();
-    let (levels, captures) = noise::estimate(problem, &first.values, fitted, options.noise)
-        .ok_or_else(|| SolveError::Backend {
-            solver: backend.name().into(),
-            message: "the first fit puts a vertex behind the camera".into(),
-        })?;
-    if levels.px <= 0.0 || !levels.px.is_finite() {
-        // A perfect fit (noise-free data): nothing to weight by.
-        return Ok(Solution {
-            noise: Some(levels),
-            ..first
-        });
+    let mut current = first.clone();
+    let mut levels = None;
+    let mut last = None;
+    let mut iterations = first.summary.iterations;
+    let mut seconds = first.summary.seconds;
+    for _ in 0..NOISE_ROUNDS {
+        let (estimate, captures) =
+            noise::estimate(problem, &current.values, fitted, options.noise).ok_or_else(|| {
+                SolveError::Backend {
+                    solver: backend.name().into(),
+                    message: "a fit puts a vertex behind the camera".into(),
+                }
+            })?;
+        if estimate.px <= 0.0 || !estimate.px.is_finite() {
+            // A perfect fit (noise-free data): nothing to weight by.
+            return Ok((Solution { noise: Some(estimate), ..current }, None));
+        }
+        let mut weighted = problem.clone();
+        weighted.initial = current.values;
+        for (term, cn) in weighted.captures.iter_mut().zip(&captures) {
+            term.whitening = Some(cn.whitening(estimate));
+        }
+        current = solve(&weighted, backend)?;
+        last = Some(weighted);
+        iterations += current.summary.iterations;
+        seconds += current.summary.seconds;
+        levels = Some(estimate);
     }
-    let mut weighted = problem.clone();
-    weighted.initial = first.values;
-    for (term, cn) in weighted.captures.iter_mut().zip(&captures) {
-        term.whitening = Some(cn.whitening(levels));
-    }
-    let mut second = solve(&weighted, backend)?;
+    let mut second = current;
     let estimated = options.noise.px.is_none() || options.noise.joint.is_none();
     if !estimated {
         // Both noise levels given: trust them, do not rescale by the residuals.
@@ -324,17 +399,17 @@ pub fn calibrate(
         after.initial = before.initial;
     }
     second.initial_rms_px = first.initial_rms_px;
-    second.summary.iterations += first.summary.iterations;
+    second.summary.iterations = iterations;
     // Costs as plain least squares (unweighted), like the RMS.
     second.summary.initial_cost = first.summary.initial_cost;
     second.summary.final_cost = 0.5
         * problem
             .residuals(&second.values)
             .map_or(f64::NAN, |r| r.iter().map(|x| x * x).sum::<f64>());
-    second.summary.seconds += first.summary.seconds;
-    second.noise = Some(levels);
+    second.summary.seconds = seconds;
+    second.noise = levels;
     second.seconds = start.elapsed().as_secs_f64();
-    Ok(second)
+    Ok((second, last))
 }
 
 /// Per-vertex residuals at the start values and at `values` (NaN where a vertex is behind

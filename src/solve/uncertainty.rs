@@ -1,0 +1,228 @@
+//! Checks on the reported uncertainty and on what the data can determine: the
+//! capture-clustered sandwich, the capture bootstrap, and the identifiability report
+//! (singular values, correlations, weakly or not observable parameter combinations).
+
+use nalgebra::{DMatrix, DVector};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::jacobian::Evaluator;
+use super::{Backend, Problem, Solution, SolveError, covariance};
+use crate::model::{PARAMETER_COUNT, Param};
+
+/// Relative singular value (column-scaled Jacobian) below which a direction counts as not
+/// determined by the data.
+pub const UNDETERMINED: f64 = covariance::RELATIVE_RANK_THRESHOLD;
+/// Relative singular value below which a direction counts as weakly determined.
+pub const WEAK: f64 = 1e-3;
+/// Correlations at least this strong are listed.
+pub const HIGH_CORRELATION: f64 = 0.9;
+
+/// A direction in parameter space, as a named combination (coefficients of the
+/// column-scaled, unit-free parameters; unit norm).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Direction {
+    /// Singular value relative to the largest one.
+    pub relative_singular_value: f64,
+    /// `(parameter, coefficient)`, largest first, coefficients below 0.1 left out.
+    pub terms: Vec<(Param, f64)>,
+}
+
+impl Direction {
+    /// "0.71·LHipPitch − 0.70·LKneePitch".
+    pub fn describe(&self) -> String {
+        let mut out = String::new();
+        for (k, (p, c)) in self.terms.iter().enumerate() {
+            let sign = if *c < 0.0 { "−" } else if k > 0 { "+" } else { "" };
+            if k > 0 {
+                out.push(' ');
+            }
+            out.push_str(sign);
+            if k > 0 {
+                out.push(' ');
+            }
+            out.push_str(&format!("{:.2}·{}", c.abs(), p.name()));
+        }
+        out
+    }
+}
+
+/// What the data can and cannot determine.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Identifiability {
+    /// Singular values of the column-scaled (weighted) Jacobian, largest first.
+    pub singular_values: Vec<f64>,
+    /// Largest over smallest non-zero singular value (∞ is reported as `None`).
+    pub condition_number: Option<f64>,
+    /// Numerical rank (directions above [`UNDETERMINED`]).
+    pub rank: usize,
+    /// Free parameters.
+    pub free: usize,
+    /// Pairs of parameters correlated at least [`HIGH_CORRELATION`], strongest first.
+    pub correlated: Vec<(Param, Param, f64)>,
+    /// Directions below [`WEAK`] but above [`UNDETERMINED`].
+    pub weak: Vec<Direction>,
+    /// Directions the data do not determine at all.
+    pub undetermined: Vec<Direction>,
+    /// Parameters that no capture observes (zero Jacobian column).
+    pub unobserved: Vec<Param>,
+    /// A set of parameters whose holding fixed would make the problem determined.
+    pub suggest_fix: Vec<Param>,
+    /// Whether each parameter is determined (fixed ones count as determined).
+    pub determined: Vec<bool>,
+}
+
+/// The correlation matrix of a covariance (zero where a variance is zero).
+pub fn correlation(cov: &DMatrix<f64>) -> DMatrix<f64> {
+    let n = cov.nrows();
+    DMatrix::from_fn(n, n, |i, j| {
+        let d = (cov[(i, i)] * cov[(j, j)]).sqrt();
+        if d > 0.0 { cov[(i, j)] / d } else if i == j { 1.0 } else { 0.0 }
+    })
+}
+
+/// Analyses the (weighted) Jacobian of `problem` at the free values `x` together with the
+/// solution's covariance.
+pub fn identifiability(problem: &Problem, x: &[f64], cov: &DMatrix<f64>) -> Identifiability {
+    let eval = Evaluator::new(problem);
+    let free = eval.free().to_vec();
+    let mut report = Identifiability {
+        free: free.len(),
+        determined: vec![true; PARAMETER_COUNT],
+        ..Default::default()
+    };
+    let Some((_, jac)) = eval.residuals_and_jacobian(x) else { return report };
+    let n = free.len();
+    let norms: Vec<f64> = (0..n).map(|j| jac.column(j).norm()).collect();
+    report.unobserved =
+        free.iter().zip(&norms).filter(|(_, n)| **n == 0.0).map(|(p, _)| *p).collect();
+    let mut scaled = jac.clone();
+    for (j, norm) in norms.iter().enumerate() {
+        if *norm > 0.0 {
+            scaled.column_mut(j).scale_mut(1.0 / norm);
+        }
+    }
+    let svd = scaled.svd(false, true);
+    let v_t = svd.v_t.expect("requested V");
+    let mut order: Vec<usize> = (0..svd.singular_values.len()).collect();
+    order.sort_by(|a, b| svd.singular_values[*b].total_cmp(&svd.singular_values[*a]));
+    let max = svd.singular_values.max();
+    report.singular_values = order.iter().map(|&k| svd.singular_values[k]).collect();
+    let mut suggested: Vec<Param> = Vec::new();
+    for &k in &order {
+        let rel = if max > 0.0 { svd.singular_values[k] / max } else { 0.0 };
+        if rel > UNDETERMINED {
+            report.rank += 1;
+        }
+        if rel >= WEAK {
+            continue;
+        }
+        let v = v_t.row(k);
+        let mut terms: Vec<(Param, f64)> =
+            free.iter().enumerate().map(|(j, p)| (*p, v[j])).filter(|(_, c)| c.abs() >= 0.1).collect();
+        terms.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+        if terms.first().is_some_and(|t| t.1 < 0.0) {
+            terms.iter_mut().for_each(|t| t.1 = -t.1);
+        }
+        let direction = Direction { relative_singular_value: rel, terms };
+        if rel > UNDETERMINED {
+            report.weak.push(direction);
+        } else {
+            for (p, _) in &direction.terms {
+                report.determined[p.index()] = false;
+            }
+            if let Some((p, _)) = direction.terms.iter().find(|(p, _)| !suggested.contains(p)) {
+                suggested.push(*p);
+            }
+            report.undetermined.push(direction);
+        }
+    }
+    report.suggest_fix = suggested;
+    let smallest = report.singular_values.iter().copied().filter(|s| *s > max * UNDETERMINED);
+    report.condition_number = smallest.fold(None, |_, s| Some(max / s));
+    if report.rank < n {
+        report.condition_number = None;
+    }
+    let corr = correlation(cov);
+    for (a, pa) in free.iter().enumerate() {
+        for pb in &free[a + 1..] {
+            let r = corr[(pa.index(), pb.index())];
+            if r.abs() >= HIGH_CORRELATION
+                && report.determined[pa.index()]
+                && report.determined[pb.index()]
+            {
+                report.correlated.push((*pa, *pb, r));
+            }
+        }
+    }
+    report.correlated.sort_by(|a, b| b.2.abs().total_cmp(&a.2.abs()));
+    report
+}
+
+/// The capture-clustered sandwich covariance `H⁺ (Σ_c g_c g_cᵀ) H⁺ · G/(G−1)` of the
+/// (weighted) problem at the free values `x`, with `H = JᵀJ` and `g_c = J_cᵀ r_c`: robust
+/// to any correlation of the residuals within a capture. Full PARAMETER_COUNT² matrix.
+pub fn sandwich(problem: &Problem, x: &[f64]) -> Option<DMatrix<f64>> {
+    let eval = Evaluator::new(problem);
+    let free = eval.free().to_vec();
+    let (r, jac) = eval.residuals_and_jacobian(x)?;
+    let (h_inv, _) = covariance::from_jacobian(&jac);
+    let n = free.len();
+    let mut meat = DMatrix::zeros(n, n);
+    let mut row = 0;
+    for term in &problem.captures {
+        let rows = term.residual_count();
+        let g: DVector<f64> = jac.rows(row, rows).transpose() * r.rows(row, rows);
+        meat += &g * g.transpose();
+        row += rows;
+    }
+    let clusters = problem.captures.len() as f64;
+    let small_sample = if clusters > 1.0 { clusters / (clusters - 1.0) } else { 1.0 };
+    let cov = &h_inv * meat * &h_inv * small_sample;
+    Some(covariance::embed(&free, &cov, 1.0))
+}
+
+/// The capture bootstrap: `n` refits on captures drawn with replacement (each keeping its
+/// whitening), started from the solution. Returns the standard deviation of the estimates
+/// (internal units) and how many refits failed.
+pub fn bootstrap(
+    problem: &Problem,
+    solution: &Solution,
+    backend: &dyn Backend,
+    n: usize,
+    seed: u64,
+) -> Result<([f64; PARAMETER_COUNT], usize), SolveError> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut sum = [0.0; PARAMETER_COUNT];
+    let mut sum2 = [0.0; PARAMETER_COUNT];
+    let mut ok = 0usize;
+    let mut failed = 0usize;
+    let count = problem.captures.len();
+    for _ in 0..n {
+        let mut sample = problem.clone();
+        sample.initial = solution.values;
+        sample.captures =
+            (0..count).map(|_| problem.captures[rng.random_range(0..count)].clone()).collect();
+        match super::solve(&sample, backend) {
+            Ok(s) if s.summary.converged => {
+                ok += 1;
+                for i in 0..PARAMETER_COUNT {
+                    sum[i] += s.values[i];
+                    sum2[i] += s.values[i] * s.values[i];
+                }
+            }
+            _ => failed += 1,
+        }
+    }
+    if ok < 2 {
+        return Err(SolveError::Invalid(format!(
+            "bootstrap: only {ok} of {n} refits succeeded"
+        )));
+    }
+    let k = ok as f64;
+    let std = std::array::from_fn(|i| {
+        let mean = sum[i] / k;
+        ((sum2[i] - k * mean * mean) / (k - 1.0)).max(0.0).sqrt()
+    });
+    Ok((std, failed))
+}
