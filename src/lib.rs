@@ -10,6 +10,8 @@
 pub mod batch;
 pub mod cli;
 pub mod dataset;
+#[cfg(feature = "detect")]
+pub mod detect;
 pub mod model;
 pub mod report;
 pub mod sim;

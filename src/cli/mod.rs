@@ -1,5 +1,7 @@
 //! The command line: thin wrappers that parse arguments, call the library and print.
 
+#[cfg(feature = "detect")]
+mod detect;
 mod simulate;
 mod solve;
 
@@ -35,6 +37,9 @@ enum Command {
     /// Calibrate: fit the offsets to a dataset's corners and print them with their
     /// uncertainty.
     Solve(solve::SolveArgs),
+    /// Find the sandal's vertices in a dataset's images with OpenCV; write corners.csv.
+    #[cfg(feature = "detect")]
+    Detect(detect::DetectArgs),
 }
 
 /// Parses the command line, runs it, and maps errors to a message and exit code 1.
@@ -54,6 +59,8 @@ pub fn run(cli: &Cli) -> Result<ExitCode> {
     match &cli.command {
         Command::Simulate(args) => simulate::run(args),
         Command::Solve(args) => solve::run(args, cli.verbose),
+        #[cfg(feature = "detect")]
+        Command::Detect(args) => detect::run(args),
     }
 }
 

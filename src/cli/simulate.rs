@@ -34,6 +34,22 @@ pub struct SimulateArgs {
     /// Replace files of an existing dataset in OUT.
     #[arg(long)]
     force: bool,
+    /// Also render one greyscale PNG per capture into OUT/images (corners.csv is then left
+    /// empty, for `naocalib detect`).
+    #[arg(long)]
+    images: bool,
+    /// Image blur σ [px] (with --images).
+    #[arg(long, default_value_t = 0.8, requires = "images")]
+    blur: f64,
+    /// Image grey-level noise σ (with --images).
+    #[arg(long, default_value_t = 2.0, requires = "images")]
+    grey_noise: f64,
+    /// Image vignetting: relative loss of brightness in the corners (with --images).
+    #[arg(long, default_value_t = 0.3, requires = "images")]
+    vignetting: f64,
+    /// Lens distortion k1,k2,p1,p2,k3 (OpenCV order) of the simulated camera.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    distortion: Option<Vec<f64>>,
 }
 
 /// Runs `naocalib simulate`.
@@ -50,8 +66,30 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
         joint_noise: args.joint_noise_deg.to_radians(),
         truth,
         noise_seed: None,
+        images: args.images.then(|| crate::sim::render::ImageOutput {
+            dir: args.out.clone(),
+            options: crate::sim::render::RenderOptions {
+                blur: args.blur,
+                noise: args.grey_noise,
+                vignetting: args.vignetting,
+                seed: args.seed,
+                ..Default::default()
+            },
+            force: args.force,
+        }),
     };
-    let mut dataset = crate::sim::simulate(&Model::default(), &options)?;
+    let mut model = Model::default();
+    if let Some(d) = &args.distortion {
+        anyhow::ensure!(
+            d.len() == 5,
+            "--distortion takes five numbers: k1,k2,p1,p2,k3"
+        );
+        model.camera.distortion = std::array::from_fn(|i| d[i]);
+    }
+    let mut dataset = crate::sim::simulate(&model, &options)?;
+    if args.images {
+        dataset.corners.clear();
+    }
     dataset.dir = args.out.clone();
     dataset.write(&args.out, args.force)?;
     println!(

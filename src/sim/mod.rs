@@ -4,6 +4,8 @@
 //! As in the paper's measurement phase, each leg takes `stances` stances, and each stance is
 //! photographed with `heads` head postures (24 × 3 × 2 = 144 captures by default).
 
+pub mod render;
+
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -29,6 +31,8 @@ pub struct SimOptions {
     /// Seed for the noise alone, when it should differ from the stance seed (repeated
     /// simulations of the same stances and truth with new noise).
     pub noise_seed: Option<u64>,
+    /// Render one image per capture (true pose, actual joints) and name it in the capture.
+    pub images: Option<render::ImageOutput>,
 }
 
 impl Default for SimOptions {
@@ -41,6 +45,7 @@ impl Default for SimOptions {
             joint_noise: 0.0,
             truth: None,
             noise_seed: None,
+            images: None,
         }
     }
 }
@@ -64,6 +69,9 @@ pub enum SimError {
     /// An option is out of range.
     #[error("{0}")]
     Options(String),
+    /// An image could not be rendered or written.
+    #[error(transparent)]
+    Render(#[from] render::RenderError),
 }
 
 /// Draws plausible true offsets: camera ±3°, joints σ 1° (at most 2.5°), board rotation
@@ -309,6 +317,7 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
     let vertices: Vec<_> = model.board.vertices().collect();
     let mut captures = Vec::new();
     let mut corners = Vec::new();
+    let mut image_jobs = Vec::new();
     for stance in &stances {
         for logged in &stance.postures {
             let id = captures.len() as u64;
@@ -330,14 +339,31 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
                     line: 0,
                 });
             }
+            if options.images.is_some() {
+                image_jobs.push(render::ImageJob {
+                    id,
+                    side: stance.side,
+                    joints: actual,
+                });
+            }
             captures.push(Capture {
                 id,
                 side: stance.side,
-                image: None,
+                image: options.images.as_ref().map(|_| render::image_name(id)),
                 joints: *logged,
                 line: 0,
             });
         }
+    }
+    if let Some(out) = &options.images {
+        render::render_all(
+            model,
+            &truth,
+            &image_jobs,
+            &out.options,
+            &out.dir,
+            out.force,
+        )?;
     }
     let mut simulation = toml::Table::new();
     simulation.insert("seed".into(), toml::Value::Integer(options.seed as i64));

@@ -1,0 +1,2 @@
+//! Detection throughput (placeholder while the detector is being written).
+fn main() {}

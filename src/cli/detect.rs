@@ -1,0 +1,171 @@
+//! `naocalib detect`: find the sandal's vertices in a dataset's images and write
+//! `corners.csv`.
+
+use std::io::IsTerminal as _;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::Mutex;
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+
+use crate::dataset::{CORNERS_CSV, Dataset};
+use crate::detect::assign::Grid;
+use crate::detect::{self, DetectOptions, ImageResult, Summary};
+use crate::model::{PARAMETER_COUNT, Param};
+
+#[derive(Debug, Args)]
+pub struct DetectArgs {
+    /// Dataset directory (dataset.toml, captures.csv naming the images).
+    dataset: PathBuf,
+    /// Replace an existing corners.csv that holds vertices.
+    #[arg(long)]
+    force: bool,
+    /// Inner vertices per row and rows, e.g. 9x6 (default: the board in dataset.toml).
+    #[arg(long, value_name = "CxR", value_parser = parse_pattern)]
+    pattern: Option<Grid>,
+    /// Do not use the model and logged joints: search whole images and number the
+    /// vertices in OpenCV's order.
+    #[arg(long)]
+    no_model: bool,
+    /// Write an overlay PNG per image into DIR: detected vertices (green crosses) and the
+    /// nominal model's projection (red circles).
+    #[arg(long, value_name = "DIR")]
+    overlay: Option<PathBuf>,
+    /// With --overlay, also draw the projection with the parameters of this result of
+    /// `naocalib solve --json` (blue circles).
+    #[arg(long, value_name = "JSON", requires = "overlay")]
+    after: Option<PathBuf>,
+    /// Images processed at once (default: the number of cores).
+    #[arg(long, short = 'j', value_name = "N")]
+    jobs: Option<usize>,
+}
+
+fn parse_pattern(text: &str) -> Result<Grid, String> {
+    let err = || format!("'{text}' is not a pattern like 9x6 (inner vertices per row x rows)");
+    let (c, r) = text.split_once(['x', 'X']).ok_or_else(err)?;
+    let cols: u32 = c.trim().parse().map_err(|_| err())?;
+    let rows: u32 = r.trim().parse().map_err(|_| err())?;
+    if cols < 2 || rows < 2 || cols > 100 || rows > 100 {
+        return Err(format!(
+            "pattern '{text}': 2 … 100 vertices per row and rows"
+        ));
+    }
+    Ok(Grid { cols, rows })
+}
+
+/// Reads the parameters of a `naocalib solve --json` result (report units) as internal
+/// values; parameters not named stay zero.
+fn read_solution(path: &Path) -> Result<[f64; PARAMETER_COUNT]> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+    let json: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))?;
+    let Some(map) = json.get("parameters").and_then(|p| p.as_object()) else {
+        bail!(
+            "{}: no \"parameters\" object (a `naocalib solve --json` result?)",
+            path.display()
+        );
+    };
+    let mut values = [0.0; PARAMETER_COUNT];
+    for (name, entry) in map {
+        let param = Param::from_name(name)
+            .with_context(|| format!("{}: unknown parameter {name}", path.display()))?;
+        let value = entry
+            .get("value")
+            .and_then(|v| v.as_f64())
+            .with_context(|| {
+                format!("{}: parameter {name} has no numeric value", path.display())
+            })?;
+        values[param.index()] = param.unit().from_report(value);
+    }
+    Ok(values)
+}
+
+/// Runs `naocalib detect`.
+pub fn run(args: &DetectArgs) -> Result<ExitCode> {
+    let dataset = Dataset::load(&args.dataset)?;
+    let corners_path = args.dataset.join(CORNERS_CSV);
+    // An existing corners.csv without vertices (as `simulate --images` writes) holds nothing
+    // to lose; one with vertices is only replaced with --force.
+    let replace = corners_path.exists();
+    if replace && !dataset.corners.is_empty() && !args.force {
+        bail!(
+            "{}: already holds {} vertices; use --force to overwrite",
+            corners_path.display(),
+            dataset.corners.len()
+        );
+    }
+    let after = args.after.as_deref().map(read_solution).transpose()?;
+    if let Some(dir) = &args.overlay {
+        std::fs::create_dir_all(dir).with_context(|| format!("{}", dir.display()))?;
+    }
+    let mut options = DetectOptions {
+        pattern: args.pattern,
+        use_model: !args.no_model,
+        ..DetectOptions::default()
+    };
+    if let Some(jobs) = args.jobs {
+        if jobs == 0 {
+            bail!("--jobs must be at least 1");
+        }
+        options.jobs = jobs;
+    }
+    if let Some(p) = args.pattern {
+        let board = detect::board_grid(&dataset.model);
+        if p != board {
+            eprintln!(
+                "naocalib: note: pattern {}x{} differs from the board in dataset.toml ({}x{}); \
+                 corners.csv will only load with a matching [board]",
+                p.cols, p.rows, board.cols, board.rows
+            );
+        }
+    }
+
+    let bar = std::io::stderr().is_terminal().then(|| {
+        let bar = indicatif::ProgressBar::new(dataset.captures.len() as u64);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} images {per_sec} {eta}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        bar
+    });
+    let overlay_errors = Mutex::new(Vec::new());
+    let done = |r: &ImageResult| {
+        if let Some(dir) = &args.overlay
+            && let Some(Err(e)) = detect::overlay::write(&dataset, r, dir, after.as_ref())
+        {
+            overlay_errors
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .push(e.to_string());
+        }
+        if let Some(bar) = &bar {
+            bar.inc(1);
+        }
+    };
+    let results = detect::detect_dataset(&dataset, &options, &done);
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    for r in &results {
+        eprintln!("{r}");
+    }
+    for e in overlay_errors.into_inner().unwrap_or_default() {
+        eprintln!("naocalib: overlay: {e}");
+    }
+    let summary = Summary::of(&results);
+    let corners = detect::corners(&results);
+    crate::dataset::write_corners(&args.dataset, &corners, replace)?;
+    eprintln!(
+        "{}: {} images: {summary}; wrote {} vertices to {}",
+        args.dataset.display(),
+        results.len(),
+        corners.len(),
+        corners_path.display()
+    );
+    Ok(if summary.found == 0 && !results.is_empty() {
+        ExitCode::from(2)
+    } else {
+        ExitCode::SUCCESS
+    })
+}

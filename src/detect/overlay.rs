@@ -1,0 +1,109 @@
+//! Overlays like the paper's Fig. 5: the image with the detected vertices and the model's
+//! projection before (nominal, all offsets zero) and after calibration drawn on it.
+
+use std::path::{Path, PathBuf};
+
+use opencv::core::{Mat, Point, Scalar, Vector};
+use opencv::imgproc;
+use opencv::prelude::*;
+
+use crate::dataset::{Corner, Dataset};
+use crate::model::PARAMETER_COUNT;
+
+use super::{DetectError, ImageResult, Outcome};
+
+/// Colour of the detected vertices (green crosses).
+pub const DETECTED: [f64; 3] = [0.0, 200.0, 0.0];
+/// Colour of the nominal model's projection (red circles).
+pub const BEFORE: [f64; 3] = [0.0, 0.0, 255.0];
+/// Colour of the calibrated model's projection (blue circles).
+pub const AFTER: [f64; 3] = [255.0, 128.0, 0.0];
+
+fn point(p: [f64; 2]) -> Point {
+    // Drawn with 4 fractional bits (shift 4) for sub-pixel placement.
+    Point::new((p[0] * 16.0).round() as i32, (p[1] * 16.0).round() as i32)
+}
+
+fn colour(c: [f64; 3]) -> Scalar {
+    Scalar::new(c[0], c[1], c[2], 0.0)
+}
+
+/// Draws on a colour copy of `grey`: the `before` and `after` projections as circles and the
+/// `detected` vertices as crosses; returns it as PNG bytes.
+pub fn draw(
+    grey: &Mat,
+    detected: &[[f64; 2]],
+    before: Option<&[[f64; 2]]>,
+    after: Option<&[[f64; 2]]>,
+) -> opencv::Result<Vec<u8>> {
+    let mut img = Mat::default();
+    imgproc::cvt_color(grey, &mut img, imgproc::COLOR_GRAY2BGR, 0)?;
+    for (points, c) in [(before, BEFORE), (after, AFTER)] {
+        for p in points.unwrap_or(&[]) {
+            imgproc::circle(
+                &mut img,
+                point(*p),
+                4 * 16,
+                colour(c),
+                1,
+                imgproc::LINE_AA,
+                4,
+            )?;
+        }
+    }
+    for p in detected {
+        let q = point(*p);
+        for (dx, dy) in [(3, 3), (3, -3)] {
+            imgproc::line(
+                &mut img,
+                Point::new(q.x - dx * 16, q.y - dy * 16),
+                Point::new(q.x + dx * 16, q.y + dy * 16),
+                colour(DETECTED),
+                1,
+                imgproc::LINE_AA,
+                4,
+            )?;
+        }
+    }
+    let mut buf = Vector::<u8>::new();
+    opencv::imgcodecs::imencode(".png", &img, &mut buf, &Vector::new())?;
+    Ok(buf.to_vec())
+}
+
+/// Writes the overlay of one result into `dir` as `capture_NNNN.png` and returns its path:
+/// detected vertices, the nominal model's projection and, with `after`, the projection
+/// with those parameters. `None` for a capture without a readable image.
+pub fn write(
+    dataset: &Dataset,
+    result: &ImageResult,
+    dir: &Path,
+    after: Option<&[f64; PARAMETER_COUNT]>,
+) -> Option<Result<PathBuf, DetectError>> {
+    let capture = dataset.capture(result.capture)?;
+    let image = capture.image.as_ref()?;
+    let path = super::resolve_image(&dataset.dir, image).ok()?;
+    let grey = super::read_grey(&path).ok()?;
+    let detected: Vec<[f64; 2]> = match &result.outcome {
+        Outcome::Found { corners, .. } => corners.iter().map(|c: &Corner| c.pixel).collect(),
+        _ => Vec::new(),
+    };
+    let model = &dataset.model;
+    let before = super::predict(model, capture, &[0.0; PARAMETER_COUNT]);
+    let after = after.and_then(|p| super::predict(model, capture, p));
+    let out = dir.join(format!("capture_{:04}.png", capture.id));
+    let cv = |e: opencv::Error| DetectError::OpenCv {
+        path: out.clone(),
+        message: e.message,
+    };
+    Some(
+        draw(&grey, &detected, before.as_deref(), after.as_deref())
+            .map_err(cv)
+            .and_then(|png| {
+                std::fs::write(&out, png).map_err(|source| DetectError::Io {
+                    path: out.clone(),
+                    source,
+                })
+            })
+            .map(|()| out.clone()),
+    )
+}
