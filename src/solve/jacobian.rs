@@ -1,65 +1,174 @@
 //! Residuals and their exact Jacobian in Rust, by forward-mode dual numbers through the same
 //! generic model: what the pure-Rust backends and the Rust covariance use.
+//!
+//! The Jacobian is exact but not computed by brute force. Per capture, the board pose in the
+//! camera frame `T_CB` is evaluated once on dual numbers (one lane per free parameter the
+//! capture depends on); per vertex, the chain rule then carries these derivatives through
+//! `p_C = R·p_B + t` (a constant `p_B`) and through the generic camera model evaluated on
+//! 3-lane duals of the point. This is the same derivative the all-dual evaluation gives,
+//! at a fraction of its cost.
+//!
+//! A robust loss is honoured by rescaling each vertex's residual pair `r` to
+//! `r·√(ρ(s)/s)` with `s = ‖r‖²`, so that `½‖r̃‖² = ½ρ(s)` (see [`robust_weight`]); the
+//! rescaling is differentiated exactly too, and any plain least-squares solver on `r̃`
+//! minimises the robust cost `½Σρ(‖r_v‖²)`, as Ceres does with its loss functions.
+
+use std::marker::PhantomData;
 
 use nalgebra::{Const, DMatrix, DVector, U1};
-use num_dual::{Derivative, DualSVec64};
+use num_dual::{Derivative, Dual64, DualSVec64};
 
-use super::problem::{CaptureTerm, Problem};
-use crate::model::{Camera, PARAMETER_COUNT, Param};
+use super::problem::{Loss, Problem};
+use crate::model::{Camera, PARAMETER_COUNT, Param, Scalar, StanceChains};
 
 /// Parameters differentiated at once per pass (the Jet width of the Ceres shim, too).
 const WIDTH: usize = 12;
 type Dual = DualSVec64<WIDTH>;
+type Dual3 = DualSVec64<3>;
+
+/// The message of every backend that refuses a robust loss together with whitening.
+pub const LOSS_WITH_WHITENING: &str = "a whitening matrix cannot be combined with a robust loss";
+
+/// `w(s) = √(ρ(s)/s)` for the squared residual norm `s` of one vertex: scaling the vertex's
+/// residuals by `w` turns their squared norm into `ρ(s)`. Ceres' conventions: Huber with
+/// scale `a` is `ρ(s) = s` for `s ≤ a²` and `2a√s − a²` beyond; Cauchy is
+/// `ρ(s) = a²·ln(1 + s/a²)`. Generic over the scalar so that dual numbers differentiate it;
+/// near `s = 0` a series keeps it finite and smooth.
+pub fn robust_weight<T: Scalar>(loss: Loss, s: T) -> T {
+    match loss {
+        Loss::Squared => T::from(1.0),
+        Loss::Huber(a) => {
+            if s.re() <= a * a {
+                T::from(1.0)
+            } else {
+                // ρ/s = 2a/√s − a²/s
+                (s.sqrt().recip() * (2.0 * a) - s.recip() * (a * a)).sqrt()
+            }
+        }
+        Loss::Cauchy(a) => {
+            let x = s * (1.0 / (a * a));
+            // ρ/s = ln(1 + x)/x
+            let ratio = if x.re() < 1e-4 {
+                // 1 − x/2 + x²/3 − x³/4 + x⁴/5: error below 1e-20 for x < 1e-4.
+                T::from(1.0)
+                    - x.clone()
+                        * (T::from(0.5)
+                            - x.clone()
+                                * (T::from(1.0 / 3.0)
+                                    - x.clone() * (T::from(0.25) - x.clone() * 0.2)))
+            } else {
+                x.ln_1p() / x
+            };
+            ratio.sqrt()
+        }
+    }
+}
+
+/// `w(s)` and `dw/ds` (see [`robust_weight`]).
+fn weight_and_slope(loss: Loss, s: f64) -> (f64, f64) {
+    let w = robust_weight(loss, Dual64::new(s, 1.0));
+    (w.re, w.eps)
+}
+
+/// One capture, prepared for fast evaluation.
+#[derive(Debug, Clone)]
+struct Term {
+    /// Chains with the held parameters frozen.
+    chains: StanceChains,
+    /// Free parameters this capture depends on.
+    used: Vec<Param>,
+    /// Their Jacobian columns.
+    columns: Vec<usize>,
+    /// First residual row of this capture.
+    row: usize,
+    /// Board-frame vertex positions.
+    points: Vec<[f64; 3]>,
+    /// Observed pixels.
+    pixels: Vec<[f64; 2]>,
+    /// Optional whitening.
+    whitening: Option<DMatrix<f64>>,
+}
+
+impl Term {
+    fn residual_count(&self) -> usize {
+        2 * self.points.len()
+    }
+}
 
 /// Precomputed data to evaluate a problem quickly: chains with held parameters frozen, and
 /// the column of each free parameter.
+///
+/// It copies what it needs from the problem, so it may outlive it (`Evaluator<'static>`);
+/// the lifetime parameter only keeps the type's signature stable.
 #[derive(Debug, Clone)]
 pub struct Evaluator<'a> {
-    problem: &'a Problem,
-    /// The captures with their chains frozen.
-    terms: Vec<CaptureTerm>,
+    camera: Camera,
+    loss: Loss,
+    initial: [f64; PARAMETER_COUNT],
+    terms: Vec<Term>,
     free: Vec<Param>,
-    column: [Option<usize>; PARAMETER_COUNT],
-    /// Each capture's free parameters (columns), in chain order.
-    used: Vec<Vec<Param>>,
+    residual_count: usize,
+    _problem: PhantomData<&'a Problem>,
+}
+
+/// The residuals of one capture and their Jacobian with respect to the free parameters
+/// that capture depends on (see [`Evaluator::capture`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CaptureJacobian {
+    /// The weighted residuals, `u₀, v₀, u₁, v₁, …` (whitened or robustly rescaled).
+    pub residuals: Vec<f64>,
+    /// Row-major `residuals.len() × columns.len()` Jacobian.
+    pub jacobian: Vec<f64>,
+    /// The global Jacobian column (index into [`Evaluator::free`]) of each local column.
+    pub columns: Vec<usize>,
 }
 
 impl<'a> Evaluator<'a> {
     /// Prepares `problem` for evaluation.
-    pub fn new(problem: &'a Problem) -> Self {
-        let terms: Vec<CaptureTerm> = problem
-            .captures
-            .iter()
-            .zip(problem.frozen_chains())
-            .map(|(term, chains)| CaptureTerm {
-                chains,
-                ..term.clone()
-            })
-            .collect();
+    pub fn new(problem: &Problem) -> Self {
         let free = problem.free();
         let mut column = [None; PARAMETER_COUNT];
         for (k, p) in free.iter().enumerate() {
             column[p.index()] = Some(k);
         }
-        let used = terms
+        let mut row = 0;
+        let terms = problem
+            .captures
             .iter()
-            .map(|t| &t.chains)
-            .map(|c| {
-                let mut ps = c.camera.params();
-                for p in c.board.params() {
-                    if !ps.contains(&p) {
-                        ps.push(p);
+            .zip(problem.frozen_chains())
+            .map(|(term, chains)| {
+                let mut used = chains.camera.params();
+                for p in chains.board.params() {
+                    if !used.contains(&p) {
+                        used.push(p);
                     }
                 }
-                ps
+                used.retain(|p| column[p.index()].is_some());
+                let columns = used
+                    .iter()
+                    .map(|p| column[p.index()].expect("free"))
+                    .collect();
+                let t = Term {
+                    chains,
+                    used,
+                    columns,
+                    row,
+                    points: term.observations.iter().map(|o| o.point).collect(),
+                    pixels: term.observations.iter().map(|o| o.pixel).collect(),
+                    whitening: term.whitening.clone(),
+                };
+                row += t.residual_count();
+                t
             })
             .collect();
         Evaluator {
-            problem,
+            camera: problem.camera,
+            loss: problem.loss,
+            initial: problem.initial,
             terms,
             free,
-            column,
-            used,
+            residual_count: row,
+            _problem: PhantomData,
         }
     }
 
@@ -68,70 +177,277 @@ impl<'a> Evaluator<'a> {
         &self.free
     }
 
+    /// Number of residuals (rows of the Jacobian).
+    pub fn residual_count(&self) -> usize {
+        self.residual_count
+    }
+
+    /// Number of captures (the problem's capture order).
+    pub fn capture_count(&self) -> usize {
+        self.terms.len()
+    }
+
+    /// Whether the problem combines a robust loss with whitening, which no backend supports
+    /// (Ceres refuses it; so do the pure-Rust backends, with [`LOSS_WITH_WHITENING`]).
+    pub fn loss_with_whitening(&self) -> bool {
+        self.loss != Loss::Squared && self.terms.iter().any(|t| t.whitening.is_some())
+    }
+
     /// Weighted residuals at the free values `x`, or `None` if a vertex falls behind the
-    /// camera.
+    /// camera. With a robust loss, `½‖r‖²` is the robust cost.
     pub fn residuals(&self, x: &[f64]) -> Option<DVector<f64>> {
-        let params = self.problem.expand(x);
-        let mut out = Vec::with_capacity(self.problem.residual_count());
+        let params = self.expand(x);
+        let mut out = DVector::zeros(self.residual_count);
         for term in &self.terms {
-            out.extend(term.weighted_residuals(&self.problem.camera, &params)?);
+            let r = &mut out.as_mut_slice()[term.row..term.row + term.residual_count()];
+            self.term_values(term, &params, r)?;
         }
-        Some(DVector::from_vec(out))
+        Some(out)
+    }
+
+    /// The full parameter vector with the free parameters set to `x`.
+    pub fn expand(&self, x: &[f64]) -> [f64; PARAMETER_COUNT] {
+        let mut all = self.initial;
+        for (p, v) in self.free.iter().zip(x) {
+            all[p.index()] = *v;
+        }
+        all
+    }
+
+    /// `½‖r‖²` of the weighted residuals (the robust cost with a loss), or `None`.
+    pub fn cost(&self, x: &[f64]) -> Option<f64> {
+        self.residuals(x).map(|r| 0.5 * r.norm_squared())
     }
 
     /// Weighted residuals and the dense Jacobian (m × free) at the free values `x`.
     pub fn residuals_and_jacobian(&self, x: &[f64]) -> Option<(DVector<f64>, DMatrix<f64>)> {
-        let params = self.problem.expand(x);
-        let m = self.problem.residual_count();
-        let mut r = DVector::zeros(m);
-        let mut jac = DMatrix::zeros(m, self.free.len());
-        let mut row = 0;
-        for (term, used) in self.terms.iter().zip(&self.used) {
+        let params = self.expand(x);
+        let mut r = DVector::zeros(self.residual_count);
+        let mut jac = DMatrix::zeros(self.residual_count, self.free.len());
+        for term in &self.terms {
+            let local = self.term_jacobian(term, &params)?;
             let rows = term.residual_count();
-            let chunks: Vec<&[Param]> = if used.is_empty() {
-                vec![&[][..]]
-            } else {
-                used.chunks(WIDTH).collect()
-            };
-            for chunk in chunks {
-                let (values, derivs) = capture_pass(term, &self.problem.camera, &params, chunk)?;
-                for (i, value) in values.iter().enumerate() {
-                    r[row + i] = *value;
-                    for (c, p) in chunk.iter().enumerate() {
-                        if let Some(col) = self.column[p.index()] {
-                            jac[(row + i, col)] = derivs[i][c];
-                        }
-                    }
+            let k = term.columns.len();
+            r.rows_mut(term.row, rows)
+                .copy_from_slice(&local.residuals[..rows]);
+            for (c, &col) in term.columns.iter().enumerate() {
+                let mut column = jac.column_mut(col);
+                for i in 0..rows {
+                    column[term.row + i] = local.jacobian[i * k + c];
                 }
             }
-            row += rows;
         }
         Some((r, jac))
     }
+
+    /// The weighted residuals of capture `index` (problem order) and their Jacobian with
+    /// respect to the free parameters it depends on, at the free values `x`.
+    pub fn capture(&self, index: usize, x: &[f64]) -> Option<CaptureJacobian> {
+        self.capture_at(index, &self.expand(x))
+    }
+
+    /// [`Evaluator::capture`] at the full parameter vector `params` (internal units).
+    pub fn capture_at(
+        &self,
+        index: usize,
+        params: &[f64; PARAMETER_COUNT],
+    ) -> Option<CaptureJacobian> {
+        self.term_jacobian(&self.terms[index], params)
+    }
+
+    /// The weighted residuals of capture `index` at the full parameter vector `params`, or
+    /// `None` when a vertex falls behind the camera.
+    pub fn capture_residuals_at(
+        &self,
+        index: usize,
+        params: &[f64; PARAMETER_COUNT],
+    ) -> Option<Vec<f64>> {
+        let term = &self.terms[index];
+        let mut r = vec![0.0; term.residual_count()];
+        self.term_values(term, params, &mut r)?;
+        Some(r)
+    }
+
+    /// The free parameters capture `index` depends on (its local Jacobian columns).
+    pub fn capture_parameters(&self, index: usize) -> &[Param] {
+        &self.terms[index].used
+    }
+
+    /// Weighted residuals of one capture into `r`.
+    fn term_values(
+        &self,
+        term: &Term,
+        params: &[f64; PARAMETER_COUNT],
+        r: &mut [f64],
+    ) -> Option<()> {
+        let pose = term.chains.camera_to_board::<f64>(params);
+        for (k, (p, px)) in term.points.iter().zip(&term.pixels).enumerate() {
+            let [u, v] = self.camera.project(&pose.apply(p))?;
+            r[2 * k] = u - px[0];
+            r[2 * k + 1] = v - px[1];
+        }
+        self.weigh_values(term, r);
+        Some(())
+    }
+
+    /// Residuals and local Jacobian of one capture at the full parameter vector `params`.
+    fn term_jacobian(
+        &self,
+        term: &Term,
+        params: &[f64; PARAMETER_COUNT],
+    ) -> Option<CaptureJacobian> {
+        let k = term.used.len();
+        let (pose, dpose) = pose_derivatives(&term.chains, params, &term.used);
+        let rows = term.residual_count();
+        let mut residuals = vec![0.0; rows];
+        let mut jacobian = vec![0.0; rows * k];
+        let mut dp = vec![[0.0; 3]; k];
+        for (v, (p, px)) in term.points.iter().zip(&term.pixels).enumerate() {
+            // The point in the camera frame and its derivative with respect to each
+            // parameter: d(R·p + t) = dR·p + dt.
+            let pc = pose.apply(p);
+            for (d, dp) in dpose.iter().zip(dp.iter_mut()) {
+                *dp = std::array::from_fn(|i| {
+                    d[3 * i] * p[0] + d[3 * i + 1] * p[1] + d[3 * i + 2] * p[2] + d[9 + i]
+                });
+            }
+            // The projection and its 2 × 3 Jacobian with respect to the point.
+            let seeded: [Dual3; 3] = std::array::from_fn(|i| {
+                Dual3::new(pc[i], Derivative::derivative_generic(Const::<3>, U1, i))
+            });
+            let [u, w] = self.camera.project(&seeded)?;
+            residuals[2 * v] = u.re - px[0];
+            residuals[2 * v + 1] = w.re - px[1];
+            for (row, value) in [u, w].iter().enumerate() {
+                let g = value.eps.unwrap_generic(Const::<3>, U1);
+                let out = &mut jacobian[(2 * v + row) * k..(2 * v + row + 1) * k];
+                for (o, dp) in out.iter_mut().zip(&dp) {
+                    *o = g[0] * dp[0] + g[1] * dp[1] + g[2] * dp[2];
+                }
+            }
+        }
+        self.weigh(term, &mut residuals, &mut jacobian, k);
+        Some(CaptureJacobian {
+            residuals,
+            jacobian,
+            columns: term.columns.clone(),
+        })
+    }
+
+    /// Applies the whitening or the robust rescaling to a capture's residuals.
+    fn weigh_values(&self, term: &Term, r: &mut [f64]) {
+        if let Some(w) = &term.whitening {
+            let plain = DVector::from_column_slice(r);
+            r.copy_from_slice((w * plain).as_slice());
+        } else if self.loss != Loss::Squared {
+            for pair in r.chunks_exact_mut(2) {
+                let (w, _) = weight_and_slope(self.loss, pair[0] * pair[0] + pair[1] * pair[1]);
+                pair[0] *= w;
+                pair[1] *= w;
+            }
+        }
+    }
+
+    /// Applies the whitening or the robust rescaling to a capture's residuals and their
+    /// row-major Jacobian with `k` columns.
+    fn weigh(&self, term: &Term, r: &mut [f64], jac: &mut [f64], k: usize) {
+        if let Some(w) = &term.whitening {
+            let rows = r.len();
+            let plain_r = DVector::from_column_slice(r);
+            let plain_j = DMatrix::from_row_slice(rows, k, jac);
+            r.copy_from_slice((w * plain_r).as_slice());
+            let weighted = w * plain_j;
+            for i in 0..rows {
+                for c in 0..k {
+                    jac[i * k + c] = weighted[(i, c)];
+                }
+            }
+        } else if self.loss != Loss::Squared {
+            // r̃ = w(s)·r, s = ‖r‖²: dr̃ = w·dr + 2·w'(s)·r·(rᵀ·dr).
+            for (v, pair) in r.chunks_exact_mut(2).enumerate() {
+                let (a, b) = (pair[0], pair[1]);
+                let (w, slope) = weight_and_slope(self.loss, a * a + b * b);
+                let rows = &mut jac[2 * v * k..(2 * v + 2) * k];
+                let (ju, jv) = rows.split_at_mut(k);
+                for (du, dv) in ju.iter_mut().zip(jv.iter_mut()) {
+                    let ds = 2.0 * slope * (a * *du + b * *dv);
+                    *du = w * *du + a * ds;
+                    *dv = w * *dv + b * ds;
+                }
+                pair[0] = w * a;
+                pair[1] = w * b;
+            }
+        }
+    }
 }
 
-/// One forward-mode pass over a capture, differentiating with respect to `chunk`.
-fn capture_pass(
-    term: &CaptureTerm,
-    camera: &Camera,
+/// `T_CB` at `params` and its derivatives with respect to each parameter of `used`, each as
+/// 12 numbers: the row-major rotation, then the translation.
+fn pose_derivatives(
+    chains: &StanceChains,
     params: &[f64; PARAMETER_COUNT],
-    chunk: &[Param],
-) -> Option<(Vec<f64>, Vec<[f64; WIDTH]>)> {
-    let mut x: Vec<Dual> = params.iter().map(|&v| Dual::from(v)).collect();
-    for (k, p) in chunk.iter().enumerate() {
-        x[p.index()] = Dual::new(
-            params[p.index()],
-            Derivative::derivative_generic(Const::<WIDTH>, U1, k),
-        );
+    used: &[Param],
+) -> (crate::model::Pose<f64>, Vec<[f64; 12]>) {
+    if used.is_empty() {
+        return (chains.camera_to_board::<f64>(params), Vec::new());
     }
-    let residuals = term.weighted_residuals(camera, &x)?;
-    let values = residuals.iter().map(|d| d.re).collect();
-    let derivs = residuals
-        .iter()
-        .map(|d| {
-            let eps = d.eps.unwrap_generic(Const::<WIDTH>, U1);
-            std::array::from_fn(|c| eps[c])
-        })
-        .collect();
-    Some((values, derivs))
+    let mut derivatives = Vec::with_capacity(used.len());
+    let mut value = None;
+    for chunk in used.chunks(WIDTH) {
+        let mut x: [Dual; PARAMETER_COUNT] = std::array::from_fn(|i| Dual::from(params[i]));
+        for (k, p) in chunk.iter().enumerate() {
+            x[p.index()] = Dual::new(
+                params[p.index()],
+                Derivative::derivative_generic(Const::<WIDTH>, U1, k),
+            );
+        }
+        let pose = chains.camera_to_board(&x);
+        let entries: [&Dual; 12] = std::array::from_fn(|e| {
+            if e < 9 {
+                &pose.rotation[e / 3][e % 3]
+            } else {
+                &pose.translation[e - 9]
+            }
+        });
+        let eps: [_; 12] =
+            std::array::from_fn(|e| entries[e].eps.unwrap_generic(Const::<WIDTH>, U1));
+        derivatives.extend((0..chunk.len()).map(|c| std::array::from_fn(|e| eps[e][c])));
+        value.get_or_insert_with(|| crate::model::Pose {
+            rotation: pose
+                .rotation
+                .each_ref()
+                .map(|row| row.each_ref().map(|d| d.re)),
+            translation: pose.translation.each_ref().map(|d| d.re),
+        });
+    }
+    (value.expect("at least one chunk"), derivatives)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn robust_weight_squares_to_rho() {
+        for s in [0.0, 1e-12, 1e-6, 0.3, 1.0, 4.0, 17.0, 1e4] {
+            let huber = robust_weight(Loss::Huber(2.0), s);
+            let rho = if s <= 4.0 { s } else { 4.0 * s.sqrt() - 4.0 };
+            assert!(
+                (huber * huber * s - rho).abs() <= 1e-12 * rho.max(1.0),
+                "huber {s}"
+            );
+            let cauchy = robust_weight(Loss::Cauchy(2.0), s);
+            let rho = 4.0 * (s / 4.0).ln_1p();
+            assert!(
+                (cauchy * cauchy * s - rho).abs() <= 1e-14 * rho.max(1e-30),
+                "cauchy {s}"
+            );
+        }
+        // The series and the closed form meet smoothly.
+        let a = weight_and_slope(Loss::Cauchy(1.0), 1e-4 * (1.0 - 1e-9));
+        let b = weight_and_slope(Loss::Cauchy(1.0), 1e-4 * (1.0 + 1e-9));
+        assert!((a.0 - b.0).abs() < 1e-12, "{a:?} {b:?}");
+        assert!((a.1 - b.1).abs() < 1e-8, "{a:?} {b:?}");
+        assert_eq!(weight_and_slope(Loss::Squared, 3.0), (1.0, 0.0));
+    }
 }

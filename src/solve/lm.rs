@@ -1,21 +1,87 @@
 //! Pure-Rust backend: the `levenberg-marquardt` crate (a port of MINPACK's `lmder`), with
 //! the exact Jacobian from dual numbers through the same Rust model.
+//!
+//! A robust loss is honoured by the [`Evaluator`]'s per-vertex rescaling of the residuals,
+//! so MINPACK minimises the same cost `½Σρ(‖r_v‖²)` as Ceres.
 
+use std::cell::{Cell, RefCell};
 use std::time::Instant;
 
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt, TerminationReason};
 use nalgebra::{DMatrix, DVector, Dyn, Owned};
 
-use super::jacobian::Evaluator;
+use super::jacobian::{Evaluator, LOSS_WITH_WHITENING};
 use super::{Backend, BackendResult, Problem, SolveError, Summary, covariance};
 
 /// The MINPACK-style Levenberg–Marquardt backend (`--solver lm`).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct MinpackLm;
 
+/// Residual norm reported for a trial point that puts a vertex behind the camera: large, so
+/// MINPACK rejects the step and shrinks its trust region, but finite.
+const BEHIND_CAMERA_NORM: f64 = 1e10;
+
+/// The problem as the crate sees it, compressed to `n + 1` residuals.
+///
+/// MINPACK uses the Jacobian `J` and the residuals `r` of an accepted point only through
+/// `JᵀJ`, `Jᵀr` and `‖r‖` (its pivoted QR of `J` solves `min ‖J·p + r‖² + λ‖D·p‖²`), and
+/// the residuals of a trial point only through `‖r‖`. With `JᵀJ = V·Λ·Vᵀ`, the pair
+/// `J̃ = Λ^½·Vᵀ` (plus a zero row) and `r̃ = (Λ^-½·Vᵀ·Jᵀr, √(‖r‖² − ‖Λ^-½·Vᵀ·Jᵀr‖²))` has the
+/// same three, so MINPACK takes exactly the same steps, but its QR now costs `O(n³)`
+/// instead of `O(m·n²)` for `m ≫ n` residuals. As the compressed residuals depend on the
+/// Jacobian, it is computed with the residuals at every trial point (most are accepted).
 struct Target<'a> {
     eval: &'a Evaluator<'a>,
     x: DVector<f64>,
+    /// The compressed Jacobian at `x`, and the full one (for the covariance).
+    current: RefCell<Option<Compressed>>,
+    /// Jacobian requests so far (MINPACK's outer iterations).
+    jacobians: Cell<usize>,
+    /// At most this many ([`super::Tolerances::max_iterations`]).
+    max_jacobians: usize,
+}
+
+/// The compressed problem at one point.
+struct Compressed {
+    x: DVector<f64>,
+    jacobian: DMatrix<f64>,
+    full_jacobian: DMatrix<f64>,
+}
+
+impl Target<'_> {
+    /// Compressed residuals at `self.x`, keeping the compressed Jacobian; `None` when a
+    /// vertex falls behind the camera.
+    fn compress(&self) -> Option<DVector<f64>> {
+        let n = self.x.len();
+        let (r, jac) = self.eval.residuals_and_jacobian(self.x.as_slice())?;
+        let normal = jac.tr_mul(&jac);
+        let gradient = jac.tr_mul(&r);
+        let eigen = normal.symmetric_eigen();
+        let max = eigen.eigenvalues.max().max(0.0);
+        let mut compressed_jac = DMatrix::zeros(n + 1, n);
+        let mut compressed_r = DVector::zeros(n + 1);
+        let mut explained = 0.0;
+        for (k, &l) in eigen.eigenvalues.iter().enumerate() {
+            // Directions at rounding level carry no information (nor, in exact arithmetic,
+            // any part of the gradient).
+            if l <= max * 1e-15 || l <= 0.0 {
+                continue;
+            }
+            let v = eigen.eigenvectors.column(k);
+            let root = l.sqrt();
+            compressed_jac.row_mut(k).copy_from(&(v.transpose() * root));
+            let c = v.dot(&gradient) / root;
+            compressed_r[k] = c;
+            explained += c * c;
+        }
+        compressed_r[n] = (r.norm_squared() - explained).max(0.0).sqrt();
+        *self.current.borrow_mut() = Some(Compressed {
+            x: self.x.clone(),
+            jacobian: compressed_jac,
+            full_jacobian: jac,
+        });
+        Some(compressed_r)
+    }
 }
 
 impl LeastSquaresProblem<f64, Dyn, Dyn> for Target<'_> {
@@ -32,18 +98,26 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Target<'_> {
     }
 
     fn residuals(&self) -> Option<DVector<f64>> {
-        self.eval.residuals(self.x.as_slice())
+        let n = self.x.len();
+        Some(self.compress().unwrap_or_else(|| {
+            let mut r = DVector::zeros(n + 1);
+            r[n] = BEHIND_CAMERA_NORM;
+            r
+        }))
     }
 
     fn jacobian(&self) -> Option<DMatrix<f64>> {
-        self.eval
-            .residuals_and_jacobian(self.x.as_slice())
-            .map(|(_, j)| j)
+        if self.jacobians.get() >= self.max_jacobians {
+            // Stops the crate with `User("jacobian")`: the iteration limit.
+            return None;
+        }
+        self.jacobians.set(self.jacobians.get() + 1);
+        let fresh = matches!(&*self.current.borrow(), Some(c) if c.x == self.x);
+        if !fresh {
+            self.compress()?;
+        }
+        self.current.borrow().as_ref().map(|c| c.jacobian.clone())
     }
-}
-
-fn cost(r: &DVector<f64>) -> f64 {
-    0.5 * r.norm_squared()
 }
 
 impl Backend for MinpackLm {
@@ -54,34 +128,47 @@ impl Backend for MinpackLm {
     fn solve(&self, problem: &Problem) -> Result<BackendResult, SolveError> {
         let start = Instant::now();
         let eval = Evaluator::new(problem);
-        let free = eval.free().to_vec();
-        let x0 =
-            DVector::from_iterator(free.len(), free.iter().map(|p| problem.initial[p.index()]));
         let fail = |message: String| SolveError::Backend {
             solver: self.name().into(),
             message,
         };
-        let initial_cost = cost(
-            &eval
-                .residuals(x0.as_slice())
-                .ok_or_else(|| fail("a vertex is behind the camera at the start".into()))?,
-        );
-        if problem.loss != super::Loss::Squared {
-            return Err(fail(
-                "robust losses are not supported by this backend yet".into(),
-            ));
+        if eval.loss_with_whitening() {
+            return Err(fail(LOSS_WITH_WHITENING.into()));
         }
+        let free = eval.free().to_vec();
+        let x0 =
+            DVector::from_iterator(free.len(), free.iter().map(|p| problem.initial[p.index()]));
+        let initial_cost = eval
+            .cost(x0.as_slice())
+            .ok_or_else(|| fail("a vertex is behind the camera at the start".into()))?;
         let tol = problem.tolerances;
+        // MINPACK counts residual evaluations against `patience·(n + 1)`; the iteration
+        // limit proper is enforced on the Jacobian evaluations by the target.
+        let patience = tol.max_iterations.max(1);
         let lm = LevenbergMarquardt::new()
             .with_ftol(tol.function.max(f64::EPSILON))
             .with_xtol(tol.parameter.max(f64::EPSILON))
             .with_gtol(tol.gradient.max(f64::EPSILON))
-            .with_patience(tol.max_iterations);
-        let target = Target { eval: &eval, x: x0 };
+            .with_patience(patience);
+        let target = Target {
+            eval: &eval,
+            x: x0,
+            current: RefCell::new(None),
+            jacobians: Cell::new(0),
+            max_jacobians: tol.max_iterations.max(1),
+        };
         let (target, report) = lm.minimize(target);
         let x = target.x;
-        let (r, jac) = eval
-            .residuals_and_jacobian(x.as_slice())
+        let jac = match target.current.into_inner() {
+            Some(c) if c.x == x => c.full_jacobian,
+            _ => {
+                eval.residuals_and_jacobian(x.as_slice())
+                    .ok_or_else(|| fail("the solution puts a vertex behind the camera".into()))?
+                    .1
+            }
+        };
+        let final_cost = eval
+            .cost(x.as_slice())
             .ok_or_else(|| fail("the solution puts a vertex behind the camera".into()))?;
         let (cov, _rank) = covariance::from_jacobian(&jac);
         let converged = report.termination.was_successful()
@@ -89,16 +176,31 @@ impl Backend for MinpackLm {
                 report.termination,
                 TerminationReason::NoImprovementPossible(_)
             );
+        let iterations = target.jacobians.get();
+        let termination = match report.termination {
+            TerminationReason::User("jacobian") => format!(
+                "iteration limit: {iterations} iterations ({} residual evaluations)",
+                report.number_of_evaluations
+            ),
+            TerminationReason::LostPatience => format!(
+                "evaluation limit: {} residual evaluations",
+                report.number_of_evaluations
+            ),
+            ref other => format!(
+                "{other:?} after {iterations} iterations ({} residual evaluations)",
+                report.number_of_evaluations
+            ),
+        };
         Ok(BackendResult {
             free_values: x.iter().copied().collect(),
             covariance: Some(cov),
             summary: Summary {
                 solver: self.name().into(),
                 converged,
-                iterations: report.number_of_evaluations,
+                iterations,
                 initial_cost,
-                final_cost: cost(&r),
-                termination: format!("{:?}", report.termination),
+                final_cost,
+                termination,
                 seconds: start.elapsed().as_secs_f64(),
             },
         })

@@ -1,21 +1,28 @@
-//! Pure-Rust backend: `tiny-solver`'s Levenberg–Marquardt (sparse Cholesky), with its own
-//! dual-number autodiff over the same generic Rust model.
+//! Pure-Rust backend: `tiny-solver`'s Levenberg–Marquardt (sparse Cholesky) over the same
+//! Rust model.
+//!
+//! tiny-solver differentiates its factors with its own dynamic dual numbers. Each capture is
+//! one factor; rather than running the whole model on those (slow: a heap allocation per
+//! operation), the factor computes the capture's residuals and exact Jacobian with the
+//! [`Evaluator`] and hands them back as duals by the chain rule,
+//! `ε(r_i) = Σ_c J_ic · ε(x_c)` — the same numbers tiny-solver's autodiff would produce.
+//! The robust loss is the [`Evaluator`]'s per-vertex rescaling, so tiny-solver minimises
+//! the same `½Σρ(‖r_v‖²)` as Ceres (its own loss functions act on a whole block).
 
 use std::collections::HashMap;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use nalgebra::DVector;
-use num_dual::DualDVec64;
+use nalgebra::{DVector, Dyn, U1};
+use num_dual::{Derivative, DualDVec64};
 use tiny_solver::factors::Factor;
-use tiny_solver::loss_functions::{CauchyLoss, HuberLoss, Loss as TinyLoss};
 use tiny_solver::optimizer::Optimizer;
 use tiny_solver::{LevenbergMarquardtOptimizer, OptimizerOptions};
 
-use super::jacobian::Evaluator;
-use super::{Backend, BackendResult, CaptureTerm, Loss, Problem, SolveError, Summary, covariance};
-use crate::model::{Camera, PARAMETER_COUNT, Param, ParamGroup, Scalar};
+use super::jacobian::{Evaluator, LOSS_WITH_WHITENING};
+use super::{Backend, BackendResult, Problem, SolveError, Summary, covariance};
+use crate::model::{PARAMETER_COUNT, Param, ParamGroup};
 
 /// tiny-solver's Levenberg–Marquardt backend (`--solver tiny`).
 #[derive(Debug, Clone, Copy, Default)]
@@ -27,35 +34,40 @@ const BEHIND_CAMERA_RESIDUAL: f64 = 1e4;
 
 /// One capture as a tiny-solver factor over the parameter groups it uses.
 struct CaptureFactor {
-    term: CaptureTerm,
-    camera: Camera,
-    /// Fixed values of every parameter (internal units).
-    base: [f64; PARAMETER_COUNT],
+    eval: Arc<Evaluator<'static>>,
+    /// The capture's index in the problem.
+    index: usize,
+    /// Number of residuals.
+    rows: usize,
     /// The free parameters of each variable this factor takes, in variable order.
     variables: Vec<Vec<Param>>,
+    /// For each local Jacobian column of the capture: (variable, position in it).
+    slots: Vec<(usize, usize)>,
     /// Counts Jacobian evaluations (shared by all factors; only the first one counts).
     counter: Option<Arc<AtomicUsize>>,
 }
 
 impl CaptureFactor {
-    fn eval<T: Scalar>(&self, params: &[DVector<T>]) -> DVector<T> {
-        let mut all: Vec<T> = self.base.iter().map(|&v| T::from(v)).collect();
-        for (values, names) in params.iter().zip(&self.variables) {
-            for (v, p) in values.iter().zip(names) {
-                all[p.index()] = v.clone();
+    /// The full parameter vector for the variables' values.
+    fn params(&self, values: impl Fn(usize, usize) -> f64) -> [f64; PARAMETER_COUNT] {
+        let mut all = self.eval.expand(&[]);
+        for (v, names) in self.variables.iter().enumerate() {
+            for (j, p) in names.iter().enumerate() {
+                all[p.index()] = values(v, j);
             }
         }
-        let r = self
-            .term
-            .weighted_residuals(&self.camera, &all)
-            .unwrap_or_else(|| vec![T::from(BEHIND_CAMERA_RESIDUAL); self.term.residual_count()]);
-        DVector::from_vec(r)
+        all
     }
 }
 
 impl Factor<f64> for CaptureFactor {
     fn residual_func(&self, params: &[DVector<f64>]) -> DVector<f64> {
-        self.eval(params)
+        let all = self.params(|v, j| params[v][j]);
+        let r = self
+            .eval
+            .capture_residuals_at(self.index, &all)
+            .unwrap_or_else(|| vec![BEHIND_CAMERA_RESIDUAL; self.rows]);
+        DVector::from_vec(r)
     }
 }
 
@@ -64,7 +76,34 @@ impl Factor<DualDVec64> for CaptureFactor {
         if let Some(c) = &self.counter {
             c.fetch_add(1, Ordering::Relaxed);
         }
-        self.eval(params)
+        let all = self.params(|v, j| params[v][j].re);
+        // tiny-solver seeds one lane per entry of the factor's variables.
+        let width: usize = params.iter().map(|p| p.len()).sum();
+        let Some(local) = self.eval.capture_at(self.index, &all) else {
+            return DVector::from_element(
+                self.rows,
+                DualDVec64::new(
+                    BEHIND_CAMERA_RESIDUAL,
+                    Derivative::some(DVector::zeros(width)),
+                ),
+            );
+        };
+        let k = self.slots.len();
+        let inputs: Vec<DVector<f64>> = self
+            .slots
+            .iter()
+            .map(|&(v, j)| params[v][j].eps.clone().unwrap_generic(Dyn(width), U1))
+            .collect();
+        DVector::from_iterator(
+            self.rows,
+            (0..self.rows).map(|i| {
+                let mut eps = DVector::zeros(width);
+                for (c, input) in inputs.iter().enumerate() {
+                    eps.axpy(local.jacobian[i * k + c], input, 1.0);
+                }
+                DualDVec64::new(local.residuals[i], Derivative::some(eps))
+            }),
+        )
     }
 }
 
@@ -79,7 +118,10 @@ impl Backend for Tiny {
             solver: self.name().into(),
             message,
         };
-        let eval = Evaluator::new(problem);
+        let eval: Arc<Evaluator<'static>> = Arc::new(Evaluator::new(problem));
+        if eval.loss_with_whitening() {
+            return Err(fail(LOSS_WITH_WHITENING.into()));
+        }
         let free = eval.free().to_vec();
         // One variable per parameter group, holding that group's free parameters.
         let mut groups: Vec<(ParamGroup, Vec<Param>)> = Vec::new();
@@ -91,25 +133,12 @@ impl Backend for Tiny {
         }
         let counter = Arc::new(AtomicUsize::new(0));
         let mut tiny = tiny_solver::Problem::new();
-        for (k, (term, chains)) in problem
-            .captures
-            .iter()
-            .zip(problem.frozen_chains())
-            .enumerate()
-        {
-            let mut used: Vec<ParamGroup> = Vec::new();
-            for p in chains
-                .camera
-                .params()
-                .into_iter()
-                .chain(chains.board.params())
-            {
-                if !used.contains(&p.group()) {
-                    used.push(p.group());
-                }
-            }
-            used.sort();
-            let variables: Vec<Vec<Param>> = used
+        for (k, term) in problem.captures.iter().enumerate() {
+            let used = eval.capture_parameters(k);
+            let mut used_groups: Vec<ParamGroup> = used.iter().map(|p| p.group()).collect();
+            used_groups.sort();
+            used_groups.dedup();
+            let variables: Vec<Vec<Param>> = used_groups
                 .iter()
                 .map(|g| {
                     groups
@@ -119,23 +148,27 @@ impl Backend for Tiny {
                         .unwrap_or_default()
                 })
                 .collect();
-            let names: Vec<&str> = used.iter().map(|g| g.name()).collect();
-            let loss: Option<Box<dyn TinyLoss + Send>> = match problem.loss {
-                Loss::Squared => None,
-                Loss::Huber(s) => Some(Box::new(HuberLoss::new(s))),
-                Loss::Cauchy(s) => Some(Box::new(CauchyLoss::new(s))),
-            };
+            let slots = used
+                .iter()
+                .map(|p| {
+                    let v = used_groups
+                        .iter()
+                        .position(|g| *g == p.group())
+                        .expect("group listed");
+                    let j = variables[v].iter().position(|q| q == p).expect("in group");
+                    (v, j)
+                })
+                .collect();
+            let names: Vec<&str> = used_groups.iter().map(|g| g.name()).collect();
             let factor = CaptureFactor {
-                term: CaptureTerm {
-                    chains,
-                    ..term.clone()
-                },
-                camera: problem.camera,
-                base: problem.initial,
+                eval: eval.clone(),
+                index: k,
+                rows: term.residual_count(),
                 variables,
+                slots,
                 counter: (k == 0).then(|| counter.clone()),
             };
-            tiny.add_residual_block(term.residual_count(), &names, Box::new(factor), loss);
+            tiny.add_residual_block(term.residual_count(), &names, Box::new(factor), None);
         }
         let initial: HashMap<String, DVector<f64>> = groups
             .iter()
@@ -147,8 +180,8 @@ impl Backend for Tiny {
             })
             .collect();
         let x0: Vec<f64> = free.iter().map(|p| problem.initial[p.index()]).collect();
-        let r0 = eval
-            .residuals(&x0)
+        let initial_cost = eval
+            .cost(&x0)
             .ok_or_else(|| fail("a vertex is behind the camera at the start".into()))?;
         let tol = problem.tolerances;
         let options = OptimizerOptions {
@@ -178,7 +211,7 @@ impl Backend for Tiny {
         let (cov, _rank) = covariance::from_jacobian(&jac);
         // tiny-solver does not say why it stopped: call it converged when one more
         // Gauss–Newton step could remove only a negligible part of the cost.
-        let gradient = jac.transpose() * &r;
+        let gradient = jac.tr_mul(&r);
         let decrease = 0.5 * (gradient.transpose() * &cov * &gradient)[(0, 0)];
         let final_cost = 0.5 * r.norm_squared();
         let iterations = counter.load(Ordering::Relaxed);
@@ -191,7 +224,7 @@ impl Backend for Tiny {
                 solver: self.name().into(),
                 converged,
                 iterations,
-                initial_cost: 0.5 * r0.norm_squared(),
+                initial_cost,
                 final_cost,
                 termination: format!(
                     "stopped after {iterations} Jacobian evaluations; one more Gauss-Newton \
