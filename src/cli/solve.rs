@@ -38,10 +38,24 @@ pub struct SolveArgs {
     /// Also estimate the uncertainty by a capture bootstrap with N refits.
     #[arg(long, value_name = "N", default_value_t = 0)]
     bootstrap: usize,
+    /// Robust first fit: huber or cauchy, optionally with a scale in px (huber:2);
+    /// outlier vertices are listed and left out of the final fit.
+    #[arg(long, value_name = "LOSS[:PX]")]
+    loss: Option<String>,
     /// Least-squares backend: ceres (default), lm (levenberg-marquardt crate), tiny
     /// (tiny-solver).
     #[arg(long, default_value = DEFAULT_SOLVER)]
     solver: String,
+    /// Write plots (PNG and SVG) into this directory: residuals before/after, per capture.
+    #[arg(long, value_name = "DIR")]
+    plots: Option<PathBuf>,
+    /// Write the calibration files into this directory: calibration.toml/.json and B-Human
+    /// style cameraCalibration.cfg and jointCalibration.cfg.
+    #[arg(long, value_name = "DIR")]
+    export: Option<PathBuf>,
+    /// Replace existing --plots/--export files (never the dataset's).
+    #[arg(long)]
+    force: bool,
 }
 
 /// The held parameters for `--fix` and `--free`.
@@ -71,7 +85,10 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     let dataset = load(&args.dataset)?;
     let fixed = fixed_set(args.fix.as_deref(), args.free.as_deref())?;
     let backend = super::backend(&args.solver, verbose)?;
-    let problem = Problem::from_dataset(&dataset, fixed)?;
+    let mut problem = Problem::from_dataset(&dataset, fixed)?;
+    if let Some(loss) = &args.loss {
+        problem.loss = parse_loss(loss)?;
+    }
     for (name, value) in [
         ("--px-noise", args.px_noise),
         ("--joint-noise-deg", args.joint_noise_deg),
@@ -93,6 +110,13 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     };
     let solution = solve::calibrate(&problem, backend.as_ref(), &options)
         .with_context(|| format!("solving {}", args.dataset.display()))?;
+    super::export::solve_outputs(
+        &solution,
+        &dataset,
+        args.plots.as_deref(),
+        args.export.as_deref(),
+        args.force,
+    )?;
     let truth = dataset.truth.as_ref().map(|t| &t.values[..]);
     let mut stdout = std::io::stdout().lock();
     if args.json {
@@ -108,4 +132,24 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     } else {
         ExitCode::from(3)
     })
+}
+
+/// Parses `huber`, `cauchy`, `huber:2.5`.
+pub fn parse_loss(text: &str) -> Result<solve::Loss> {
+    let (name, scale) = match text.split_once(':') {
+        Some((n, s)) => {
+            let v: f64 = s
+                .parse()
+                .ok()
+                .filter(|v: &f64| v.is_finite() && *v > 0.0)
+                .with_context(|| format!("--loss {text}: the scale must be a positive number"))?;
+            (n, v)
+        }
+        None => (text, 1.0),
+    };
+    match name {
+        "huber" => Ok(solve::Loss::Huber(scale)),
+        "cauchy" => Ok(solve::Loss::Cauchy(scale)),
+        _ => anyhow::bail!("--loss {text}: unknown loss '{name}' (huber or cauchy)"),
+    }
 }

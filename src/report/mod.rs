@@ -64,7 +64,11 @@ pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
             sandwich
         );
         if let Some(b) = boot {
-            let _ = write!(out, " {:>9}", sigma_cell(solution, p, Some(b.std[p.index()])));
+            let _ = write!(
+                out,
+                " {:>9}",
+                sigma_cell(solution, p, Some(b.std[p.index()]))
+            );
         }
         if let Some(truth) = truth {
             let t = unit.to_report(truth[p.index()]);
@@ -121,6 +125,27 @@ pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
             "bootstrap: {} refits over resampled captures ({} failed)",
             b.replicates, b.failed
         );
+    }
+    if !solution.outliers.is_empty() {
+        let _ = writeln!(
+            out,
+            "outliers left out: {} vertices (capture row,col: residual px)",
+            solution.outliers.len()
+        );
+        for o in solution.outliers.iter().take(20) {
+            let _ = writeln!(
+                out,
+                "  capture {} ({},{}): ({:+.2}, {:+.2})",
+                o.capture, o.vertex.row, o.vertex.col, o.residual[0], o.residual[1]
+            );
+        }
+        if solution.outliers.len() > 20 {
+            let _ = writeln!(
+                out,
+                "  … and {} more (see --json)",
+                solution.outliers.len() - 20
+            );
+        }
     }
     out.push_str(&identifiability_text(solution));
     let _ = writeln!(
@@ -186,6 +211,10 @@ pub fn json(solution: &Solution, truth: Option<&[f64]>) -> Value {
             "joint_deg": n.joint.to_degrees(),
         })),
         "identifiability": identifiability_json(solution),
+        "outliers": solution.outliers.iter().map(|o| json!({
+            "capture": o.capture, "row": o.vertex.row, "col": o.vertex.col,
+            "residual_px": o.residual,
+        })).collect::<Vec<_>>(),
         "parameters": Value::Object(params),
     })
 }

@@ -7,6 +7,7 @@
 
 #[cfg(feature = "ceres")]
 pub mod ceres;
+pub mod compare;
 pub mod covariance;
 pub mod jacobian;
 pub mod lm;
@@ -136,7 +137,23 @@ pub struct Solution {
     pub bootstrap: Option<BootstrapStd>,
     /// What the data determine, and what not.
     pub identifiability: uncertainty::Identifiability,
+    /// Vertices the robust first fit flagged as outliers and left out (with `--loss`).
+    pub outliers: Vec<Outlier>,
 }
+
+/// A vertex whose residual after the robust fit is far beyond the noise.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Outlier {
+    /// The capture id.
+    pub capture: u64,
+    /// Which vertex.
+    pub vertex: crate::model::Vertex,
+    /// Its `(u, v)` residual at the robust fit [px].
+    pub residual: [f64; 2],
+}
+
+/// Residual norms beyond this many robust standard deviations mark an outlier.
+pub const OUTLIER_SIGMAS: f64 = 5.0;
 
 /// The capture bootstrap's one-sigma.
 #[derive(Debug, Clone, PartialEq)]
@@ -152,7 +169,11 @@ pub struct BootstrapStd {
 impl Solution {
     /// Whether the data determine `p` (a held parameter counts as determined).
     pub fn is_determined(&self, p: Param) -> bool {
-        self.identifiability.determined.get(p.index()).copied().unwrap_or(true)
+        self.identifiability
+            .determined
+            .get(p.index())
+            .copied()
+            .unwrap_or(true)
     }
 }
 
@@ -270,8 +291,7 @@ pub fn solve(problem: &Problem, backend: &dyn Backend) -> Result<Solution, Solve
         residual_variance,
     );
     let std = std::array::from_fn(|i| covariance[(i, i)].max(0.0).sqrt());
-    let identifiability =
-        uncertainty::identifiability(problem, &result.free_values, &covariance);
+    let identifiability = uncertainty::identifiability(problem, &result.free_values, &covariance);
     let sandwich_std = uncertainty::sandwich(problem, &result.free_values)
         .map(|c| std::array::from_fn(|i| c[(i, i)].max(0.0).sqrt()));
     Ok(Solution {
@@ -291,6 +311,7 @@ pub fn solve(problem: &Problem, backend: &dyn Backend) -> Result<Solution, Solve
         sandwich_std,
         bootstrap: None,
         identifiability,
+        outliers: Vec::new(),
     })
 }
 
@@ -330,6 +351,9 @@ pub fn calibrate(
     backend: &dyn Backend,
     options: &UncertaintyOptions,
 ) -> Result<Solution, SolveError> {
+    if problem.loss != Loss::Squared {
+        return calibrate_robust(problem, backend, options);
+    }
     let (mut solution, last) = fit(problem, backend, options)?;
     if options.bootstrap > 0 {
         let (std, failed) = uncertainty::bootstrap(
@@ -339,8 +363,59 @@ pub fn calibrate(
             options.bootstrap,
             options.seed,
         )?;
-        solution.bootstrap = Some(BootstrapStd { std, replicates: options.bootstrap, failed });
+        solution.bootstrap = Some(BootstrapStd {
+            std,
+            replicates: options.bootstrap,
+            failed,
+        });
     }
+    Ok(solution)
+}
+
+/// With a robust loss: a robust fit, then the vertices far beyond the robust residual scale
+/// are flagged as outliers and left out, and the rest is calibrated as usual (noise model,
+/// whitening), so the reported uncertainty stays that of a least-squares fit to inliers.
+fn calibrate_robust(
+    problem: &Problem,
+    backend: &dyn Backend,
+    options: &UncertaintyOptions,
+) -> Result<Solution, SolveError> {
+    let robust = solve(problem, backend)?;
+    let mut coords: Vec<f64> = robust
+        .residuals
+        .iter()
+        .flat_map(|r| r.solved.map(f64::abs))
+        .collect();
+    coords.sort_by(f64::total_cmp);
+    let sigma = 1.4826 * coords.get(coords.len() / 2).copied().unwrap_or(0.0);
+    let limit = OUTLIER_SIGMAS * sigma;
+    let outliers: Vec<Outlier> = robust
+        .residuals
+        .iter()
+        .filter(|r| r.solved[0].hypot(r.solved[1]) > limit)
+        .map(|r| Outlier {
+            capture: r.capture,
+            vertex: r.vertex,
+            residual: r.solved,
+        })
+        .collect();
+    let mut inliers = problem.clone();
+    inliers.loss = Loss::Squared;
+    inliers.initial = robust.values;
+    for term in &mut inliers.captures {
+        let id = term.capture;
+        term.observations.retain(|o| {
+            !outliers
+                .iter()
+                .any(|x| x.capture == id && x.vertex == o.vertex)
+        });
+    }
+    inliers.captures.retain(|t| !t.observations.is_empty());
+    let mut solution = calibrate(&inliers, backend, options)?;
+    solution.initial_rms_px = robust.initial_rms_px;
+    solution.summary.iterations += robust.summary.iterations;
+    solution.summary.seconds += robust.summary.seconds;
+    solution.outliers = outliers;
     Ok(solution)
 }
 
@@ -365,16 +440,20 @@ fn fit(
     let mut iterations = first.summary.iterations;
     let mut seconds = first.summary.seconds;
     for _ in 0..NOISE_ROUNDS {
-        let (estimate, captures) =
-            noise::estimate(problem, &current.values, fitted, options.noise).ok_or_else(|| {
-                SolveError::Backend {
-                    solver: backend.name().into(),
-                    message: "a fit puts a vertex behind the camera".into(),
-                }
+        let (estimate, captures) = noise::estimate(problem, &current.values, fitted, options.noise)
+            .ok_or_else(|| SolveError::Backend {
+                solver: backend.name().into(),
+                message: "a fit puts a vertex behind the camera".into(),
             })?;
         if estimate.px <= 0.0 || !estimate.px.is_finite() {
             // A perfect fit (noise-free data): nothing to weight by.
-            return Ok((Solution { noise: Some(estimate), ..current }, None));
+            return Ok((
+                Solution {
+                    noise: Some(estimate),
+                    ..current
+                },
+                None,
+            ));
         }
         let mut weighted = problem.clone();
         weighted.initial = current.values;

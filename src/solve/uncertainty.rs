@@ -33,7 +33,13 @@ impl Direction {
     pub fn describe(&self) -> String {
         let mut out = String::new();
         for (k, (p, c)) in self.terms.iter().enumerate() {
-            let sign = if *c < 0.0 { "−" } else if k > 0 { "+" } else { "" };
+            let sign = if *c < 0.0 {
+                "−"
+            } else if k > 0 {
+                "+"
+            } else {
+                ""
+            };
             if k > 0 {
                 out.push(' ');
             }
@@ -77,7 +83,13 @@ pub fn correlation(cov: &DMatrix<f64>) -> DMatrix<f64> {
     let n = cov.nrows();
     DMatrix::from_fn(n, n, |i, j| {
         let d = (cov[(i, i)] * cov[(j, j)]).sqrt();
-        if d > 0.0 { cov[(i, j)] / d } else if i == j { 1.0 } else { 0.0 }
+        if d > 0.0 {
+            cov[(i, j)] / d
+        } else if i == j {
+            1.0
+        } else {
+            0.0
+        }
     })
 }
 
@@ -91,16 +103,22 @@ pub fn identifiability(problem: &Problem, x: &[f64], cov: &DMatrix<f64>) -> Iden
         determined: vec![true; PARAMETER_COUNT],
         ..Default::default()
     };
-    let Some((_, jac)) = eval.residuals_and_jacobian(x) else { return report };
+    let Some((_, jac)) = eval.residuals_and_jacobian(x) else {
+        return report;
+    };
     let n = free.len();
     let norms: Vec<f64> = (0..n).map(|j| jac.column(j).norm()).collect();
-    report.unobserved =
-        free.iter().zip(&norms).filter(|(_, n)| **n == 0.0).map(|(p, _)| *p).collect();
-    let mut scaled = jac.clone();
-    for (j, norm) in norms.iter().enumerate() {
-        if *norm > 0.0 {
-            scaled.column_mut(j).scale_mut(1.0 / norm);
-        }
+    report.unobserved = free
+        .iter()
+        .zip(&norms)
+        .filter(|(_, n)| **n == 0.0)
+        .map(|(p, _)| *p)
+        .collect();
+    // Unobserved parameters are reported by name; the SVD looks at the observed ones.
+    let observed: Vec<usize> = (0..n).filter(|&j| norms[j] > 0.0).collect();
+    let mut scaled = DMatrix::zeros(jac.nrows(), observed.len());
+    for (k, &j) in observed.iter().enumerate() {
+        scaled.set_column(k, &(jac.column(j) / norms[j]));
     }
     let svd = scaled.svd(false, true);
     let v_t = svd.v_t.expect("requested V");
@@ -108,9 +126,16 @@ pub fn identifiability(problem: &Problem, x: &[f64], cov: &DMatrix<f64>) -> Iden
     order.sort_by(|a, b| svd.singular_values[*b].total_cmp(&svd.singular_values[*a]));
     let max = svd.singular_values.max();
     report.singular_values = order.iter().map(|&k| svd.singular_values[k]).collect();
-    let mut suggested: Vec<Param> = Vec::new();
+    let mut suggested: Vec<Param> = report.unobserved.clone();
+    for p in &report.unobserved {
+        report.determined[p.index()] = false;
+    }
     for &k in &order {
-        let rel = if max > 0.0 { svd.singular_values[k] / max } else { 0.0 };
+        let rel = if max > 0.0 {
+            svd.singular_values[k] / max
+        } else {
+            0.0
+        };
         if rel > UNDETERMINED {
             report.rank += 1;
         }
@@ -118,13 +143,20 @@ pub fn identifiability(problem: &Problem, x: &[f64], cov: &DMatrix<f64>) -> Iden
             continue;
         }
         let v = v_t.row(k);
-        let mut terms: Vec<(Param, f64)> =
-            free.iter().enumerate().map(|(j, p)| (*p, v[j])).filter(|(_, c)| c.abs() >= 0.1).collect();
+        let mut terms: Vec<(Param, f64)> = observed
+            .iter()
+            .enumerate()
+            .map(|(k, &j)| (free[j], v[k]))
+            .filter(|(_, c)| c.abs() >= 0.1)
+            .collect();
         terms.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
         if terms.first().is_some_and(|t| t.1 < 0.0) {
             terms.iter_mut().for_each(|t| t.1 = -t.1);
         }
-        let direction = Direction { relative_singular_value: rel, terms };
+        let direction = Direction {
+            relative_singular_value: rel,
+            terms,
+        };
         if rel > UNDETERMINED {
             report.weak.push(direction);
         } else {
@@ -138,7 +170,11 @@ pub fn identifiability(problem: &Problem, x: &[f64], cov: &DMatrix<f64>) -> Iden
         }
     }
     report.suggest_fix = suggested;
-    let smallest = report.singular_values.iter().copied().filter(|s| *s > max * UNDETERMINED);
+    let smallest = report
+        .singular_values
+        .iter()
+        .copied()
+        .filter(|s| *s > max * UNDETERMINED);
     report.condition_number = smallest.fold(None, |_, s| Some(max / s));
     if report.rank < n {
         report.condition_number = None;
@@ -155,13 +191,17 @@ pub fn identifiability(problem: &Problem, x: &[f64], cov: &DMatrix<f64>) -> Iden
             }
         }
     }
-    report.correlated.sort_by(|a, b| b.2.abs().total_cmp(&a.2.abs()));
+    report
+        .correlated
+        .sort_by(|a, b| b.2.abs().total_cmp(&a.2.abs()));
     report
 }
 
-/// The capture-clustered sandwich covariance `H⁺ (Σ_c g_c g_cᵀ) H⁺ · G/(G−1)` of the
-/// (weighted) problem at the free values `x`, with `H = JᵀJ` and `g_c = J_cᵀ r_c`: robust
-/// to any correlation of the residuals within a capture. Full PARAMETER_COUNT² matrix.
+/// The capture-clustered sandwich covariance `H⁺ (Σ_c g_c g_cᵀ) H⁺` of the (weighted)
+/// problem at the free values `x`, with `H = JᵀJ` and `g_c = J_cᵀ (I − H_cc)^{-1/2} r_c`
+/// (the "CR2" leverage correction, `H_cc = J_c H⁺ J_cᵀ`, since a fitted capture's residuals
+/// are smaller than its errors): robust to any correlation of the residuals within a
+/// capture. Full PARAMETER_COUNT² matrix.
 pub fn sandwich(problem: &Problem, x: &[f64]) -> Option<DMatrix<f64>> {
     let eval = Evaluator::new(problem);
     let free = eval.free().to_vec();
@@ -172,13 +212,18 @@ pub fn sandwich(problem: &Problem, x: &[f64]) -> Option<DMatrix<f64>> {
     let mut row = 0;
     for term in &problem.captures {
         let rows = term.residual_count();
-        let g: DVector<f64> = jac.rows(row, rows).transpose() * r.rows(row, rows);
+        let j_c = jac.rows(row, rows);
+        let leverage = (&j_c * &h_inv * j_c.transpose()).symmetric_eigen();
+        let v = &leverage.eigenvectors;
+        let scale = leverage
+            .eigenvalues
+            .map(|l| 1.0 / (1.0 - l.clamp(0.0, 0.99)).sqrt());
+        let r_c = v * DMatrix::from_diagonal(&scale) * (v.transpose() * r.rows(row, rows));
+        let g: DVector<f64> = j_c.transpose() * r_c;
         meat += &g * g.transpose();
         row += rows;
     }
-    let clusters = problem.captures.len() as f64;
-    let small_sample = if clusters > 1.0 { clusters / (clusters - 1.0) } else { 1.0 };
-    let cov = &h_inv * meat * &h_inv * small_sample;
+    let cov = &h_inv * meat * &h_inv;
     Some(covariance::embed(&free, &cov, 1.0))
 }
 
@@ -201,8 +246,9 @@ pub fn bootstrap(
     for _ in 0..n {
         let mut sample = problem.clone();
         sample.initial = solution.values;
-        sample.captures =
-            (0..count).map(|_| problem.captures[rng.random_range(0..count)].clone()).collect();
+        sample.captures = (0..count)
+            .map(|_| problem.captures[rng.random_range(0..count)].clone())
+            .collect();
         match super::solve(&sample, backend) {
             Ok(s) if s.summary.converged => {
                 ok += 1;
