@@ -249,3 +249,42 @@ fn simulate_refuses_to_overwrite() {
     assert_clean_failure(&out, &["--force"]);
     assert_eq!(before, std::fs::read(dir.join("corners.csv")).unwrap());
 }
+
+#[test]
+fn rank_deficient_dataset_exits_cleanly_with_named_diagnostics() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("one");
+    let out = naocalib()
+        .args(["simulate", "--stances", "1", "--heads", "1"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let out = solve(&dir, &[]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("NOT determined") && text.contains("--fix"), "{text}");
+    assert!(!text.contains("NaN"), "{text}");
+    let out = solve(&dir, &["--json"]);
+    let json: Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let id = &json["identifiability"];
+    assert!(id["rank"].as_u64().unwrap() < id["free"].as_u64().unwrap());
+    assert!(!id["suggest_fix"].as_array().unwrap().is_empty());
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("NaN"));
+}
+
+#[test]
+fn noise_options_and_checks() {
+    let (_tmp, dir) = small_dataset();
+    let out = solve(&dir, &["--json", "--bootstrap", "5", "--px-noise", "0.1"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!((json["noise"]["px"].as_f64().unwrap() - 0.1).abs() < 1e-12);
+    let cam = &json["parameters"]["CamYaw"];
+    assert!(cam["std_sandwich"].as_f64().unwrap() > 0.0);
+    assert!(cam["std_bootstrap"].as_f64().unwrap() > 0.0);
+    let out = solve(&dir, &["--json", "--loss", "huber:2"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_clean_failure(&solve(&dir, &["--loss", "tukey"]), &["tukey"]);
+    assert_clean_failure(&solve(&dir, &["--px-noise=-1"]), &["--px-noise"]);
+}
