@@ -1,1 +1,425 @@
-//! Batch solving over many datasets.
+//! Batch solving: many datasets in parallel, summary statistics across runs (the paper's
+//! Table 2), and drift between runs of the same robot.
+//!
+//! - [`find_datasets`] turns arguments into dataset directories: a directory holding
+//!   `captures.csv` or `dataset.toml` is a dataset, any other directory stands for its
+//!   immediate subdirectories that are datasets.
+//! - [`solve_dirs`] (from disk) and [`solve_datasets`] (in memory) solve every dataset on
+//!   all cores, each exactly as `naocalib solve` does ([`solve_one`]); a broken dataset
+//!   becomes a [`Failure`] with its reason and never stops the batch.
+//! - [`Batch::summary`] gives mean ± std across runs and the mean reported one-sigma
+//!   ([`stats`]); [`Batch::drift`] the z-scores of the changes between runs ([`drift`]).
+//! - [`Batch::table`] and [`Batch::json`] are the reports; [`Batch::write`] writes every
+//!   run's result JSON and the summary into a directory, atomically.
+//!
+//! ```
+//! use naocalib::batch::{BatchOptions, solve_datasets};
+//! use naocalib::model::Model;
+//! use naocalib::sim::{SimOptions, simulate};
+//!
+//! let datasets: Vec<_> = (1..=2)
+//!     .map(|seed| {
+//!         let options = SimOptions { seed, stances: 4, heads: 2, ..SimOptions::default() };
+//!         let mut d = simulate(&Model::default(), &options).unwrap();
+//!         d.dir = format!("nao/run{seed}").into();
+//!         d
+//!     })
+//!     .collect();
+//! let options = BatchOptions { solver: "lm".into(), ..BatchOptions::default() };
+//! let batch = solve_datasets(&datasets, &options, &|_| {});
+//! assert_eq!(batch.runs.len(), 2);
+//! assert!(batch.failures.is_empty());
+//! let summary = batch.summary();
+//! println!("{}", batch.table(&options.drift));
+//! # let _ = summary;
+//! ```
+
+pub mod drift;
+mod report;
+pub mod stats;
+
+use std::collections::BTreeMap;
+use std::panic::AssertUnwindSafe;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+
+use crate::dataset::{CAPTURES_CSV, DATASET_TOML, Dataset, DatasetError};
+use crate::model::{FixedSet, PARAMETER_COUNT, Side};
+use crate::report::plot::capture_sides;
+use crate::solve::{Backend, Problem, Solution, SolveError, UncertaintyOptions};
+
+pub use drift::{DriftMode, DriftOptions, DriftPair, Grouping, ParamDrift, drift};
+pub use stats::{ParamStats, Summary, summarize};
+
+/// How one dataset's problem is solved: the function [`solve_one`] calls with the problem
+/// and a backend. The default is [`crate::solve::calibrate`] with the default
+/// [`UncertaintyOptions`], what `naocalib solve` runs without options; see
+/// [`BatchOptions::with_uncertainty`].
+pub type SolveFn = dyn Fn(&Problem, &dyn Backend) -> Result<Solution, SolveError> + Send + Sync;
+
+/// What a batch solves with.
+#[derive(Clone)]
+pub struct BatchOptions {
+    /// Backend name (see [`crate::solve::backend_names`]).
+    pub solver: String,
+    /// Parameters held fixed in every run.
+    pub fixed: FixedSet,
+    /// Worker threads; 0 for one per core.
+    pub threads: usize,
+    /// Let the backend log progress.
+    pub verbose: bool,
+    /// How a problem is solved (default: [`crate::solve::calibrate`] with default options).
+    pub method: Arc<SolveFn>,
+    /// Drift options for the reports.
+    pub drift: DriftOptions,
+}
+
+impl std::fmt::Debug for BatchOptions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BatchOptions")
+            .field("solver", &self.solver)
+            .field("fixed", &self.fixed)
+            .field("threads", &self.threads)
+            .field("verbose", &self.verbose)
+            .field("drift", &self.drift)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Default for BatchOptions {
+    fn default() -> Self {
+        BatchOptions {
+            solver: crate::solve::backend_names()[0].to_string(),
+            fixed: FixedSet::default(),
+            threads: 0,
+            verbose: false,
+            method: Arc::new(|problem: &Problem, backend: &dyn Backend| {
+                crate::solve::calibrate(problem, backend, &UncertaintyOptions::default())
+            }),
+            drift: DriftOptions::default(),
+        }
+    }
+}
+
+impl BatchOptions {
+    /// These options, solving each dataset with [`crate::solve::calibrate`] and `uncertainty`
+    /// (as `naocalib solve` does with the corresponding options).
+    pub fn with_uncertainty(mut self, uncertainty: UncertaintyOptions) -> Self {
+        self.method = Arc::new(move |problem: &Problem, backend: &dyn Backend| {
+            crate::solve::calibrate(problem, backend, &uncertainty)
+        });
+        self
+    }
+}
+
+/// Why one dataset of a batch has no result.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// The path is not a dataset, nor a directory holding datasets.
+    #[error("{reason}")]
+    NotADataset {
+        /// The path given.
+        path: PathBuf,
+        /// Why not.
+        reason: String,
+    },
+    /// The dataset could not be read.
+    #[error(transparent)]
+    Dataset(#[from] DatasetError),
+    /// The calibration could not be solved.
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+    /// No backend of that name.
+    #[error("unknown solver '{0}'")]
+    UnknownSolver(String),
+    /// The solve panicked (a bug); the batch goes on.
+    #[error("internal error (panic): {0}")]
+    Panic(String),
+}
+
+/// One solved dataset.
+#[derive(Debug, Clone)]
+pub struct Run {
+    /// The dataset directory.
+    pub dataset: PathBuf,
+    /// The calibration.
+    pub solution: Solution,
+    /// The dataset's true parameters (simulated datasets), internal units.
+    pub truth: Option<[f64; PARAMETER_COUNT]>,
+    /// Which board each capture shows (for plots).
+    pub sides: BTreeMap<u64, Side>,
+}
+
+/// One dataset that could not be solved.
+#[derive(Debug)]
+pub struct Failure {
+    /// The dataset directory (or the argument that held none).
+    pub dataset: PathBuf,
+    /// Why.
+    pub error: RunError,
+}
+
+/// The outcome of a batch: the solved runs and the failures, each in input order.
+#[derive(Debug, Default)]
+pub struct Batch {
+    /// Solved datasets, in the order they were given (or found).
+    pub runs: Vec<Run>,
+    /// Datasets (or arguments) without a result, with the reason.
+    pub failures: Vec<Failure>,
+}
+
+/// How far a batch has got, for a progress display.
+#[derive(Debug, Clone, Copy)]
+pub struct Progress<'a> {
+    /// Datasets finished (solved or failed).
+    pub done: usize,
+    /// Datasets in the batch.
+    pub total: usize,
+    /// The dataset just finished.
+    pub dataset: &'a Path,
+    /// Whether it was solved.
+    pub ok: bool,
+}
+
+/// Whether `dir` is a dataset directory (holds `captures.csv` or `dataset.toml`).
+pub fn is_dataset(dir: &Path) -> bool {
+    dir.join(CAPTURES_CSV).is_file() || dir.join(DATASET_TOML).is_file()
+}
+
+/// The dataset directories named by `paths`: a dataset directory stands for itself, any
+/// other directory for its immediate subdirectories that are datasets (sorted by name).
+/// Paths that are neither (missing, a file, a directory without datasets) are returned as
+/// failures. A dataset named twice is solved once.
+pub fn find_datasets(paths: &[PathBuf]) -> (Vec<PathBuf>, Vec<Failure>) {
+    let mut found: Vec<PathBuf> = Vec::new();
+    let mut failures = Vec::new();
+    let add = |p: PathBuf, found: &mut Vec<PathBuf>| {
+        if !found.contains(&p) {
+            found.push(p);
+        }
+    };
+    for path in paths {
+        let fail = |reason: String| Failure {
+            dataset: path.clone(),
+            error: RunError::NotADataset {
+                path: path.clone(),
+                reason,
+            },
+        };
+        if !path.is_dir() {
+            failures.push(fail(if path.exists() {
+                "not a directory".into()
+            } else {
+                "no such directory".into()
+            }));
+            continue;
+        }
+        if is_dataset(path) {
+            add(path.clone(), &mut found);
+            continue;
+        }
+        let entries = match std::fs::read_dir(path) {
+            Ok(entries) => entries,
+            Err(e) => {
+                failures.push(fail(format!("cannot list the directory: {e}")));
+                continue;
+            }
+        };
+        let mut subdirs: Vec<PathBuf> = entries
+            .filter_map(Result::ok)
+            .map(|e| e.path())
+            .filter(|p| p.is_dir() && is_dataset(p))
+            .collect();
+        subdirs.sort();
+        if subdirs.is_empty() {
+            failures.push(fail(format!(
+                "not a dataset ({CAPTURES_CSV} and {DATASET_TOML} missing), and no \
+                 subdirectory is one"
+            )));
+        }
+        for d in subdirs {
+            add(d, &mut found);
+        }
+    }
+    (found, failures)
+}
+
+/// Solves one dataset exactly as `naocalib solve` does: [`Problem::from_dataset`] with
+/// `options.fixed`, then `options.method` with the backend `options.solver`.
+pub fn solve_one(dataset: &Dataset, options: &BatchOptions) -> Result<Solution, RunError> {
+    let backend = crate::solve::backend(&options.solver, options.verbose)
+        .ok_or_else(|| RunError::UnknownSolver(options.solver.clone()))?;
+    let problem = Problem::from_dataset(dataset, options.fixed.clone())?;
+    Ok((options.method)(&problem, backend.as_ref())?)
+}
+
+/// Solves the datasets in the directories `dirs` on all cores (see [`solve_one`]);
+/// `progress` is called after each one. Results are in the order of `dirs`.
+pub fn solve_dirs(
+    dirs: &[PathBuf],
+    options: &BatchOptions,
+    progress: &(dyn Fn(Progress<'_>) + Sync),
+) -> Batch {
+    let results = par_map(dirs, options.threads, progress, |dir: &PathBuf| {
+        let dataset = Dataset::load(dir)?;
+        let solution = solve_one(&dataset, options)?;
+        Ok(Run {
+            sides: capture_sides(&dataset),
+            dataset: dir.clone(),
+            solution,
+            truth: dataset.truth.map(|t| t.values),
+        })
+    });
+    collect(dirs.iter().cloned(), results)
+}
+
+/// Solves datasets already in memory on all cores (see [`solve_one`]); each run is named
+/// by its dataset's [`Dataset::dir`].
+pub fn solve_datasets(
+    datasets: &[Dataset],
+    options: &BatchOptions,
+    progress: &(dyn Fn(Progress<'_>) + Sync),
+) -> Batch {
+    let results = par_map(datasets, options.threads, progress, |dataset: &Dataset| {
+        let solution = solve_one(dataset, options)?;
+        Ok(Run {
+            sides: capture_sides(dataset),
+            dataset: dataset.dir.clone(),
+            solution,
+            truth: dataset.truth.as_ref().map(|t| t.values),
+        })
+    });
+    collect(datasets.iter().map(|d| d.dir.clone()), results)
+}
+
+/// [`find_datasets`] then [`solve_dirs`]: the whole `naocalib batch` as a library call.
+/// Arguments that hold no dataset come first among the failures.
+pub fn run(
+    paths: &[PathBuf],
+    options: &BatchOptions,
+    progress: &(dyn Fn(Progress<'_>) + Sync),
+) -> Batch {
+    let (dirs, mut failures) = find_datasets(paths);
+    let mut batch = solve_dirs(&dirs, options, progress);
+    failures.append(&mut batch.failures);
+    batch.failures = failures;
+    batch
+}
+
+fn collect(names: impl Iterator<Item = PathBuf>, results: Vec<Result<Run, RunError>>) -> Batch {
+    let mut batch = Batch::default();
+    for (dataset, result) in names.zip(results) {
+        match result {
+            Ok(run) => batch.runs.push(run),
+            Err(error) => batch.failures.push(Failure { dataset, error }),
+        }
+    }
+    batch
+}
+
+/// A name for items in progress reports.
+trait Named {
+    fn name(&self) -> &Path;
+}
+
+impl Named for PathBuf {
+    fn name(&self) -> &Path {
+        self
+    }
+}
+
+impl Named for Dataset {
+    fn name(&self) -> &Path {
+        &self.dir
+    }
+}
+
+/// Maps `f` over `items` on `threads` worker threads (0: one per core), taking the next
+/// item from a shared counter, so that slow and fast datasets balance out. A panic in `f`
+/// becomes a [`RunError::Panic`] for that item.
+fn par_map<T: Named + Sync, R: Send>(
+    items: &[T],
+    threads: usize,
+    progress: &(dyn Fn(Progress<'_>) + Sync),
+    f: impl Fn(&T) -> Result<R, RunError> + Sync,
+) -> Vec<Result<R, RunError>> {
+    let threads = if threads == 0 {
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    } else {
+        threads
+    }
+    .min(items.len())
+    .max(1);
+    let next = AtomicUsize::new(0);
+    let done = AtomicUsize::new(0);
+    let slots: Mutex<Vec<Option<Result<R, RunError>>>> =
+        Mutex::new((0..items.len()).map(|_| None).collect());
+    let work = || {
+        loop {
+            let i = next.fetch_add(1, Ordering::Relaxed);
+            let Some(item) = items.get(i) else { break };
+            let result = std::panic::catch_unwind(AssertUnwindSafe(|| f(item)))
+                .unwrap_or_else(|panic| Err(RunError::Panic(panic_message(&*panic))));
+            let ok = result.is_ok();
+            slots.lock().unwrap_or_else(|e| e.into_inner())[i] = Some(result);
+            let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
+            progress(Progress {
+                done: finished,
+                total: items.len(),
+                dataset: item.name(),
+                ok,
+            });
+        }
+    };
+    if threads == 1 {
+        work();
+    } else {
+        std::thread::scope(|s| {
+            for _ in 0..threads {
+                s.spawn(work);
+            }
+        });
+    }
+    slots
+        .into_inner()
+        .unwrap_or_else(|e| e.into_inner())
+        .into_iter()
+        .map(|slot| slot.unwrap_or_else(|| Err(RunError::Panic("no result".into()))))
+        .collect()
+}
+
+fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
+    if let Some(s) = panic.downcast_ref::<&str>() {
+        (*s).to_string()
+    } else if let Some(s) = panic.downcast_ref::<String>() {
+        s.clone()
+    } else {
+        "unknown panic".into()
+    }
+}
+
+impl Batch {
+    /// Whether every dataset was solved.
+    pub fn all_solved(&self) -> bool {
+        self.failures.is_empty()
+    }
+
+    /// Whether every solved run converged.
+    pub fn all_converged(&self) -> bool {
+        self.runs.iter().all(|r| r.solution.summary.converged)
+    }
+
+    /// Mean ± std across the runs and the mean reported one-sigma (see [`summarize`]).
+    pub fn summary(&self) -> Summary {
+        let solutions: Vec<&Solution> = self.runs.iter().map(|r| &r.solution).collect();
+        summarize(&solutions)
+    }
+
+    /// The drift between runs of the same robot (see [`drift::batch_drift`]).
+    pub fn drift(&self, options: &DriftOptions) -> Vec<DriftPair> {
+        drift::batch_drift(&self.runs, options)
+    }
+}
+
+pub use report::{OutputFiles, run_file_names};

@@ -1,7 +1,9 @@
 //! The command line: thin wrappers that parse arguments, call the library and print.
 
+mod batch;
 #[cfg(feature = "detect")]
 mod detect;
+mod export;
 mod simulate;
 mod solve;
 
@@ -37,6 +39,11 @@ enum Command {
     /// Calibrate: fit the offsets to a dataset's corners and print them with their
     /// uncertainty.
     Solve(solve::SolveArgs),
+    /// Calibrate many datasets in parallel: a table of all runs with mean ± std across
+    /// runs, drift between runs of the same robot, and failures reported and skipped.
+    Batch(batch::BatchArgs),
+    /// Write a result as calibration files: TOML/JSON and B-Human style .cfg.
+    Export(export::ExportArgs),
     /// Find the sandal's vertices in a dataset's images with OpenCV; write corners.csv.
     #[cfg(feature = "detect")]
     Detect(detect::DetectArgs),
@@ -59,6 +66,8 @@ pub fn run(cli: &Cli) -> Result<ExitCode> {
     match &cli.command {
         Command::Simulate(args) => simulate::run(args),
         Command::Solve(args) => solve::run(args, cli.verbose),
+        Command::Batch(args) => batch::run(args, cli.verbose),
+        Command::Export(args) => export::run(args),
         #[cfg(feature = "detect")]
         Command::Detect(args) => detect::run(args),
     }

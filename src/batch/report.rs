@@ -1,0 +1,408 @@
+//! The reports of a batch: the text table (the paper's Table 2), the JSON, and the files of
+//! `--out`.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use serde_json::{Map, Value, json};
+
+use super::drift::{DriftMode, DriftOptions, DriftPair, Grouping};
+use super::{Batch, Run};
+use crate::report::export::{ExportError, WriteOptions, dataset_files, write_atomic};
+
+/// Most runs shown as columns of the text table; with more, only the summary columns are
+/// shown (every run is in the JSON).
+pub const MAX_RUN_COLUMNS: usize = 8;
+
+/// The files [`Batch::write`] wrote.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutputFiles {
+    /// One result JSON per run, in the order of [`Batch::runs`].
+    pub runs: Vec<PathBuf>,
+    /// The summary JSON (runs, failures, statistics, drift).
+    pub summary: PathBuf,
+}
+
+/// File names for the runs' result JSON: the dataset directory's name plus `.json`, made
+/// unique with the parent directory's name and then a number.
+pub fn run_file_names(runs: &[Run]) -> Vec<String> {
+    let base = |p: &Path, with_parent: bool| {
+        let name = p
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "run".into());
+        let parent = p
+            .parent()
+            .and_then(Path::file_name)
+            .map(|n| n.to_string_lossy().into_owned());
+        match parent {
+            Some(parent) if with_parent => format!("{parent}_{name}"),
+            _ => name,
+        }
+    };
+    let simple: Vec<String> = runs.iter().map(|r| base(&r.dataset, false)).collect();
+    let mut names: Vec<String> = Vec::new();
+    for (i, run) in runs.iter().enumerate() {
+        let clash = simple.iter().filter(|s| **s == simple[i]).count() > 1;
+        let mut name = if clash {
+            base(&run.dataset, true)
+        } else {
+            simple[i].clone()
+        };
+        if name == "summary" {
+            name = "run_summary".into();
+        }
+        let mut candidate = name.clone();
+        let mut k = 2;
+        while names.contains(&candidate) {
+            candidate = format!("{name}-{k}");
+            k += 1;
+        }
+        names.push(candidate);
+    }
+    names.into_iter().map(|n| format!("{n}.json")).collect()
+}
+
+fn fmt_or_dash(x: f64, decimals: usize) -> String {
+    if x.is_finite() {
+        format!("{x:.decimals$}")
+    } else {
+        "-".into()
+    }
+}
+
+impl Batch {
+    /// The human-readable report: the runs, one column each (up to
+    /// [`MAX_RUN_COLUMNS`]), then mean ± std across runs and the mean reported one-sigma
+    /// per parameter, iterations, RMS and time; then the failures and the drift.
+    pub fn table(&self, drift: &DriftOptions) -> String {
+        let mut out = String::new();
+        let summary = self.summary();
+        let runs = &self.runs;
+        let columns = runs.len() <= MAX_RUN_COLUMNS;
+        if !runs.is_empty() {
+            let _ = writeln!(out, "runs:");
+            for (i, run) in runs.iter().enumerate() {
+                let s = &run.solution.summary;
+                let _ = writeln!(
+                    out,
+                    "  {:>3}  {}{}",
+                    i + 1,
+                    run.dataset.display(),
+                    if s.converged { "" } else { "  (NOT converged)" }
+                );
+            }
+            let _ = write!(out, "\n{:<14} {:<4}", "parameter", "unit");
+            if columns {
+                for i in 0..runs.len() {
+                    let _ = write!(out, " {:>10}", i + 1);
+                }
+            }
+            let _ = writeln!(out, " {:>21} {:>9}", "mean ± std", "mean σ");
+            for st in &summary.parameters {
+                let p = st.param;
+                let _ = write!(out, "{:<14} {:<4}", p.name(), p.unit().name());
+                if columns {
+                    for run in runs {
+                        let cell = if run.solution.fixed.is_fixed(p) {
+                            "fixed".to_string()
+                        } else {
+                            format!("{:.4}", run.solution.report_value(p))
+                        };
+                        let _ = write!(out, " {cell:>10}");
+                    }
+                }
+                let ms = if st.n == 0 {
+                    "fixed".to_string()
+                } else {
+                    format!("{:.4} ± {}", st.mean, fmt_or_dash(st.std, 4))
+                };
+                let _ = writeln!(out, " {ms:>21} {:>9}", fmt_or_dash(st.mean_sigma, 4));
+            }
+            let row = |out: &mut String,
+                       name: &str,
+                       unit: &str,
+                       f: &dyn Fn(&Run) -> String,
+                       mean: String| {
+                let _ = write!(out, "{name:<14} {unit:<4}");
+                if columns {
+                    for run in runs {
+                        let _ = write!(out, " {:>10}", f(run));
+                    }
+                }
+                let _ = writeln!(out, " {mean:>21}");
+            };
+            row(
+                &mut out,
+                "iterations",
+                "",
+                &|r| r.solution.summary.iterations.to_string(),
+                format!("{:.1}", summary.iterations),
+            );
+            row(
+                &mut out,
+                "rms x",
+                "px",
+                &|r| format!("{:.5}", r.solution.rms_px[0]),
+                format!("{:.5}", summary.rms_px[0]),
+            );
+            row(
+                &mut out,
+                "rms y",
+                "px",
+                &|r| format!("{:.5}", r.solution.rms_px[1]),
+                format!("{:.5}", summary.rms_px[1]),
+            );
+            row(
+                &mut out,
+                "time",
+                "ms",
+                &|r| format!("{:.1}", r.solution.seconds * 1e3),
+                format!("{:.1}", summary.seconds * 1e3),
+            );
+            if !columns {
+                let _ = writeln!(
+                    out,
+                    "({} runs: per-run values are in --json and --out)",
+                    runs.len()
+                );
+            }
+        }
+        let _ = writeln!(
+            out,
+            "\n{} solved ({} converged), {} failed",
+            runs.len(),
+            summary.converged,
+            self.failures.len()
+        );
+        for f in &self.failures {
+            let _ = writeln!(out, "FAILED {}: {}", f.dataset.display(), f.error);
+        }
+        let pairs = self.drift(drift);
+        if !pairs.is_empty() {
+            let _ = writeln!(
+                out,
+                "\ndrift ({}, flagged when |z| > {}; z = Δ / √(σ₁² + σ₂²)):",
+                match drift.mode {
+                    DriftMode::Consecutive => "each run vs the one before",
+                    DriftMode::First => "each run vs the first",
+                },
+                drift.threshold
+            );
+            for pair in &pairs {
+                let flagged: Vec<_> = pair.flagged().collect();
+                let _ = writeln!(
+                    out,
+                    "  run {} → run {}{}: {}",
+                    pair.from + 1,
+                    pair.to + 1,
+                    if drift.grouping == Grouping::Parent {
+                        format!(" ({})", pair.robot)
+                    } else {
+                        String::new()
+                    },
+                    if flagged.is_empty() {
+                        "no parameter changed beyond its uncertainty".to_string()
+                    } else {
+                        format!("{} changed", flagged.len())
+                    }
+                );
+                for d in flagged {
+                    let _ = writeln!(
+                        out,
+                        "      {:<14} Δ {:>+9.4} {:<3} (σ {:.4}, z {:+.1})",
+                        d.param.name(),
+                        d.delta,
+                        d.param.unit().name(),
+                        d.sigma,
+                        d.z.unwrap_or(f64::NAN)
+                    );
+                }
+            }
+        }
+        out
+    }
+
+    /// One run's result JSON: SPEC section 7 ([`crate::report::json`]) with its `dataset`.
+    pub fn run_json(run: &Run) -> Value {
+        let mut value = crate::report::json(&run.solution, run.truth.as_ref().map(|t| &t[..]));
+        value["dataset"] = Value::String(run.dataset.display().to_string());
+        value
+    }
+
+    /// The summary as JSON: counts, per-parameter statistics, failures and drift (no
+    /// per-run results; see [`Batch::json`]).
+    pub fn summary_json(&self, drift: &DriftOptions) -> Value {
+        let summary = self.summary();
+        let mut params = Map::new();
+        for st in &summary.parameters {
+            let num = |x: f64| if x.is_finite() { json!(x) } else { Value::Null };
+            params.insert(
+                st.param.name().into(),
+                json!({
+                    "n": st.n,
+                    "mean": num(st.mean),
+                    "std": num(st.std),
+                    "mean_sigma": num(st.mean_sigma),
+                    "min": num(st.min),
+                    "max": num(st.max),
+                    "unit": st.param.unit().name(),
+                }),
+            );
+        }
+        let failures: Vec<Value> = self
+            .failures
+            .iter()
+            .map(|f| json!({"dataset": f.dataset.display().to_string(), "error": f.error.to_string()}))
+            .collect();
+        let pairs: Vec<Value> = self
+            .drift(drift)
+            .iter()
+            .map(|pair| drift_json(self, pair))
+            .collect();
+        json!({
+            "runs": summary.runs,
+            "converged": summary.converged,
+            "failed": self.failures.len(),
+            "datasets": self.runs.iter().map(|r| r.dataset.display().to_string()).collect::<Vec<_>>(),
+            "iterations_mean": summary.iterations,
+            "rms_px_mean": summary.rms_px,
+            "seconds_mean": summary.seconds,
+            "parameters": Value::Object(params),
+            "failures": failures,
+            "drift": {
+                "mode": match drift.mode { DriftMode::Consecutive => "consecutive", DriftMode::First => "first" },
+                "threshold": drift.threshold,
+                "grouping": match drift.grouping { Grouping::Parent => "parent", Grouping::All => "all", Grouping::None => "none" },
+                "pairs": pairs,
+            },
+        })
+    }
+
+    /// The whole batch as JSON: `{"runs": [SPEC 7 result + dataset, …], "summary": …}`.
+    pub fn json(&self, drift: &DriftOptions) -> Value {
+        json!({
+            "runs": self.runs.iter().map(Batch::run_json).collect::<Vec<_>>(),
+            "summary": self.summary_json(drift),
+        })
+    }
+
+    /// Writes every run's result JSON (names from [`run_file_names`]) and `summary.json`
+    /// into `dir`, each atomically. Never writes over a file of any dataset of the batch;
+    /// refuses existing files unless `options.force`, checking all before writing any.
+    pub fn write(
+        &self,
+        dir: &Path,
+        drift: &DriftOptions,
+        options: &WriteOptions,
+    ) -> Result<OutputFiles, ExportError> {
+        let mut options = options.clone();
+        for d in self
+            .runs
+            .iter()
+            .map(|r| &r.dataset)
+            .chain(self.failures.iter().map(|f| &f.dataset))
+        {
+            options.inputs.extend(dataset_files(d));
+        }
+        let runs: Vec<PathBuf> = run_file_names(&self.runs)
+            .iter()
+            .map(|n| dir.join(n))
+            .collect();
+        let summary = dir.join("summary.json");
+        // Check everything first, so that a refusal leaves nothing half-written.
+        for path in runs.iter().chain([&summary]) {
+            write_atomic_check(path, &options)?;
+        }
+        for (run, path) in self.runs.iter().zip(&runs) {
+            let text = pretty(&Batch::run_json(run));
+            write_atomic(path, text.as_bytes(), &options)?;
+        }
+        write_atomic(
+            &summary,
+            pretty(&self.summary_json(drift)).as_bytes(),
+            &options,
+        )?;
+        Ok(OutputFiles { runs, summary })
+    }
+}
+
+fn write_atomic_check(path: &Path, options: &WriteOptions) -> Result<(), ExportError> {
+    if let Some(input) = options.inputs.iter().find(|i| **i == path) {
+        return Err(ExportError::Input {
+            path: input.clone(),
+        });
+    }
+    if !options.force && path.symlink_metadata().is_ok() {
+        return Err(ExportError::Exists {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(())
+}
+
+fn pretty(value: &Value) -> String {
+    let mut s = serde_json::to_string_pretty(value).expect("JSON of plain values");
+    s.push('\n');
+    s
+}
+
+fn drift_json(batch: &Batch, pair: &DriftPair) -> Value {
+    let mut params = Map::new();
+    for d in &pair.params {
+        params.insert(
+            d.param.name().into(),
+            json!({
+                "delta": d.delta,
+                "sigma": d.sigma,
+                "z": d.z,
+                "flagged": d.flagged,
+                "unit": d.param.unit().name(),
+            }),
+        );
+    }
+    json!({
+        "robot": pair.robot,
+        "from": batch.runs[pair.from].dataset.display().to_string(),
+        "to": batch.runs[pair.to].dataset.display().to_string(),
+        "flagged": pair.flagged().map(|d| d.param.name()).collect::<Vec<_>>(),
+        "parameters": Value::Object(params),
+    })
+}
+
+impl Batch {
+    /// Writes the batch's plots into `dir`: `parameters` (estimates with error bars across
+    /// the runs) and for every run `<name>_residuals` and `<name>_captures` (names as in
+    /// [`run_file_names`]), PNG and SVG each. Returns the files written.
+    pub fn plots(
+        &self,
+        dir: &Path,
+        options: &WriteOptions,
+    ) -> Result<Vec<PathBuf>, crate::report::plot::PlotError> {
+        use crate::report::plot;
+        let mut options = options.clone();
+        for run in &self.runs {
+            options.inputs.extend(dataset_files(&run.dataset));
+        }
+        let mut files = Vec::new();
+        let solutions: Vec<_> = self.runs.iter().map(|r| &r.solution).collect();
+        if !solutions.is_empty() {
+            files.extend(plot::parameter_estimates(
+                &solutions,
+                &dir.join("parameters"),
+                &options,
+            )?);
+        }
+        for (run, name) in self.runs.iter().zip(run_file_names(&self.runs)) {
+            let prefix = name.trim_end_matches(".json");
+            files.extend(plot::solution_plots(
+                &run.solution,
+                Some(&run.sides),
+                dir,
+                prefix,
+                &options,
+            )?);
+        }
+        Ok(files)
+    }
+}

@@ -1,0 +1,231 @@
+//! `naocalib batch`: calibrate many datasets in parallel and summarise them.
+
+use std::io::{IsTerminal as _, Write as _};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Mutex;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use clap::{Args, ValueEnum};
+
+use super::DEFAULT_SOLVER;
+use crate::batch::{self, BatchOptions, DriftMode, DriftOptions, Grouping, Progress};
+use crate::report::export::WriteOptions;
+
+/// Which runs are compared for drift.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum DriftArg {
+    /// Each run with the one before it.
+    Consecutive,
+    /// Each run with the first.
+    First,
+}
+
+/// Which runs are of the same robot.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum RobotsArg {
+    /// Datasets in the same parent directory are one robot's.
+    Parent,
+    /// All runs are of one robot.
+    All,
+    /// No drift.
+    None,
+}
+
+/// Exit codes: 0 all solved and converged; 2 some dataset failed (reported, skipped);
+/// 3 all solved but some did not converge; 1 a usage or output error.
+#[derive(Debug, Args)]
+pub struct BatchArgs {
+    /// Dataset directories, or directories holding dataset directories.
+    #[arg(required = true, value_name = "DATASET")]
+    datasets: Vec<PathBuf>,
+    /// Print every run (SPEC section 7 form, with its dataset) and the summary as JSON.
+    #[arg(long)]
+    json: bool,
+    /// Write each run's result JSON and summary.json into this directory.
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Write plots (PNG and SVG) into this directory: parameter estimates across runs, and
+    /// each run's residuals and per-capture RMS.
+    #[arg(long, value_name = "DIR")]
+    plots: Option<PathBuf>,
+    /// Replace existing output files (never a dataset's files).
+    #[arg(long)]
+    force: bool,
+    /// Parameters to hold fixed at zero, comma-separated (e.g. CamYaw,LBoardRotZ).
+    #[arg(long, value_name = "NAMES")]
+    fix: Option<String>,
+    /// Parameters to estimate that are held fixed by default (HeadYaw,HeadPitch).
+    #[arg(long, value_name = "NAMES")]
+    free: Option<String>,
+    /// Least-squares backend: ceres (default), lm, tiny.
+    #[arg(long, default_value = DEFAULT_SOLVER)]
+    solver: String,
+    /// Worker threads (0: one per core).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// Drift: compare each run with the one before it, or with the first.
+    #[arg(long, value_enum, default_value = "consecutive")]
+    drift: DriftArg,
+    /// Flag a parameter whose change between two runs has |z| above this.
+    #[arg(long, default_value_t = 3.0, value_name = "Z")]
+    drift_threshold: f64,
+    /// Which runs are of the same robot (for drift).
+    #[arg(long, value_enum, default_value = "parent")]
+    robots: RobotsArg,
+    /// Pixel noise σ [px] for the noise model; estimated from the residuals if not given.
+    #[arg(long, value_name = "PX")]
+    px_noise: Option<f64>,
+    /// Joint-angle noise σ per joint and capture [deg]; estimated if not given.
+    #[arg(long, value_name = "DEG")]
+    joint_noise_deg: Option<f64>,
+    /// Report the plain σ̂²(JᵀJ)⁻¹ instead of the noise model.
+    #[arg(long)]
+    plain_std: bool,
+    /// No progress bar, even on a terminal.
+    #[arg(long)]
+    no_progress: bool,
+}
+
+/// A one-line progress bar on stderr.
+struct Bar {
+    started: Instant,
+    failed: Mutex<usize>,
+}
+
+impl Bar {
+    fn show(&self, p: Progress<'_>) {
+        let mut failed = self.failed.lock().unwrap_or_else(|e| e.into_inner());
+        if !p.ok {
+            *failed += 1;
+        }
+        let width = 30;
+        let filled = width * p.done / p.total.max(1);
+        let name = p.dataset.display().to_string();
+        let name: String = if name.chars().count() > 40 {
+            let tail: String = name.chars().rev().take(39).collect();
+            format!("…{}", tail.chars().rev().collect::<String>())
+        } else {
+            name
+        };
+        let mut err = std::io::stderr().lock();
+        let _ = write!(
+            err,
+            "\r\x1b[2K[{}{}] {}/{} {:.1}s{} {}",
+            "#".repeat(filled),
+            "-".repeat(width - filled),
+            p.done,
+            p.total,
+            self.started.elapsed().as_secs_f64(),
+            if *failed > 0 {
+                format!(" ({} failed)", *failed)
+            } else {
+                String::new()
+            },
+            name
+        );
+        if p.done == p.total {
+            let _ = write!(err, "\r\x1b[2K");
+        }
+        let _ = err.flush();
+    }
+}
+
+/// Runs `naocalib batch`.
+pub fn run(args: &BatchArgs, verbose: bool) -> Result<ExitCode> {
+    let fixed = super::solve::fixed_set(args.fix.as_deref(), args.free.as_deref())?;
+    super::backend(&args.solver, false)?;
+    for (name, value) in [
+        ("--px-noise", args.px_noise),
+        ("--joint-noise-deg", args.joint_noise_deg),
+    ] {
+        if let Some(v) = value
+            && !(v.is_finite() && v > 0.0)
+        {
+            anyhow::bail!("{name} must be a positive number, got {v}");
+        }
+    }
+    if !(args.drift_threshold.is_finite() && args.drift_threshold > 0.0) {
+        anyhow::bail!(
+            "--drift-threshold must be a positive number, got {}",
+            args.drift_threshold
+        );
+    }
+    let options = BatchOptions {
+        solver: args.solver.clone(),
+        fixed,
+        threads: args.threads,
+        verbose,
+        drift: DriftOptions {
+            mode: match args.drift {
+                DriftArg::Consecutive => DriftMode::Consecutive,
+                DriftArg::First => DriftMode::First,
+            },
+            threshold: args.drift_threshold,
+            grouping: match args.robots {
+                RobotsArg::Parent => Grouping::Parent,
+                RobotsArg::All => Grouping::All,
+                RobotsArg::None => Grouping::None,
+            },
+        },
+        ..BatchOptions::default()
+    }
+    .with_uncertainty(crate::solve::UncertaintyOptions {
+        noise_model: !args.plain_std,
+        noise: crate::solve::noise::NoiseOptions {
+            px: args.px_noise,
+            joint: args.joint_noise_deg.map(f64::to_radians),
+        },
+        ..Default::default()
+    });
+    let show = !args.no_progress && !verbose && std::io::stderr().is_terminal();
+    let bar = Bar {
+        started: Instant::now(),
+        failed: Mutex::new(0),
+    };
+    let progress = |p: Progress<'_>| {
+        if show {
+            bar.show(p);
+        }
+    };
+    let result = batch::run(&args.datasets, &options, &progress);
+    let write_options = WriteOptions {
+        force: args.force,
+        inputs: Vec::new(),
+    };
+    if let Some(dir) = &args.out {
+        let files = result
+            .write(dir, &options.drift, &write_options)
+            .context("--out")?;
+        eprintln!(
+            "wrote {} run results and {}",
+            files.runs.len(),
+            files.summary.display()
+        );
+    }
+    if let Some(dir) = &args.plots {
+        let files = result.plots(dir, &write_options).context("--plots")?;
+        eprintln!("wrote {} plot files into {}", files.len(), dir.display());
+    }
+    let mut stdout = std::io::stdout().lock();
+    if args.json {
+        writeln!(
+            stdout,
+            "{}",
+            serde_json::to_string_pretty(&result.json(&options.drift))?
+        )?;
+    } else {
+        write!(stdout, "{}", result.table(&options.drift))?;
+    }
+    for f in result.failures.iter().filter(|_| args.json) {
+        eprintln!("naocalib: {}: {}", f.dataset.display(), f.error);
+    }
+    Ok(if !result.all_solved() {
+        ExitCode::from(2)
+    } else if !result.all_converged() {
+        ExitCode::from(3)
+    } else {
+        ExitCode::SUCCESS
+    })
+}
