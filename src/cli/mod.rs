@@ -1,6 +1,7 @@
 //! The command line: thin wrappers that parse arguments, call the library and print.
 
 mod batch;
+mod compare;
 #[cfg(feature = "detect")]
 mod detect;
 mod export;
@@ -39,6 +40,9 @@ enum Command {
     /// Calibrate: fit the offsets to a dataset's corners and print them with their
     /// uncertainty.
     Solve(solve::SolveArgs),
+    /// Run every solver on the same dataset: a table of convergence, cost, RMS, time and
+    /// the largest difference from Ceres in sigma, and the parameters side by side.
+    Compare(compare::CompareArgs),
     /// Calibrate many datasets in parallel: a table of all runs with mean ± std across
     /// runs, drift between runs of the same robot, and failures reported and skipped.
     Batch(batch::BatchArgs),
@@ -66,6 +70,7 @@ pub fn run(cli: &Cli) -> Result<ExitCode> {
     match &cli.command {
         Command::Simulate(args) => simulate::run(args),
         Command::Solve(args) => solve::run(args, cli.verbose),
+        Command::Compare(args) => compare::run(args),
         Command::Batch(args) => batch::run(args, cli.verbose),
         Command::Export(args) => export::run(args),
         #[cfg(feature = "detect")]

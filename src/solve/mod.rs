@@ -8,6 +8,7 @@
 #[cfg(feature = "ceres")]
 pub mod ceres;
 pub mod compare;
+pub mod compare;
 pub mod covariance;
 pub mod jacobian;
 pub mod lm;
