@@ -11,7 +11,9 @@ use naocalib::solve::{Problem, UncertaintyOptions, backend, calibrate};
 fn main() {
     let mut args = std::env::args().skip(1);
     let reps: usize = args.next().map_or(100, |a| a.parse().expect("repetitions"));
-    let solver = args.next().unwrap_or_else(|| naocalib::solve::backend_names()[0].into());
+    let solver = args
+        .next()
+        .unwrap_or_else(|| naocalib::solve::backend_names()[0].into());
     let backend = backend(&solver, false).expect("known solver");
     for (px, joint_deg) in [(0.1, 0.0), (0.1, 0.1)] {
         let mut estimates = vec![Vec::new(); PAPER_PARAMETERS];
@@ -45,18 +47,28 @@ fn main() {
             mean(&px_hat),
             mean(&joint_hat)
         );
-        println!("{:<14} {:>12} {:>12} {:>7}", "parameter", "scatter", "mean σ", "ratio");
+        println!(
+            "{:<14} {:>12} {:>12} {:>7}",
+            "parameter", "scatter", "mean σ", "ratio"
+        );
         let mut worst: (f64, &str) = (1.0, "");
         for p in &Param::ALL[..PAPER_PARAMETERS] {
             let e = &estimates[p.index()];
             let m = mean(e);
-            let scatter = (e.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (e.len() - 1) as f64).sqrt();
+            let scatter =
+                (e.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (e.len() - 1) as f64).sqrt();
             let sigma = mean(&stds[p.index()]);
             let ratio = sigma / scatter;
             if (ratio.ln()).abs() > worst.0.ln().abs() {
                 worst = (ratio, p.name());
             }
-            println!("{:<14} {:>12.5} {:>12.5} {:>7.2}", p.name(), scatter, sigma, ratio);
+            println!(
+                "{:<14} {:>12.5} {:>12.5} {:>7.2}",
+                p.name(),
+                scatter,
+                sigma,
+                ratio
+            );
         }
         println!("worst ratio {:.2} ({})", worst.0, worst.1);
     }
