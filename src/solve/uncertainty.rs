@@ -213,7 +213,7 @@ pub fn sandwich(problem: &Problem, x: &[f64]) -> Option<DMatrix<f64>> {
     for term in &problem.captures {
         let rows = term.residual_count();
         let j_c = jac.rows(row, rows);
-        let leverage = (&j_c * &h_inv * j_c.transpose()).symmetric_eigen();
+        let leverage = (j_c * &h_inv * j_c.transpose()).symmetric_eigen();
         let v = &leverage.eigenvectors;
         let scale = leverage
             .eigenvalues
