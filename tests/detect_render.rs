@@ -155,3 +155,15 @@ fn end_to_end_recovers_the_truth() {
         );
     }
 }
+
+#[test]
+fn lens_distortion_is_rendered_and_handled() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut model = Model::default();
+    model.camera.distortion = [-0.15, 0.05, 0.001, -0.001, 0.0];
+    let dataset = rendered(tmp.path(), &model, 21, 3, 2);
+    let (rms, worst, _, summary) = detect_and_compare(&dataset);
+    eprintln!("distorted: rms {rms:.4} px, worst {worst:.4} px, {summary}");
+    assert_eq!(summary.found, dataset.captures.len(), "{summary}");
+    assert!(rms < 0.05, "rms {rms} px");
+}

@@ -1,0 +1,285 @@
+//! `naocalib detect` through the binary: OpenCV's own sample images with `--pattern 9x6
+//! --no-model` (compared with OpenCV's `findChessboardCorners` + `cornerSubPix`), bad image
+//! files that must each give a clear per-image error, and the corners.csv rules.
+#![cfg(feature = "detect")]
+
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+use assert_cmd::Command;
+use naocalib::dataset::Dataset;
+use naocalib::sim::render::GreyImage;
+use opencv::core::{Point2f, Size, TermCriteria, Vector};
+use opencv::prelude::*;
+use opencv::{calib3d, imgcodecs, imgproc};
+
+const SAMPLES: [&str; 6] = [
+    "left01.jpg",
+    "left02.jpg",
+    "left03.jpg",
+    "left04.jpg",
+    "left06.jpg",
+    "left12.jpg",
+];
+
+fn naocalib() -> Command {
+    Command::cargo_bin("naocalib").expect("binary built")
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/opencv")
+}
+
+/// A dataset of the sample images: a 640 × 480 camera, a 10 × 7 board (9 × 6 inner
+/// vertices), zero joint angles.
+fn sample_dataset(dir: &Path) {
+    std::fs::create_dir_all(dir.join("images")).unwrap();
+    std::fs::write(
+        dir.join("dataset.toml"),
+        "[camera]\nwidth = 640\nheight = 480\nfx = 536.0\nfy = 536.0\ncx = 342.0\ncy = 235.0\n\n\
+         [board]\nsquares_x = 10\nsquares_y = 7\nsquare_mm = 25.0\n",
+    )
+    .unwrap();
+    let mut csv = String::from("capture,board,image");
+    let joints = [
+        "HeadYaw",
+        "HeadPitch",
+        "LHipYawPitch",
+        "LHipRoll",
+        "LHipPitch",
+        "LKneePitch",
+        "LAnklePitch",
+        "LAnkleRoll",
+        "RHipYawPitch",
+        "RHipRoll",
+        "RHipPitch",
+        "RKneePitch",
+        "RAnklePitch",
+        "RAnkleRoll",
+    ];
+    for j in joints {
+        csv += ",";
+        csv += j;
+    }
+    csv += "\n";
+    for (k, name) in SAMPLES.iter().enumerate() {
+        std::fs::copy(fixtures().join(name), dir.join("images").join(name)).unwrap();
+        csv += &format!("{k},left,images/{name}{}\n", ",0".repeat(joints.len()));
+    }
+    std::fs::write(dir.join("captures.csv"), csv).unwrap();
+}
+
+/// OpenCV's tutorial recipe (default flags, 30 iterations or 0.001), with one window for
+/// the whole image of `half` pixels each side of the corner. (The tutorial's fixed 11 makes
+/// a 23-pixel window, larger than the squares in the far part of left02.jpg, where it then
+/// goes astray by several pixels; so does 0.3 of the median square.)
+fn opencv_reference(path: &Path, half: i32) -> Vec<[f64; 2]> {
+    let grey = imgcodecs::imread(path.to_str().unwrap(), imgcodecs::IMREAD_GRAYSCALE).unwrap();
+    let mut corners = Vector::<Point2f>::new();
+    let found = calib3d::find_chessboard_corners(
+        &grey,
+        Size::new(9, 6),
+        &mut corners,
+        calib3d::CALIB_CB_ADAPTIVE_THRESH | calib3d::CALIB_CB_NORMALIZE_IMAGE,
+    )
+    .unwrap();
+    assert!(found, "OpenCV finds the board in {}", path.display());
+    let criteria = TermCriteria::new(
+        opencv::core::TermCriteria_Type::COUNT as i32 | opencv::core::TermCriteria_Type::EPS as i32,
+        30,
+        0.001,
+    )
+    .unwrap();
+    imgproc::corner_sub_pix(
+        &grey,
+        &mut corners,
+        Size::new(half, half),
+        Size::new(-1, -1),
+        criteria,
+    )
+    .unwrap();
+    assert!(!grey.empty());
+    corners.iter().map(|p| [p.x as f64, p.y as f64]).collect()
+}
+
+#[test]
+fn opencv_samples_agree_with_opencv() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("samples");
+    sample_dataset(&dir);
+    let out = naocalib()
+        .args(["detect", "--pattern", "9x6", "--no-model"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let err = stderr(&out);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("6 found, 0 not found"), "{err}");
+    let dataset = Dataset::load(&dir).unwrap();
+    assert_eq!(dataset.corners.len(), 6 * 54);
+    let mut worst = 0.0f64;
+    let mut sum2 = 0.0;
+    for (k, name) in SAMPLES.iter().enumerate() {
+        // One window for all corners that fits the smallest square: 0.3 of it (naocalib
+        // sizes the window per corner).
+        let ours: Vec<_> = dataset.corners_of(k as u64).map(|c| c.pixel).collect();
+        let mut spacing: Vec<f64> = ours
+            .windows(2)
+            .enumerate()
+            .filter(|(i, _)| (i + 1) % 9 != 0)
+            .map(|(_, w)| ((w[0][0] - w[1][0]).powi(2) + (w[0][1] - w[1][1]).powi(2)).sqrt())
+            .collect();
+        spacing.sort_by(f64::total_cmp);
+        let half = (0.3 * spacing[0]).round() as i32;
+        let reference = opencv_reference(&dir.join("images").join(name), half);
+        let mut w = 0.0f64;
+        for c in dataset.corners_of(k as u64) {
+            let r = reference[(c.vertex.row * 9 + c.vertex.col) as usize];
+            w = w.max(((c.pixel[0] - r[0]).powi(2) + (c.pixel[1] - r[1]).powi(2)).sqrt());
+        }
+        eprintln!("{name}: window ±{half} px, worst difference {w:.3} px");
+        for c in dataset.corners_of(k as u64) {
+            let r = reference[(c.vertex.row * 9 + c.vertex.col) as usize];
+            let d = ((c.pixel[0] - r[0]).powi(2) + (c.pixel[1] - r[1]).powi(2)).sqrt();
+            worst = worst.max(d);
+            sum2 += d * d;
+        }
+    }
+    let rms = (sum2 / (6.0 * 54.0)).sqrt();
+    eprintln!("against OpenCV's recipe: rms {rms:.3} px, worst {worst:.3} px");
+    assert!(rms < 0.05 && worst < 0.2, "rms {rms}, worst {worst}");
+}
+
+/// A small rendered dataset: 8 captures with images.
+fn rendered(dir: &Path) {
+    let out = naocalib()
+        .args([
+            "simulate",
+            "--images",
+            "--stances",
+            "4",
+            "--heads",
+            "1",
+            "--seed",
+            "5",
+        ])
+        .arg(dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+}
+
+#[test]
+fn bad_image_files_give_per_image_errors() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("ds");
+    rendered(&dir);
+    let img = |k: u32| dir.join(format!("images/{k:04}.png"));
+    // 0: truncated PNG, 1: empty, 2: missing, 3: wrong size, 4: not an image,
+    // 5: a symbolic link out of the dataset, 6: corrupt JPEG; 7 stays good.
+    let png = std::fs::read(img(0)).unwrap();
+    std::fs::write(img(0), &png[..png.len() / 3]).unwrap();
+    std::fs::write(img(1), b"").unwrap();
+    std::fs::remove_file(img(2)).unwrap();
+    let small = GreyImage {
+        width: 320,
+        height: 240,
+        pixels: vec![128; 320 * 240],
+    };
+    small.write_png(&img(3)).unwrap();
+    std::fs::write(img(4), "capture,row\n1,2\n").unwrap();
+    let outside = tmp.path().join("outside.png");
+    std::fs::copy(img(5), &outside).unwrap();
+    std::fs::remove_file(img(5)).unwrap();
+    #[cfg(unix)]
+    std::os::unix::fs::symlink(&outside, img(5)).unwrap();
+    std::fs::write(img(6), b"\xff\xd8\xff\xe0garbage").unwrap();
+
+    let out = naocalib().arg("detect").arg(&dir).output().unwrap();
+    let err = stderr(&out);
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for needle in [
+        "capture 0 (images/0000.png): error:",
+        "0000.png: not a readable image",
+        "capture 1 (images/0001.png): error:",
+        "0001.png: the file is empty",
+        "0002.png: no such file",
+        "0003.png: the image is 320×240 pixels, but the camera in dataset.toml is 640×480",
+        "0004.png: not a readable image: not a PNG, JPEG",
+        "0006.png: not a readable image",
+        "capture 7 (images/0007.png): found 24 vertices",
+        "1 found, 0 not found, 0 rejected, 7 unreadable",
+    ] {
+        assert!(err.contains(needle), "stderr lacks '{needle}':\n{err}");
+    }
+    #[cfg(unix)]
+    assert!(
+        err.contains("0005.png: the image path leaves the dataset directory"),
+        "{err}"
+    );
+    let dataset = Dataset::load(&dir).unwrap();
+    assert_eq!(dataset.corners.len(), 24);
+    assert!(dataset.corners.iter().all(|c| c.capture == 7));
+}
+
+#[test]
+fn corners_csv_is_replaced_only_with_force() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("ds");
+    rendered(&dir);
+    // simulate --images leaves corners.csv without vertices: detect may fill it.
+    let out = naocalib().arg("detect").arg(&dir).output().unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("8 found"), "{}", stderr(&out));
+    let before = std::fs::read(dir.join("corners.csv")).unwrap();
+    let out = naocalib().arg("detect").arg(&dir).output().unwrap();
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("use --force"), "{}", stderr(&out));
+    assert_eq!(std::fs::read(dir.join("corners.csv")).unwrap(), before);
+    let overlays = tmp.path().join("overlays");
+    let solved = tmp.path().join("solved.json");
+    std::fs::write(
+        &solved,
+        r#"{"parameters": {"CamPitch": {"value": 1.5, "std": 0.1, "unit": "deg"}}}"#,
+    )
+    .unwrap();
+    let out = naocalib()
+        .args(["detect", "--force", "--jobs", "1", "--overlay"])
+        .arg(&overlays)
+        .arg("--after")
+        .arg(&solved)
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(std::fs::read(dir.join("corners.csv")).unwrap(), before);
+    let overlay = imgcodecs::imread(
+        overlays.join("capture_0000.png").to_str().unwrap(),
+        imgcodecs::IMREAD_COLOR,
+    )
+    .unwrap();
+    assert_eq!((overlay.cols(), overlay.rows()), (640, 480));
+    // A path with '..' is refused when the dataset is read, naming the line and field.
+    let captures = std::fs::read_to_string(dir.join("captures.csv")).unwrap();
+    std::fs::write(
+        dir.join("captures.csv"),
+        captures.replacen("images/0000.png", "../0000.png", 1),
+    )
+    .unwrap();
+    let out = naocalib()
+        .args(["detect", "--force"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        stderr(&out).contains("captures.csv line 2, field image"),
+        "{}",
+        stderr(&out)
+    );
+}
