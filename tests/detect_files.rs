@@ -283,3 +283,38 @@ fn corners_csv_is_replaced_only_with_force() {
         stderr(&out)
     );
 }
+
+#[test]
+fn rejected_and_not_found_are_reported() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("ds");
+    rendered(&dir);
+    // Capture 0 claims the other foot: the model predicts that board far from the one seen.
+    let captures = std::fs::read_to_string(dir.join("captures.csv")).unwrap();
+    let mut lines: Vec<String> = captures.lines().map(str::to_string).collect();
+    lines[1] = if lines[1].contains(",left,") {
+        lines[1].replacen(",left,", ",right,", 1)
+    } else {
+        lines[1].replacen(",right,", ",left,", 1)
+    };
+    std::fs::write(dir.join("captures.csv"), lines.join("\n") + "\n").unwrap();
+    // Capture 1 shows no board at all.
+    let blank = GreyImage {
+        width: 640,
+        height: 480,
+        pixels: (0..640 * 480).map(|k| (k % 7 * 20 + 60) as u8).collect(),
+    };
+    blank.write_png(&dir.join("images/0001.png")).unwrap();
+    let out = naocalib().arg("detect").arg(&dir).output().unwrap();
+    let err = stderr(&out);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("capture 0 (images/0000.png): rejected: "),
+        "{err}"
+    );
+    assert!(
+        err.contains("capture 1 (images/0001.png): not found"),
+        "{err}"
+    );
+    assert!(err.contains("6 found, 1 not found, 1 rejected"), "{err}");
+}

@@ -553,6 +553,11 @@ pub fn detect_dataset(
     options: &DetectOptions,
     done: &(dyn Fn(&ImageResult) + Sync),
 ) -> Vec<ImageResult> {
+    // The images are the unit of parallelism: OpenCV's own worker threads would only compete
+    // with them.
+    if options.jobs > 1 {
+        let _ = opencv::core::set_num_threads(1);
+    }
     let run = || {
         dataset
             .captures
