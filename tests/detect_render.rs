@@ -129,7 +129,8 @@ fn end_to_end_recovers_the_truth() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
     let model = Model::default();
-    let mut dataset = rendered(dir, &model, 11, 12, 2);
+    // Paper-sized: 24 stances × 3 head postures × 2 legs = 144 images.
+    let mut dataset = rendered(dir, &model, 11, 24, 3);
     let truth = dataset.truth.clone().unwrap();
     let results = detect::detect_dataset(&dataset, &DetectOptions::default(), &|_| {});
     let summary = Summary::of(&results);
@@ -143,10 +144,10 @@ fn end_to_end_recovers_the_truth() {
     for p in Param::ALL.iter().take(21) {
         let est = p.unit().to_report(solution.values[p.index()]);
         let tru = truth.report_value(*p);
-        // Half the paper-sized set: the 0.03° / 0.15 mm scaled by √2.
+        // The targets.
         let tol = match p.unit() {
-            naocalib::model::Unit::Deg => 0.03 * 2f64.sqrt(),
-            _ => 0.15 * 2f64.sqrt(),
+            naocalib::model::Unit::Deg => 0.03,
+            _ => 0.15,
         };
         assert!(
             (est - tru).abs() < tol,
