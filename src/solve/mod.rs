@@ -8,7 +8,6 @@
 #[cfg(feature = "ceres")]
 pub mod ceres;
 pub mod compare;
-pub mod compare;
 pub mod covariance;
 pub mod jacobian;
 pub mod lm;
