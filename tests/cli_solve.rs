@@ -263,7 +263,10 @@ fn rank_deficient_dataset_exits_cleanly_with_named_diagnostics() {
     let out = solve(&dir, &[]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains("NOT determined") && text.contains("--fix"), "{text}");
+    assert!(
+        text.contains("NOT determined") && text.contains("--fix"),
+        "{text}"
+    );
     assert!(!text.contains("NaN"), "{text}");
     let out = solve(&dir, &["--json"]);
     let json: Value = serde_json::from_slice(&out.stdout).expect("JSON");

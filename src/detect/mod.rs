@@ -339,7 +339,7 @@ pub fn read_grey(path: &Path) -> Result<Mat, DetectError> {
     decode_grey(path, &bytes)
 }
 
-/// Decodes image bytes (PNG natively, JPEG and others with OpenCV) as 8-bit greyscale.
+/// Decodes image bytes (PNG, JPEG, BMP or PGM) as 8-bit greyscale.
 pub fn decode_grey(path: &Path, bytes: &[u8]) -> Result<Mat, DetectError> {
     let decode = |message: String| DetectError::Decode {
         path: path.to_path_buf(),
@@ -359,20 +359,35 @@ pub fn decode_grey(path: &Path, bytes: &[u8]) -> Result<Mat, DetectError> {
         let mat = Mat::new_rows_cols_with_data(height as i32, width as i32, &grey).map_err(cv)?;
         return mat.try_clone().map_err(cv);
     }
-    const KNOWN: [&[u8]; 5] = [b"\xff\xd8\xff", b"BM", b"II*\0", b"MM\0*", b"P5"];
+    const KNOWN: [&[u8]; 4] = [b"\xff\xd8\xff", b"BM", b"P5", b"P2"];
     if !KNOWN.iter().any(|m| bytes.starts_with(m)) {
         return Err(decode(
-            "not a PNG, JPEG, BMP, TIFF or PGM file (unknown signature)".into(),
+            "not a PNG, JPEG, BMP or PGM file (unknown signature)".into(),
         ));
     }
-    let buf = opencv::core::Vector::<u8>::from_slice(bytes);
-    let mat = opencv::imgcodecs::imdecode(&buf, opencv::imgcodecs::IMREAD_GRAYSCALE).map_err(cv)?;
-    if mat.empty() {
-        return Err(decode(
-            "OpenCV cannot decode it (corrupt or truncated?)".into(),
-        ));
-    }
-    Ok(mat)
+    let (grey, width, height) = decode_other(bytes).map_err(decode)?;
+    let mat = Mat::new_rows_cols_with_data(height as i32, width as i32, &grey).map_err(cv)?;
+    mat.try_clone().map_err(cv)
+}
+
+/// Decodes a JPEG, BMP or PGM into 8-bit grey levels (colour as in [`decode_png`]).
+fn decode_other(bytes: &[u8]) -> Result<(Vec<u8>, u32, u32), String> {
+    let img = image::load_from_memory(bytes).map_err(|e| e.to_string())?;
+    let (width, height) = (img.width(), img.height());
+    let grey = match img {
+        image::DynamicImage::ImageLuma8(g) => g.into_raw(),
+        other => other
+            .to_rgb8()
+            .pixels()
+            .map(|p| bt601(p.0[0], p.0[1], p.0[2]))
+            .collect(),
+    };
+    Ok((grey, width, height))
+}
+
+/// ITU-R BT.601 luma, as OpenCV's colour-to-grey conversion.
+fn bt601(r: u8, g: u8, b: u8) -> u8 {
+    (0.299 * r as f64 + 0.587 * g as f64 + 0.114 * b as f64).round() as u8
 }
 
 /// Decodes a PNG into 8-bit grey levels (colour converted with ITU-R BT.601 weights).
@@ -392,9 +407,7 @@ fn decode_png(bytes: &[u8]) -> Result<(Vec<u8>, u32, u32), String> {
         2 => buf.chunks_exact(2).map(|p| p[0]).collect(),
         _ => buf
             .chunks_exact(channels)
-            .map(|p| {
-                (0.299 * p[0] as f64 + 0.587 * p[1] as f64 + 0.114 * p[2] as f64).round() as u8
-            })
+            .map(|p| bt601(p[0], p[1], p[2]))
             .collect(),
     };
     Ok((grey, info.width, info.height))

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use opencv::core::{Mat, Point, Scalar, Vector};
+use opencv::core::{Mat, Point, Scalar};
 use opencv::imgproc;
 use opencv::prelude::*;
 
@@ -65,9 +65,27 @@ pub fn draw(
             )?;
         }
     }
-    let mut buf = Vector::<u8>::new();
-    opencv::imgcodecs::imencode(".png", &img, &mut buf, &Vector::new())?;
-    Ok(buf.to_vec())
+    encode_png(&img)
+}
+
+/// Encodes an 8-bit BGR image as RGB PNG bytes.
+fn encode_png(bgr: &Mat) -> opencv::Result<Vec<u8>> {
+    let rgb: Vec<u8> = bgr
+        .data_bytes()?
+        .chunks_exact(3)
+        .flat_map(|p| [p[2], p[1], p[0]])
+        .collect();
+    let encoding =
+        |e: png::EncodingError| opencv::Error::new(opencv::core::StsError, e.to_string());
+    let mut out = Vec::new();
+    let mut encoder = png::Encoder::new(&mut out, bgr.cols() as u32, bgr.rows() as u32);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_compression(png::Compression::Fast);
+    let mut writer = encoder.write_header().map_err(encoding)?;
+    writer.write_image_data(&rgb).map_err(encoding)?;
+    writer.finish().map_err(encoding)?;
+    Ok(out)
 }
 
 /// Writes the overlay of one result into `dir` as `capture_NNNN.png` and returns its path:
