@@ -111,7 +111,8 @@ use super::{Backend, BackendResult, Loss, Problem, SolveError, Summary};
 use crate::model::{Axis, PARAMETER_COUNT, Param, Step};
 
 /// The Ceres backend: Levenberg–Marquardt with dense QR and autodiff on Jets, through the
-/// C++ shim in `cpp/`. The covariance is Ceres' dense-SVD pseudo-inverse `(JᵀJ)⁺`.
+/// C++ shim in `cpp/`. The covariance is `ceres::Covariance`'s `(JᵀJ)⁺` (sparse QR, or the
+/// dense SVD's pseudo-inverse when the Jacobian is rank deficient).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Ceres {
     /// Print Ceres' per-iteration progress and its full report to stderr.
@@ -124,6 +125,17 @@ impl Backend for Ceres {
     }
 
     fn solve(&self, problem: &Problem) -> Result<BackendResult, SolveError> {
+        self.run(problem, true)
+    }
+
+    fn solve_values(&self, problem: &Problem) -> Result<BackendResult, SolveError> {
+        self.run(problem, false)
+    }
+}
+
+impl Ceres {
+    /// One Ceres solve, with `ceres::Covariance` if `covariance`.
+    fn run(&self, problem: &Problem, covariance: bool) -> Result<BackendResult, SolveError> {
         let ffi_problem = to_ffi(problem)?;
         let (loss, loss_scale) = match problem.loss {
             Loss::Squared => (0, 0.0),
@@ -138,7 +150,7 @@ impl Backend for Ceres {
             parameter_tolerance: t.parameter,
             loss,
             loss_scale,
-            covariance: true,
+            covariance,
             verbose: self.verbose,
         };
         let solution = ffi::solve(&ffi_problem, &options).map_err(backend_error)?;

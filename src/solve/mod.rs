@@ -76,6 +76,11 @@ pub trait Backend {
     fn name(&self) -> &'static str;
     /// Solves the problem from its initial values.
     fn solve(&self, problem: &Problem) -> Result<BackendResult, SolveError>;
+    /// Like [`Backend::solve`], but the covariance may be left out (`None`): for fits whose
+    /// uncertainty nobody reads (the first fits before the noise model, bootstrap refits).
+    fn solve_values(&self, problem: &Problem) -> Result<BackendResult, SolveError> {
+        self.solve(problem)
+    }
 }
 
 /// Names of the available backends, the default first.
@@ -259,9 +264,31 @@ pub fn validate(problem: &Problem) -> Result<(), SolveError> {
 
 /// Solves `problem` with `backend` and derives the statistics of the result.
 pub fn solve(problem: &Problem, backend: &dyn Backend) -> Result<Solution, SolveError> {
+    let mut solution = optimise(problem, backend)?;
+    add_statistics(problem, problem, &mut solution);
+    Ok(solution)
+}
+
+/// The fit alone: values, summary, RMS and the scaled covariance, without the per-vertex
+/// residuals, the identifiability report and the sandwich (see [`add_statistics`]).
+/// Intermediate fits and bootstrap refits need no more.
+pub fn optimise(problem: &Problem, backend: &dyn Backend) -> Result<Solution, SolveError> {
+    optimise_with(problem, backend, true)
+}
+
+/// [`optimise`], with the covariance only if `covariance` (else zero `std`).
+fn optimise_with(
+    problem: &Problem,
+    backend: &dyn Backend,
+    covariance: bool,
+) -> Result<Solution, SolveError> {
     let start = Instant::now();
     validate(problem)?;
-    let result = backend.solve(problem)?;
+    let result = if covariance {
+        backend.solve(problem)?
+    } else {
+        backend.solve_values(problem)?
+    };
     let free = problem.free();
     if result.free_values.len() != free.len() {
         return Err(SolveError::Backend {
@@ -279,7 +306,6 @@ pub fn solve(problem: &Problem, backend: &dyn Backend) -> Result<Solution, Solve
         message: "the solution puts a vertex behind the camera".into(),
     })?;
     let initial_rms_px = problem.rms(&problem.initial).unwrap_or([f64::NAN; 2]);
-    let residuals = vertex_residuals(problem, &values);
     let dof = problem.residual_count().saturating_sub(free.len()).max(1);
     let residual_variance = 2.0 * result.summary.final_cost / dof as f64;
     let covariance = covariance::embed(
@@ -291,9 +317,6 @@ pub fn solve(problem: &Problem, backend: &dyn Backend) -> Result<Solution, Solve
         residual_variance,
     );
     let std = std::array::from_fn(|i| covariance[(i, i)].max(0.0).sqrt());
-    let identifiability = uncertainty::identifiability(problem, &result.free_values, &covariance);
-    let sandwich_std = uncertainty::sandwich(problem, &result.free_values)
-        .map(|c| std::array::from_fn(|i| c[(i, i)].max(0.0).sqrt()));
     Ok(Solution {
         summary: result.summary,
         values,
@@ -306,13 +329,32 @@ pub fn solve(problem: &Problem, backend: &dyn Backend) -> Result<Solution, Solve
         captures: problem.captures.len(),
         residual_variance,
         seconds: start.elapsed().as_secs_f64(),
-        residuals,
+        residuals: Vec::new(),
         noise: None,
-        sandwich_std,
+        sandwich_std: None,
         bootstrap: None,
-        identifiability,
+        identifiability: uncertainty::Identifiability::default(),
         outliers: Vec::new(),
     })
+}
+
+/// Adds to a fit of `fitted` (the problem as solved, perhaps whitened) the statistics that
+/// do not depend on the backend: the identifiability report and the sandwich covariance
+/// (from one Jacobian of `fitted`), and every vertex's residual before (at `original`'s
+/// start values) and after.
+pub fn add_statistics(fitted: &Problem, original: &Problem, solution: &mut Solution) {
+    let start = Instant::now();
+    let free_values: Vec<f64> = fitted
+        .free()
+        .iter()
+        .map(|p| solution.values[p.index()])
+        .collect();
+    let (identifiability, sandwich) =
+        uncertainty::statistics(fitted, &free_values, &solution.covariance);
+    solution.identifiability = identifiability;
+    solution.sandwich_std = sandwich.map(|c| std::array::from_fn(|i| c[(i, i)].max(0.0).sqrt()));
+    solution.residuals = vertex_residuals(original, &solution.values);
+    solution.seconds += start.elapsed().as_secs_f64();
 }
 
 /// Rounds of (estimate the noise, whitened refit) after the first fit.
@@ -380,7 +422,8 @@ fn calibrate_robust(
     backend: &dyn Backend,
     options: &UncertaintyOptions,
 ) -> Result<Solution, SolveError> {
-    let robust = solve(problem, backend)?;
+    let mut robust = optimise(problem, backend)?;
+    robust.residuals = vertex_residuals(problem, &robust.values);
     let mut coords: Vec<f64> = robust
         .residuals
         .iter()
@@ -426,8 +469,10 @@ fn fit(
     options: &UncertaintyOptions,
 ) -> Result<(Solution, Option<Problem>), SolveError> {
     let start = Instant::now();
-    let first = solve(problem, backend)?;
-    if !options.noise_model || problem.loss != Loss::Squared {
+    let plain = !options.noise_model || problem.loss != Loss::Squared;
+    let mut first = optimise_with(problem, backend, plain)?;
+    if plain {
+        add_statistics(problem, problem, &mut first);
         return Ok((first, None));
     }
     // The first (unweighted) fit is inefficient under joint noise, and its error looks like
@@ -436,17 +481,27 @@ fn fit(
     let fitted = problem.free().len();
     let mut current = first.clone();
     let mut levels = None;
-    let mut last = None;
+    let mut last: Option<Problem> = None;
     let mut iterations = first.summary.iterations;
     let mut seconds = first.summary.seconds;
-    for _ in 0..NOISE_ROUNDS {
+    for round in 0..NOISE_ROUNDS {
         let (estimate, captures) = noise::estimate(problem, &current.values, fitted, options.noise)
             .ok_or_else(|| SolveError::Backend {
                 solver: backend.name().into(),
                 message: "a fit puts a vertex behind the camera".into(),
             })?;
         if estimate.px <= 0.0 || !estimate.px.is_finite() {
-            // A perfect fit (noise-free data): nothing to weight by.
+            // A perfect fit (noise-free data): nothing to weight by. Its covariance was
+            // skipped; a refit from the solution gives it in an iteration or two.
+            let fitted = last.as_ref().unwrap_or(problem);
+            let mut at = fitted.clone();
+            at.initial = current.values;
+            let refit = optimise(&at, backend)?;
+            current.covariance = refit.covariance;
+            current.std = refit.std;
+            current.residual_variance = refit.residual_variance;
+            add_statistics(fitted, problem, &mut current);
+            current.initial_rms_px = first.initial_rms_px;
             return Ok((
                 Solution {
                     noise: Some(estimate),
@@ -460,22 +515,20 @@ fn fit(
         for (term, cn) in weighted.captures.iter_mut().zip(&captures) {
             term.whitening = Some(cn.whitening(estimate));
         }
-        current = solve(&weighted, backend)?;
+        current = optimise_with(&weighted, backend, round + 1 == NOISE_ROUNDS)?;
         last = Some(weighted);
         iterations += current.summary.iterations;
         seconds += current.summary.seconds;
         levels = Some(estimate);
     }
     let mut second = current;
+    add_statistics(last.as_ref().unwrap_or(problem), problem, &mut second);
     let estimated = options.noise.px.is_none() || options.noise.joint.is_none();
     if !estimated {
         // Both noise levels given: trust them, do not rescale by the residuals.
         let scale = 1.0 / second.residual_variance;
         second.covariance *= scale;
         second.std = std::array::from_fn(|i| second.covariance[(i, i)].max(0.0).sqrt());
-    }
-    for (after, before) in second.residuals.iter_mut().zip(&first.residuals) {
-        after.initial = before.initial;
     }
     second.initial_rms_px = first.initial_rms_px;
     second.summary.iterations = iterations;

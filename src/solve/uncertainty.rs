@@ -97,15 +97,45 @@ pub fn correlation(cov: &DMatrix<f64>) -> DMatrix<f64> {
 /// solution's covariance.
 pub fn identifiability(problem: &Problem, x: &[f64], cov: &DMatrix<f64>) -> Identifiability {
     let eval = Evaluator::new(problem);
-    let free = eval.free().to_vec();
-    let mut report = Identifiability {
+    match eval.residuals_and_jacobian(x) {
+        Some((_, jac)) => identifiability_of(eval.free(), &jac, cov),
+        None => unanalysed(eval.free()),
+    }
+}
+
+/// The identifiability report and the sandwich covariance of `problem` at the free values
+/// `x` from one evaluation of the Jacobian (what [`super::solve`] reports beside the fit).
+pub fn statistics(
+    problem: &Problem,
+    x: &[f64],
+    cov: &DMatrix<f64>,
+) -> (Identifiability, Option<DMatrix<f64>>) {
+    let eval = Evaluator::new(problem);
+    match eval.residuals_and_jacobian(x) {
+        Some((r, jac)) => (
+            identifiability_of(eval.free(), &jac, cov),
+            Some(sandwich_of(problem, eval.free(), &r, &jac)),
+        ),
+        None => (unanalysed(eval.free()), None),
+    }
+}
+
+/// The report when the Jacobian could not be evaluated: nothing flagged.
+fn unanalysed(free: &[Param]) -> Identifiability {
+    Identifiability {
         free: free.len(),
         determined: vec![true; PARAMETER_COUNT],
         ..Default::default()
-    };
-    let Some((_, jac)) = eval.residuals_and_jacobian(x) else {
-        return report;
-    };
+    }
+}
+
+/// [`identifiability`] from the (weighted) Jacobian `jac` over the `free` parameters.
+pub fn identifiability_of(
+    free: &[Param],
+    jac: &DMatrix<f64>,
+    cov: &DMatrix<f64>,
+) -> Identifiability {
+    let mut report = unanalysed(free);
     let n = free.len();
     let norms: Vec<f64> = (0..n).map(|j| jac.column(j).norm()).collect();
     report.unobserved = free
@@ -204,27 +234,67 @@ pub fn identifiability(problem: &Problem, x: &[f64], cov: &DMatrix<f64>) -> Iden
 /// capture. Full PARAMETER_COUNT² matrix.
 pub fn sandwich(problem: &Problem, x: &[f64]) -> Option<DMatrix<f64>> {
     let eval = Evaluator::new(problem);
-    let free = eval.free().to_vec();
     let (r, jac) = eval.residuals_and_jacobian(x)?;
-    let (h_inv, _) = covariance::from_jacobian(&jac);
+    Some(sandwich_of(problem, eval.free(), &r, &jac))
+}
+
+/// [`sandwich`] from the (weighted) residuals `r` and Jacobian `jac` over the `free`
+/// parameters.
+pub fn sandwich_of(
+    problem: &Problem,
+    free: &[Param],
+    r: &DVector<f64>,
+    jac: &DMatrix<f64>,
+) -> DMatrix<f64> {
+    let (h_inv, _) = covariance::from_jacobian(jac);
     let n = free.len();
     let mut meat = DMatrix::zeros(n, n);
     let mut row = 0;
     for term in &problem.captures {
         let rows = term.residual_count();
         let j_c = jac.rows(row, rows);
-        let leverage = (j_c * &h_inv * j_c.transpose()).symmetric_eigen();
-        let v = &leverage.eigenvectors;
-        let scale = leverage
-            .eigenvalues
-            .map(|l| 1.0 / (1.0 - l.clamp(0.0, 0.99)).sqrt());
-        let r_c = v * DMatrix::from_diagonal(&scale) * (v.transpose() * r.rows(row, rows));
-        let g: DVector<f64> = j_c.transpose() * r_c;
-        meat += &g * g.transpose();
+        // The capture's own columns: at most a dozen of the free parameters.
+        let cols: Vec<usize> = (0..n)
+            .filter(|&j| j_c.column(j).iter().any(|v| *v != 0.0))
+            .collect();
+        let b = j_c.select_columns(&cols);
+        let p = h_inv.select_rows(&cols).select_columns(&cols);
+        let r_c = leverage_corrected(&b, &p, &r.rows(row, rows).into_owned());
+        let g: DVector<f64> = b.transpose() * r_c;
+        for (a, &ia) in cols.iter().enumerate() {
+            for (c, &ic) in cols.iter().enumerate() {
+                meat[(ia, ic)] += g[a] * g[c];
+            }
+        }
         row += rows;
     }
     let cov = &h_inv * meat * &h_inv;
-    Some(covariance::embed(&free, &cov, 1.0))
+    covariance::embed(free, &cov, 1.0)
+}
+
+/// `(I − H_cc)^{-1/2} r_c` with the leverage `H_cc = B P Bᵀ` of one capture (`B` its
+/// Jacobian on its own columns, `P` their block of `H⁺`), leverages capped at 0.99.
+///
+/// `H_cc` (2k × 2k) has rank at most `B`'s column count, so its eigenpairs come from the
+/// small `M = S BᵀB S` with `S = P^{1/2}`: `M v = λ v` gives `H_cc u = λ u` for
+/// `u = B S v / √λ`.
+fn leverage_corrected(b: &DMatrix<f64>, p: &DMatrix<f64>, r_c: &DVector<f64>) -> DVector<f64> {
+    let pe = p.clone().symmetric_eigen();
+    let root = pe.eigenvalues.map(|l| l.max(0.0).sqrt());
+    let s = &pe.eigenvectors * DMatrix::from_diagonal(&root) * pe.eigenvectors.transpose();
+    let bs = b * s;
+    let m = bs.transpose() * &bs;
+    let me = m.symmetric_eigen();
+    let mut out = r_c.clone();
+    for (k, &l) in me.eigenvalues.iter().enumerate() {
+        if l <= 1e-12 {
+            continue;
+        }
+        let u = &bs * me.eigenvectors.column(k) / l.sqrt();
+        let factor = 1.0 / (1.0 - l.min(0.99)).sqrt() - 1.0;
+        out.axpy(factor * u.dot(r_c), &u, 1.0);
+    }
+    out
 }
 
 /// The capture bootstrap: `n` refits on captures drawn with replacement (each keeping its
@@ -249,7 +319,7 @@ pub fn bootstrap(
         sample.captures = (0..count)
             .map(|_| problem.captures[rng.random_range(0..count)].clone())
             .collect();
-        match super::solve(&sample, backend) {
+        match super::optimise_with(&sample, backend, false) {
             Ok(s) if s.summary.converged => {
                 ok += 1;
                 for i in 0..PARAMETER_COUNT {
@@ -271,4 +341,35 @@ pub fn bootstrap(
         ((sum2[i] - k * mean * mean) / (k - 1.0)).max(0.0).sqrt()
     });
     Ok((std, failed))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The small-eigenproblem leverage correction equals the direct one on the full
+    /// `H_cc = B P Bᵀ` (2k × 2k).
+    #[test]
+    fn leverage_correction_matches_direct_eigendecomposition() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let (rows, cols) = (48, 11);
+        let b = DMatrix::from_fn(rows, cols, |_, _| rng.random_range(-1.0..1.0));
+        let a = DMatrix::from_fn(cols, cols, |_, _| rng.random_range(-1.0..1.0));
+        // A positive definite P scaled so that some leverages exceed the 0.99 cap.
+        let p = (&a * a.transpose() + DMatrix::identity(cols, cols)) * 0.02;
+        let r = DVector::from_fn(rows, |_, _| rng.random_range(-1.0..1.0));
+
+        let h = &b * &p * b.transpose();
+        let eig = h.symmetric_eigen();
+        assert!(eig.eigenvalues.iter().any(|&l| l > 0.99));
+        let scale = eig
+            .eigenvalues
+            .map(|l: f64| 1.0 / (1.0 - l.clamp(0.0, 0.99)).sqrt());
+        let v = &eig.eigenvectors;
+        let direct = v * DMatrix::from_diagonal(&scale) * (v.transpose() * &r);
+
+        let fast = leverage_corrected(&b, &p, &r);
+        let err = (&fast - &direct).norm() / direct.norm();
+        assert!(err < 1e-10, "relative difference {err:e}");
+    }
 }
