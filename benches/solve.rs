@@ -1,7 +1,7 @@
 //! Solving the paper-sized dataset (24 stances × 3 head postures × 2 legs = 144 captures,
 //! 3456 vertices, 21 free parameters, 0.1 px noise) with covariance, with every backend.
 //!
-//! Two groups: `backend_paper_sized` times the backend alone (optimisation and covariance,
+//! Three groups: `backend_paper_sized` times the backend alone (optimisation and covariance,
 //! what the solvers differ in); `solve_paper_sized` the whole [`solve`] with the
 //! backend-independent statistics (identifiability, sandwich covariance), the same for all.
 //! Every backend runs single-threaded in its own numerics (Ceres with one thread); only
@@ -13,7 +13,7 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use naocalib::model::{FixedSet, Model};
 use naocalib::sim::{SimOptions, simulate};
-use naocalib::solve::{Problem, backend, backend_names, solve};
+use naocalib::solve::{Problem, UncertaintyOptions, backend, backend_names, calibrate, solve};
 
 fn paper_sized() -> Problem {
     let dataset = simulate(&Model::default(), &SimOptions::default()).expect("simulated");
@@ -46,5 +46,21 @@ fn bench_solve(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_backend, bench_solve);
+/// The whole identification phase as `naocalib solve` runs it: first fit, noise estimate,
+/// two whitened refits, covariance and statistics.
+fn bench_calibrate(c: &mut Criterion) {
+    let problem = paper_sized();
+    let options = UncertaintyOptions::default();
+    let mut group = c.benchmark_group("calibrate_paper_sized");
+    group.sample_size(20);
+    for name in backend_names() {
+        let backend = backend(name, false).expect("listed backend");
+        group.bench_function(backend.name(), |b| {
+            b.iter(|| calibrate(&problem, backend.as_ref(), &options).expect("calibrated"))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_backend, bench_solve, bench_calibrate);
 criterion_main!(benches);

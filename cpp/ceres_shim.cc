@@ -26,6 +26,7 @@
 #include <ceres/problem.h>
 #include <ceres/solver.h>
 #include <ceres/types.h>
+#include <Eigen/Core>
 #include <glog/logging.h>
 
 #include "naocalib/src/solve/ceres.rs.h"
@@ -245,7 +246,6 @@ class CaptureFunctor {
         capture_(capture),
         first_(first),
         count_(count),
-        whiten_(capture.first_weight >= 0),
         slot_(std::move(slot)),
         offset_(std::move(offset)) {}
 
@@ -270,12 +270,7 @@ class CaptureFunctor {
     const std::size_t v0 = std::size_t{capture_.first_vertex} + first_;
     const double* points = problem_.points.data() + 3 * v0;
     const double* pixels = problem_.pixels.data() + 2 * v0;
-    std::vector<T> raw;
     T* out = residuals;
-    if (whiten_) {
-      raw.resize(2 * std::size_t{count_});
-      out = raw.data();
-    }
     for (std::uint32_t k = 0; k < count_; ++k) {
       const double* pb = points + 3 * k;
       T pc[3];
@@ -285,15 +280,6 @@ class CaptureFunctor {
       if (!project(pc, uv)) return false;
       out[2 * k] = uv[0] - pixels[2 * k];
       out[2 * k + 1] = uv[1] - pixels[2 * k + 1];
-    }
-    if (whiten_) {
-      const std::size_t m = 2 * std::size_t{count_};
-      const double* w = problem_.weights.data() + capture_.first_weight;
-      for (std::size_t i = 0; i < m; ++i) {
-        T acc(0.0);
-        for (std::size_t j = 0; j < m; ++j) acc = acc + raw[j] * w[i * m + j];
-        residuals[i] = acc;
-      }
     }
     return true;
   }
@@ -360,12 +346,57 @@ class CaptureFunctor {
   const FfiProblem& problem_;
   const FfiCapture& capture_;
   std::uint32_t first_, count_;
-  bool whiten_;
   std::vector<int> slot_;    // per free parameter: its block's position in this block list
   std::vector<int> offset_;  // per free parameter: its position in the block
 };
 
 using CaptureCost = ceres::DynamicAutoDiffCostFunction<CaptureFunctor, kStride>;
+
+// A capture's whitened residuals `W r` (W = Σ_c^{-1/2}, dense, row-major, from Rust):
+// the autodiff cost gives r and ∂r/∂θ, and W is applied to both in double afterwards,
+// which costs a small matrix product instead of carrying it through the Jets.
+class WhitenedCost : public ceres::CostFunction {
+ public:
+  WhitenedCost(CaptureCost* raw, const double* w) : raw_(raw), w_(w) {
+    *mutable_parameter_block_sizes() = raw_->parameter_block_sizes();
+    set_num_residuals(raw_->num_residuals());
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+    const int m = num_residuals();
+    const std::vector<std::int32_t>& sizes = parameter_block_sizes();
+    std::vector<double> r(m);
+    std::vector<std::vector<double>> jac;
+    std::vector<double*> raw_jacobians;
+    if (jacobians != nullptr) {
+      jac.resize(sizes.size());
+      raw_jacobians.assign(sizes.size(), nullptr);
+      for (std::size_t b = 0; b < sizes.size(); ++b) {
+        if (jacobians[b] == nullptr) continue;
+        jac[b].resize(static_cast<std::size_t>(m) * sizes[b]);
+        raw_jacobians[b] = jac[b].data();
+      }
+    }
+    if (!raw_->Evaluate(parameters, r.data(),
+                        jacobians != nullptr ? raw_jacobians.data() : nullptr))
+      return false;
+    const Eigen::Map<const RowMajor> w(w_, m, m);
+    Eigen::Map<Eigen::VectorXd>(residuals, m).noalias() =
+        w * Eigen::Map<const Eigen::VectorXd>(r.data(), m);
+    if (jacobians != nullptr)
+      for (std::size_t b = 0; b < sizes.size(); ++b)
+        if (jacobians[b] != nullptr)
+          Eigen::Map<RowMajor>(jacobians[b], m, sizes[b]).noalias() =
+              w * Eigen::Map<const RowMajor>(raw_jacobians[b], m, sizes[b]);
+    return true;
+  }
+
+ private:
+  std::unique_ptr<CaptureCost> raw_;
+  const double* w_;
+};
 
 // ---------------------------------------------------------------------------------------
 // The ceres::Problem with its parameter block storage.
@@ -415,9 +446,12 @@ class Built {
       const std::uint32_t groups = per_vertex ? cap.vertex_count : 1;
       const std::uint32_t count = per_vertex ? 1 : cap.vertex_count;
       for (std::uint32_t g = 0; g < groups; ++g) {
-        auto* cost = new CaptureCost(new CaptureFunctor(p, cap, g * count, count, slot, offset));
-        for (int size : sizes) cost->AddParameterBlock(size);
-        cost->SetNumResiduals(static_cast<int>(2 * count));
+        auto* raw = new CaptureCost(new CaptureFunctor(p, cap, g * count, count, slot, offset));
+        for (int size : sizes) raw->AddParameterBlock(size);
+        raw->SetNumResiduals(static_cast<int>(2 * count));
+        ceres::CostFunction* cost = raw;
+        // validate() rules out whitening together with a robust loss (per-vertex blocks).
+        if (cap.first_weight >= 0) cost = new WhitenedCost(raw, p.weights.data() + cap.first_weight);
         ceres::LossFunction* loss_function = nullptr;
         if (loss == kHuber) loss_function = new ceres::HuberLoss(loss_scale);
         if (loss == kCauchy) loss_function = new ceres::CauchyLoss(loss_scale);
@@ -476,6 +510,7 @@ bool covariance(Built& built, std::size_t n, rust::Vec<double>& out) {
   auto compute = [&](ceres::CovarianceAlgorithmType algorithm) {
     ceres::Covariance::Options options;
     options.algorithm_type = algorithm;
+    options.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;
     options.null_space_rank = -1;
     options.min_reciprocal_condition_number = 1e-14;
     options.num_threads = 1;
