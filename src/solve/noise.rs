@@ -77,9 +77,21 @@ impl CaptureNoise {
     /// Decomposes `J_θ,c` for a capture at parameters `params`.
     pub fn new(term: &CaptureTerm, camera: &Camera, params: &[f64]) -> Option<CaptureNoise> {
         let jac = joint_jacobian(term, camera, params)?;
-        let svd = jac.svd(true, false);
-        let u = svd.u.expect("requested U");
-        let s2 = svd.singular_values.map(|s| s * s);
+        // From the small d × d eigenproblem of JᵀJ: JᵀJ v = s² v, u = J v / s. Directions
+        // with s² below 1e-12 of the largest carry no joint noise worth weighting and are
+        // dropped (their u would not be accurate).
+        let eigen = (jac.transpose() * &jac).symmetric_eigen();
+        let max = eigen.eigenvalues.iter().copied().fold(0.0, f64::max);
+        let keep: Vec<usize> = (0..eigen.eigenvalues.len())
+            .filter(|&k| eigen.eigenvalues[k] > 1e-12 * max && eigen.eigenvalues[k] > 0.0)
+            .collect();
+        let mut u = DMatrix::zeros(jac.nrows(), keep.len());
+        let mut s2 = DVector::zeros(keep.len());
+        for (c, &k) in keep.iter().enumerate() {
+            let l = eigen.eigenvalues[k];
+            u.set_column(c, &(&jac * eigen.eigenvectors.column(k) / l.sqrt()));
+            s2[c] = l;
+        }
         Some(CaptureNoise { u, s2 })
     }
 
