@@ -81,6 +81,53 @@ fn read_solution(path: &Path) -> Result<[f64; PARAMETER_COUNT]> {
     Ok(values)
 }
 
+/// A progress bar over `images` images on stderr, when stderr is a terminal.
+fn progress_bar(images: usize) -> Option<indicatif::ProgressBar> {
+    std::io::stderr().is_terminal().then(|| {
+        let bar = indicatif::ProgressBar::new(images as u64);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} images, {elapsed} elapsed, {eta} left",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        bar
+    })
+}
+
+/// For `naocalib solve --detect`: detects the vertices in `dataset`'s images with the
+/// defaults of `naocalib detect` and puts them in place of its corners (nothing is
+/// written). Prints the images that gave no vertices (every image with `verbose`) and the
+/// summary line on stderr.
+pub fn detect_for_solve(dataset: &mut Dataset, verbose: bool) -> Result<()> {
+    let start = std::time::Instant::now();
+    let bar = progress_bar(dataset.captures.len());
+    let done = |_: &ImageResult| {
+        if let Some(bar) = &bar {
+            bar.inc(1);
+        }
+    };
+    let detection = detect::detect_into(dataset, &DetectOptions::default(), &done);
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    let detection = detection?;
+    for r in &detection.results {
+        if verbose || !matches!(r.outcome, detect::Outcome::Found { .. }) {
+            eprintln!("{r}");
+        }
+    }
+    eprintln!(
+        "{}: {} images: {}; {} vertices detected in {:.2} s (corners.csv not used)",
+        dataset.dir.display(),
+        detection.results.len(),
+        detection.summary,
+        dataset.corners.len(),
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
 /// Runs `naocalib detect`.
 pub fn run(args: &DetectArgs) -> Result<ExitCode> {
     let dataset = Dataset::load(&args.dataset)?;
@@ -121,16 +168,7 @@ pub fn run(args: &DetectArgs) -> Result<ExitCode> {
         }
     }
 
-    let bar = std::io::stderr().is_terminal().then(|| {
-        let bar = indicatif::ProgressBar::new(dataset.captures.len() as u64);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{bar:40} {pos}/{len} images, {elapsed} elapsed, {eta} left",
-            )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        bar
-    });
+    let bar = progress_bar(dataset.captures.len());
     let overlay_errors = Mutex::new(Vec::new());
     let done = |r: &ImageResult| {
         if let Some(dir) = &args.overlay

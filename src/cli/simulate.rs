@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 use clap::Args;
 
 use crate::model::Model;
@@ -55,7 +55,20 @@ pub struct SimulateArgs {
 /// Runs `naocalib simulate`.
 pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
     let truth = match &args.truth {
-        Some(path) => Some(crate::dataset::read_truth(path)?.values),
+        Some(path) => {
+            // With --force the dataset's truth.toml would be replaced: never the input.
+            let written = args.out.join(crate::dataset::TRUTH_TOML);
+            if let (Ok(a), Ok(b)) = (path.canonicalize(), written.canonicalize())
+                && a == b
+            {
+                bail!(
+                    "--truth {} is the truth.toml this would write; copy it out of {} first",
+                    path.display(),
+                    args.out.display()
+                );
+            }
+            Some(crate::dataset::read_truth(path)?.values)
+        }
         None => None,
     };
     let options = SimOptions {
@@ -92,14 +105,29 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
     }
     dataset.dir = args.out.clone();
     dataset.write(&args.out, args.force)?;
-    println!(
-        "wrote {}: {} captures, {} vertices (seed {}, {} px, {}° joint noise)",
-        args.out.display(),
-        dataset.captures.len(),
-        dataset.corners.len(),
-        args.seed,
-        args.px_noise,
-        args.joint_noise_deg
-    );
+    if args.images {
+        println!(
+            "wrote {}: {} captures with images in {} (seed {}, blur {} px, grey noise {}, \
+             vignetting {}, {}° joint noise); corners.csv is empty: run `naocalib detect`",
+            args.out.display(),
+            dataset.captures.len(),
+            args.out.join("images").display(),
+            args.seed,
+            args.blur,
+            args.grey_noise,
+            args.vignetting,
+            args.joint_noise_deg
+        );
+    } else {
+        println!(
+            "wrote {}: {} captures, {} vertices (seed {}, {} px, {}° joint noise)",
+            args.out.display(),
+            dataset.captures.len(),
+            dataset.corners.len(),
+            args.seed,
+            args.px_noise,
+            args.joint_noise_deg
+        );
+    }
     Ok(ExitCode::SUCCESS)
 }

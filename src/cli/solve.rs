@@ -16,6 +16,10 @@ use crate::solve::{self, Problem};
 pub struct SolveArgs {
     /// Dataset directory (dataset.toml, captures.csv, corners.csv).
     dataset: PathBuf,
+    /// Detect the vertices in the dataset's images (as `naocalib detect` does, in memory)
+    /// and solve with them instead of corners.csv, which is neither needed nor written.
+    #[arg(long)]
+    detect: bool,
     /// Print the result as JSON (SPEC section 7).
     #[arg(long)]
     json: bool,
@@ -80,15 +84,29 @@ fn load(path: &Path) -> Result<Dataset> {
     Ok(Dataset::load(path)?)
 }
 
+/// The dataset with the vertices detected in its images instead of its corners.csv.
+#[cfg(feature = "detect")]
+fn load_detected(path: &Path, verbose: bool) -> Result<Dataset> {
+    let mut dataset = Dataset::load_without_corners(path)?;
+    super::detect::detect_for_solve(&mut dataset, verbose)?;
+    Ok(dataset)
+}
+
+#[cfg(not(feature = "detect"))]
+fn load_detected(_: &Path, _: bool) -> Result<Dataset> {
+    anyhow::bail!(
+        "--detect needs naocalib built with the `detect` feature (OpenCV), which this build \
+         lacks; rebuild with default features, or run `naocalib detect` elsewhere and solve \
+         with its corners.csv"
+    )
+}
+
 /// Runs `naocalib solve`.
 pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
-    let dataset = load(&args.dataset)?;
+    // The options first: a mistake in them should not wait for a detection run.
     let fixed = fixed_set(args.fix.as_deref(), args.free.as_deref())?;
     let backend = super::backend(&args.solver, verbose)?;
-    let mut problem = Problem::from_dataset(&dataset, fixed)?;
-    if let Some(loss) = &args.loss {
-        problem.loss = parse_loss(loss)?;
-    }
+    let loss = args.loss.as_deref().map(parse_loss).transpose()?;
     for (name, value) in [
         ("--px-noise", args.px_noise),
         ("--joint-noise-deg", args.joint_noise_deg),
@@ -98,6 +116,15 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
         {
             anyhow::bail!("{name} must be a positive number, got {v}");
         }
+    }
+    let dataset = if args.detect {
+        load_detected(&args.dataset, verbose)?
+    } else {
+        load(&args.dataset)?
+    };
+    let mut problem = Problem::from_dataset(&dataset, fixed)?;
+    if let Some(loss) = loss {
+        problem.loss = loss;
     }
     let options = solve::UncertaintyOptions {
         noise_model: !args.plain_std,

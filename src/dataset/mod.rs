@@ -117,6 +117,17 @@ impl Dataset {
     /// corners, a missing `truth.toml` no truth. Rows keep their line numbers. Every
     /// problem is an error naming the file, the line and the field; nothing panics.
     pub fn load(dir: &Path) -> Result<Dataset, DatasetError> {
+        Self::load_parts(dir, true)
+    }
+
+    /// Reads and validates the dataset in `dir` as [`Dataset::load`] does, but without
+    /// `corners.csv`, which is neither required nor read (the corners are left empty): for
+    /// detecting the vertices in the images instead.
+    pub fn load_without_corners(dir: &Path) -> Result<Dataset, DatasetError> {
+        Self::load_parts(dir, false)
+    }
+
+    fn load_parts(dir: &Path, with_corners: bool) -> Result<Dataset, DatasetError> {
         let path = dir.join(DATASET_TOML);
         let bytes = text::read_file(&path, true, " (it needs at least a [camera] table)")?;
         let model = config::parse(&path, &bytes.unwrap_or_default())?;
@@ -127,7 +138,12 @@ impl Dataset {
         let ids = captures::validate(&path, &captures, |_, c| c.line)?;
 
         let path = dir.join(CORNERS_CSV);
-        let corners = match text::read_file(&path, false, " (it needs at least its header line)")? {
+        let bytes = if with_corners {
+            text::read_file(&path, false, " (it needs at least its header line)")?
+        } else {
+            None
+        };
+        let corners = match bytes {
             Some(bytes) => corners::parse(&path, &bytes)?,
             None => Vec::new(),
         };
@@ -219,20 +235,8 @@ impl Dataset {
         };
 
         write::create_dir(dir)?;
-        for path in [&toml_path, &captures_path, &corners_path] {
-            write::check_absent(path, force)?;
-        }
+        check_writable(dir, truth_toml.is_some(), force)?;
         let stale_truth = truth_path.symlink_metadata().is_ok();
-        match &truth_toml {
-            Some(_) => write::check_absent(&truth_path, force)?,
-            None if stale_truth && !force => {
-                return Err(DatasetError::Exists {
-                    path: truth_path,
-                    reason: "exists, but the dataset being written has no truth",
-                });
-            }
-            None => {}
-        }
 
         write::write_atomic(&toml_path, dataset_toml.as_bytes(), force)?;
         write::write_atomic(&captures_path, &captures_csv, force)?;
@@ -271,6 +275,26 @@ impl Dataset {
     pub fn image_path(&self, capture: &Capture) -> Option<PathBuf> {
         capture.image.as_ref().map(|image| self.dir.join(image))
     }
+}
+
+/// Checks that [`Dataset::write`] into `dir` of a dataset with or without a truth would not
+/// be refused for an existing file: with `force` always, else only when none of
+/// `dataset.toml`, `captures.csv`, `corners.csv` and `truth.toml` exists. For writers that
+/// put other files (images) into `dir` first and must not leave them behind a refusal.
+pub fn check_writable(dir: &Path, with_truth: bool, force: bool) -> Result<(), DatasetError> {
+    for name in [DATASET_TOML, CAPTURES_CSV, CORNERS_CSV] {
+        write::check_absent(&dir.join(name), force)?;
+    }
+    let truth_path = dir.join(TRUTH_TOML);
+    if with_truth {
+        write::check_absent(&truth_path, force)?;
+    } else if !force && truth_path.symlink_metadata().is_ok() {
+        return Err(DatasetError::Exists {
+            path: truth_path,
+            reason: "exists, but the dataset being written has no truth",
+        });
+    }
+    Ok(())
 }
 
 /// Reads a `truth.toml` file on its own (e.g. the true parameters to simulate with): the

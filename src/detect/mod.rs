@@ -228,6 +228,85 @@ impl fmt::Display for Summary {
     }
 }
 
+/// Why detection gave nothing to solve with.
+#[derive(Debug, thiserror::Error)]
+pub enum NoCorners {
+    /// No capture names an image.
+    #[error(
+        "{}: no capture in captures.csv names an image (its image column is empty); \
+         there is nothing to detect",
+        dir.display()
+    )]
+    NoImages {
+        /// The dataset directory.
+        dir: PathBuf,
+    },
+    /// No board was found in any image.
+    #[error(
+        "{}: no board found in any of its {images} images ({summary}); first: {first}",
+        dir.display()
+    )]
+    NothingFound {
+        /// The dataset directory.
+        dir: PathBuf,
+        /// Captures with an image.
+        images: usize,
+        /// The counts.
+        summary: Summary,
+        /// The first capture's result line (why it failed).
+        first: String,
+    },
+}
+
+/// The result of detecting the vertices of a whole dataset in memory.
+#[derive(Debug)]
+pub struct Detection {
+    /// One result per capture, in capture order.
+    pub results: Vec<ImageResult>,
+    /// Their counts.
+    pub summary: Summary,
+}
+
+/// Detects the vertices in every image of `dataset` (as [`detect_dataset`]) and puts them
+/// in place of `dataset.corners`, for solving without a `corners.csv`; nothing is written.
+///
+/// Images in which no board is found (or that cannot be read, or are rejected) are only
+/// reported in the returned results; it is an error when no capture names an image, or
+/// when no board is found in any of them (the dataset is then left unchanged).
+pub fn detect_into(
+    dataset: &mut Dataset,
+    options: &DetectOptions,
+    done: &(dyn Fn(&ImageResult) + Sync),
+) -> Result<Detection, NoCorners> {
+    let images = dataset
+        .captures
+        .iter()
+        .filter(|c| c.image.is_some())
+        .count();
+    if images == 0 {
+        return Err(NoCorners::NoImages {
+            dir: dataset.dir.clone(),
+        });
+    }
+    let results = detect_dataset(dataset, options, done);
+    let summary = Summary::of(&results);
+    if summary.found == 0 {
+        let first = results
+            .iter()
+            .find(|r| !matches!(r.outcome, Outcome::NoImage))
+            .map(ToString::to_string)
+            .unwrap_or_default();
+        return Err(NoCorners::NothingFound {
+            dir: dataset.dir.clone(),
+            images,
+            summary,
+            first,
+        });
+    }
+    dataset.corners = corners(&results);
+    Ok(Detection { results, summary })
+}
+
 /// Every corner found, in capture order.
 pub fn corners(results: &[ImageResult]) -> Vec<Corner> {
     results

@@ -72,6 +72,9 @@ pub enum SimError {
     /// An image could not be rendered or written.
     #[error(transparent)]
     Render(#[from] render::RenderError),
+    /// The dataset the images belong to could not be written (checked before any image is).
+    #[error(transparent)]
+    Dataset(#[from] crate::dataset::DatasetError),
 }
 
 /// Draws plausible true offsets: camera ±3°, joints σ 1° (at most 2.5°), board rotation
@@ -279,6 +282,11 @@ pub fn choose_stances(
 }
 
 /// Simulates a whole dataset for `model`: captures, noisy corners and the truth.
+///
+/// With [`SimOptions::images`], the images are written into `images/` of the dataset
+/// directory before the dataset is returned (for the caller to write with
+/// [`Dataset::write`]); unless `force`, an existing image or dataset file there is refused
+/// before anything is written, so a refusal leaves the directory as it was.
 pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError> {
     if options.stances == 0 || options.heads == 0 {
         return Err(SimError::Options(
@@ -290,6 +298,10 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
         return Err(SimError::Options(
             "noise levels must be finite and not negative".into(),
         ));
+    }
+    if let Some(out) = &options.images {
+        out.options.validate()?;
+        crate::dataset::check_writable(&out.dir, true, out.force)?;
     }
     let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
     let truth = match options.truth {
@@ -378,11 +390,21 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
         "head_postures".into(),
         toml::Value::Integer(options.heads as i64),
     );
-    simulation.insert("px_noise".into(), toml::Value::Float(options.px_noise));
+    if options.images.is_none() {
+        simulation.insert("px_noise".into(), toml::Value::Float(options.px_noise));
+    }
     simulation.insert(
         "joint_noise_deg".into(),
         toml::Value::Float(options.joint_noise.to_degrees()),
     );
+    if let Some(out) = &options.images {
+        // The corners then come from detection in the images, not from a pixel noise.
+        let o = &out.options;
+        simulation.insert("images".into(), toml::Value::Boolean(true));
+        simulation.insert("image_blur_px".into(), toml::Value::Float(o.blur));
+        simulation.insert("image_grey_noise".into(), toml::Value::Float(o.noise));
+        simulation.insert("image_vignetting".into(), toml::Value::Float(o.vignetting));
+    }
     Ok(Dataset {
         dir: Default::default(),
         model: *model,
