@@ -3,11 +3,11 @@
 //! the same robust fit; and `compare` reporting solvers that fail or stop early.
 
 use nalgebra::{DMatrix, Dyn, U1};
-use naocalib::model::{FixedSet, Model, PARAMETER_COUNT, Param, Side};
+use naocalib::model::{FixedSet, Model, PARAMETER_COUNT, Side};
 use naocalib::sim::{SimOptions, simulate};
 use naocalib::solve::covariance::{from_jacobian, rank_of_covariance};
 use naocalib::solve::jacobian::{Evaluator, robust_weight};
-use naocalib::solve::{Backend, Loss, Problem, backend, backend_names, compare::compare, solve};
+use naocalib::solve::{Loss, Problem, backend_names, compare::compare};
 use num_dual::{Derivative, DualDVec64};
 
 /// A small simulated problem: `stances` stances × `heads` head postures per leg.
@@ -22,14 +22,6 @@ fn simulated(seed: u64, stances: usize, heads: usize) -> (Problem, [f64; PARAMET
     let truth = dataset.truth.as_ref().expect("truth").values;
     let problem = Problem::from_dataset(&dataset, FixedSet::default()).expect("problem");
     (problem, truth)
-}
-
-/// The pure-Rust backends of this build.
-fn rust_backends() -> Vec<Box<dyn Backend>> {
-    ["lm", "tiny"]
-        .iter()
-        .map(|n| backend(n, false).expect("pure-Rust backend"))
-        .collect()
 }
 
 /// The residuals as the backends minimise them (robust rescaling per vertex included) and
@@ -157,6 +149,16 @@ fn compare_reports_solvers_that_stop_early() {
 #[cfg(feature = "ceres")]
 mod with_ceres {
     use super::*;
+    use naocalib::model::Param;
+    use naocalib::solve::{Backend, backend, solve};
+
+    /// The pure-Rust backends of this build.
+    fn rust_backends() -> Vec<Box<dyn Backend>> {
+        ["lm", "tiny"]
+            .iter()
+            .map(|n| backend(n, false).expect("pure-Rust backend"))
+            .collect()
+    }
     use naocalib::solve::ceres::{Ceres, evaluate};
     use naocalib::solve::compare::max_sigma_difference;
 
