@@ -6,6 +6,28 @@
 //! camera and board offsets that make the kinematic model explain the images.
 //!
 //! Data flows one way: [`dataset`] → [`solve::Problem`] → [`solve::Solution`] → [`report`].
+//!
+//! Calibrating a dataset from Rust, as `naocalib solve` does:
+//!
+//! ```
+//! use std::path::Path;
+//! use naocalib::dataset::Dataset;
+//! use naocalib::model::{FixedSet, Param};
+//! use naocalib::solve::{Problem, UncertaintyOptions, backend, backend_names, calibrate};
+//!
+//! let dataset = Dataset::load(Path::new("data/sample"))?;
+//! let problem = Problem::from_dataset(&dataset, FixedSet::default())?;
+//! let solver = backend(backend_names()[0], false).expect("a listed backend");
+//! let solution = calibrate(&problem, solver.as_ref(), &UncertaintyOptions::default())?;
+//! let (value, sigma) = (
+//!     solution.report_value(Param::LKneePitch),
+//!     solution.report_std(Param::LKneePitch),
+//! );
+//! println!("LKneePitch offset {value:.3}° ± {sigma:.3}°");
+//! assert!(solution.summary.converged && sigma > 0.0 && sigma < 0.5);
+//! println!("{}", naocalib::report::table(&solution, None));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 pub mod batch;
 pub mod cli;
