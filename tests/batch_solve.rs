@@ -321,3 +321,53 @@ fn cli_batch_matches_cli_solve_and_exits_non_zero_on_failure() {
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("CamYaw") && text.contains("rms x"), "{text}");
 }
+
+/// `batch --loss huber --bootstrap N` runs each dataset as `solve` with the same options:
+/// the same values, the same outliers, a bootstrap std for every free parameter.
+#[test]
+fn cli_batch_loss_and_bootstrap_match_cli_solve() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("nao/a");
+    let mut ds = small(41, None);
+    // Three gross outliers, 25 px off.
+    for k in [5, 60, 150] {
+        ds.corners[k].pixel[0] += 25.0;
+    }
+    ds.write(&dir, false).unwrap();
+    let run = |args: &[&str]| -> Value {
+        let out = Command::cargo_bin("naocalib")
+            .unwrap()
+            .args(args)
+            .args(["--json", "--loss", "huber", "--bootstrap", "4"])
+            .arg(if args[0] == "batch" {
+                tmp.path().join("nao")
+            } else {
+                dir.clone()
+            })
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{out:?}");
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let batch = run(&["batch", "--no-progress"]);
+    let solve = run(&["solve"]);
+    let b = &batch["runs"][0];
+    assert_eq!(
+        b["outliers"].as_array().unwrap().len(),
+        3,
+        "{}",
+        b["outliers"]
+    );
+    assert_eq!(b["outliers"], solve["outliers"]);
+    for (name, p) in b["parameters"].as_object().unwrap() {
+        let s = &solve["parameters"][name];
+        assert_eq!(p["value"], s["value"], "{name}");
+        if p.get("fixed").is_none() {
+            let (x, y) = (
+                p["std_bootstrap"].as_f64().unwrap(),
+                s["std_bootstrap"].as_f64().unwrap(),
+            );
+            assert!(x > 0.0 && close(x, y), "{name}: bootstrap std {x} vs {y}");
+        }
+    }
+}

@@ -47,7 +47,7 @@ use std::sync::{Arc, Mutex};
 use crate::dataset::{CAPTURES_CSV, DATASET_TOML, Dataset, DatasetError};
 use crate::model::{FixedSet, PARAMETER_COUNT, Side};
 use crate::report::plot::capture_sides;
-use crate::solve::{Backend, Problem, Solution, SolveError, UncertaintyOptions};
+use crate::solve::{Backend, Loss, Problem, Solution, SolveError, UncertaintyOptions};
 
 pub use drift::{DriftMode, DriftOptions, DriftPair, Grouping, ParamDrift, drift};
 pub use stats::{ParamStats, Summary, summarize};
@@ -69,6 +69,9 @@ pub struct BatchOptions {
     pub threads: usize,
     /// Let the backend log progress.
     pub verbose: bool,
+    /// The loss of every problem (robust first fit with outliers left out, as
+    /// `naocalib solve --loss`); [`Loss::Squared`] by default.
+    pub loss: Loss,
     /// How a problem is solved (default: [`crate::solve::calibrate`] with default options).
     pub method: Arc<SolveFn>,
     /// Drift options for the reports.
@@ -82,6 +85,7 @@ impl std::fmt::Debug for BatchOptions {
             .field("fixed", &self.fixed)
             .field("threads", &self.threads)
             .field("verbose", &self.verbose)
+            .field("loss", &self.loss)
             .field("drift", &self.drift)
             .finish_non_exhaustive()
     }
@@ -94,6 +98,7 @@ impl Default for BatchOptions {
             fixed: FixedSet::default(),
             threads: 0,
             verbose: false,
+            loss: Loss::Squared,
             method: Arc::new(|problem: &Problem, backend: &dyn Backend| {
                 crate::solve::calibrate(problem, backend, &UncertaintyOptions::default())
             }),
@@ -246,11 +251,13 @@ pub fn find_datasets(paths: &[PathBuf]) -> (Vec<PathBuf>, Vec<Failure>) {
 }
 
 /// Solves one dataset exactly as `naocalib solve` does: [`Problem::from_dataset`] with
-/// `options.fixed`, then `options.method` with the backend `options.solver`.
+/// `options.fixed` and `options.loss`, then `options.method` with the backend
+/// `options.solver`.
 pub fn solve_one(dataset: &Dataset, options: &BatchOptions) -> Result<Solution, RunError> {
     let backend = crate::solve::backend(&options.solver, options.verbose)
         .ok_or_else(|| RunError::UnknownSolver(options.solver.clone()))?;
-    let problem = Problem::from_dataset(dataset, options.fixed.clone())?;
+    let mut problem = Problem::from_dataset(dataset, options.fixed.clone())?;
+    problem.loss = options.loss;
     Ok((options.method)(&problem, backend.as_ref())?)
 }
 

@@ -3,8 +3,7 @@
 use std::io::{IsTerminal as _, Write as _};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::Mutex;
-use std::time::Instant;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
@@ -83,53 +82,28 @@ pub struct BatchArgs {
     /// Report the plain σ̂²(JᵀJ)⁻¹ instead of the noise model.
     #[arg(long)]
     plain_std: bool,
+    /// Also estimate each run's uncertainty by a capture bootstrap with N refits.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    bootstrap: usize,
+    /// Robust first fit: huber or cauchy, optionally with a scale in px (huber:2);
+    /// outlier vertices are left out of each run's final fit.
+    #[arg(long, value_name = "LOSS[:PX]")]
+    loss: Option<String>,
     /// No progress bar, even on a terminal.
     #[arg(long)]
     no_progress: bool,
 }
 
-/// A one-line progress bar on stderr.
-struct Bar {
-    started: Instant,
-    failed: Mutex<usize>,
-}
-
-impl Bar {
-    fn show(&self, p: Progress<'_>) {
-        let mut failed = self.failed.lock().unwrap_or_else(|e| e.into_inner());
-        if !p.ok {
-            *failed += 1;
-        }
-        let width = 30;
-        let filled = width * p.done / p.total.max(1);
-        let name = p.dataset.display().to_string();
-        let name: String = if name.chars().count() > 40 {
-            let tail: String = name.chars().rev().take(39).collect();
-            format!("…{}", tail.chars().rev().collect::<String>())
-        } else {
-            name
-        };
-        let mut err = std::io::stderr().lock();
-        let _ = write!(
-            err,
-            "\r\x1b[2K[{}{}] {}/{} {:.1}s{} {}",
-            "#".repeat(filled),
-            "-".repeat(width - filled),
-            p.done,
-            p.total,
-            self.started.elapsed().as_secs_f64(),
-            if *failed > 0 {
-                format!(" ({} failed)", *failed)
-            } else {
-                String::new()
-            },
-            name
-        );
-        if p.done == p.total {
-            let _ = write!(err, "\r\x1b[2K");
-        }
-        let _ = err.flush();
-    }
+/// A progress bar on stderr: datasets done, failures so far, elapsed time and the ETA.
+fn progress_bar(datasets: usize) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(datasets as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{bar:30} {pos}/{len} datasets{msg}, {elapsed} elapsed, {eta} left",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar
 }
 
 /// Runs `naocalib batch`.
@@ -152,8 +126,15 @@ pub fn run(args: &BatchArgs, verbose: bool) -> Result<ExitCode> {
             args.drift_threshold
         );
     }
+    let loss = args
+        .loss
+        .as_deref()
+        .map(super::solve::parse_loss)
+        .transpose()?
+        .unwrap_or(crate::solve::Loss::Squared);
     let options = BatchOptions {
         solver: args.solver.clone(),
+        loss,
         fixed,
         threads: args.threads,
         verbose,
@@ -173,6 +154,7 @@ pub fn run(args: &BatchArgs, verbose: bool) -> Result<ExitCode> {
     }
     .with_uncertainty(crate::solve::UncertaintyOptions {
         noise_model: !args.plain_std,
+        bootstrap: args.bootstrap,
         noise: crate::solve::noise::NoiseOptions {
             px: args.px_noise,
             joint: args.joint_noise_deg.map(f64::to_radians),
@@ -180,16 +162,21 @@ pub fn run(args: &BatchArgs, verbose: bool) -> Result<ExitCode> {
         ..Default::default()
     });
     let show = !args.no_progress && !verbose && std::io::stderr().is_terminal();
-    let bar = Bar {
-        started: Instant::now(),
-        failed: Mutex::new(0),
-    };
+    let bar = show.then(|| progress_bar(0));
+    let failed = AtomicUsize::new(0);
     let progress = |p: Progress<'_>| {
-        if show {
-            bar.show(p);
+        let Some(bar) = &bar else { return };
+        bar.set_length(p.total as u64);
+        if !p.ok {
+            let n = failed.fetch_add(1, Ordering::Relaxed) + 1;
+            bar.set_message(format!(" ({n} failed)"));
         }
+        bar.inc(1);
     };
     let result = batch::run(&args.datasets, &options, &progress);
+    if let Some(bar) = &bar {
+        bar.finish_and_clear();
+    }
     let write_options = WriteOptions {
         force: args.force,
         inputs: Vec::new(),
