@@ -128,8 +128,12 @@ void validate(const FfiProblem& p) {
     if (cap.first_weight < -1) fail(where + "first_weight must be -1 or an index");
     if (cap.first_weight >= 0) {
       const std::uint64_t m = 2 * std::uint64_t{cap.vertex_count};
-      if (static_cast<std::uint64_t>(cap.first_weight) + m * m > p.weights.size())
-        fail(where + "whitening matrix out of range of weights");
+      if (cap.whitening_rank < -1 || cap.whitening_rank > static_cast<std::int64_t>(m))
+        fail(where + "whitening rank out of range");
+      const std::uint64_t q = cap.whitening_rank < 0 ? 0 : cap.whitening_rank;
+      const std::uint64_t size = cap.whitening_rank < 0 ? m * m : 1 + m * q + q;
+      if (static_cast<std::uint64_t>(cap.first_weight) + size > p.weights.size())
+        fail(where + "whitening out of range of weights");
     }
   }
   if (!any_residual) fail("no observed vertices");
@@ -352,19 +356,20 @@ class CaptureFunctor {
 
 using CaptureCost = ceres::DynamicAutoDiffCostFunction<CaptureFunctor, kStride>;
 
-// A capture's whitened residuals `W r` (W = Σ_c^{-1/2}, dense, row-major, from Rust):
-// the autodiff cost gives r and ∂r/∂θ, and W is applied to both in double afterwards,
-// which costs a small matrix product instead of carrying it through the Jets.
+// A capture's whitened residuals `W r` (W from Rust, see FfiCapture): the autodiff cost
+// gives r and ∂r/∂θ, and W is applied to both in double afterwards, which costs a small
+// matrix product instead of carrying it through the Jets. The low-rank form
+// `scale·(I − U·diag(shrink)·Uᵀ)` costs O(m·q) per column instead of O(m²).
 class WhitenedCost : public ceres::CostFunction {
  public:
-  WhitenedCost(CaptureCost* raw, const double* w) : raw_(raw), w_(w) {
+  WhitenedCost(CaptureCost* raw, const double* w, int rank)
+      : raw_(raw), w_(w), rank_(rank) {
     *mutable_parameter_block_sizes() = raw_->parameter_block_sizes();
     set_num_residuals(raw_->num_residuals());
   }
 
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override {
-    using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
     const int m = num_residuals();
     const std::vector<std::int32_t>& sizes = parameter_block_sizes();
     std::vector<double> r(m);
@@ -382,20 +387,34 @@ class WhitenedCost : public ceres::CostFunction {
     if (!raw_->Evaluate(parameters, r.data(),
                         jacobians != nullptr ? raw_jacobians.data() : nullptr))
       return false;
-    const Eigen::Map<const RowMajor> w(w_, m, m);
-    Eigen::Map<Eigen::VectorXd>(residuals, m).noalias() =
-        w * Eigen::Map<const Eigen::VectorXd>(r.data(), m);
+    apply(r.data(), residuals, m, 1);
     if (jacobians != nullptr)
       for (std::size_t b = 0; b < sizes.size(); ++b)
-        if (jacobians[b] != nullptr)
-          Eigen::Map<RowMajor>(jacobians[b], m, sizes[b]).noalias() =
-              w * Eigen::Map<const RowMajor>(raw_jacobians[b], m, sizes[b]);
+        if (jacobians[b] != nullptr) apply(raw_jacobians[b], jacobians[b], m, sizes[b]);
     return true;
   }
 
  private:
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+  // out = W · in, both m × cols row major.
+  void apply(const double* in, double* out, int m, int cols) const {
+    const Eigen::Map<const RowMajor> x(in, m, cols);
+    Eigen::Map<RowMajor> y(out, m, cols);
+    if (rank_ < 0) {
+      y.noalias() = Eigen::Map<const RowMajor>(w_, m, m) * x;
+      return;
+    }
+    const double scale = w_[0];
+    const Eigen::Map<const RowMajor> u(w_ + 1, m, rank_);
+    const Eigen::Map<const Eigen::VectorXd> shrink(w_ + 1 + static_cast<std::size_t>(m) * rank_, rank_);
+    const RowMajor z = shrink.asDiagonal() * (u.transpose() * x);
+    y.noalias() = scale * (x - u * z);
+  }
+
   std::unique_ptr<CaptureCost> raw_;
   const double* w_;
+  int rank_;
 };
 
 // ---------------------------------------------------------------------------------------
@@ -451,7 +470,8 @@ class Built {
         raw->SetNumResiduals(static_cast<int>(2 * count));
         ceres::CostFunction* cost = raw;
         // validate() rules out whitening together with a robust loss (per-vertex blocks).
-        if (cap.first_weight >= 0) cost = new WhitenedCost(raw, p.weights.data() + cap.first_weight);
+        if (cap.first_weight >= 0)
+          cost = new WhitenedCost(raw, p.weights.data() + cap.first_weight, cap.whitening_rank);
         ceres::LossFunction* loss_function = nullptr;
         if (loss == kHuber) loss_function = new ceres::HuberLoss(loss_scale);
         if (loss == kCauchy) loss_function = new ceres::CauchyLoss(loss_scale);

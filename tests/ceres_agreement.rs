@@ -12,7 +12,9 @@ use naocalib::model::{
     Side, Vertex,
 };
 use naocalib::solve::ceres::{Ceres, evaluate};
-use naocalib::solve::{CaptureTerm, Loss, Observation, Problem, SolveError, Tolerances, solve};
+use naocalib::solve::{
+    CaptureTerm, Loss, Observation, Problem, SolveError, Tolerances, Whitening, solve,
+};
 use num_dual::{Derivative, DualDVec64};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -148,9 +150,24 @@ fn add_whitening(problem: &mut Problem, seed: u64) {
     for c in &mut problem.captures {
         let m = c.residual_count();
         let scale = 0.3 / (m as f64).sqrt();
-        c.whitening = Some(DMatrix::from_fn(m, m, |i, j| {
+        c.whitening = Some(Whitening::Dense(DMatrix::from_fn(m, m, |i, j| {
             f64::from(u8::from(i == j)) + scale * rng.random_range(-1.0..=1.0)
-        }));
+        })));
+    }
+}
+
+/// Gives every capture a random whitening of the noise model's low-rank form
+/// `s·(I − U·diag(shrink)·Uᵀ)`, with 5 orthonormal directions.
+fn add_low_rank_whitening(problem: &mut Problem, seed: u64) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    for c in &mut problem.captures {
+        let m = c.residual_count();
+        let random = DMatrix::from_fn(m, 5, |_, _| rng.random_range(-1.0..=1.0));
+        c.whitening = Some(Whitening::LowRank {
+            u: random.qr().q(),
+            shrink: DVector::from_fn(5, |_, _| rng.random_range(0.0..0.95)),
+            scale: rng.random_range(0.5..10.0),
+        });
     }
 }
 
@@ -267,6 +284,10 @@ fn residuals_and_jacobians_agree_with_whitening_and_distortion() {
     let (mut problem, _) = make_problem(4, distorted_camera(), &Side::BOTH, 4);
     add_whitening(&mut problem, 41);
     check_agreement(&problem, 42, "whitened + distorted");
+
+    let (mut problem, _) = make_problem(6, Camera::default(), &Side::BOTH, 4);
+    add_low_rank_whitening(&mut problem, 61);
+    check_agreement(&problem, 62, "low-rank whitened");
 }
 
 #[test]

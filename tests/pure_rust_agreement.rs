@@ -7,7 +7,7 @@ use naocalib::model::{FixedSet, Model, PARAMETER_COUNT, Side};
 use naocalib::sim::{SimOptions, simulate};
 use naocalib::solve::covariance::{from_jacobian, rank_of_covariance};
 use naocalib::solve::jacobian::{Evaluator, robust_weight};
-use naocalib::solve::{Loss, Problem, backend_names, compare::compare};
+use naocalib::solve::{Loss, Problem, Whitening, backend_names, compare::compare};
 use num_dual::{Derivative, DualDVec64};
 
 /// A small simulated problem: `stances` stances × `heads` head postures per leg.
@@ -135,7 +135,10 @@ fn compare_reports_solvers_that_stop_early() {
     let mut bad = problem.clone();
     bad.loss = Loss::Huber(1.0);
     for c in &mut bad.captures {
-        c.whitening = Some(DMatrix::identity(c.residual_count(), c.residual_count()));
+        c.whitening = Some(Whitening::Dense(DMatrix::identity(
+            c.residual_count(),
+            c.residual_count(),
+        )));
     }
     let comparison = compare(&bad, &[]).expect("compares");
     for run in &comparison.runs {

@@ -26,8 +26,10 @@ pub mod ffi {
     /// One capture: its camera chain is `steps[first_step .. first_step + camera_steps]`,
     /// its board chain the `board_steps` steps after that; its vertices are
     /// `points[3·first_vertex ..]` / `pixels[2·first_vertex ..]`, `vertex_count` of them.
-    /// `first_weight` indexes `weights` for a row-major (2·vertex_count)² whitening matrix,
-    /// or is −1 for none.
+    /// `first_weight` indexes `weights` for the capture's whitening `W` (m = 2·vertex_count
+    /// rows), or is −1 for none. With `whitening_rank` −1, `W` is dense: m² numbers, row
+    /// major. With `whitening_rank` q ≥ 0, `W = scale·(I − U·diag(shrink)·Uᵀ)`, stored as
+    /// `scale`, then `U` (m × q, row major), then `shrink` (q): 1 + m·q + q numbers.
     #[derive(Debug, Clone)]
     struct FfiCapture {
         first_step: u32,
@@ -36,6 +38,7 @@ pub mod ffi {
         first_vertex: u32,
         vertex_count: u32,
         first_weight: i64,
+        whitening_rank: i32,
     }
 
     /// The whole problem over the free parameters.
@@ -51,7 +54,7 @@ pub mod ffi {
         points: Vec<f64>,
         /// Observed pixels, 2 per vertex.
         pixels: Vec<f64>,
-        /// Whitening matrices, concatenated.
+        /// Whitenings, concatenated (see `FfiCapture`).
         weights: Vec<f64>,
         /// fx, fy, cx, cy, k1, k2, p1, p2, k3.
         camera: [f64; 9],
@@ -107,7 +110,7 @@ pub mod ffi {
 
 use nalgebra::DMatrix;
 
-use super::{Backend, BackendResult, Loss, Problem, SolveError, Summary};
+use super::{Backend, BackendResult, Loss, Problem, SolveError, Summary, Whitening};
 use crate::model::{Axis, PARAMETER_COUNT, Param, Step};
 
 /// The Ceres backend: Levenberg–Marquardt with dense QR and autodiff on Jets, through the
@@ -318,22 +321,37 @@ fn to_ffi(problem: &Problem) -> Result<ffi::FfiProblem, SolveError> {
             out.points.extend_from_slice(&o.point);
             out.pixels.extend_from_slice(&o.pixel);
         }
-        let first_weight = match &term.whitening {
-            None => -1,
+        let (first_weight, whitening_rank) = match &term.whitening {
+            None => (-1, -1),
             Some(w) => {
                 let k = term.residual_count();
-                if w.nrows() != k || w.ncols() != k {
+                if w.size() != k || !w.is_well_formed() {
                     return Err(backend_error(format!(
-                        "capture {}: whitening matrix is {}×{}, expected {k}×{k}",
-                        term.capture,
-                        w.nrows(),
-                        w.ncols()
+                        "capture {}: the whitening matrix is not a finite {k}×{k} matrix",
+                        term.capture
                     )));
                 }
                 let first = out.weights.len() as i64;
-                out.weights
-                    .extend((0..k).flat_map(|i| (0..k).map(move |j| w[(i, j)])));
-                first
+                match w {
+                    Whitening::Dense(w) => {
+                        out.weights
+                            .extend((0..k).flat_map(|i| (0..k).map(move |j| w[(i, j)])));
+                        (first, -1)
+                    }
+                    Whitening::LowRank { u, shrink, scale } => {
+                        let q = u.ncols();
+                        out.weights.push(*scale);
+                        out.weights
+                            .extend((0..k).flat_map(|i| (0..q).map(move |c| u[(i, c)])));
+                        out.weights.extend(shrink.iter());
+                        (
+                            first,
+                            i32::try_from(q).map_err(|_| {
+                                backend_error(String::from("too many whitening directions"))
+                            })?,
+                        )
+                    }
+                }
             }
         };
         out.captures.push(ffi::FfiCapture {
@@ -343,6 +361,7 @@ fn to_ffi(problem: &Problem) -> Result<ffi::FfiProblem, SolveError> {
             first_vertex,
             vertex_count: count(term.observations.len(), "vertices")?,
             first_weight,
+            whitening_rank,
         });
     }
     Ok(out)

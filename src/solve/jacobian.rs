@@ -18,7 +18,7 @@ use std::marker::PhantomData;
 use nalgebra::{Const, DMatrix, DVector, U1};
 use num_dual::{Derivative, Dual64, DualSVec64};
 
-use super::problem::{Loss, Problem};
+use super::problem::{Loss, Problem, Whitening};
 use crate::model::{Camera, PARAMETER_COUNT, Param, Scalar, StanceChains};
 
 /// Parameters differentiated at once per pass (the Jet width of the Ceres shim, too).
@@ -86,7 +86,7 @@ struct Term {
     /// Observed pixels.
     pixels: Vec<[f64; 2]>,
     /// Optional whitening.
-    whitening: Option<DMatrix<f64>>,
+    whitening: Option<Whitening>,
 }
 
 impl Term {
@@ -337,8 +337,7 @@ impl<'a> Evaluator<'a> {
     /// Applies the whitening or the robust rescaling to a capture's residuals.
     fn weigh_values(&self, term: &Term, r: &mut [f64]) {
         if let Some(w) = &term.whitening {
-            let plain = DVector::from_column_slice(r);
-            r.copy_from_slice((w * plain).as_slice());
+            w.apply_in_place(r, 1);
         } else if self.loss != Loss::Squared {
             for pair in r.chunks_exact_mut(2) {
                 let (w, _) = weight_and_slope(self.loss, pair[0] * pair[0] + pair[1] * pair[1]);
@@ -352,16 +351,8 @@ impl<'a> Evaluator<'a> {
     /// row-major Jacobian with `k` columns.
     fn weigh(&self, term: &Term, r: &mut [f64], jac: &mut [f64], k: usize) {
         if let Some(w) = &term.whitening {
-            let rows = r.len();
-            let plain_r = DVector::from_column_slice(r);
-            let plain_j = DMatrix::from_row_slice(rows, k, jac);
-            r.copy_from_slice((w * plain_r).as_slice());
-            let weighted = w * plain_j;
-            for i in 0..rows {
-                for c in 0..k {
-                    jac[i * k + c] = weighted[(i, c)];
-                }
-            }
+            w.apply_in_place(r, 1);
+            w.apply_in_place(jac, k);
         } else if self.loss != Loss::Squared {
             // r̃ = w(s)·r, s = ‖r‖²: dr̃ = w·dr + 2·w'(s)·r·(rᵀ·dr).
             for (v, pair) in r.chunks_exact_mut(2).enumerate() {

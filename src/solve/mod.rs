@@ -21,7 +21,7 @@ use std::time::Instant;
 use nalgebra::DMatrix;
 
 use crate::model::{FixedSet, PARAMETER_COUNT, Param};
-pub use problem::{CaptureTerm, Loss, Observation, Problem, Tolerances};
+pub use problem::{CaptureTerm, Loss, Observation, Problem, Tolerances, Whitening};
 
 /// Why a solve could not be done.
 #[derive(Debug, thiserror::Error)]
@@ -247,13 +247,11 @@ pub fn validate(problem: &Problem) -> Result<(), SolveError> {
             )));
         }
         if let Some(w) = &c.whitening
-            && (w.nrows() != c.residual_count() || w.ncols() != c.residual_count())
+            && (w.size() != c.residual_count() || !w.is_well_formed())
         {
             return Err(SolveError::Invalid(format!(
-                "capture {}: whitening matrix is {}×{}, expected {}×{}",
+                "capture {}: the whitening matrix is not a finite {}×{} matrix",
                 c.capture,
-                w.nrows(),
-                w.ncols(),
                 c.residual_count(),
                 c.residual_count()
             )));

@@ -9,7 +9,7 @@
 use nalgebra::{Const, DMatrix, DVector, U1};
 use num_dual::{Derivative, DualSVec64};
 
-use super::problem::{CaptureTerm, Problem};
+use super::problem::{CaptureTerm, Problem, Whitening};
 use crate::model::{Camera, JOINT_COUNT, Joint, PARAMETER_COUNT, Param};
 
 /// The joints that can move one capture's vertices: two head joints and six leg joints.
@@ -95,16 +95,17 @@ impl CaptureNoise {
         Some(CaptureNoise { u, s2 })
     }
 
-    /// The whitening matrix `Σ_c^{-1/2}` (symmetric) for the given noise levels.
-    pub fn whitening(&self, levels: NoiseLevels) -> DMatrix<f64> {
-        let n = self.u.nrows();
+    /// The whitening `Σ_c^{-1/2}` (symmetric, low rank plus identity) for the given noise
+    /// levels.
+    pub fn whitening(&self, levels: NoiseLevels) -> Whitening {
         let a = levels.px * levels.px;
         let b = levels.joint * levels.joint;
         // Σ = a·I + U·diag(b·s²)·Uᵀ ⇒ Σ^{-1/2} = (I − U·diag(1 − sqrt(a/(a + b·s²)))·Uᵀ)/√a.
-        let shrink = self.s2.map(|s2| 1.0 - (a / (a + b * s2)).sqrt());
-        let mut w = DMatrix::identity(n, n);
-        w -= &self.u * DMatrix::from_diagonal(&shrink) * self.u.transpose();
-        w / a.sqrt()
+        Whitening::LowRank {
+            u: self.u.clone(),
+            shrink: self.s2.map(|s2| 1.0 - (a / (a + b * s2)).sqrt()),
+            scale: 1.0 / a.sqrt(),
+        }
     }
 }
 

@@ -3,7 +3,7 @@
 //! A backend sees a [`Problem`], never files. The residual of a vertex is the model's
 //! projection minus the observed pixel position, `u` then `v` (SPEC eq. 8).
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 
 use crate::model::{FixedSet, PARAMETER_COUNT, Param, Scalar, StanceChains, Vertex};
 
@@ -27,9 +27,108 @@ pub struct CaptureTerm {
     pub chains: StanceChains,
     /// The vertices seen, in any order.
     pub observations: Vec<Observation>,
-    /// Optional whitening matrix `W` (2k × 2k for k observations, residuals ordered
+    /// Optional whitening `W` (2k × 2k for k observations, residuals ordered
     /// u₀, v₀, u₁, v₁, …): the backend minimises `‖W·r‖²` for this capture.
-    pub whitening: Option<DMatrix<f64>>,
+    pub whitening: Option<Whitening>,
+}
+
+/// A capture's whitening matrix `W`, usually `Σ_c^{-1/2}` of its residual covariance.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Whitening {
+    /// Any square matrix.
+    Dense(DMatrix<f64>),
+    /// `scale · (I − U·diag(shrink)·Uᵀ)` with orthonormal columns `U` (2k × q, q small):
+    /// the noise model's form (pixel noise plus joint noise along q joint directions),
+    /// applied in O(k·q) instead of O(k²).
+    LowRank {
+        /// The directions, orthonormal columns.
+        u: DMatrix<f64>,
+        /// How much of each direction is taken out, one per column of `u`.
+        shrink: DVector<f64>,
+        /// The overall factor.
+        scale: f64,
+    },
+}
+
+impl Whitening {
+    /// Rows (= columns) of `W`.
+    pub fn size(&self) -> usize {
+        match self {
+            Whitening::Dense(w) => w.nrows(),
+            Whitening::LowRank { u, .. } => u.nrows(),
+        }
+    }
+
+    /// Whether the parts fit together (square, matching lengths) and are finite.
+    pub fn is_well_formed(&self) -> bool {
+        match self {
+            Whitening::Dense(w) => w.nrows() == w.ncols() && w.iter().all(|x| x.is_finite()),
+            Whitening::LowRank { u, shrink, scale } => {
+                shrink.len() == u.ncols()
+                    && scale.is_finite()
+                    && u.iter().chain(shrink.iter()).all(|x| x.is_finite())
+            }
+        }
+    }
+
+    /// `W` as a dense matrix.
+    pub fn to_dense(&self) -> DMatrix<f64> {
+        match self {
+            Whitening::Dense(w) => w.clone(),
+            Whitening::LowRank { u, shrink, scale } => {
+                let n = u.nrows();
+                (DMatrix::identity(n, n) - u * DMatrix::from_diagonal(shrink) * u.transpose())
+                    * *scale
+            }
+        }
+    }
+
+    /// `W·r` on any scalar type.
+    pub fn apply<T: Scalar>(&self, r: &[T]) -> Vec<T> {
+        let zero = || crate::model::scalar::lift::<T>(0.0);
+        match self {
+            Whitening::Dense(w) => (0..w.nrows())
+                .map(|i| (0..w.ncols()).fold(zero(), |acc, j| acc + r[j].clone() * w[(i, j)]))
+                .collect(),
+            Whitening::LowRank { u, shrink, scale } => {
+                // z = diag(shrink)·Uᵀ·r, then scale·(r − U·z).
+                let z: Vec<T> = (0..u.ncols())
+                    .map(|c| {
+                        (0..u.nrows()).fold(zero(), |acc, i| acc + r[i].clone() * u[(i, c)])
+                            * shrink[c]
+                    })
+                    .collect();
+                (0..u.nrows())
+                    .map(|i| {
+                        let taken =
+                            (0..u.ncols()).fold(zero(), |acc, c| acc + z[c].clone() * u[(i, c)]);
+                        (r[i].clone() - taken) * *scale
+                    })
+                    .collect()
+            }
+        }
+    }
+
+    /// `W·M` in place for a row-major `M` with `cols` columns (`cols = 1`: a vector).
+    pub fn apply_in_place(&self, m: &mut [f64], cols: usize) {
+        let rows = self.size();
+        let plain = DMatrix::from_row_slice(rows, cols, m);
+        let weighted = match self {
+            Whitening::Dense(w) => w * plain,
+            Whitening::LowRank { u, shrink, scale } => {
+                let mut z = u.tr_mul(&plain);
+                for (c, mut row) in z.row_iter_mut().enumerate() {
+                    row *= shrink[c];
+                }
+                (plain - u * z) * *scale
+            }
+        };
+        for i in 0..rows {
+            for c in 0..cols {
+                m[i * cols + c] = weighted[(i, c)];
+            }
+        }
+    }
 }
 
 impl CaptureTerm {
@@ -65,13 +164,7 @@ impl CaptureTerm {
         let r = self.residuals(camera, params)?;
         Some(match &self.whitening {
             None => r,
-            Some(w) => (0..w.nrows())
-                .map(|i| {
-                    (0..w.ncols()).fold(crate::model::scalar::lift::<T>(0.0), |acc, j| {
-                        acc + r[j].clone() * w[(i, j)]
-                    })
-                })
-                .collect(),
+            Some(w) => w.apply(&r),
         })
     }
 }
@@ -251,5 +344,47 @@ impl Problem {
             loss: Loss::Squared,
             tolerances: Tolerances::default(),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The low-rank whitening applied directly (generic and in place) equals its dense form.
+    #[test]
+    fn low_rank_whitening_matches_its_dense_form() {
+        let raw = DMatrix::from_fn(8, 3, |i, j| {
+            ((i * 7 + j * 3) % 5) as f64 - 2.0 + 0.1 * j as f64
+        });
+        let w = Whitening::LowRank {
+            u: raw.clone().qr().q(),
+            shrink: DVector::from_vec(vec![0.9, 0.5, 0.1]),
+            scale: 2.5,
+        };
+        assert!(w.is_well_formed() && w.size() == 8);
+        let dense = w.to_dense();
+        let r: Vec<f64> = (0..8).map(|i| (i as f64 * 0.7).sin()).collect();
+        let expected = &dense * DVector::from_column_slice(&r);
+        let generic = w.apply(&r);
+        let mut in_place = r.clone();
+        w.apply_in_place(&mut in_place, 1);
+        for i in 0..8 {
+            assert!((generic[i] - expected[i]).abs() < 1e-12);
+            assert!((in_place[i] - expected[i]).abs() < 1e-12);
+        }
+        // Row-major with two columns: each column whitened.
+        let mut m: Vec<f64> = r.iter().flat_map(|x| [*x, 2.0 * x]).collect();
+        w.apply_in_place(&mut m, 2);
+        for i in 0..8 {
+            assert!((m[2 * i] - expected[i]).abs() < 1e-12);
+            assert!((m[2 * i + 1] - 2.0 * expected[i]).abs() < 1e-12);
+        }
+        let bad = Whitening::LowRank {
+            u: raw,
+            shrink: DVector::from_vec(vec![0.5]),
+            scale: 1.0,
+        };
+        assert!(!bad.is_well_formed());
     }
 }
