@@ -278,12 +278,16 @@ pub fn sandwich_of(
 /// Jacobian on its own columns, `P` their block of `H⁺`), leverages capped at 0.99.
 ///
 /// `H_cc` (2k × 2k) has rank at most `B`'s column count, so its eigenpairs come from the
-/// small `M = S BᵀB S` with `S = P^{1/2}`: `M v = λ v` gives `H_cc u = λ u` for
+/// small `M = Sᵀ BᵀB S` with `P = S Sᵀ`: `M v = λ v` gives `H_cc u = λ u` for
 /// `u = B S v / √λ`.
 fn leverage_corrected(b: &DMatrix<f64>, p: &DMatrix<f64>, r_c: &DVector<f64>) -> DVector<f64> {
-    let pe = p.clone().symmetric_eigen();
-    let root = pe.eigenvalues.map(|l| l.max(0.0).sqrt());
-    let s = &pe.eigenvectors * DMatrix::from_diagonal(&root) * pe.eigenvectors.transpose();
+    // Any factor `P = S Sᵀ` will do: the Cholesky factor, or (P only semi-definite, for a
+    // rank-deficient problem) the symmetric square root.
+    let s = p.clone().cholesky().map(|c| c.unpack()).unwrap_or_else(|| {
+        let pe = p.clone().symmetric_eigen();
+        let root = pe.eigenvalues.map(|l| l.max(0.0).sqrt());
+        &pe.eigenvectors * DMatrix::from_diagonal(&root) * pe.eigenvectors.transpose()
+    });
     let bs = b * s;
     let m = bs.transpose() * &bs;
     let me = m.symmetric_eigen();
