@@ -267,8 +267,9 @@ pub fn solve(problem: &Problem, backend: &dyn Backend) -> Result<Solution, Solve
     Ok(solution)
 }
 
-/// The fit alone: values, summary, RMS and the scaled covariance, without the per-vertex
-/// residuals, the identifiability report and the sandwich (see [`add_statistics`]).
+/// The fit alone: values, summary, RMS at the solution and the scaled covariance, without
+/// the per-vertex residuals, the RMS at the start, the identifiability report and the
+/// sandwich (see [`add_statistics`]).
 /// Intermediate fits and bootstrap refits need no more.
 pub fn optimise(problem: &Problem, backend: &dyn Backend) -> Result<Solution, SolveError> {
     optimise_with(problem, backend, true)
@@ -303,7 +304,6 @@ fn optimise_with(
         solver: backend.name().into(),
         message: "the solution puts a vertex behind the camera".into(),
     })?;
-    let initial_rms_px = problem.rms(&problem.initial).unwrap_or([f64::NAN; 2]);
     let dof = problem.residual_count().saturating_sub(free.len()).max(1);
     let residual_variance = 2.0 * result.summary.final_cost / dof as f64;
     let covariance = covariance::embed(
@@ -322,7 +322,7 @@ fn optimise_with(
         covariance,
         fixed: problem.fixed.clone(),
         rms_px,
-        initial_rms_px,
+        initial_rms_px: [f64::NAN; 2],
         observations: problem.observation_count(),
         captures: problem.captures.len(),
         residual_variance,
@@ -352,6 +352,7 @@ pub fn add_statistics(fitted: &Problem, original: &Problem, solution: &mut Solut
     solution.identifiability = identifiability;
     solution.sandwich_std = sandwich.map(|c| std::array::from_fn(|i| c[(i, i)].max(0.0).sqrt()));
     solution.residuals = vertex_residuals(original, &solution.values);
+    solution.initial_rms_px = initial_rms(&solution.residuals);
     solution.seconds += start.elapsed().as_secs_f64();
 }
 
@@ -453,7 +454,7 @@ fn calibrate_robust(
     }
     inliers.captures.retain(|t| !t.observations.is_empty());
     let mut solution = calibrate(&inliers, backend, options)?;
-    solution.initial_rms_px = robust.initial_rms_px;
+    solution.initial_rms_px = initial_rms(&robust.residuals);
     solution.summary.iterations += robust.summary.iterations;
     solution.summary.seconds += robust.summary.seconds;
     solution.outliers = outliers;
@@ -499,7 +500,6 @@ fn fit(
             current.std = refit.std;
             current.residual_variance = refit.residual_variance;
             add_statistics(fitted, problem, &mut current);
-            current.initial_rms_px = first.initial_rms_px;
             return Ok((
                 Solution {
                     noise: Some(estimate),
@@ -528,7 +528,6 @@ fn fit(
         second.covariance *= scale;
         second.std = std::array::from_fn(|i| second.covariance[(i, i)].max(0.0).sqrt());
     }
-    second.initial_rms_px = first.initial_rms_px;
     second.summary.iterations = iterations;
     // Costs as plain least squares (unweighted), like the RMS.
     second.summary.initial_cost = first.summary.initial_cost;
@@ -540,6 +539,14 @@ fn fit(
     second.noise = levels;
     second.seconds = start.elapsed().as_secs_f64();
     Ok((second, last))
+}
+
+/// RMS in u and v of the residuals at the start values [px] (NaN where undefined).
+fn initial_rms(residuals: &[VertexResidual]) -> [f64; 2] {
+    let n = residuals.len().max(1) as f64;
+    std::array::from_fn(|k| {
+        (residuals.iter().map(|r| r.initial[k].powi(2)).sum::<f64>() / n).sqrt()
+    })
 }
 
 /// Per-vertex residuals at the start values and at `values` (NaN where a vertex is behind

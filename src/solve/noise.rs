@@ -46,6 +46,15 @@ pub struct CaptureNoise {
 /// `J_θ,c`: derivatives of a capture's unweighted residuals with respect to the joint angles
 /// of the joints its chains use (equal to the derivatives with respect to their offsets).
 pub fn joint_jacobian(term: &CaptureTerm, camera: &Camera, params: &[f64]) -> Option<DMatrix<f64>> {
+    residuals_and_joint_jacobian(term, camera, params).map(|(_, jac)| jac)
+}
+
+/// The capture's unweighted residuals and [`joint_jacobian`], from one evaluation.
+fn residuals_and_joint_jacobian(
+    term: &CaptureTerm,
+    camera: &Camera,
+    params: &[f64],
+) -> Option<(DVector<f64>, DMatrix<f64>)> {
     let joints: Vec<Param> = term
         .chains
         .camera
@@ -70,13 +79,22 @@ pub fn joint_jacobian(term: &CaptureTerm, camera: &Camera, params: &[f64]) -> Op
             jac[(i, k)] = eps[k];
         }
     }
-    Some(jac)
+    Some((DVector::from_iterator(r.len(), r.iter().map(|d| d.re)), jac))
 }
 
 impl CaptureNoise {
     /// Decomposes `J_θ,c` for a capture at parameters `params`.
     pub fn new(term: &CaptureTerm, camera: &Camera, params: &[f64]) -> Option<CaptureNoise> {
-        let jac = joint_jacobian(term, camera, params)?;
+        Self::with_residuals(term, camera, params).map(|(cn, _)| cn)
+    }
+
+    /// [`CaptureNoise::new`] and the capture's unweighted residuals, from one evaluation.
+    fn with_residuals(
+        term: &CaptureTerm,
+        camera: &Camera,
+        params: &[f64],
+    ) -> Option<(CaptureNoise, DVector<f64>)> {
+        let (r, jac) = residuals_and_joint_jacobian(term, camera, params)?;
         // From the small d × d eigenproblem of JᵀJ: JᵀJ v = s² v, u = J v / s. Directions
         // with s² below 1e-12 of the largest carry no joint noise worth weighting and are
         // dropped (their u would not be accurate).
@@ -92,7 +110,7 @@ impl CaptureNoise {
             u.set_column(c, &(&jac * eigen.eigenvectors.column(k) / l.sqrt()));
             s2[c] = l;
         }
-        Some(CaptureNoise { u, s2 })
+        Some((CaptureNoise { u, s2 }, r))
     }
 
     /// The whitening `Σ_c^{-1/2}` (symmetric, low rank plus identity) for the given noise
@@ -133,8 +151,7 @@ pub fn estimate(
     let mut noise = Vec::with_capacity(problem.captures.len());
     let mut parts = Vec::with_capacity(problem.captures.len());
     for term in &problem.captures {
-        let cn = CaptureNoise::new(term, &problem.camera, params)?;
-        let r = DVector::from_vec(term.residuals(&problem.camera, params)?);
+        let (cn, r) = CaptureNoise::with_residuals(term, &problem.camera, params)?;
         let z = cn.u.transpose() * &r;
         let z2: Vec<f64> = z.iter().map(|x| x * x).collect();
         let rest = (r.norm_squared() - z2.iter().sum::<f64>()).max(0.0);
