@@ -11,6 +11,8 @@ use naocalib::sim::{SimOptions, simulate};
 use naocalib::solve::UncertaintyOptions;
 
 fn bench_batch(c: &mut Criterion) {
+    // As the CLI does at start (see its doc).
+    naocalib::solve::retain_freed_memory();
     let datasets: Vec<_> = (1..=100)
         .map(|seed| {
             let options = SimOptions {

@@ -16,6 +16,8 @@ use naocalib::sim::{SimOptions, simulate};
 use naocalib::solve::{Problem, UncertaintyOptions, backend, backend_names, calibrate, solve};
 
 fn paper_sized() -> Problem {
+    // As the CLI does at start (see its doc).
+    naocalib::solve::retain_freed_memory();
     let dataset = simulate(&Model::default(), &SimOptions::default()).expect("simulated");
     Problem::from_dataset(&dataset, FixedSet::default()).expect("problem")
 }

@@ -56,6 +56,7 @@ enum Command {
 /// Parses the command line, runs it, and maps errors to a message and exit code 1.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
+    crate::solve::retain_freed_memory();
     match run(&cli) {
         Ok(code) => code,
         Err(e) => {

@@ -207,6 +207,21 @@ impl Solution {
     }
 }
 
+/// Lets the C allocator keep freed memory for reuse instead of handing it back to the
+/// operating system: every fit allocates and frees the same large buffers (Ceres' dense
+/// Jacobian and factorisation, the Rust Jacobians), and mapping them afresh each time costs
+/// page faults worth ~20% of a solve (backend bench 12.2 → 9.6 ms). Affects the whole
+/// process, which keeps up to 256 MB of freed memory; the CLI calls it at start, and a
+/// program that solves many problems may too. Does nothing outside glibc.
+pub fn retain_freed_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: mallopt only changes glibc malloc's tuning; it may be called at any time.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, 64 << 20);
+        libc::mallopt(libc::M_TRIM_THRESHOLD, 256 << 20);
+    }
+}
+
 /// Checks that a problem can be handed to a backend: enough residuals for the free
 /// parameters, every vertex in front of the camera at the start values, sane numbers.
 pub fn validate(problem: &Problem) -> Result<(), SolveError> {
