@@ -54,7 +54,16 @@ impl Target<'_> {
     fn compress(&self) -> Option<DVector<f64>> {
         let n = self.x.len();
         let (r, jac) = self.eval.residuals_and_jacobian(self.x.as_slice())?;
-        let normal = jac.tr_mul(&jac);
+        // JᵀJ from the upper triangle's column dot products (half of `tr_mul`'s work).
+        let mut normal = DMatrix::zeros(n, n);
+        for i in 0..n {
+            let column = jac.column(i);
+            for j in i..n {
+                let value = column.dot(&jac.column(j));
+                normal[(i, j)] = value;
+                normal[(j, i)] = value;
+            }
+        }
         let gradient = jac.tr_mul(&r);
         let eigen = normal.symmetric_eigen();
         let max = eigen.eigenvalues.max().max(0.0);
