@@ -94,18 +94,6 @@ pub struct BatchArgs {
     no_progress: bool,
 }
 
-/// A progress bar on stderr: datasets done, failures so far, elapsed time and the ETA.
-fn progress_bar(datasets: usize) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::new(datasets as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{bar:30} {pos}/{len} datasets{msg}, {elapsed} elapsed, {eta} left",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    bar
-}
-
 /// Runs `naocalib batch`.
 pub fn run(args: &BatchArgs, verbose: bool) -> Result<ExitCode> {
     let fixed = super::solve::fixed_set(args.fix.as_deref(), args.free.as_deref())?;
@@ -162,7 +150,7 @@ pub fn run(args: &BatchArgs, verbose: bool) -> Result<ExitCode> {
         ..Default::default()
     });
     let show = !args.no_progress && !verbose && std::io::stderr().is_terminal();
-    let bar = show.then(|| progress_bar(0));
+    let bar = show.then(|| super::progress_bar(0, "datasets"));
     let failed = AtomicUsize::new(0);
     let progress = |p: Progress<'_>| {
         let Some(bar) = &bar else { return };

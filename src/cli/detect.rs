@@ -83,16 +83,9 @@ fn read_solution(path: &Path) -> Result<[f64; PARAMETER_COUNT]> {
 
 /// A progress bar over `images` images on stderr, when stderr is a terminal.
 fn progress_bar(images: usize) -> Option<indicatif::ProgressBar> {
-    std::io::stderr().is_terminal().then(|| {
-        let bar = indicatif::ProgressBar::new(images as u64);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{bar:40} {pos}/{len} images, {elapsed} elapsed, {eta} left",
-            )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        bar
-    })
+    std::io::stderr()
+        .is_terminal()
+        .then(|| super::progress_bar(images, "images"))
 }
 
 /// For `naocalib solve --detect`: detects the vertices in `dataset`'s images with the

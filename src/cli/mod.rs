@@ -53,6 +53,19 @@ enum Command {
     Detect(detect::DetectArgs),
 }
 
+/// A progress bar on stderr over `len` items called `what` (`images`, `datasets`): done,
+/// the bar's message (e.g. failures so far), elapsed time and the ETA.
+fn progress_bar(len: usize, what: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(len as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(&format!(
+            "{{bar:40}} {{pos}}/{{len}} {what}{{msg}}, {{elapsed}} elapsed, {{eta}} left"
+        ))
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar
+}
+
 /// Parses the command line, runs it, and maps errors to a message and exit code 1.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
