@@ -19,6 +19,11 @@ fn naocalib() -> Command {
     Command::cargo_bin("naocalib").expect("binary built")
 }
 
+/// `naocalib ARGS DATASET`.
+fn run(args: &[&str], dataset: impl AsRef<std::ffi::OsStr>) -> Output {
+    naocalib().args(args).arg(dataset).output().expect("ran")
+}
+
 fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
@@ -83,11 +88,7 @@ fn solve_detect_recovers_the_truth_without_writing_corners_csv() {
     std::fs::remove_file(dir.join("corners.csv")).unwrap();
     let before = snapshot(&dir);
 
-    let out = naocalib()
-        .args(["solve", "--detect", "--json"])
-        .arg(&dir)
-        .output()
-        .unwrap();
+    let out = run(&["solve", "--detect", "--json"], &dir);
     let result = json(&out);
     let err = stderr(&out);
     assert!(
@@ -120,15 +121,9 @@ fn solve_detect_recovers_the_truth_without_writing_corners_csv() {
     }
 
     // The same as detect, then solve from the corners.csv it writes.
-    let out = naocalib().arg("detect").arg(&dir).output().unwrap();
+    let out = run(&["detect"], &dir);
     assert!(out.status.success(), "{}", stderr(&out));
-    let from_file = json(
-        &naocalib()
-            .args(["solve", "--json"])
-            .arg(&dir)
-            .output()
-            .unwrap(),
-    );
+    let from_file = json(&run(&["solve", "--json"], &dir));
     for p in Param::ALL.iter().take(21) {
         let a = result["parameters"][p.name()]["value"].as_f64().unwrap();
         let b = from_file["parameters"][p.name()]["value"].as_f64().unwrap();
@@ -186,14 +181,10 @@ fn solve_detect_ignores_corners_csv_and_keeps_the_other_options() {
     assert_eq!(snapshot(&dir), before, "the dataset was changed");
 
     // Without --detect the broken corners.csv is what is solved with, and refused.
-    let out = naocalib().arg("solve").arg(&dir).output().unwrap();
+    let out = run(&["solve"], &dir);
     assert_clean_failure(&out, &["corners.csv line 2", "capture 99"]);
     // Option mistakes are reported before detection runs.
-    let out = naocalib()
-        .args(["solve", "--detect", "--fix", "Nope"])
-        .arg(&dir)
-        .output()
-        .unwrap();
+    let out = run(&["solve", "--detect", "--fix", "Nope"], &dir);
     assert_clean_failure(&out, &["--fix"]);
     assert!(!stderr(&out).contains("found"), "{}", stderr(&out));
 }
@@ -203,13 +194,7 @@ fn solve_detect_without_usable_images_fails_with_the_reason() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("ds");
     rendered(&dir, 2);
-    let solve = || {
-        naocalib()
-            .args(["solve", "--detect"])
-            .arg(&dir)
-            .output()
-            .unwrap()
-    };
+    let solve = || run(&["solve", "--detect"], &dir);
     // Every image missing.
     let images = dir.join("images");
     let kept = tmp.path().join("kept");
@@ -256,17 +241,9 @@ fn solve_detect_without_usable_images_fails_with_the_reason() {
 
     // A dataset whose captures name no images at all.
     let plain = tmp.path().join("plain");
-    let out = naocalib()
-        .args(["simulate", "--stances", "2", "--heads", "1"])
-        .arg(&plain)
-        .output()
-        .unwrap();
+    let out = run(&["simulate", "--stances", "2", "--heads", "1"], &plain);
     assert!(out.status.success(), "{}", stderr(&out));
-    let out = naocalib()
-        .args(["solve", "--detect"])
-        .arg(&plain)
-        .output()
-        .unwrap();
+    let out = run(&["solve", "--detect"], &plain);
     assert_clean_failure(&out, &["no capture in captures.csv names an image"]);
 }
 
@@ -274,18 +251,13 @@ fn solve_detect_without_usable_images_fails_with_the_reason() {
 fn simulate_images_refuses_an_existing_dataset_before_writing_any_image() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("ds");
-    let out = naocalib()
-        .args(["simulate", "--stances", "2", "--heads", "1"])
-        .arg(&dir)
-        .output()
-        .unwrap();
+    let out = run(&["simulate", "--stances", "2", "--heads", "1"], &dir);
     assert!(out.status.success(), "{}", stderr(&out));
     let before = snapshot(&dir);
-    let out = naocalib()
-        .args(["simulate", "--images", "--stances", "2", "--heads", "1"])
-        .arg(&dir)
-        .output()
-        .unwrap();
+    let out = run(
+        &["simulate", "--images", "--stances", "2", "--heads", "1"],
+        &dir,
+    );
     assert_clean_failure(&out, &["already exists; use --force"]);
     assert!(!dir.join("images").exists(), "images were written");
     assert_eq!(snapshot(&dir), before);
@@ -294,11 +266,10 @@ fn simulate_images_refuses_an_existing_dataset_before_writing_any_image() {
     for name in ["dataset.toml", "captures.csv", "corners.csv"] {
         std::fs::remove_file(dir.join(name)).unwrap();
     }
-    let out = naocalib()
-        .args(["simulate", "--images", "--stances", "2", "--heads", "1"])
-        .arg(&dir)
-        .output()
-        .unwrap();
+    let out = run(
+        &["simulate", "--images", "--stances", "2", "--heads", "1"],
+        &dir,
+    );
     assert_clean_failure(&out, &["truth.toml: already exists"]);
     assert!(!dir.join("images").exists(), "images were written");
 
@@ -313,8 +284,8 @@ fn simulate_images_refuses_an_existing_dataset_before_writing_any_image() {
     assert!(!dir.join("images").exists(), "images were written");
 
     // With --force the dataset is replaced, images and all.
-    let out = naocalib()
-        .args([
+    let out = run(
+        &[
             "simulate",
             "--images",
             "--force",
@@ -322,10 +293,9 @@ fn simulate_images_refuses_an_existing_dataset_before_writing_any_image() {
             "2",
             "--heads",
             "1",
-        ])
-        .arg(&dir)
-        .output()
-        .unwrap();
+        ],
+        &dir,
+    );
     assert!(out.status.success(), "{}", stderr(&out));
     assert_eq!(std::fs::read_dir(dir.join("images")).unwrap().count(), 4);
     let dataset = Dataset::load(&dir).unwrap();
