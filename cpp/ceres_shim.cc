@@ -34,17 +34,13 @@
 namespace naocalib {
 namespace {
 
-// Jet width of the autodiff passes: one capture references at most camera (3) + head (2)
-// + leg (6) + board (3) = 14 parameters, so two passes at most.
+// Jet width of the autodiff passes: a capture of the paper's model references at most
+// camera (3) + leg (6) + board (3) = 12 free parameters, one pass; the extended model takes
+// a few more passes.
 constexpr int kStride = 12;
 
-// Step kinds and loss kinds, as documented in the bridge.
-constexpr std::uint8_t kFixed = 0;
-constexpr std::uint8_t kRotate = 1;
-constexpr std::uint8_t kTranslate = 2;
-constexpr std::uint8_t kNoLoss = 0;
-constexpr std::uint8_t kHuber = 1;
-constexpr std::uint8_t kCauchy = 2;
+// Most parameters one amount depends on (chain::MAX_TERMS in Rust).
+constexpr int kTerms = 3;
 
 [[noreturn]] void fail(const std::string& message) { throw std::invalid_argument(message); }
 
@@ -72,6 +68,16 @@ bool finite(double x) { return std::isfinite(x); }
 
 std::size_t vertex_total(const FfiProblem& p) { return p.points.size() / 3; }
 
+void validate(const FfiAmount& a, std::size_t n, const std::string& where) {
+  if (!finite(a.constant)) fail(where + "constant is not finite");
+  for (int k = 0; k < kTerms; ++k) {
+    if (a.params[k] < -1 || a.params[k] >= static_cast<std::int64_t>(n))
+      fail(where + "parameter index " + std::to_string(a.params[k]) + " out of range (" +
+           std::to_string(n) + " free parameters)");
+    if (!finite(a.scales[k])) fail(where + "scale is not finite");
+  }
+}
+
 void validate(const FfiProblem& p) {
   const std::size_t n = p.params.size();
   if (n == 0) fail("no free parameters");
@@ -92,25 +98,26 @@ void validate(const FfiProblem& p) {
     if (!finite(x)) fail("an observed pixel is not finite");
   for (double x : p.weights)
     if (!finite(x)) fail("a whitening weight is not finite");
-  for (double x : p.camera)
-    if (!finite(x)) fail("a camera intrinsic is not finite");
+  const FfiProjection& c = p.projection;
+  for (const FfiAmount* a : {&c.fx, &c.fy, &c.cx, &c.cy, &c.k1, &c.k2})
+    validate(*a, n, "projection: ");
+  for (double x : {c.p1, c.p2, c.k3})
+    if (!finite(x)) fail("a distortion coefficient is not finite");
 
   for (std::size_t s = 0; s < p.steps.size(); ++s) {
     const FfiStep& step = p.steps[s];
     const std::string where = "step " + std::to_string(s) + ": ";
-    if (step.kind > kTranslate) fail(where + "unknown kind " + std::to_string(step.kind));
-    if (step.kind == kFixed) {
+    if (step.kind == StepKind::Fixed) {
       for (double x : step.rotation)
         if (!finite(x)) fail(where + "rotation is not finite");
       for (double x : step.translation)
         if (!finite(x)) fail(where + "translation is not finite");
+    } else if (step.kind == StepKind::Rotate || step.kind == StepKind::Translate) {
+      if (step.axis != StepAxis::X && step.axis != StepAxis::Y && step.axis != StepAxis::Z)
+        fail(where + "unknown axis");
+      validate(step.amount, n, where);
     } else {
-      if (step.axis > 2) fail(where + "unknown axis " + std::to_string(step.axis));
-      if (step.param < -1 || step.param >= static_cast<std::int64_t>(n))
-        fail(where + "parameter index " + std::to_string(step.param) + " out of range (" +
-             std::to_string(n) + " free parameters)");
-      if (!finite(step.constant) || !finite(step.scale))
-        fail(where + "constant or scale is not finite");
+      fail(where + "unknown kind");
     }
   }
 
@@ -140,8 +147,9 @@ void validate(const FfiProblem& p) {
 }
 
 void validate(const FfiProblem& p, const FfiOptions& o) {
-  if (o.loss > kCauchy) fail("unknown loss " + std::to_string(o.loss));
-  if (o.loss != kNoLoss) {
+  if (o.loss != LossKind::Squared && o.loss != LossKind::Huber && o.loss != LossKind::Cauchy)
+    fail("unknown loss");
+  if (o.loss != LossKind::Squared) {
     if (!(finite(o.loss_scale) && o.loss_scale > 0.0))
       fail("robust loss scale must be a positive number, got " + std::to_string(o.loss_scale));
     for (const FfiCapture& cap : p.captures)
@@ -281,7 +289,7 @@ class CaptureFunctor {
       for (int i = 0; i < 3; ++i)
         pc[i] = cb.R[i][0] * pb[0] + cb.R[i][1] * pb[1] + cb.R[i][2] * pb[2] + cb.t[i];
       T uv[2];
-      if (!project(pc, uv)) return false;
+      if (!project(pc, uv, parameters)) return false;
       out[2 * k] = uv[0] - pixels[2 * k];
       out[2 * k + 1] = uv[1] - pixels[2 * k + 1];
     }
@@ -289,11 +297,14 @@ class CaptureFunctor {
   }
 
  private:
-  // `constant + scale · α` (Affine::eval).
+  // `constant + Σ scale · α` (Affine::eval, same order of operations).
   template <typename T>
-  T amount(const FfiStep& s, T const* const* parameters) const {
-    if (s.param < 0) return T(s.constant);
-    return parameters[slot_[s.param]][offset_[s.param]] * s.scale + s.constant;
+  T amount(const FfiAmount& a, T const* const* parameters) const {
+    T value = T(a.constant);
+    for (int k = 0; k < kTerms; ++k)
+      if (a.params[k] >= 0)
+        value += parameters[slot_[a.params[k]]][offset_[a.params[k]]] * a.scales[k];
+    return value;
   }
 
   // Chain::eval.
@@ -306,44 +317,46 @@ class CaptureFunctor {
     }
     for (std::uint32_t k = 0; k < count; ++k) {
       const FfiStep& s = steps[k];
+      const int axis = static_cast<int>(s.axis);
       switch (s.kind) {
-        case kFixed:
+        case StepKind::Fixed:
           if (k == 0)
             set_fixed(f, s);
           else
             then_fixed(f, s);
           break;
-        case kRotate:
-          rotate(f, s.axis, amount(s, parameters));
+        case StepKind::Rotate:
+          rotate(f, axis, amount(s.amount, parameters));
           break;
         default:
-          translate(f, s.axis, amount(s, parameters));
+          translate(f, axis, amount(s.amount, parameters));
           break;
       }
     }
   }
 
-  // Camera::project: pinhole with optional OpenCV distortion; false behind the camera.
+  // Projection::project_with: pinhole with optional OpenCV distortion (camera::distort);
+  // false behind the camera.
   template <typename T>
-  bool project(const T (&p)[3], T (&uv)[2]) const {
+  bool project(const T (&p)[3], T (&uv)[2], T const* const* parameters) const {
     if (value_of(p[0]) <= 0.0) return false;
-    const auto& cam = problem_.camera;
-    const double fx = cam[0], fy = cam[1], cx = cam[2], cy = cam[3];
+    const FfiProjection& c = problem_.projection;
     const T inv = T(1.0) / p[0];
     T a = -(p[1] * inv);
     T b = -(p[2] * inv);
-    const double k1 = cam[4], k2 = cam[5], p1 = cam[6], p2 = cam[7], k3 = cam[8];
-    if (k1 != 0.0 || k2 != 0.0 || p1 != 0.0 || p2 != 0.0 || k3 != 0.0) {
+    if (c.distorted) {
+      const T k1 = amount(c.k1, parameters), k2 = amount(c.k2, parameters);
+      const T p1 = T(c.p1), p2 = T(c.p2), k3 = T(c.k3);
       const T r2 = a * a + b * b;
-      const T radial = T(1.0) + r2 * (T(k1) + r2 * (T(k2) + r2 * k3));
+      const T radial = T(1.0) + r2 * (k1 + r2 * (k2 + r2 * k3));
       const T ab = a * b;
-      const T da = ab * (2.0 * p1) + (r2 + a * a * 2.0) * p2;
-      const T db = (r2 + b * b * 2.0) * p1 + ab * (2.0 * p2);
+      const T da = ab * p1 * 2.0 + (r2 + a * a * 2.0) * p2;
+      const T db = (r2 + b * b * 2.0) * p1 + ab * p2 * 2.0;
       a = a * radial + da;
       b = b * radial + db;
     }
-    uv[0] = a * fx + cx;
-    uv[1] = b * fy + cy;
+    uv[0] = a * amount(c.fx, parameters) + amount(c.cx, parameters);
+    uv[1] = b * amount(c.fy, parameters) + amount(c.cy, parameters);
     return true;
   }
 
@@ -422,7 +435,7 @@ class WhitenedCost : public ceres::CostFunction {
 
 class Built {
  public:
-  Built(const FfiProblem& p, const double* values, std::uint8_t loss, double loss_scale)
+  Built(const FfiProblem& p, const double* values, LossKind loss, double loss_scale)
       : layout_(make_layout(p)) {
     const int n = static_cast<int>(p.params.size());
     const int blocks = static_cast<int>(layout_.members.size());
@@ -435,11 +448,17 @@ class Built {
       if (cap.vertex_count == 0) continue;
       // The blocks this capture's steps reference, ascending.
       std::vector<bool> referenced(blocks, false);
+      auto reference = [&](const FfiAmount& a) {
+        for (int k = 0; k < kTerms; ++k)
+          if (a.params[k] >= 0) referenced[layout_.block_of[a.params[k]]] = true;
+      };
       const std::uint32_t steps = cap.camera_steps + cap.board_steps;
       for (std::uint32_t k = 0; k < steps; ++k) {
         const FfiStep& s = p.steps[cap.first_step + k];
-        if (s.kind != kFixed && s.param >= 0) referenced[layout_.block_of[s.param]] = true;
+        if (s.kind != StepKind::Fixed) reference(s.amount);
       }
+      const FfiProjection& c = p.projection;
+      for (const FfiAmount* a : {&c.fx, &c.fy, &c.cx, &c.cy, &c.k1, &c.k2}) reference(*a);
       // A capture that depends on no free parameter still contributes its (constant)
       // residuals: attach it to block 0, whose Jacobian columns it leaves zero.
       if (std::none_of(referenced.begin(), referenced.end(), [](bool r) { return r; }))
@@ -461,7 +480,7 @@ class Built {
         }
       }
 
-      const bool per_vertex = loss != kNoLoss;
+      const bool per_vertex = loss != LossKind::Squared;
       const std::uint32_t groups = per_vertex ? cap.vertex_count : 1;
       const std::uint32_t count = per_vertex ? 1 : cap.vertex_count;
       for (std::uint32_t g = 0; g < groups; ++g) {
@@ -473,8 +492,8 @@ class Built {
         if (cap.first_weight >= 0)
           cost = new WhitenedCost(raw, p.weights.data() + cap.first_weight, cap.whitening_rank);
         ceres::LossFunction* loss_function = nullptr;
-        if (loss == kHuber) loss_function = new ceres::HuberLoss(loss_scale);
-        if (loss == kCauchy) loss_function = new ceres::CauchyLoss(loss_scale);
+        if (loss == LossKind::Huber) loss_function = new ceres::HuberLoss(loss_scale);
+        if (loss == LossKind::Cauchy) loss_function = new ceres::CauchyLoss(loss_scale);
         problem_.AddResidualBlock(cost, loss_function, pointers);
       }
     }
@@ -602,7 +621,11 @@ FfiSolution solve(const FfiProblem& problem, const FfiOptions& options) {
                                                 summary.num_unsuccessful_steps);
     out.initial_cost = summary.initial_cost;
     out.final_cost = summary.final_cost;
-    out.converged = summary.termination_type == ceres::CONVERGENCE;
+    // Convergence means a finite cost at finite values: Ceres also "converges" when a NaN
+    // gradient ends the search.
+    bool finite_values = finite(summary.final_cost);
+    for (double x : out.params) finite_values = finite_values && finite(x);
+    out.converged = summary.termination_type == ceres::CONVERGENCE && finite_values;
     out.termination = rust::String(
         std::string(ceres::TerminationTypeToString(summary.termination_type)) + ": " +
         summary.message);
@@ -623,7 +646,7 @@ FfiEvaluation evaluate(const FfiProblem& problem, rust::Slice<const double> para
            " free parameters");
     for (double x : params)
       if (!finite(x)) fail("a parameter value is not finite");
-    Built built(problem, params.data(), kNoLoss, 0.0);
+    Built built(problem, params.data(), LossKind::Squared, 0.0);
 
     ceres::Problem::EvaluateOptions eo;
     for (int b : built.used()) eo.parameter_blocks.push_back(built.block(b));

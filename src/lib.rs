@@ -30,7 +30,6 @@
 //! ```
 
 pub mod batch;
-pub mod cli;
 pub mod dataset;
 #[cfg(feature = "detect")]
 pub mod detect;

@@ -1,5 +1,7 @@
-//! The `naocalib` command; all logic lives in the library (`naocalib::cli`).
+//! The `naocalib` command: flag parsing and printing only; everything else is the library.
+
+mod cli;
 
 fn main() -> std::process::ExitCode {
-    naocalib::cli::main()
+    cli::main()
 }

@@ -8,9 +8,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 
-use super::DEFAULT_SOLVER;
-use crate::batch::{self, BatchOptions, DriftMode, DriftOptions, Grouping, Progress};
-use crate::report::export::WriteOptions;
+use super::options::{ProblemArgs, SolverArgs, UncertaintyArgs};
+use naocalib::batch::{self, BatchOptions, DriftMode, DriftOptions, Grouping, Progress};
+use naocalib::report::export::WriteOptions;
 
 /// Which runs are compared for drift.
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -52,15 +52,10 @@ pub struct BatchArgs {
     /// Replace existing output files (never a dataset's files).
     #[arg(long)]
     force: bool,
-    /// Parameters to hold fixed at zero, comma-separated (e.g. CamYaw,LBoardRotZ).
-    #[arg(long, value_name = "NAMES")]
-    fix: Option<String>,
-    /// Parameters to estimate that are held fixed by default (HeadYaw,HeadPitch).
-    #[arg(long, value_name = "NAMES")]
-    free: Option<String>,
-    /// Least-squares backend: ceres (default), lm, tiny.
-    #[arg(long, default_value = DEFAULT_SOLVER)]
-    solver: String,
+    #[command(flatten)]
+    problem: ProblemArgs,
+    #[command(flatten)]
+    solver: SolverArgs,
     /// Worker threads (0: one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
@@ -73,22 +68,8 @@ pub struct BatchArgs {
     /// Which runs are of the same robot (for drift).
     #[arg(long, value_enum, default_value = "parent")]
     robots: RobotsArg,
-    /// Pixel noise σ [px] for the noise model; estimated from the residuals if not given.
-    #[arg(long, value_name = "PX")]
-    px_noise: Option<f64>,
-    /// Joint-angle noise σ per joint and capture [deg]; estimated if not given.
-    #[arg(long, value_name = "DEG")]
-    joint_noise_deg: Option<f64>,
-    /// Report the plain σ̂²(JᵀJ)⁻¹ instead of the noise model.
-    #[arg(long)]
-    plain_std: bool,
-    /// Also estimate each run's uncertainty by a capture bootstrap with N refits.
-    #[arg(long, value_name = "N", default_value_t = 0)]
-    bootstrap: usize,
-    /// Robust first fit: huber or cauchy, optionally with a scale in px (huber:2);
-    /// outlier vertices are left out of each run's final fit.
-    #[arg(long, value_name = "LOSS[:PX]")]
-    loss: Option<String>,
+    #[command(flatten)]
+    uncertainty: UncertaintyArgs,
     /// No progress bar, even on a terminal.
     #[arg(long)]
     no_progress: bool,
@@ -96,33 +77,16 @@ pub struct BatchArgs {
 
 /// Runs `naocalib batch`.
 pub fn run(args: &BatchArgs, verbose: bool) -> Result<ExitCode> {
-    let fixed = super::solve::fixed_set(args.fix.as_deref(), args.free.as_deref())?;
-    super::backend(&args.solver, false)?;
-    for (name, value) in [
-        ("--px-noise", args.px_noise),
-        ("--joint-noise-deg", args.joint_noise_deg),
-    ] {
-        if let Some(v) = value
-            && !(v.is_finite() && v > 0.0)
-        {
-            anyhow::bail!("{name} must be a positive number, got {v}");
-        }
-    }
+    let fixed = args.problem.fixed_set()?;
     if !(args.drift_threshold.is_finite() && args.drift_threshold > 0.0) {
         anyhow::bail!(
             "--drift-threshold must be a positive number, got {}",
             args.drift_threshold
         );
     }
-    let loss = args
-        .loss
-        .as_deref()
-        .map(super::solve::parse_loss)
-        .transpose()?
-        .unwrap_or(crate::solve::Loss::Squared);
     let options = BatchOptions {
-        solver: args.solver.clone(),
-        loss,
+        solver: args.solver.solver.clone(),
+        loss: args.problem.loss(),
         fixed,
         threads: args.threads,
         verbose,
@@ -140,15 +104,7 @@ pub fn run(args: &BatchArgs, verbose: bool) -> Result<ExitCode> {
         },
         ..BatchOptions::default()
     }
-    .with_uncertainty(crate::solve::UncertaintyOptions {
-        noise_model: !args.plain_std,
-        bootstrap: args.bootstrap,
-        noise: crate::solve::noise::NoiseOptions {
-            px: args.px_noise,
-            joint: args.joint_noise_deg.map(f64::to_radians),
-        },
-        ..Default::default()
-    });
+    .with_uncertainty(args.uncertainty.options());
     let show = !args.no_progress && !verbose && std::io::stderr().is_terminal();
     let bar = show.then(|| super::progress_bar(0, "datasets"));
     let failed = AtomicUsize::new(0);

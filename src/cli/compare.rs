@@ -9,9 +9,10 @@ use anyhow::{Context, Result};
 use clap::Args;
 use serde_json::{Map, Value, json};
 
-use crate::dataset::Dataset;
-use crate::solve::Problem;
-use crate::solve::compare::{Comparison, compare, sigma_difference};
+use super::options::ProblemArgs;
+use naocalib::dataset::Dataset;
+use naocalib::solve::Problem;
+use naocalib::solve::compare::{Comparison, compare, sigma_difference};
 
 /// Arguments of `naocalib compare`.
 #[derive(Debug, Args)]
@@ -21,15 +22,8 @@ pub struct CompareArgs {
     /// Print the comparison as JSON.
     #[arg(long)]
     json: bool,
-    /// Parameters to hold fixed at zero, comma-separated (e.g. CamYaw,LBoardRotZ).
-    #[arg(long, value_name = "NAMES")]
-    fix: Option<String>,
-    /// Parameters to estimate that are held fixed by default (HeadYaw,HeadPitch).
-    #[arg(long, value_name = "NAMES")]
-    free: Option<String>,
-    /// Robust loss per vertex for every solver: huber[:SCALE] or cauchy[:SCALE] (px).
-    #[arg(long, value_name = "LOSS")]
-    loss: Option<String>,
+    #[command(flatten)]
+    problem: ProblemArgs,
     /// Solvers to run, comma-separated (default: all of this build).
     #[arg(long, value_name = "NAMES")]
     solvers: Option<String>,
@@ -39,11 +33,9 @@ pub struct CompareArgs {
 /// comparison is printed either way).
 pub fn run(args: &CompareArgs) -> Result<ExitCode> {
     let dataset = Dataset::load(&args.dataset)?;
-    let fixed = super::solve::fixed_set(args.fix.as_deref(), args.free.as_deref())?;
+    let fixed = args.problem.fixed_set()?;
     let mut problem = Problem::from_dataset(&dataset, fixed)?;
-    if let Some(loss) = &args.loss {
-        problem.loss = super::solve::parse_loss(loss)?;
-    }
+    problem.loss = args.problem.loss();
     let solvers: Vec<&str> = args
         .solvers
         .as_deref()

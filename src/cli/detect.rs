@@ -9,10 +9,10 @@ use std::sync::Mutex;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 
-use crate::dataset::{CORNERS_CSV, Dataset};
-use crate::detect::assign::Grid;
-use crate::detect::{self, DetectOptions, ImageResult, Summary};
-use crate::model::{PARAMETER_COUNT, Param};
+use naocalib::dataset::{CORNERS_CSV, Dataset};
+use naocalib::detect::assign::Grid;
+use naocalib::detect::{self, DetectOptions, ImageResult, Summary};
+use naocalib::model::{PARAMETER_COUNT, Param};
 
 #[derive(Debug, Args)]
 pub struct DetectArgs {
@@ -188,7 +188,7 @@ pub fn run(args: &DetectArgs) -> Result<ExitCode> {
     }
     let summary = Summary::of(&results);
     let corners = detect::corners(&results);
-    crate::dataset::write_corners(&args.dataset, &corners, replace)?;
+    naocalib::dataset::write_corners(&args.dataset, &corners, replace)?;
     eprintln!(
         "{}: {} images: {summary}; wrote {} vertices to {}",
         args.dataset.display(),

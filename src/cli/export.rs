@@ -7,11 +7,11 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 
-use crate::report::export::{
+use naocalib::report::export::{
     Calibration, ExportFormat, WriteOptions, export, export_all, read_calibration,
 };
-use crate::report::plot;
-use crate::solve::Solution;
+use naocalib::report::plot;
+use naocalib::solve::Solution;
 
 #[derive(Debug, Args)]
 pub struct ExportArgs {
@@ -54,7 +54,7 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
     for path in &args.out {
         let format = match format.or_else(|| ExportFormat::from_path(path)) {
             Some(f) => f,
-            None => bail!(crate::report::export::ExportError::UnknownFormat { path: path.clone() }),
+            None => bail!(naocalib::report::export::ExportError::UnknownFormat { path: path.clone() }),
         };
         export(&calibration, format, path, &options)?;
         written.push(path.clone());
@@ -72,7 +72,7 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
 /// into `export_dir`, never over a file of the dataset in `dataset`. Reports on stderr.
 pub fn solve_outputs(
     solution: &Solution,
-    dataset: &crate::dataset::Dataset,
+    dataset: &naocalib::dataset::Dataset,
     plots: Option<&Path>,
     export_dir: Option<&Path>,
     force: bool,

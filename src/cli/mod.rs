@@ -5,22 +5,14 @@ mod compare;
 #[cfg(feature = "detect")]
 mod detect;
 mod export;
+mod options;
 mod simulate;
 mod solve;
 
 use std::process::ExitCode;
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::{Parser, Subcommand};
-
-use crate::solve::Backend;
-
-/// The backend used when `--solver` is not given.
-pub const DEFAULT_SOLVER: &str = if cfg!(feature = "ceres") {
-    "ceres"
-} else {
-    "lm"
-};
 
 /// Automatic kinematic calibration of the NAO (Kastner, Röfer, Laue).
 #[derive(Debug, Parser)]
@@ -66,10 +58,17 @@ fn progress_bar(len: usize, what: &str) -> indicatif::ProgressBar {
     bar
 }
 
-/// Parses the command line, runs it, and maps errors to a message and exit code 1.
+/// Parses the command line, runs it, and maps errors (a bad flag included) to a message
+/// and exit code 1.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
-    crate::solve::retain_freed_memory();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return ExitCode::from(if e.use_stderr() { 1 } else { 0 });
+        }
+    };
+    naocalib::solve::retain_freed_memory();
     match run(&cli) {
         Ok(code) => code,
         Err(e) => {
@@ -89,16 +88,5 @@ pub fn run(cli: &Cli) -> Result<ExitCode> {
         Command::Export(args) => export::run(args),
         #[cfg(feature = "detect")]
         Command::Detect(args) => detect::run(args),
-    }
-}
-
-/// The backend called `name`, or an error listing the available ones.
-pub fn backend(name: &str, verbose: bool) -> Result<Box<dyn Backend>> {
-    match crate::solve::backend(name, verbose) {
-        Some(b) => Ok(b),
-        None => bail!(
-            "unknown solver '{name}' (available: {})",
-            crate::solve::backend_names().join(", ")
-        ),
     }
 }

@@ -6,8 +6,8 @@ use std::process::ExitCode;
 use anyhow::{Result, bail};
 use clap::Args;
 
-use crate::model::Model;
-use crate::sim::SimOptions;
+use naocalib::model::{Family, Model};
+use naocalib::sim::SimOptions;
 
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
@@ -31,6 +31,11 @@ pub struct SimulateArgs {
     /// Take the true parameters from this truth.toml instead of drawing them.
     #[arg(long)]
     truth: Option<PathBuf>,
+    /// Give the drawn robot effects the paper's model lacks, as families (head,intrinsics,
+    /// distortion,links,compliance,play, or `realistic` for head,intrinsics,links,
+    /// compliance,play); their true values go into truth.toml.
+    #[arg(long, value_name = "FAMILIES", value_parser = parse_effects, conflicts_with = "truth")]
+    effects: Option<Vec<Family>>,
     /// Replace files of an existing dataset in OUT.
     #[arg(long)]
     force: bool,
@@ -57,7 +62,7 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
     let truth = match &args.truth {
         Some(path) => {
             // With --force the dataset's truth.toml would be replaced: never the input.
-            let written = args.out.join(crate::dataset::TRUTH_TOML);
+            let written = args.out.join(naocalib::dataset::TRUTH_TOML);
             if let (Ok(a), Ok(b)) = (path.canonicalize(), written.canonicalize())
                 && a == b
             {
@@ -67,7 +72,7 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
                     args.out.display()
                 );
             }
-            Some(crate::dataset::read_truth(path)?.values)
+            Some(naocalib::dataset::read_truth(path)?.values)
         }
         None => None,
     };
@@ -78,10 +83,11 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
         px_noise: args.px_noise,
         joint_noise: args.joint_noise_deg.to_radians(),
         truth,
+        effects: args.effects.clone().unwrap_or_default(),
         noise_seed: None,
-        images: args.images.then(|| crate::sim::render::ImageOutput {
+        images: args.images.then(|| naocalib::sim::render::ImageOutput {
             dir: args.out.clone(),
-            options: crate::sim::render::RenderOptions {
+            options: naocalib::sim::render::RenderOptions {
                 blur: args.blur,
                 noise: args.grey_noise,
                 vignetting: args.vignetting,
@@ -99,7 +105,7 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
         );
         model.camera.distortion = std::array::from_fn(|i| d[i]);
     }
-    let mut dataset = crate::sim::simulate(&model, &options)?;
+    let mut dataset = naocalib::sim::simulate(&model, &options)?;
     if args.images {
         dataset.corners.clear();
     }
@@ -130,4 +136,33 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Parses `--effects`: family names, or `realistic`.
+fn parse_effects(text: &str) -> Result<Vec<Family>, String> {
+    let mut out = Vec::new();
+    for name in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        let named: Vec<Family> = match (name, Family::from_name(name)) {
+            ("realistic", _) => vec![
+                Family::Head,
+                Family::Intrinsics,
+                Family::Links,
+                Family::Compliance,
+                Family::Play,
+            ],
+            (_, Some(Family::Paper)) | (_, None) => {
+                return Err(format!(
+                    "unknown effect '{name}' (head, intrinsics, distortion, links, compliance, \
+                     play, realistic)"
+                ));
+            }
+            (_, Some(f)) => vec![f],
+        };
+        for f in named {
+            if !out.contains(&f) {
+                out.push(f);
+            }
+        }
+    }
+    Ok(out)
 }

@@ -25,7 +25,7 @@ pub(crate) fn csv_float(x: f64) -> String {
 /// any float number of degrees), `to_report(x)`, which reads back within an ulp or two.
 pub(crate) fn report_value(unit: Unit, x: f64) -> f64 {
     let y = unit.to_report(x);
-    if unit == Unit::Mm || !y.is_finite() {
+    if !unit.is_scaled() || !y.is_finite() {
         return y;
     }
     let mut best: Option<(usize, f64, f64)> = None;

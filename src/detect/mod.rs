@@ -558,7 +558,7 @@ fn detect_image(
     let undistorted: Vec<[f64; 2]> = points
         .iter()
         .map(|p| {
-            let [a, b] = crate::sim::render::undistort(cam, p[0], p[1]);
+            let [a, b] = cam.undistort(p[0], p[1]);
             [a * cam.fx + cam.cx, b * cam.fy + cam.cy]
         })
         .collect();

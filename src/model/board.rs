@@ -15,6 +15,10 @@ pub struct Board {
     pub mount_origin: [f64; 3],
     /// Mount angles roll, pitch, yaw [rad].
     pub mount_rpy: [f64; 3],
+    /// Mass of the sandal [g] (for the gravity torques of compliance and play).
+    pub mass_g: f64,
+    /// The sandal's centre of mass in the sole frame [mm].
+    pub com_mm: [f64; 3],
 }
 
 impl Default for Board {
@@ -26,6 +30,8 @@ impl Default for Board {
             square: 25.0,
             mount_origin: [170.0, 0.0, 0.0],
             mount_rpy: [0.0; 3],
+            mass_g: 120.0,
+            com_mm: [150.0, 0.0, 0.0],
         }
     }
 }

@@ -1,5 +1,9 @@
-//! The pinhole camera with optional OpenCV distortion (SPEC section 3).
+//! The pinhole camera with optional OpenCV distortion, and its projection as data
+//! ([`Projection`]): the intrinsics and the first two distortion coefficients may carry
+//! calibration parameters (families `intrinsics` and `distortion`, see docs/MODEL.md).
 
+use super::chain::Affine;
+use super::parameters::{PARAMETER_COUNT, Param};
 use super::scalar::{Scalar, lift};
 
 /// A-priori intrinsic calibration of the lower camera.
@@ -36,6 +40,18 @@ impl Default for Camera {
     }
 }
 
+/// OpenCV's lens distortion `[k1, k2, p1, p2, k3]` applied to normalised coordinates
+/// `(a, b)`: the one place the distortion formula is written.
+pub fn distort<T: Scalar>(a: T, b: T, k: &[T; 5]) -> [T; 2] {
+    let [k1, k2, p1, p2, k3] = k.clone();
+    let r2 = a.clone() * a.clone() + b.clone() * b.clone();
+    let radial = lift::<T>(1.0) + r2.clone() * (k1 + r2.clone() * (k2 + r2.clone() * k3));
+    let ab = a.clone() * b.clone();
+    let da = ab.clone() * p1.clone() * 2.0 + (r2.clone() + a.clone() * a.clone() * 2.0) * p2.clone();
+    let db = (r2 + b.clone() * b.clone() * 2.0) * p1 + ab * p2 * 2.0;
+    [a * radial.clone() + da, b * radial + db]
+}
+
 impl Camera {
     /// Whether the lens distortion is not all zero.
     pub fn is_distorted(&self) -> bool {
@@ -45,24 +61,69 @@ impl Camera {
     /// Projects a point given in the camera frame `C` (x along the optical axis) to pixels.
     /// `None` when the point is not in front of the camera (`x ≤ 0`).
     pub fn project<T: Scalar>(&self, p: &[T; 3]) -> Option<[T; 2]> {
-        if p[0].re() <= 0.0 {
-            return None;
+        self.constant_projection().project::<T>(&[], p)
+    }
+
+    /// The projection with no parameter attached (the a-priori intrinsics as constants).
+    fn constant_projection(&self) -> Projection {
+        let [k1, k2, p1, p2, k3] = self.distortion;
+        let c = Affine::constant;
+        Projection {
+            fx: c(self.fx),
+            fy: c(self.fy),
+            cx: c(self.cx),
+            cy: c(self.cy),
+            k1: c(k1),
+            k2: c(k2),
+            p1,
+            p2,
+            k3,
         }
-        let inv = p[0].recip();
-        let mut a = -(p[1].clone() * inv.clone());
-        let mut b = -(p[2].clone() * inv);
-        if self.is_distorted() {
-            let [k1, k2, p1, p2, k3] = self.distortion;
-            let r2 = a.clone() * a.clone() + b.clone() * b.clone();
-            let radial = lift::<T>(1.0)
-                + r2.clone() * (lift::<T>(k1) + r2.clone() * (lift::<T>(k2) + r2.clone() * k3));
-            let ab = a.clone() * b.clone();
-            let da = ab.clone() * (2.0 * p1) + (r2.clone() + a.clone() * a.clone() * 2.0) * p2;
-            let db = (r2 + b.clone() * b.clone() * 2.0) * p1 + ab * (2.0 * p2);
-            a = a * radial.clone() + da;
-            b = b * radial + db;
+    }
+
+    /// The projection as data, with the intrinsics and distortion parameters (Fx, Fy, Cx,
+    /// Cy, K1, K2) added to the a-priori values.
+    pub fn projection(&self) -> Projection {
+        Projection {
+            fx: Affine::constant(self.fx).plus(Param::Fx, 1.0),
+            fy: Affine::constant(self.fy).plus(Param::Fy, 1.0),
+            cx: Affine::constant(self.cx).plus(Param::Cx, 1.0),
+            cy: Affine::constant(self.cy).plus(Param::Cy, 1.0),
+            k1: Affine::constant(self.distortion[0]).plus(Param::K1, 1.0),
+            k2: Affine::constant(self.distortion[1]).plus(Param::K2, 1.0),
+            ..self.constant_projection()
         }
-        Some([a * self.fx + self.cx, b * self.fy + self.cy])
+    }
+
+    /// Removes the lens distortion: the undistorted normalised coordinates `(a, b)`
+    /// (`a = −y/x`, `b = −z/x`) of pixel `(u, v)` (Newton's method on [`distort`]).
+    pub fn undistort(&self, u: f64, v: f64) -> [f64; 2] {
+        let ad = (u - self.cx) / self.fx;
+        let bd = (v - self.cy) / self.fy;
+        if !self.is_distorted() {
+            return [ad, bd];
+        }
+        let k = &self.distortion;
+        let (mut a, mut b) = (ad, bd);
+        for _ in 0..20 {
+            let [fa, fb] = distort(a, b, k);
+            let (ea, eb) = (fa - ad, fb - bd);
+            if ea.abs() < 1e-14 && eb.abs() < 1e-14 {
+                break;
+            }
+            let h = 1e-7;
+            let [fa1, fb1] = distort(a + h, b, k);
+            let [fa2, fb2] = distort(a, b + h, k);
+            let (j11, j21) = ((fa1 - fa) / h, (fb1 - fb) / h);
+            let (j12, j22) = ((fa2 - fa) / h, (fb2 - fb) / h);
+            let det = j11 * j22 - j12 * j21;
+            if det.abs() < 1e-12 {
+                break;
+            }
+            a -= (j22 * ea - j12 * eb) / det;
+            b -= (-j21 * ea + j11 * eb) / det;
+        }
+        [a, b]
     }
 
     /// Whether a pixel position lies inside the image, at least `margin` pixels from its
@@ -72,5 +133,101 @@ impl Camera {
             && uv[1] >= margin
             && uv[0] <= self.width as f64 - 1.0 - margin
             && uv[1] <= self.height as f64 - 1.0 - margin
+    }
+}
+
+/// The projection `P` as data: `u = cx + fx·a'`, `v = cy + fy·b'` with `(a', b')` the
+/// distorted normalised coordinates of `(a, b) = (−y/x, −z/x)`. The intrinsics and the first
+/// two distortion coefficients may depend on calibration parameters; Rust and the Ceres shim
+/// evaluate the same description.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Projection {
+    /// Focal length in x [px].
+    pub fx: Affine,
+    /// Focal length in y [px].
+    pub fy: Affine,
+    /// Optical centre x [px].
+    pub cx: Affine,
+    /// Optical centre y [px].
+    pub cy: Affine,
+    /// Radial distortion k1.
+    pub k1: Affine,
+    /// Radial distortion k2.
+    pub k2: Affine,
+    /// Tangential distortion p1 (constant).
+    pub p1: f64,
+    /// Tangential distortion p2 (constant).
+    pub p2: f64,
+    /// Radial distortion k3 (constant).
+    pub k3: f64,
+}
+
+impl Projection {
+    /// The six parameterised coefficients, in the order fx, fy, cx, cy, k1, k2.
+    pub fn coefficients(&self) -> [&Affine; 6] {
+        [&self.fx, &self.fy, &self.cx, &self.cy, &self.k1, &self.k2]
+    }
+
+    /// Whether the distortion polynomial must be evaluated (a coefficient is non-zero or
+    /// may become so).
+    pub fn is_distorted(&self) -> bool {
+        self.k1.depends() || self.k2.depends() || {
+            [self.k1.constant, self.k2.constant, self.p1, self.p2, self.k3]
+                .iter()
+                .any(|&k| k != 0.0)
+        }
+    }
+
+    /// The projection with every parameter in `held` replaced by its value in `values`.
+    pub fn freeze(&self, held: &[bool; PARAMETER_COUNT], values: &[f64]) -> Projection {
+        let f = |a: &Affine| a.freeze(held, values);
+        Projection {
+            fx: f(&self.fx),
+            fy: f(&self.fy),
+            cx: f(&self.cx),
+            cy: f(&self.cy),
+            k1: f(&self.k1),
+            k2: f(&self.k2),
+            ..*self
+        }
+    }
+
+    /// Projects a point of the camera frame `C` to pixels for parameters `params`
+    /// (indexed by [`Param::index`]; may be empty when no coefficient depends on one).
+    /// `None` when the point is not in front of the camera (`x ≤ 0`).
+    pub fn project<T: Scalar>(&self, params: &[T], p: &[T; 3]) -> Option<[T; 2]> {
+        let coefficients = self.coefficients().map(|a| a.eval(params));
+        self.project_with(&coefficients, p)
+    }
+
+    /// [`Projection::project`] with the six coefficients (fx, fy, cx, cy, k1, k2) given as
+    /// values, e.g. dual numbers seeded for their derivatives.
+    pub fn project_with<T: Scalar>(&self, coefficients: &[T; 6], p: &[T; 3]) -> Option<[T; 2]> {
+        if p[0].re() <= 0.0 {
+            return None;
+        }
+        let [fx, fy, cx, cy, k1, k2] = coefficients.clone();
+        let inv = p[0].recip();
+        let a = -(p[1].clone() * inv.clone());
+        let b = -(p[2].clone() * inv);
+        let [a, b] = if self.is_distorted() {
+            distort(a, b, &[k1, k2, lift(self.p1), lift(self.p2), lift(self.k3)])
+        } else {
+            [a, b]
+        };
+        Some([a * fx + cx, b * fy + cy])
+    }
+
+    /// The parameters the projection depends on, in order, without repeats.
+    pub fn params(&self) -> Vec<Param> {
+        let mut out = Vec::new();
+        for a in self.coefficients() {
+            for (p, _) in a.terms() {
+                if !out.contains(&p) {
+                    out.push(p);
+                }
+            }
+        }
+        out
     }
 }

@@ -8,14 +8,19 @@ use super::parameters::{PARAMETER_COUNT, Param};
 use super::pose::{Axis, Pose};
 use super::scalar::{Scalar, lift};
 
-/// A scalar that is a constant plus, optionally, a multiple of one calibration parameter:
-/// `constant + scale · α[param]`. A joint rotation `q = θ + α` is `Affine::joint(θ, param)`.
+/// Most parameters one amount may depend on: a leg joint's angle carries its offset, its
+/// compliance and its play.
+pub const MAX_TERMS: usize = 3;
+
+/// A scalar that is a constant plus a few multiples of calibration parameters:
+/// `constant + Σ scale_k · α[param_k]`. A joint rotation `q = θ + α` is
+/// `Affine::joint(1, θ, param)`; compliance and play add terms with per-capture
+/// coefficients (the gravity torque, half its sign).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Affine {
     /// The constant part (e.g. the measured joint angle, in radians).
     pub constant: f64,
-    /// The parameter this value depends on, with its coefficient.
-    pub param: Option<(Param, f64)>,
+    terms: [Option<(Param, f64)>; MAX_TERMS],
 }
 
 impl Affine {
@@ -23,32 +28,64 @@ impl Affine {
     pub fn constant(value: f64) -> Self {
         Affine {
             constant: value,
-            param: None,
+            terms: [None; MAX_TERMS],
         }
     }
 
     /// `sign · (θ + α[param])`: a measured joint angle plus its offset, possibly mirrored.
     pub fn joint(sign: f64, measured: f64, param: Param) -> Self {
-        Affine {
-            constant: sign * measured,
-            param: Some((param, sign)),
-        }
+        Affine::constant(sign * measured).plus(param, sign)
     }
 
     /// `α[param]` alone.
     pub fn param(param: Param) -> Self {
-        Affine {
-            constant: 0.0,
-            param: Some((param, 1.0)),
+        Affine::constant(0.0).plus(param, 1.0)
+    }
+
+    /// This amount plus `scale · α[param]`.
+    ///
+    /// # Panics
+    /// When it already has [`MAX_TERMS`] terms (a bug in the model's construction).
+    pub fn plus(mut self, param: Param, scale: f64) -> Self {
+        let slot = self
+            .terms
+            .iter_mut()
+            .find(|t| t.is_none())
+            .expect("an amount depends on at most MAX_TERMS parameters");
+        *slot = Some((param, scale));
+        self
+    }
+
+    /// The parameters and their coefficients.
+    pub fn terms(&self) -> impl Iterator<Item = (Param, f64)> + '_ {
+        self.terms.iter().flatten().copied()
+    }
+
+    /// Whether the amount depends on any parameter.
+    pub fn depends(&self) -> bool {
+        self.terms[0].is_some()
+    }
+
+    /// The amount with every parameter in `held` replaced by its value in `values`.
+    pub fn freeze(&self, held: &[bool; PARAMETER_COUNT], values: &[f64]) -> Affine {
+        let mut out = Affine::constant(self.constant);
+        for (p, scale) in self.terms() {
+            if held[p.index()] {
+                out.constant += scale * values[p.index()];
+            } else {
+                out = out.plus(p, scale);
+            }
         }
+        out
     }
 
     /// Evaluates the value for the parameter vector `params`.
     pub fn eval<T: Scalar>(&self, params: &[T]) -> T {
-        match self.param {
-            None => lift(self.constant),
-            Some((p, scale)) => params[p.index()].clone() * scale + self.constant,
+        let mut value = lift::<T>(self.constant);
+        for (p, scale) in self.terms() {
+            value += params[p.index()].clone() * scale;
         }
+        value
     }
 }
 
@@ -87,21 +124,21 @@ impl Chain {
 
     /// Appends a rotation; a constant one is folded into the preceding constant transform.
     pub fn rotate(self, axis: Axis, angle: Affine) -> Self {
-        match angle.param {
-            None => self.fixed(Pose::rotation(axis, angle.constant)),
-            Some(_) => self.push(Step::Rotate(axis, angle)),
+        if angle.depends() {
+            self.push(Step::Rotate(axis, angle))
+        } else {
+            self.fixed(Pose::rotation(axis, angle.constant))
         }
     }
 
     /// Appends a translation; a constant one is folded into the preceding constant transform.
     pub fn translate(self, axis: Axis, distance: Affine) -> Self {
-        match distance.param {
-            None => {
-                let mut t = [0.0; 3];
-                t[axis.index()] = distance.constant;
-                self.fixed(Pose::translation(t[0], t[1], t[2]))
-            }
-            Some(_) => self.push(Step::Translate(axis, distance)),
+        if distance.depends() {
+            self.push(Step::Translate(axis, distance))
+        } else {
+            let mut t = [0.0; 3];
+            t[axis.index()] = distance.constant;
+            self.fixed(Pose::translation(t[0], t[1], t[2]))
         }
     }
 
@@ -126,10 +163,7 @@ impl Chain {
     /// The chain with every parameter in `held` replaced by its value in `values`
     /// (radians / mm) and constant steps folded: what a solver needs for the free parameters.
     pub fn freeze(&self, held: &[bool; PARAMETER_COUNT], values: &[f64]) -> Chain {
-        let freeze = |a: &Affine| match a.param {
-            Some((p, _)) if held[p.index()] => Affine::constant(a.eval(values)),
-            _ => *a,
-        };
+        let freeze = |a: &Affine| a.freeze(held, values);
         self.steps
             .iter()
             .fold(Chain::new(), |chain, step| match step {
@@ -143,11 +177,12 @@ impl Chain {
     pub fn params(&self) -> Vec<Param> {
         let mut out = Vec::new();
         for step in &self.steps {
-            if let Step::Rotate(_, a) | Step::Translate(_, a) = step
-                && let Some((p, _)) = a.param
-                && !out.contains(&p)
-            {
-                out.push(p);
+            if let Step::Rotate(_, a) | Step::Translate(_, a) = step {
+                for (p, _) in a.terms() {
+                    if !out.contains(&p) {
+                        out.push(p);
+                    }
+                }
             }
         }
         out

@@ -7,15 +7,18 @@
 pub mod board;
 pub mod camera;
 pub mod chain;
+pub mod gravity;
 pub mod parameters;
 pub mod pose;
 pub mod robot;
 pub mod scalar;
 
 pub use board::{Board, Vertex};
-pub use camera::Camera;
+pub use camera::{Camera, Projection};
 pub use chain::{Affine, Chain, Step};
-pub use parameters::{FixedSet, PAPER_PARAMETERS, PARAMETER_COUNT, Param, ParamGroup, Unit};
+pub use parameters::{
+    Family, FixedSet, PAPER_PARAMETERS, PARAMETER_COUNT, Param, ParamGroup, Unit,
+};
 pub use pose::{Axis, Pose};
 pub use robot::{JOINT_COUNT, Joint, JointAngles, RobotGeometry, Side};
 pub use scalar::Scalar;
@@ -55,15 +58,28 @@ impl StanceChains {
             board: self.board.freeze(held, values),
         }
     }
+
+    /// The parameters either chain depends on, without repeats.
+    pub fn params(&self) -> Vec<Param> {
+        let mut out = self.camera.params();
+        for p in self.board.params() {
+            if !out.contains(&p) {
+                out.push(p);
+            }
+        }
+        out
+    }
 }
 
 impl Model {
-    /// The chains of a capture of the board on `side`, with joint angles `joints`.
+    /// The chains of a capture of the board on `side`, with joint angles `joints` (the
+    /// gravity torques of compliance and play computed from them).
     pub fn chains(&self, side: Side, joints: &JointAngles) -> StanceChains {
         let [rot_z, trans_x, trans_y] = side.board_params();
+        let torques = gravity::leg_torques(&self.robot, &self.board, side, joints);
         let board = self
             .robot
-            .sole_chain(side, joints)
+            .sole_chain(side, joints, &torques)
             .rotate(Axis::Z, Affine::param(rot_z))
             .translate(Axis::X, Affine::param(trans_x))
             .translate(Axis::Y, Affine::param(trans_y))
@@ -83,12 +99,26 @@ impl Model {
         vertices: &[Vertex],
     ) -> Vec<Option<[T; 2]>> {
         let pose = chains.camera_to_board(params);
+        let projection = self.camera.projection();
         vertices
             .iter()
             .map(|v| {
                 let p = self.board.vertex_position(*v).map(scalar::lift::<T>);
-                self.camera.project(&pose.apply(&p))
+                projection.project(params, &pose.apply(&p))
             })
             .collect()
+    }
+
+    /// The camera with the intrinsics and distortion parameters of `params` (internal
+    /// units, indexed by [`Param::index`]) added: the true camera of a simulated robot.
+    pub fn camera_at(&self, params: &[f64]) -> Camera {
+        let mut camera = self.camera;
+        camera.fx += params[Param::Fx.index()];
+        camera.fy += params[Param::Fy.index()];
+        camera.cx += params[Param::Cx.index()];
+        camera.cy += params[Param::Cy.index()];
+        camera.distortion[0] += params[Param::K1.index()];
+        camera.distortion[1] += params[Param::K2.index()];
+        camera
     }
 }

@@ -1,14 +1,22 @@
-//! The calibration parameters: names, units, order (SPEC section 5).
+//! The calibration parameters as data: one registry names every parameter with its family,
+//! unit and solver block (docs/MODEL.md lists them). Adding a parameter is one line here
+//! plus its place in the model.
 
 use std::fmt;
 
-/// The unit a parameter is reported in. Angles are radians inside the code and files.
+/// The unit a parameter is reported in. Inside the code and files, angles are radians.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Unit {
     /// An angle: radians internally, degrees in reports.
     Deg,
     /// A length in millimetres.
     Mm,
+    /// Pixels.
+    Px,
+    /// A dimensionless coefficient.
+    One,
+    /// Compliance: rad/(N·m) internally, deg/(N·m) in reports.
+    DegPerNm,
 }
 
 impl Unit {
@@ -17,39 +25,165 @@ impl Unit {
         match self {
             Unit::Deg => "deg",
             Unit::Mm => "mm",
+            Unit::Px => "px",
+            Unit::One => "1",
+            Unit::DegPerNm => "deg/(N·m)",
         }
     }
 
-    /// Converts an internal value (rad or mm) into report units (deg or mm).
+    /// Whether report and internal units differ (degrees vs radians).
+    pub fn is_scaled(self) -> bool {
+        matches!(self, Unit::Deg | Unit::DegPerNm)
+    }
+
+    /// Converts an internal value into report units.
     pub fn to_report(self, value: f64) -> f64 {
-        match self {
-            Unit::Deg => value.to_degrees(),
-            Unit::Mm => value,
+        if self.is_scaled() {
+            value.to_degrees()
+        } else {
+            value
         }
     }
 
-    /// Converts a value in report units (deg or mm) into internal units (rad or mm).
+    /// Converts a value in report units into internal units.
     pub fn from_report(self, value: f64) -> f64 {
-        match self {
-            Unit::Deg => value.to_radians(),
-            Unit::Mm => value,
+        if self.is_scaled() {
+            value.to_radians()
+        } else {
+            value
         }
     }
 }
 
+/// A family of parameters, freed or held together (`--free compliance`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Family {
+    /// The paper's 21: camera rotation, leg joint offsets, sandal mounting.
+    Paper,
+    /// Head joint offsets.
+    Head,
+    /// Corrections of the focal lengths and the principal point.
+    Intrinsics,
+    /// Corrections of the radial distortion k1, k2.
+    Distortion,
+    /// Corrections of link lengths and the camera position.
+    Links,
+    /// Joint elasticity under the gravity torque.
+    Compliance,
+    /// Joint play (backlash) held at one end by gravity.
+    Play,
+}
+
+impl Family {
+    /// Every family, in registry order.
+    pub const ALL: [Family; 7] = [
+        Family::Paper,
+        Family::Head,
+        Family::Intrinsics,
+        Family::Distortion,
+        Family::Links,
+        Family::Compliance,
+        Family::Play,
+    ];
+
+    /// The family's name (`paper`, `compliance`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            Family::Paper => "paper",
+            Family::Head => "head",
+            Family::Intrinsics => "intrinsics",
+            Family::Distortion => "distortion",
+            Family::Links => "links",
+            Family::Compliance => "compliance",
+            Family::Play => "play",
+        }
+    }
+
+    /// Looks a family up by name.
+    pub fn from_name(name: &str) -> Option<Family> {
+        Family::ALL.into_iter().find(|f| f.name() == name)
+    }
+
+    /// The family's parameters, in registry order.
+    pub fn params(self) -> impl Iterator<Item = Param> {
+        Param::ALL.into_iter().filter(move |p| p.family() == self)
+    }
+}
+
+impl fmt::Display for Family {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A group of parameters that move together in the model: one parameter block for the
+/// solvers (Ceres parameter blocks, tiny-solver variables).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum ParamGroup {
+    /// CamYaw, CamPitch, CamRoll.
+    Camera,
+    /// The six left leg joint offsets.
+    LeftLeg,
+    /// The six right leg joint offsets.
+    RightLeg,
+    /// The left sandal's mounting offsets.
+    LeftBoard,
+    /// The right sandal's mounting offsets.
+    RightBoard,
+    /// HeadYaw, HeadPitch.
+    Head,
+    /// Intrinsics and distortion corrections.
+    Projection,
+    /// Head-side link corrections (neck, camera position, hip spacing).
+    BodyLinks,
+    /// The left leg's link corrections.
+    LeftLinks,
+    /// The right leg's link corrections.
+    RightLinks,
+    /// The left leg's compliance and play.
+    LeftElastic,
+    /// The right leg's compliance and play.
+    RightElastic,
+}
+
+impl ParamGroup {
+    /// Short name (used as a variable name).
+    pub fn name(self) -> &'static str {
+        match self {
+            ParamGroup::Camera => "camera",
+            ParamGroup::LeftLeg => "left_leg",
+            ParamGroup::RightLeg => "right_leg",
+            ParamGroup::LeftBoard => "left_board",
+            ParamGroup::RightBoard => "right_board",
+            ParamGroup::Head => "head",
+            ParamGroup::Projection => "projection",
+            ParamGroup::BodyLinks => "body_links",
+            ParamGroup::LeftLinks => "left_links",
+            ParamGroup::RightLinks => "right_links",
+            ParamGroup::LeftElastic => "left_elastic",
+            ParamGroup::RightElastic => "right_elastic",
+        }
+    }
+
+    /// A small number per group (the Ceres block id).
+    pub fn id(self) -> u32 {
+        self as u32
+    }
+}
+
 macro_rules! parameters {
-    ($($name:ident: $unit:ident, $fixed:expr;)*) => {
+    ($($name:ident: $unit:ident, $family:ident, $group:ident;)*) => {
         /// One calibration parameter. The first 21 are the paper's, in the order of its
-        /// Table 2; further ones are held fixed by default (SPEC section 5).
+        /// Table 2; the extended model's follow, held fixed unless freed.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
         #[repr(usize)]
-        pub enum Param { $(#[doc = concat!("Offset `", stringify!($name), "`.")] $name,)* }
+        pub enum Param { $(#[doc = concat!("Parameter `", stringify!($name), "`.")] $name,)* }
 
         impl Param {
             /// Every parameter, in order.
             pub const ALL: [Param; [$(Param::$name),*].len()] = [$(Param::$name),*];
 
-            /// The parameter's name as in SPEC and the result JSON.
+            /// The parameter's name as in the result JSON and truth.toml.
             pub fn name(self) -> &'static str {
                 match self { $(Param::$name => stringify!($name),)* }
             }
@@ -59,38 +193,84 @@ macro_rules! parameters {
                 match self { $(Param::$name => Unit::$unit,)* }
             }
 
-            /// Whether the parameter is held fixed unless asked otherwise.
-            pub fn fixed_by_default(self) -> bool {
-                match self { $(Param::$name => $fixed,)* }
+            /// The family the parameter belongs to.
+            pub fn family(self) -> Family {
+                match self { $(Param::$name => Family::$family,)* }
+            }
+
+            /// The solver block this parameter belongs to.
+            pub fn group(self) -> ParamGroup {
+                match self { $(Param::$name => ParamGroup::$group,)* }
             }
         }
     };
 }
 
 parameters! {
-    CamYaw: Deg, false;
-    CamPitch: Deg, false;
-    CamRoll: Deg, false;
-    LHipYawPitch: Deg, false;
-    LHipRoll: Deg, false;
-    LHipPitch: Deg, false;
-    LKneePitch: Deg, false;
-    LAnklePitch: Deg, false;
-    LAnkleRoll: Deg, false;
-    RHipYawPitch: Deg, false;
-    RHipRoll: Deg, false;
-    RHipPitch: Deg, false;
-    RKneePitch: Deg, false;
-    RAnklePitch: Deg, false;
-    RAnkleRoll: Deg, false;
-    LBoardRotZ: Deg, false;
-    LBoardTransX: Mm, false;
-    LBoardTransY: Mm, false;
-    RBoardRotZ: Deg, false;
-    RBoardTransX: Mm, false;
-    RBoardTransY: Mm, false;
-    HeadYaw: Deg, true;
-    HeadPitch: Deg, true;
+    CamYaw: Deg, Paper, Camera;
+    CamPitch: Deg, Paper, Camera;
+    CamRoll: Deg, Paper, Camera;
+    LHipYawPitch: Deg, Paper, LeftLeg;
+    LHipRoll: Deg, Paper, LeftLeg;
+    LHipPitch: Deg, Paper, LeftLeg;
+    LKneePitch: Deg, Paper, LeftLeg;
+    LAnklePitch: Deg, Paper, LeftLeg;
+    LAnkleRoll: Deg, Paper, LeftLeg;
+    RHipYawPitch: Deg, Paper, RightLeg;
+    RHipRoll: Deg, Paper, RightLeg;
+    RHipPitch: Deg, Paper, RightLeg;
+    RKneePitch: Deg, Paper, RightLeg;
+    RAnklePitch: Deg, Paper, RightLeg;
+    RAnkleRoll: Deg, Paper, RightLeg;
+    LBoardRotZ: Deg, Paper, LeftBoard;
+    LBoardTransX: Mm, Paper, LeftBoard;
+    LBoardTransY: Mm, Paper, LeftBoard;
+    RBoardRotZ: Deg, Paper, RightBoard;
+    RBoardTransX: Mm, Paper, RightBoard;
+    RBoardTransY: Mm, Paper, RightBoard;
+    HeadYaw: Deg, Head, Head;
+    HeadPitch: Deg, Head, Head;
+    Fx: Px, Intrinsics, Projection;
+    Fy: Px, Intrinsics, Projection;
+    Cx: Px, Intrinsics, Projection;
+    Cy: Px, Intrinsics, Projection;
+    K1: One, Distortion, Projection;
+    K2: One, Distortion, Projection;
+    LThigh: Mm, Links, LeftLinks;
+    LTibia: Mm, Links, LeftLinks;
+    LFoot: Mm, Links, LeftLinks;
+    RThigh: Mm, Links, RightLinks;
+    RTibia: Mm, Links, RightLinks;
+    RFoot: Mm, Links, RightLinks;
+    HipOffsetY: Mm, Links, BodyLinks;
+    NeckZ: Mm, Links, BodyLinks;
+    CamX: Mm, Links, BodyLinks;
+    CamY: Mm, Links, BodyLinks;
+    CamZ: Mm, Links, BodyLinks;
+    LHipYawPitchCompliance: DegPerNm, Compliance, LeftElastic;
+    LHipRollCompliance: DegPerNm, Compliance, LeftElastic;
+    LHipPitchCompliance: DegPerNm, Compliance, LeftElastic;
+    LKneePitchCompliance: DegPerNm, Compliance, LeftElastic;
+    LAnklePitchCompliance: DegPerNm, Compliance, LeftElastic;
+    LAnkleRollCompliance: DegPerNm, Compliance, LeftElastic;
+    RHipYawPitchCompliance: DegPerNm, Compliance, RightElastic;
+    RHipRollCompliance: DegPerNm, Compliance, RightElastic;
+    RHipPitchCompliance: DegPerNm, Compliance, RightElastic;
+    RKneePitchCompliance: DegPerNm, Compliance, RightElastic;
+    RAnklePitchCompliance: DegPerNm, Compliance, RightElastic;
+    RAnkleRollCompliance: DegPerNm, Compliance, RightElastic;
+    LHipYawPitchPlay: Deg, Play, LeftElastic;
+    LHipRollPlay: Deg, Play, LeftElastic;
+    LHipPitchPlay: Deg, Play, LeftElastic;
+    LKneePitchPlay: Deg, Play, LeftElastic;
+    LAnklePitchPlay: Deg, Play, LeftElastic;
+    LAnkleRollPlay: Deg, Play, LeftElastic;
+    RHipYawPitchPlay: Deg, Play, RightElastic;
+    RHipRollPlay: Deg, Play, RightElastic;
+    RHipPitchPlay: Deg, Play, RightElastic;
+    RKneePitchPlay: Deg, Play, RightElastic;
+    RAnklePitchPlay: Deg, Play, RightElastic;
+    RAnkleRollPlay: Deg, Play, RightElastic;
 }
 
 /// Number of parameters the paper estimates (the first ones of [`Param::ALL`]).
@@ -108,6 +288,11 @@ impl Param {
     /// Looks a parameter up by its name (exact, case-sensitive).
     pub fn from_name(name: &str) -> Option<Param> {
         Param::ALL.iter().copied().find(|p| p.name() == name)
+    }
+
+    /// Whether the parameter is held fixed unless asked otherwise (all but the paper's).
+    pub fn fixed_by_default(self) -> bool {
+        self.family() != Family::Paper
     }
 }
 
@@ -137,6 +322,19 @@ impl FixedSet {
         set
     }
 
+    /// The default set with `free` freed, then `fix` held (lists of family and parameter
+    /// names, as `--free` and `--fix` take them).
+    pub fn from_lists(free: &str, fix: &str) -> Result<Self, String> {
+        let mut set = FixedSet::default();
+        for p in parse_param_list(free).map_err(|e| format!("--free: {e}"))? {
+            set.set(p, false);
+        }
+        for p in parse_param_list(fix).map_err(|e| format!("--fix: {e}"))? {
+            set.set(p, true);
+        }
+        Ok(set)
+    }
+
     /// Holds `param` fixed (or frees it).
     pub fn set(&mut self, param: Param, fixed: bool) {
         self.0[param.index()] = fixed;
@@ -156,73 +354,66 @@ impl FixedSet {
             .collect()
     }
 
+    /// The families with at least one free parameter, in registry order.
+    pub fn families(&self) -> Vec<Family> {
+        Family::ALL
+            .into_iter()
+            .filter(|f| f.params().any(|p| !self.is_fixed(p)))
+            .collect()
+    }
+
     /// A mask indexed by [`Param::index`].
     pub fn mask(&self) -> &[bool; PARAMETER_COUNT] {
         &self.0
     }
 }
 
-/// Parses a comma-separated list of parameter names (`CamYaw,LBoardRotZ`).
+/// Parses a comma-separated list of family and parameter names (`compliance,play,Fx`)
+/// into the parameters they name, in order, without repeats.
 pub fn parse_param_list(list: &str) -> Result<Vec<Param>, String> {
-    list.split(',')
-        .map(str::trim)
-        .filter(|s| !s.is_empty())
-        .map(|s| {
-            Param::from_name(s).ok_or_else(|| {
-                let names: Vec<_> = Param::ALL.iter().map(|p| p.name()).collect();
-                format!("unknown parameter '{s}' (known: {})", names.join(", "))
-            })
-        })
-        .collect()
-}
-
-/// A group of parameters that move together in the model: one parameter block for the
-/// solvers (Ceres parameter blocks, tiny-solver variables).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum ParamGroup {
-    /// CamYaw, CamPitch, CamRoll.
-    Camera,
-    /// The six left leg joint offsets.
-    LeftLeg,
-    /// The six right leg joint offsets.
-    RightLeg,
-    /// The left sandal's mounting offsets.
-    LeftBoard,
-    /// The right sandal's mounting offsets.
-    RightBoard,
-    /// HeadYaw, HeadPitch.
-    Head,
-}
-
-impl ParamGroup {
-    /// Short name (used as a variable name).
-    pub fn name(self) -> &'static str {
-        match self {
-            ParamGroup::Camera => "camera",
-            ParamGroup::LeftLeg => "left_leg",
-            ParamGroup::RightLeg => "right_leg",
-            ParamGroup::LeftBoard => "left_board",
-            ParamGroup::RightBoard => "right_board",
-            ParamGroup::Head => "head",
+    let mut out: Vec<Param> = Vec::new();
+    for name in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        let named: Vec<Param> = if let Some(family) = Family::from_name(name) {
+            family.params().collect()
+        } else if let Some(p) = Param::from_name(name) {
+            vec![p]
+        } else {
+            let families: Vec<_> = Family::ALL.iter().map(|f| f.name()).collect();
+            let names: Vec<_> = Param::ALL.iter().map(|p| p.name()).collect();
+            return Err(format!(
+                "unknown parameter or family '{name}' (families: {}; parameters: {})",
+                families.join(", "),
+                names.join(", ")
+            ));
+        };
+        for p in named {
+            if !out.contains(&p) {
+                out.push(p);
+            }
         }
     }
+    Ok(out)
 }
 
-impl Param {
-    /// The block this parameter belongs to.
-    pub fn group(self) -> ParamGroup {
-        use Param::*;
-        match self {
-            CamYaw | CamPitch | CamRoll => ParamGroup::Camera,
-            LHipYawPitch | LHipRoll | LHipPitch | LKneePitch | LAnklePitch | LAnkleRoll => {
-                ParamGroup::LeftLeg
-            }
-            RHipYawPitch | RHipRoll | RHipPitch | RKneePitch | RAnklePitch | RAnkleRoll => {
-                ParamGroup::RightLeg
-            }
-            LBoardRotZ | LBoardTransX | LBoardTransY => ParamGroup::LeftBoard,
-            RBoardRotZ | RBoardTransX | RBoardTransY => ParamGroup::RightBoard,
-            HeadYaw | HeadPitch => ParamGroup::Head,
-        }
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn registry_has_the_extended_model() {
+        assert_eq!(PARAMETER_COUNT, 64);
+        let count = |f: Family| f.params().count();
+        assert_eq!(count(Family::Paper), PAPER_PARAMETERS);
+        assert_eq!(count(Family::Head), 2);
+        assert_eq!(count(Family::Intrinsics), 4);
+        assert_eq!(count(Family::Distortion), 2);
+        assert_eq!(count(Family::Links), 11);
+        assert_eq!(count(Family::Compliance), 12);
+        assert_eq!(count(Family::Play), 12);
+        assert!(Param::ALL[..PAPER_PARAMETERS].iter().all(|p| p.family() == Family::Paper));
+        let list = parse_param_list("compliance, Fx,LHipPitchCompliance").unwrap();
+        assert_eq!(list.len(), 13);
+        assert_eq!(list[12], Param::Fx);
+        assert!(parse_param_list("elasticity").unwrap_err().contains("elasticity"));
     }
 }

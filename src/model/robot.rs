@@ -128,6 +128,25 @@ impl Joint {
         self as usize
     }
 
+    /// Position among the twelve leg joints (left then right, hip to ankle); `None` for
+    /// the head joints.
+    pub fn leg_index(self) -> Option<usize> {
+        self.index().checked_sub(2)
+    }
+
+    /// The joint's compliance parameter (leg joints only). The registry lists them in leg
+    /// joint order.
+    pub fn compliance(self) -> Option<Param> {
+        self.leg_index()
+            .map(|k| Param::ALL[Param::LHipYawPitchCompliance.index() + k])
+    }
+
+    /// The joint's play parameter (leg joints only), in leg joint order like compliance.
+    pub fn play(self) -> Option<Param> {
+        self.leg_index()
+            .map(|k| Param::ALL[Param::LHipYawPitchPlay.index() + k])
+    }
+
     /// The joint's mechanical range in radians (NAO H25 documentation).
     pub fn limits(self) -> (f64, f64) {
         use Joint::*;
@@ -181,6 +200,9 @@ pub struct RobotGeometry {
     pub lower_camera_offset: [f64; 3],
     /// Lower camera tilt about y, looking down [rad].
     pub lower_camera_tilt: f64,
+    /// Direction of gravity in the origin frame `O`, a unit vector (lying on its back:
+    /// `(−1, 0, 0)`); it sets the gravity torques of compliance and play.
+    pub gravity: [f64; 3],
 }
 
 impl Default for RobotGeometry {
@@ -194,17 +216,19 @@ impl Default for RobotGeometry {
             foot_height: 45.19,
             lower_camera_offset: [50.71, 0.0, 17.74],
             lower_camera_tilt: 39.7f64.to_radians(),
+            gravity: [-1.0, 0.0, 0.0],
         }
     }
 }
 
 impl RobotGeometry {
-    /// `T_OC`: origin → lower camera (SPEC eq. 3), with the head joint offsets and the
-    /// camera rotation offsets as parameters.
+    /// `T_OC`: origin → lower camera, with the head joint offsets, the neck and camera
+    /// position corrections and the camera rotation offsets as parameters.
     pub fn camera_chain(&self, joints: &JointAngles) -> Chain {
         let [x, y, z] = self.lower_camera_offset;
+        let length = |value: f64, param: Param| Affine::constant(value).plus(param, 1.0);
         Chain::new()
-            .fixed(Pose::translation(0.0, 0.0, self.hip_to_neck_z))
+            .translate(Axis::Z, length(self.hip_to_neck_z, Param::NeckZ))
             .rotate(
                 Axis::Z,
                 Affine::joint(1.0, joints.get(Joint::HeadYaw), Param::HeadYaw),
@@ -213,38 +237,73 @@ impl RobotGeometry {
                 Axis::Y,
                 Affine::joint(1.0, joints.get(Joint::HeadPitch), Param::HeadPitch),
             )
-            .fixed(Pose::translation(x, y, z))
+            .translate(Axis::X, length(x, Param::CamX))
+            .translate(Axis::Y, length(y, Param::CamY))
+            .translate(Axis::Z, length(z, Param::CamZ))
             .rotate(Axis::Y, Affine::constant(self.lower_camera_tilt))
             .rotate(Axis::Y, Affine::param(Param::CamPitch))
             .rotate(Axis::X, Affine::param(Param::CamRoll))
             .rotate(Axis::Z, Affine::param(Param::CamYaw))
     }
 
-    /// `T_OS`: origin → sole of one leg (SPEC section 2), with the joint offsets as
-    /// parameters.
-    pub fn sole_chain(&self, side: Side, joints: &JointAngles) -> Chain {
+    /// `T_OS`: origin → sole of one leg, with the joint offsets, link corrections,
+    /// compliance and play as parameters. `torques` are the capture's gravity torques about
+    /// the six joints (see [`super::gravity::leg_torques`]): each joint turns by
+    /// `q = θ + α + κ·τ + (π/2)·sign(τ)`.
+    pub fn sole_chain(&self, side: Side, joints: &JointAngles, torques: &[f64; 6]) -> Chain {
         let s = side.sign();
-        let [
-            hip_yaw_pitch,
-            hip_roll,
-            hip_pitch,
-            knee,
-            ankle_pitch,
-            ankle_roll,
-        ] = side.leg_joints().map(|j| (joints.get(j), j.offset()));
-        let joint = |(angle, param): (f64, Param)| Affine::joint(1.0, angle, param);
+        let [thigh, tibia, foot] = match side {
+            Side::Left => [Param::LThigh, Param::LTibia, Param::LFoot],
+            Side::Right => [Param::RThigh, Param::RTibia, Param::RFoot],
+        };
+        let angle = |k: usize, sign: f64| {
+            let joint = side.leg_joints()[k];
+            let tau = torques[k];
+            let half_sign = if tau > 0.0 {
+                0.5
+            } else if tau < 0.0 {
+                -0.5
+            } else {
+                0.0
+            };
+            Affine::joint(sign, joints.get(joint), joint.offset())
+                .plus(joint.compliance().expect("a leg joint"), sign * tau)
+                .plus(joint.play().expect("a leg joint"), sign * half_sign)
+        };
+        let down = |value: f64, param: Param| Affine::constant(-value).plus(param, -1.0);
         Chain::new()
-            .fixed(Pose::translation(0.0, s * self.hip_offset_y, 0.0))
+            .translate(
+                Axis::Y,
+                Affine::constant(s * self.hip_offset_y).plus(Param::HipOffsetY, s),
+            )
             .rotate(Axis::X, Affine::constant(s * FRAC_PI_4))
-            .rotate(Axis::Z, Affine::joint(-s, hip_yaw_pitch.0, hip_yaw_pitch.1))
+            .rotate(Axis::Z, angle(0, -s))
             .rotate(Axis::X, Affine::constant(-s * FRAC_PI_4))
-            .rotate(Axis::X, joint(hip_roll))
-            .rotate(Axis::Y, joint(hip_pitch))
-            .fixed(Pose::translation(0.0, 0.0, -self.thigh))
-            .rotate(Axis::Y, joint(knee))
-            .fixed(Pose::translation(0.0, 0.0, -self.tibia))
-            .rotate(Axis::Y, joint(ankle_pitch))
-            .rotate(Axis::X, joint(ankle_roll))
-            .fixed(Pose::translation(0.0, 0.0, -self.foot_height))
+            .rotate(Axis::X, angle(1, 1.0))
+            .rotate(Axis::Y, angle(2, 1.0))
+            .translate(Axis::Z, down(self.thigh, thigh))
+            .rotate(Axis::Y, angle(3, 1.0))
+            .translate(Axis::Z, down(self.tibia, tibia))
+            .rotate(Axis::Y, angle(4, 1.0))
+            .rotate(Axis::X, angle(5, 1.0))
+            .translate(Axis::Z, down(self.foot_height, foot))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn compliance_and_play_follow_the_leg_joints() {
+        for j in Joint::ALL {
+            match j.leg_index() {
+                None => assert!(j.compliance().is_none() && j.play().is_none()),
+                Some(_) => {
+                    assert_eq!(j.compliance().unwrap().name(), format!("{}Compliance", j.name()));
+                    assert_eq!(j.play().unwrap().name(), format!("{}Play", j.name()));
+                }
+            }
+        }
     }
 }

@@ -11,7 +11,9 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
 use crate::dataset::{Capture, Corner, Dataset, Truth};
-use crate::model::{Joint, JointAngles, Model, PARAMETER_COUNT, Param, Side, StanceChains};
+use crate::model::{
+    Family, Joint, JointAngles, Model, PARAMETER_COUNT, Param, Side, StanceChains,
+};
 
 /// What to simulate.
 #[derive(Debug, Clone, PartialEq)]
@@ -28,6 +30,9 @@ pub struct SimOptions {
     pub joint_noise: f64,
     /// True parameters (internal units); drawn at random when `None`.
     pub truth: Option<[f64; PARAMETER_COUNT]>,
+    /// Families beyond the paper's whose effects the drawn truth has (see
+    /// [`draw_effects`]); ignored when `truth` is given.
+    pub effects: Vec<Family>,
     /// Seed for the noise alone, when it should differ from the stance seed (repeated
     /// simulations of the same stances and truth with new noise).
     pub noise_seed: Option<u64>,
@@ -44,6 +49,7 @@ impl Default for SimOptions {
             px_noise: 0.1,
             joint_noise: 0.0,
             truth: None,
+            effects: Vec::new(),
             noise_seed: None,
             images: None,
         }
@@ -91,11 +97,37 @@ pub fn draw_truth(rng: &mut impl Rng) -> [f64; PARAMETER_COUNT] {
             CamYaw | CamPitch | CamRoll => rng.random_range(-3.0f64..3.0).to_radians(),
             LBoardRotZ | RBoardRotZ => board_rot.sample(rng),
             LBoardTransX | LBoardTransY | RBoardTransX | RBoardTransY => board_trans.sample(rng),
-            HeadYaw | HeadPitch => 0.0,
+            _ if p.family() != crate::model::Family::Paper => 0.0,
             _ => joint.sample(rng).clamp(-limit, limit),
         };
     }
     truth
+}
+
+/// Adds to `truth` effects of realistic size for each of `families` (the paper's family is
+/// drawn by [`draw_truth`]): head offsets ±0.5°, focal lengths ±1 % and principal point
+/// ±3 px, distortion k1, k2 ±0.01, link lengths σ 0.5 mm, compliance 0.1–0.5 deg/(N·m),
+/// play 0.2–1° full width.
+pub fn draw_effects(rng: &mut impl Rng, families: &[Family], truth: &mut [f64; PARAMETER_COUNT]) {
+    let link = Normal::new(0.0, 0.5).expect("valid σ");
+    for p in Param::ALL {
+        if !families.contains(&p.family()) {
+            continue;
+        }
+        let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+        truth[p.index()] = match p.family() {
+            Family::Paper => continue,
+            Family::Head => rng.random_range(-0.5f64..0.5).to_radians(),
+            Family::Intrinsics => match p {
+                Param::Fx | Param::Fy => sign * rng.random_range(0.5..1.0) * 5.625,
+                _ => sign * rng.random_range(1.5..3.0),
+            },
+            Family::Distortion => rng.random_range(-0.01..0.01),
+            Family::Links => link.sample(rng),
+            Family::Compliance => rng.random_range(0.1f64..0.5).to_radians(),
+            Family::Play => rng.random_range(0.2f64..1.0).to_radians(),
+        };
+    }
 }
 
 /// One stance with the head postures it is photographed in.
@@ -159,11 +191,7 @@ fn aim_head(
         model.camera.project(&pose.translation)
     };
     let mut j = *joints;
-    let sole = model
-        .robot
-        .sole_chain(side, joints)
-        .eval(params)
-        .translation;
+    let sole = model.chains(side, joints).board.eval(params).translation;
     j.set(Joint::HeadYaw, sole[1].atan2(sole[0]));
     j.set(Joint::HeadPitch, 0.3);
     for _ in 0..20 {
@@ -306,7 +334,11 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
     let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
     let truth = match options.truth {
         Some(t) => t,
-        None => draw_truth(&mut rng),
+        None => {
+            let mut t = draw_truth(&mut rng);
+            draw_effects(&mut rng, &options.effects, &mut t);
+            t
+        }
     };
     let mut stances = Vec::new();
     for side in Side::BOTH {

@@ -166,46 +166,6 @@ impl RenderOptions {
     }
 }
 
-/// Inverts the camera's lens distortion: the undistorted normalised coordinates `(a, b)`
-/// (`a = −y/x`, `b = −z/x`) of pixel `(u, v)`.
-pub fn undistort(camera: &Camera, u: f64, v: f64) -> [f64; 2] {
-    let ad = (u - camera.cx) / camera.fx;
-    let bd = (v - camera.cy) / camera.fy;
-    if !camera.is_distorted() {
-        return [ad, bd];
-    }
-    let [k1, k2, p1, p2, k3] = camera.distortion;
-    let distort = |a: f64, b: f64| {
-        let r2 = a * a + b * b;
-        let radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-        [
-            a * radial + 2.0 * p1 * a * b + p2 * (r2 + 2.0 * a * a),
-            b * radial + p1 * (r2 + 2.0 * b * b) + 2.0 * p2 * a * b,
-        ]
-    };
-    // Newton's method with a numerical Jacobian, started at the distorted point.
-    let (mut a, mut b) = (ad, bd);
-    for _ in 0..20 {
-        let [fa, fb] = distort(a, b);
-        let (ea, eb) = (fa - ad, fb - bd);
-        if ea.abs() < 1e-14 && eb.abs() < 1e-14 {
-            break;
-        }
-        let h = 1e-7;
-        let [fa1, fb1] = distort(a + h, b);
-        let [fa2, fb2] = distort(a, b + h);
-        let (j11, j21) = ((fa1 - fa) / h, (fb1 - fb) / h);
-        let (j12, j22) = ((fa2 - fa) / h, (fb2 - fb) / h);
-        let det = j11 * j22 - j12 * j21;
-        if det.abs() < 1e-12 {
-            break;
-        }
-        a -= (j22 * ea - j12 * eb) / det;
-        b -= (-j21 * ea + j11 * eb) / det;
-    }
-    [a, b]
-}
-
 /// The plane of the board seen from the camera: maps a normalised image point to board
 /// coordinates (the inverse of the homography `[r1 r2 t]`).
 struct BoardPlane {
@@ -433,7 +393,7 @@ pub fn render(
         let mut region = vec![0u32; gw * (height + 1)];
         for j in 0..=height {
             for i in 0..=width {
-                let n = undistort(camera, i as f64 - 0.5, j as f64 - 0.5);
+                let n = camera.undistort(i as f64 - 0.5, j as f64 - 0.5);
                 norm[j * gw + i] = n;
                 region[j * gw + i] = pattern.region(plane.hit(n[0], n[1]));
             }
@@ -555,6 +515,11 @@ pub fn render_all(
         .map(|n| n.get())
         .unwrap_or(1)
         .min(jobs.len().max(1));
+    // The true camera: the a-priori intrinsics with the true intrinsics errors added.
+    let model = &crate::model::Model {
+        camera: model.camera_at(params),
+        ..*model
+    };
     let next = std::sync::atomic::AtomicUsize::new(0);
     std::thread::scope(|scope| {
         let workers: Vec<_> = (0..threads)
@@ -591,7 +556,7 @@ mod tests {
             ..Camera::default()
         };
         for (u, v) in [(0.0, 0.0), (320.0, 240.0), (639.0, 479.0), (100.0, 400.0)] {
-            let [a, b] = undistort(&camera, u, v);
+            let [a, b] = camera.undistort(u, v);
             let p = camera.project(&[1.0, -a, -b]).unwrap();
             assert!((p[0] - u).abs() < 1e-9 && (p[1] - v).abs() < 1e-9, "{p:?}");
         }
@@ -607,7 +572,7 @@ mod tests {
         for v in model.board.vertices() {
             let p = model.board.vertex_position(v);
             let uv = model.camera.project(&pose.apply(&p)).unwrap();
-            let n = undistort(&model.camera, uv[0], uv[1]);
+            let n = model.camera.undistort(uv[0], uv[1]);
             let hit = plane.hit(n[0], n[1]).unwrap();
             assert!((hit[0] - p[0]).abs() < 1e-9 && (hit[1] - p[1]).abs() < 1e-9);
         }

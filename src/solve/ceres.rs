@@ -7,20 +7,72 @@
 
 #[cxx::bridge(namespace = "naocalib")]
 pub mod ffi {
+    /// What an elementary transform does.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    enum StepKind {
+        /// A constant transform (`rotation`, `translation`).
+        Fixed,
+        /// A rotation about `axis` by `amount` [rad].
+        Rotate,
+        /// A translation along `axis` by `amount` [mm].
+        Translate,
+    }
+
+    /// A local coordinate axis.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    enum StepAxis {
+        /// x.
+        X,
+        /// y.
+        Y,
+        /// z.
+        Z,
+    }
+
+    /// The robust loss per vertex.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    enum LossKind {
+        /// Plain least squares.
+        Squared,
+        /// Huber with `loss_scale` [px].
+        Huber,
+        /// Cauchy with `loss_scale` [px].
+        Cauchy,
+    }
+
+    /// `constant + Σ scales[k] · free[params[k]]` over the entries with `params[k] ≥ 0`
+    /// (−1: unused).
+    #[derive(Debug, Clone, Copy)]
+    struct FfiAmount {
+        constant: f64,
+        params: [i32; 3],
+        scales: [f64; 3],
+    }
+
     /// One elementary transform of a chain.
-    /// `kind`: 0 = fixed transform (`rotation`, `translation`), 1 = rotation about `axis`,
-    /// 2 = translation along `axis`; for 1 and 2 the amount is
-    /// `constant + scale · free[param]` (`param` = −1: constant only).
-    /// `axis`: 0 = x, 1 = y, 2 = z.
     #[derive(Debug, Clone)]
     struct FfiStep {
-        kind: u8,
-        axis: u8,
-        constant: f64,
-        param: i32,
-        scale: f64,
+        kind: StepKind,
+        axis: StepAxis,
+        amount: FfiAmount,
         rotation: [f64; 9],
         translation: [f64; 3],
+    }
+
+    /// The projection: `u = cx + fx·a'`, `v = cy + fy·b'` with OpenCV distortion of the
+    /// normalised coordinates when `distorted`.
+    #[derive(Debug, Clone)]
+    struct FfiProjection {
+        fx: FfiAmount,
+        fy: FfiAmount,
+        cx: FfiAmount,
+        cy: FfiAmount,
+        k1: FfiAmount,
+        k2: FfiAmount,
+        p1: f64,
+        p2: f64,
+        k3: f64,
+        distorted: bool,
     }
 
     /// One capture: its camera chain is `steps[first_step .. first_step + camera_steps]`,
@@ -56,18 +108,18 @@ pub mod ffi {
         pixels: Vec<f64>,
         /// Whitenings, concatenated (see `FfiCapture`).
         weights: Vec<f64>,
-        /// fx, fy, cx, cy, k1, k2, p1, p2, k3.
-        camera: [f64; 9],
+        /// The camera projection.
+        projection: FfiProjection,
     }
 
-    /// Solver settings. `loss`: 0 = none, 1 = Huber, 2 = Cauchy (per vertex, `loss_scale` px).
+    /// Solver settings.
     #[derive(Debug, Clone)]
     struct FfiOptions {
         max_iterations: u32,
         function_tolerance: f64,
         gradient_tolerance: f64,
         parameter_tolerance: f64,
-        loss: u8,
+        loss: LossKind,
         loss_scale: f64,
         covariance: bool,
         verbose: bool,
@@ -111,7 +163,8 @@ pub mod ffi {
 use nalgebra::DMatrix;
 
 use super::{Backend, BackendResult, Loss, Problem, SolveError, Summary, Whitening};
-use crate::model::{Axis, PARAMETER_COUNT, Param, Step};
+use crate::model::chain::MAX_TERMS;
+use crate::model::{Affine, Axis, PARAMETER_COUNT, Projection, Step};
 
 /// The Ceres backend: Levenberg–Marquardt with dense QR and autodiff on Jets, through the
 /// C++ shim in `cpp/`. The covariance is `ceres::Covariance`'s `(JᵀJ)⁺` (sparse QR, or the
@@ -141,9 +194,9 @@ impl Ceres {
     fn run(&self, problem: &Problem, covariance: bool) -> Result<BackendResult, SolveError> {
         let ffi_problem = to_ffi(problem)?;
         let (loss, loss_scale) = match problem.loss {
-            Loss::Squared => (0, 0.0),
-            Loss::Huber(s) => (1, s),
-            Loss::Cauchy(s) => (2, s),
+            Loss::Squared => (ffi::LossKind::Squared, 0.0),
+            Loss::Huber(s) => (ffi::LossKind::Huber, s),
+            Loss::Cauchy(s) => (ffi::LossKind::Cauchy, s),
         };
         let t = &problem.tolerances;
         let options = ffi::FfiOptions {
@@ -217,49 +270,43 @@ fn backend_error(message: impl std::fmt::Display) -> SolveError {
     }
 }
 
-/// The Ceres parameter block of a free parameter: the camera rotation, the head joints,
-/// each leg's joints and each board's mounting correction form one block each; any other
-/// parameter is a block of its own.
-fn param_block(p: Param) -> u32 {
-    use Param::*;
-    if matches!(p, CamYaw | CamPitch | CamRoll) {
-        0
-    } else if matches!(p, HeadYaw | HeadPitch) {
-        1
-    } else if matches!(
-        p,
-        LHipYawPitch | LHipRoll | LHipPitch | LKneePitch | LAnklePitch | LAnkleRoll
-    ) {
-        2
-    } else if matches!(
-        p,
-        RHipYawPitch | RHipRoll | RHipPitch | RKneePitch | RAnklePitch | RAnkleRoll
-    ) {
-        3
-    } else if matches!(p, LBoardRotZ | LBoardTransX | LBoardTransY) {
-        4
-    } else if matches!(p, RBoardRotZ | RBoardTransX | RBoardTransY) {
-        5
-    } else {
-        6 + p.index() as u32
-    }
-}
-
 fn count(n: usize, what: &str) -> Result<u32, SolveError> {
     u32::try_from(n).map_err(|_| backend_error(format!("too many {what} for the bridge")))
+}
+
+/// An amount over the free parameters (`free_index`: position among them, by parameter).
+fn ffi_amount(
+    amount: &Affine,
+    free_index: &[Option<usize>; PARAMETER_COUNT],
+) -> Result<ffi::FfiAmount, SolveError> {
+    let mut out = ffi::FfiAmount {
+        constant: amount.constant,
+        params: [-1; MAX_TERMS],
+        scales: [0.0; MAX_TERMS],
+    };
+    for (k, (p, scale)) in amount.terms().enumerate() {
+        let index = free_index[p.index()].ok_or_else(|| {
+            backend_error(format!("parameter {p} is held fixed but was not frozen"))
+        })?;
+        out.params[k] = i32::try_from(index).map_err(|_| backend_error("too many parameters"))?;
+        out.scales[k] = scale;
+    }
+    Ok(out)
 }
 
 fn ffi_step(
     step: &Step,
     free_index: &[Option<usize>; PARAMETER_COUNT],
 ) -> Result<ffi::FfiStep, SolveError> {
-    let axis = |a: &Axis| a.index() as u8;
+    let axis = |a: &Axis| match a {
+        Axis::X => ffi::StepAxis::X,
+        Axis::Y => ffi::StepAxis::Y,
+        Axis::Z => ffi::StepAxis::Z,
+    };
     let mut out = ffi::FfiStep {
-        kind: 0,
-        axis: 0,
-        constant: 0.0,
-        param: -1,
-        scale: 0.0,
+        kind: ffi::StepKind::Fixed,
+        axis: ffi::StepAxis::X,
+        amount: ffi_amount(&Affine::constant(0.0), free_index)?,
         rotation: [0.0; 9],
         translation: [0.0; 3],
     };
@@ -272,23 +319,35 @@ fn ffi_step(
         }
         Step::Rotate(a, amount) | Step::Translate(a, amount) => {
             out.kind = if matches!(step, Step::Rotate(..)) {
-                1
+                ffi::StepKind::Rotate
             } else {
-                2
+                ffi::StepKind::Translate
             };
             out.axis = axis(a);
-            out.constant = amount.constant;
-            if let Some((p, scale)) = amount.param {
-                let index = free_index[p.index()].ok_or_else(|| {
-                    backend_error(format!("parameter {p} is held fixed but was not frozen"))
-                })?;
-                out.param =
-                    i32::try_from(index).map_err(|_| backend_error("too many parameters"))?;
-                out.scale = scale;
-            }
+            out.amount = ffi_amount(amount, free_index)?;
         }
     }
     Ok(out)
+}
+
+/// The projection over the free parameters.
+fn ffi_projection(
+    projection: &Projection,
+    free_index: &[Option<usize>; PARAMETER_COUNT],
+) -> Result<ffi::FfiProjection, SolveError> {
+    let a = |x: &Affine| ffi_amount(x, free_index);
+    Ok(ffi::FfiProjection {
+        fx: a(&projection.fx)?,
+        fy: a(&projection.fy)?,
+        cx: a(&projection.cx)?,
+        cy: a(&projection.cy)?,
+        k1: a(&projection.k1)?,
+        k2: a(&projection.k2)?,
+        p1: projection.p1,
+        p2: projection.p2,
+        k3: projection.k3,
+        distorted: projection.is_distorted(),
+    })
 }
 
 /// Ships a problem across the bridge: chains with the held parameters frozen, parameter
@@ -299,17 +358,15 @@ fn to_ffi(problem: &Problem) -> Result<ffi::FfiProblem, SolveError> {
     for (i, p) in free.iter().enumerate() {
         free_index[p.index()] = Some(i);
     }
-    let c = &problem.camera;
-    let [k1, k2, p1, p2, k3] = c.distortion;
     let mut out = ffi::FfiProblem {
         params: free.iter().map(|p| problem.initial[p.index()]).collect(),
-        param_block: free.iter().map(|p| param_block(*p)).collect(),
+        param_block: free.iter().map(|p| p.group().id()).collect(),
         steps: Vec::new(),
         captures: Vec::with_capacity(problem.captures.len()),
         points: Vec::with_capacity(3 * problem.observation_count()),
         pixels: Vec::with_capacity(2 * problem.observation_count()),
         weights: Vec::new(),
-        camera: [c.fx, c.fy, c.cx, c.cy, k1, k2, p1, p2, k3],
+        projection: ffi_projection(&problem.frozen_projection(), &free_index)?,
     };
     for (term, chains) in problem.captures.iter().zip(problem.frozen_chains()) {
         let first_step = count(out.steps.len(), "steps")?;

@@ -19,12 +19,14 @@ use nalgebra::{Const, DMatrix, DVector, U1};
 use num_dual::{Derivative, Dual64, DualSVec64};
 
 use super::problem::{Loss, Problem, Whitening};
-use crate::model::{Camera, PARAMETER_COUNT, Param, Scalar, StanceChains};
+use crate::model::{PARAMETER_COUNT, Param, Projection, Scalar, StanceChains};
 
 /// Parameters differentiated at once per pass (the Jet width of the Ceres shim, too).
 const WIDTH: usize = 12;
 type Dual = DualSVec64<WIDTH>;
 type Dual3 = DualSVec64<3>;
+/// The point's three lanes, then the projection's six coefficients.
+type Dual9 = DualSVec64<9>;
 
 /// The message of every backend that refuses a robust loss together with whitening.
 pub const LOSS_WITH_WHITENING: &str = "a whitening matrix cannot be combined with a robust loss";
@@ -75,8 +77,11 @@ fn weight_and_slope(loss: Loss, s: f64) -> (f64, f64) {
 struct Term {
     /// Chains with the held parameters frozen.
     chains: StanceChains,
-    /// Free parameters this capture depends on.
+    /// Free parameters this capture depends on: those of its chains, then those of the
+    /// projection.
     used: Vec<Param>,
+    /// How many of `used` are the chains'.
+    chain_count: usize,
     /// Their Jacobian columns.
     columns: Vec<usize>,
     /// First residual row of this capture.
@@ -102,7 +107,10 @@ impl Term {
 /// the lifetime parameter only keeps the type's signature stable.
 #[derive(Debug, Clone)]
 pub struct Evaluator<'a> {
-    camera: Camera,
+    /// The projection with the held parameters frozen.
+    projection: Projection,
+    /// Per free parameter of the projection: its coefficient in fx, fy, cx, cy, k1, k2.
+    projection_scales: Vec<(Param, [f64; 6])>,
     loss: Loss,
     initial: [f64; PARAMETER_COUNT],
     terms: Vec<Term>,
@@ -131,6 +139,18 @@ impl<'a> Evaluator<'a> {
         for (k, p) in free.iter().enumerate() {
             column[p.index()] = Some(k);
         }
+        let projection = problem.frozen_projection();
+        let projection_scales: Vec<(Param, [f64; 6])> = projection
+            .params()
+            .into_iter()
+            .filter(|p| column[p.index()].is_some())
+            .map(|p| {
+                let scales = projection.coefficients().map(|a| {
+                    a.terms().filter(|(q, _)| *q == p).map(|(_, s)| s).sum()
+                });
+                (p, scales)
+            })
+            .collect();
         let mut row = 0;
         let terms = problem
             .captures
@@ -144,6 +164,8 @@ impl<'a> Evaluator<'a> {
                     }
                 }
                 used.retain(|p| column[p.index()].is_some());
+                let chain_count = used.len();
+                used.extend(projection_scales.iter().map(|(p, _)| *p));
                 let columns = used
                     .iter()
                     .map(|p| column[p.index()].expect("free"))
@@ -151,6 +173,7 @@ impl<'a> Evaluator<'a> {
                 let t = Term {
                     chains,
                     used,
+                    chain_count,
                     columns,
                     row,
                     points: term.observations.iter().map(|o| o.point).collect(),
@@ -162,7 +185,8 @@ impl<'a> Evaluator<'a> {
             })
             .collect();
         Evaluator {
-            camera: problem.camera,
+            projection,
+            projection_scales,
             loss: problem.loss,
             initial: problem.initial,
             terms,
@@ -282,7 +306,7 @@ impl<'a> Evaluator<'a> {
     ) -> Option<()> {
         let pose = term.chains.camera_to_board::<f64>(params);
         for (k, (p, px)) in term.points.iter().zip(&term.pixels).enumerate() {
-            let [u, v] = self.camera.project(&pose.apply(p))?;
+            let [u, v] = self.projection.project(params, &pose.apply(p))?;
             r[2 * k] = u - px[0];
             r[2 * k + 1] = v - px[1];
         }
@@ -297,11 +321,13 @@ impl<'a> Evaluator<'a> {
         params: &[f64; PARAMETER_COUNT],
     ) -> Option<CaptureJacobian> {
         let k = term.used.len();
-        let (pose, dpose) = pose_derivatives(&term.chains, params, &term.used);
+        let kc = term.chain_count;
+        let (pose, dpose) = pose_derivatives(&term.chains, params, &term.used[..kc]);
         let rows = term.residual_count();
         let mut residuals = vec![0.0; rows];
         let mut jacobian = vec![0.0; rows * k];
-        let mut dp = vec![[0.0; 3]; k];
+        let mut dp = vec![[0.0; 3]; kc];
+        let coefficients = self.projection.coefficients().map(|a| a.eval(params));
         for (v, (p, px)) in term.points.iter().zip(&term.pixels).enumerate() {
             // The point in the camera frame and its derivative with respect to each
             // parameter: d(R·p + t) = dR·p + dt.
@@ -311,18 +337,40 @@ impl<'a> Evaluator<'a> {
                     d[3 * i] * p[0] + d[3 * i + 1] * p[1] + d[3 * i + 2] * p[2] + d[9 + i]
                 });
             }
-            // The projection and its 2 × 3 Jacobian with respect to the point.
-            let seeded: [Dual3; 3] = std::array::from_fn(|i| {
-                Dual3::new(pc[i], Derivative::derivative_generic(Const::<3>, U1, i))
-            });
-            let [u, w] = self.camera.project(&seeded)?;
-            residuals[2 * v] = u.re - px[0];
-            residuals[2 * v + 1] = w.re - px[1];
-            for (row, value) in [u, w].iter().enumerate() {
-                let g = value.eps.unwrap_generic(Const::<3>, U1);
+            // The projection and its gradient with respect to the point (and, when the
+            // projection has free parameters, its six coefficients).
+            let (uv, grads): ([f64; 2], [[f64; 9]; 2]) = if self.projection_scales.is_empty() {
+                let seeded: [Dual3; 3] = std::array::from_fn(|i| {
+                    Dual3::new(pc[i], Derivative::derivative_generic(Const::<3>, U1, i))
+                });
+                let [u, w] = self.projection.project_with(&coefficients.map(Dual3::from), &seeded)?;
+                let g = |d: &Dual3| {
+                    let e = d.eps.unwrap_generic(Const::<3>, U1);
+                    std::array::from_fn(|i| if i < 3 { e[i] } else { 0.0 })
+                };
+                ([u.re, w.re], [g(&u), g(&w)])
+            } else {
+                let lane = |value: f64, i: usize| {
+                    Dual9::new(value, Derivative::derivative_generic(Const::<9>, U1, i))
+                };
+                let seeded: [Dual9; 3] = std::array::from_fn(|i| lane(pc[i], i));
+                let coefficients: [Dual9; 6] = std::array::from_fn(|c| lane(coefficients[c], 3 + c));
+                let [u, w] = self.projection.project_with(&coefficients, &seeded)?;
+                let g = |d: &Dual9| {
+                    let e = d.eps.unwrap_generic(Const::<9>, U1);
+                    std::array::from_fn(|i| e[i])
+                };
+                ([u.re, w.re], [g(&u), g(&w)])
+            };
+            residuals[2 * v] = uv[0] - px[0];
+            residuals[2 * v + 1] = uv[1] - px[1];
+            for (row, g) in grads.iter().enumerate() {
                 let out = &mut jacobian[(2 * v + row) * k..(2 * v + row + 1) * k];
                 for (o, dp) in out.iter_mut().zip(&dp) {
                     *o = g[0] * dp[0] + g[1] * dp[1] + g[2] * dp[2];
+                }
+                for (o, (_, scales)) in out[kc..].iter_mut().zip(&self.projection_scales) {
+                    *o = (0..6).map(|c| g[3 + c] * scales[c]).sum();
                 }
             }
         }

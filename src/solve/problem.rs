@@ -145,10 +145,11 @@ impl CaptureTerm {
         params: &[T],
     ) -> Option<Vec<T>> {
         let pose = self.chains.camera_to_board(params);
+        let projection = camera.projection();
         let mut out = Vec::with_capacity(self.residual_count());
         for obs in &self.observations {
             let p = obs.point.map(crate::model::scalar::lift::<T>);
-            let [u, v] = camera.project(&pose.apply(&p))?;
+            let [u, v] = projection.project(params, &pose.apply(&p))?;
             out.push(u - obs.pixel[0]);
             out.push(v - obs.pixel[1]);
         }

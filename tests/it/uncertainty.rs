@@ -1,6 +1,5 @@
 //! Issue 5: the reported one-sigma is honest by default, the empirical checks agree, gross
 //! outliers are survived and listed, and rank-deficient datasets are diagnosed by name.
-#![cfg(feature = "ceres")]
 
 use naocalib::model::{FixedSet, Model, PAPER_PARAMETERS, Param};
 use naocalib::sim::{SimOptions, simulate};

@@ -1,8 +1,8 @@
 //! `naocalib detect` through the binary: OpenCV's own sample images with `--pattern 9x6
 //! --no-model` (compared with OpenCV's `findChessboardCorners` + `cornerSubPix`), bad image
 //! files that must each give a clear per-image error, and the corners.csv rules.
-#![cfg(feature = "detect")]
 
+use crate::util::{naocalib, stderr};
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
@@ -21,14 +21,6 @@ const SAMPLES: [&str; 6] = [
     "left06.jpg",
     "left12.jpg",
 ];
-
-fn naocalib() -> Command {
-    Command::cargo_bin("naocalib").expect("binary built")
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
 
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/opencv")

@@ -1,34 +1,17 @@
 //! `naocalib compare` from the command line: every solver of the build in the table and
 //! the JSON, and the reference named.
 
+use crate::util::{naocalib, simulate_small};
 use std::path::Path;
 
 use assert_cmd::Command;
 use naocalib::solve::backend_names;
 
-fn naocalib() -> Command {
-    Command::cargo_bin("naocalib").expect("binary built")
-}
-
-/// Simulates a small dataset (6 stances × 2 heads per leg) into `dir`.
-fn simulate_small(dir: &Path) {
-    let out = naocalib()
-        .args(["simulate", "--stances", "6", "--heads", "2", "--seed", "3"])
-        .arg(dir)
-        .output()
-        .expect("ran");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
 #[test]
 fn compare_prints_every_solver() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let dir = tmp.path().join("ds");
-    simulate_small(&dir);
+    simulate_small(&dir, 3);
     let out = naocalib().arg("compare").arg(&dir).output().expect("ran");
     let stdout = String::from_utf8_lossy(&out.stdout);
     println!("{stdout}");
@@ -57,7 +40,7 @@ fn compare_prints_every_solver() {
 fn compare_json_has_every_solver_and_parameter() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let dir = tmp.path().join("ds");
-    simulate_small(&dir);
+    simulate_small(&dir, 3);
     let out = naocalib()
         .args(["compare", "--json", "--fix", "CamYaw"])
         .arg(&dir)
@@ -90,7 +73,7 @@ fn compare_json_has_every_solver_and_parameter() {
 fn compare_with_loss_and_unknown_solver() {
     let tmp = tempfile::tempdir().expect("tempdir");
     let dir = tmp.path().join("ds");
-    simulate_small(&dir);
+    simulate_small(&dir, 3);
     let out = naocalib()
         .args(["compare", "--json", "--loss", "cauchy:0.5"])
         .arg(&dir)

@@ -4,8 +4,8 @@
 //! Problems are built directly from the model (random stances around SPEC section 9 poses
 //! B and C, random true parameters, noise-free observations), so these tests depend on
 //! nothing but `model` and `solve`.
-#![cfg(feature = "ceres")]
 
+use crate::util::brute_force_jacobian as rust_jacobian;
 use nalgebra::{DMatrix, DVector, Dyn, U1};
 use naocalib::model::{
     Camera, FixedSet, JOINT_COUNT, JointAngles, Model, PAPER_PARAMETERS, PARAMETER_COUNT, Param,
@@ -175,33 +175,6 @@ fn add_low_rank_whitening(problem: &mut Problem, seed: u64) {
 fn random_free(problem: &Problem, rng: &mut ChaCha8Rng) -> Vec<f64> {
     let all = random_parameters(rng, 4.0, 4.0);
     problem.free().iter().map(|p| all[p.index()]).collect()
-}
-
-/// The Rust residuals (as the backend minimises them) and their dual-number Jacobian with
-/// respect to the free parameters.
-fn rust_jacobian(problem: &Problem, free_values: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
-    let free = problem.free();
-    let n = free.len();
-    let all = problem.expand(free_values);
-    let mut params: Vec<DualDVec64> = all.iter().map(|&v| DualDVec64::from_re(v)).collect();
-    for (i, p) in free.iter().enumerate() {
-        params[p.index()] = DualDVec64::new(
-            all[p.index()],
-            Derivative::derivative_generic(Dyn(n), U1, i),
-        );
-    }
-    let mut values = Vec::new();
-    let mut rows = Vec::new();
-    for c in &problem.captures {
-        for r in c
-            .weighted_residuals(&problem.camera, &params)
-            .expect("in front of the camera")
-        {
-            values.push(r.re);
-            rows.push(r.eps.unwrap_generic(Dyn(n), U1).transpose());
-        }
-    }
-    (values, DMatrix::from_rows(&rows))
 }
 
 /// The Rust residuals at `free_values`, in `f64`.

@@ -2,6 +2,7 @@
 //! answer within 0.01 sigma, the same recovery of the truth, the same covariance and rank,
 //! the same robust fit; and `compare` reporting solvers that fail or stop early.
 
+use crate::util::brute_force_jacobian as brute_force;
 use nalgebra::{DMatrix, Dyn, U1};
 use naocalib::model::{FixedSet, Model, PARAMETER_COUNT, Side};
 use naocalib::sim::{SimOptions, simulate};
@@ -22,38 +23,6 @@ fn simulated(seed: u64, stances: usize, heads: usize) -> (Problem, [f64; PARAMET
     let truth = dataset.truth.as_ref().expect("truth").values;
     let problem = Problem::from_dataset(&dataset, FixedSet::default()).expect("problem");
     (problem, truth)
-}
-
-/// The residuals as the backends minimise them (robust rescaling per vertex included) and
-/// their Jacobian, by brute force: the whole model on dynamic duals.
-fn brute_force(problem: &Problem, x: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
-    let free = problem.free();
-    let n = free.len();
-    let all = problem.expand(x);
-    let mut params: Vec<DualDVec64> = all.iter().map(|&v| DualDVec64::from_re(v)).collect();
-    for (i, p) in free.iter().enumerate() {
-        params[p.index()] = DualDVec64::new(
-            all[p.index()],
-            Derivative::derivative_generic(Dyn(n), U1, i),
-        );
-    }
-    let mut values = Vec::new();
-    let mut rows = Vec::new();
-    for c in &problem.captures {
-        let r = c
-            .weighted_residuals(&problem.camera, &params)
-            .expect("in front");
-        for pair in r.chunks(2) {
-            let s = pair[0].clone() * pair[0].clone() + pair[1].clone() * pair[1].clone();
-            let w = robust_weight(problem.loss, s);
-            for d in pair {
-                let d = d.clone() * w.clone();
-                values.push(d.re);
-                rows.push(d.eps.unwrap_generic(Dyn(n), U1).transpose());
-            }
-        }
-    }
-    (values, DMatrix::from_rows(&rows))
 }
 
 /// max |a − b| / max(1, |b|).

@@ -1,29 +1,12 @@
 //! End to end through the `naocalib` binary: simulate → solve, and bad input that must end
 //! with a clear message (file, line, field) and exit code 1 — never a panic or an abort.
 
+use crate::util::{assert_clean_failure, naocalib, simulate_small, stderr};
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
 use assert_cmd::Command;
 use serde_json::Value;
-
-fn naocalib() -> Command {
-    Command::cargo_bin("naocalib").expect("binary built")
-}
-
-/// Simulates a small dataset (6 stances × 2 heads per leg) into `dir`.
-fn simulate_small(dir: &Path) {
-    let out = naocalib()
-        .args(["simulate", "--stances", "6", "--heads", "2", "--seed", "7"])
-        .arg(dir)
-        .output()
-        .expect("ran");
-    assert!(
-        out.status.success(),
-        "simulate failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
 
 fn solve(dir: &Path, extra: &[&str]) -> Output {
     naocalib()
@@ -34,29 +17,10 @@ fn solve(dir: &Path, extra: &[&str]) -> Output {
         .expect("ran")
 }
 
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
-
-/// The run failed cleanly: exit code 1 (not a panic's 101, not a signal), one message.
-fn assert_clean_failure(out: &Output, needles: &[&str]) {
-    let err = stderr(out);
-    assert_eq!(
-        out.status.code(),
-        Some(1),
-        "expected exit 1, got {:?}: {err}",
-        out.status
-    );
-    assert!(!err.contains("panicked"), "panic: {err}");
-    for needle in needles {
-        assert!(err.contains(needle), "message lacks '{needle}': {err}");
-    }
-}
-
 fn small_dataset() -> (tempfile::TempDir, PathBuf) {
     let tmp = tempfile::tempdir().expect("tempdir");
     let dir = tmp.path().join("ds");
-    simulate_small(&dir);
+    simulate_small(&dir, 7);
     (tmp, dir)
 }
 

@@ -2,8 +2,8 @@
 //! recovered, corners.csv never written, the other options still working, unusable images
 //! named), `simulate --images` refusing an existing dataset before it writes any image, and
 //! detection falling back to the whole image when the logged joints put the board elsewhere.
-#![cfg(feature = "detect")]
 
+use crate::util::{assert_clean_failure, naocalib, run, stderr};
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
@@ -14,19 +14,6 @@ use naocalib::model::{Joint, Model, Param, Unit};
 use naocalib::sim::render::{ImageOutput, RenderOptions};
 use naocalib::sim::{SimOptions, simulate};
 use serde_json::Value;
-
-fn naocalib() -> Command {
-    Command::cargo_bin("naocalib").expect("binary built")
-}
-
-/// `naocalib ARGS DATASET`.
-fn run(args: &[&str], dataset: impl AsRef<std::ffi::OsStr>) -> Output {
-    naocalib().args(args).arg(dataset).output().expect("ran")
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
 
 /// `simulate --images` with `stances` stances × 2 head postures per leg into `dir`
 /// (default rendering: blur σ 0.8 px, grey noise σ 2), no joint noise.
@@ -48,16 +35,6 @@ fn json(out: &Output) -> Value {
         stderr(out)
     );
     serde_json::from_slice(&out.stdout).expect("JSON on stdout")
-}
-
-/// The run failed cleanly: exit code 1 (not a panic's 101), and the message says why.
-fn assert_clean_failure(out: &Output, needles: &[&str]) {
-    let err = stderr(out);
-    assert_eq!(out.status.code(), Some(1), "expected exit 1: {err}");
-    assert!(!err.contains("panicked"), "panic: {err}");
-    for needle in needles {
-        assert!(err.contains(needle), "message lacks '{needle}': {err}");
-    }
 }
 
 /// Every file under `dir`, relative, sorted, with its bytes.

@@ -1,7 +1,6 @@
 //! Detection on rendered images: sub-pixel accuracy against the model's projections, the
 //! right (row, col) for every vertex whichever way OpenCV orders them, and the end-to-end
 //! chain simulate --images → detect → solve.
-#![cfg(feature = "detect")]
 
 use std::collections::HashSet;
 use std::path::Path;

@@ -1,4 +1,5 @@
-//! SPEC section 9: reference transforms and projections, checked against the NAO URDF.
+//! The reference values of docs/MODEL.md: transforms and projections checked against the NAO
+//! URDF, and the gravity torques of the extended model.
 
 use naocalib::model::{Joint, JointAngles, Model, PARAMETER_COUNT, Param, Side, Vertex};
 
@@ -59,11 +60,11 @@ fn pose_a_transforms_match_urdf() {
             assert_close(*g, *w, 1e-4, "T_OC rotation");
         }
     }
-    let left = model.robot.sole_chain(Side::Left, &joints).eval(&zero);
+    let left = model.robot.sole_chain(Side::Left, &joints, &[0.0; 6]).eval(&zero);
     for (i, want) in [40.6731, 74.8950, -227.0421].iter().enumerate() {
         assert_close(left.translation[i], *want, 1e-3, "T_OS left");
     }
-    let right = model.robot.sole_chain(Side::Right, &joints).eval(&zero);
+    let right = model.robot.sole_chain(Side::Right, &joints, &[0.0; 6]).eval(&zero);
     for (i, want) in [50.8203, -75.8509, -220.5209].iter().enumerate() {
         assert_close(right.translation[i], *want, 1e-3, "T_OS right");
     }
@@ -118,4 +119,20 @@ fn pose_c_right_board_projections() {
             ([3, 5], [237.6186, 161.6496], [228.1338, 205.6757]),
         ],
     );
+}
+
+/// The reference gravity torques at pose A (lying on its back, default sandal).
+#[test]
+fn pose_a_gravity_torques() {
+    let model = Model::default();
+    let joints = angles(POSE_A);
+    let left = naocalib::model::gravity::leg_torques(&model.robot, &model.board, Side::Left, &joints);
+    let right =
+        naocalib::model::gravity::leg_torques(&model.robot, &model.board, Side::Right, &joints);
+    let want_left = [0.7861, 0.3455, 1.3550, 0.6162, 0.0647, 0.0247];
+    let want_right = [0.7307, -0.3333, 1.2896, 0.6048, 0.0533, -0.0243];
+    for k in 0..6 {
+        assert_close(left[k], want_left[k], 1e-4, &format!("left torque {k}"));
+        assert_close(right[k], want_right[k], 1e-4, &format!("right torque {k}"));
+    }
 }

@@ -1,0 +1,23 @@
+//! naocalib's integration tests, one binary: each module is one concern, `util` holds the
+//! helpers they share.
+
+mod util;
+
+mod batch_solve;
+#[cfg(feature = "ceres")]
+mod ceres_agreement;
+#[cfg(feature = "detect")]
+mod cli_detect_solve;
+mod cli_solve;
+mod dataset_io;
+#[cfg(feature = "detect")]
+mod detect_files;
+#[cfg(feature = "detect")]
+mod detect_render;
+mod export_roundtrip;
+mod plot_files;
+mod pure_rust_agreement;
+mod pure_rust_cli;
+mod spec_reference;
+#[cfg(feature = "ceres")]
+mod uncertainty;

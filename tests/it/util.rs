@@ -1,0 +1,88 @@
+//! Helpers shared by the integration tests: running the binary, reading its output, and a
+//! brute-force dual-number Jacobian to check the fast paths against.
+
+#![allow(dead_code)]
+
+use std::path::Path;
+use std::process::Output;
+
+use assert_cmd::Command;
+use nalgebra::{DMatrix, Dyn, U1};
+use naocalib::solve::Problem;
+use naocalib::solve::jacobian::robust_weight;
+use num_dual::{Derivative, DualDVec64};
+
+/// The `naocalib` binary of this build.
+pub fn naocalib() -> Command {
+    Command::cargo_bin("naocalib").expect("binary built")
+}
+
+/// `naocalib ARGS DATASET`.
+pub fn run(args: &[&str], dataset: impl AsRef<std::ffi::OsStr>) -> Output {
+    naocalib().args(args).arg(dataset).output().expect("ran")
+}
+
+/// The run's standard error as text.
+pub fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// The run failed cleanly: exit code 1 (not a panic's 101, not a signal), and its message
+/// names every one of `needles`.
+pub fn assert_clean_failure(out: &Output, needles: &[&str]) {
+    let err = stderr(out);
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "expected exit 1, got {:?}: {err}",
+        out.status
+    );
+    assert!(!err.contains("panicked"), "panic: {err}");
+    for needle in needles {
+        assert!(err.contains(needle), "message lacks '{needle}': {err}");
+    }
+}
+
+/// `naocalib simulate` of a small dataset (6 stances × 2 head postures per leg) into `dir`.
+pub fn simulate_small(dir: &Path, seed: u64) {
+    let out = naocalib()
+        .args(["simulate", "--stances", "6", "--heads", "2", "--seed"])
+        .arg(seed.to_string())
+        .arg(dir)
+        .output()
+        .expect("ran");
+    assert!(out.status.success(), "simulate failed: {}", stderr(&out));
+}
+
+/// The residuals as the backends minimise them (whitened where a capture has a whitening,
+/// robust rescaling per vertex included) and their Jacobian with respect to the free
+/// parameters at `x`, by brute force: the whole model on dynamic duals.
+pub fn brute_force_jacobian(problem: &Problem, x: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
+    let free = problem.free();
+    let n = free.len();
+    let all = problem.expand(x);
+    let mut params: Vec<DualDVec64> = all.iter().map(|&v| DualDVec64::from_re(v)).collect();
+    for (i, p) in free.iter().enumerate() {
+        params[p.index()] = DualDVec64::new(
+            all[p.index()],
+            Derivative::derivative_generic(Dyn(n), U1, i),
+        );
+    }
+    let mut values = Vec::new();
+    let mut rows = Vec::new();
+    for c in &problem.captures {
+        let r = c
+            .weighted_residuals(&problem.camera, &params)
+            .expect("in front of the camera");
+        for pair in r.chunks(2) {
+            let s = pair[0].clone() * pair[0].clone() + pair[1].clone() * pair[1].clone();
+            let w = robust_weight(problem.loss, s);
+            for d in pair {
+                let d = d.clone() * w.clone();
+                values.push(d.re);
+                rows.push(d.eps.unwrap_generic(Dyn(n), U1).transpose());
+            }
+        }
+    }
+    (values, DMatrix::from_rows(&rows))
+}
