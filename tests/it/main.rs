@@ -16,6 +16,7 @@ mod detect_files;
 mod detect_render;
 mod export_roundtrip;
 mod extended;
+mod misfit;
 mod plot_files;
 mod pure_rust_agreement;
 mod pure_rust_cli;
