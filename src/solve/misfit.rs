@@ -210,7 +210,7 @@ pub fn verdict(tests: Vec<FamilyTest>, rms_px: [f64; 2], joint_noise_deg: Option
     significant.sort_by(|a, b| b.explained_px2.total_cmp(&a.explained_px2));
     let suggest: Vec<Family> = significant.iter().map(|t| t.family).collect();
     let rms = rms_px[0].max(rms_px[1]);
-    let implausible = !(rms <= IMPLAUSIBLE_RMS_PX);
+    let implausible = rms.is_nan() || rms > IMPLAUSIBLE_RMS_PX;
     let noisy = joint_noise_deg.is_some_and(|j| j > IMPLAUSIBLE_JOINT_NOISE_DEG);
     let detected = !suggest.is_empty() || implausible || noisy;
     let names: Vec<&str> = suggest.iter().map(|f| f.name()).collect();
