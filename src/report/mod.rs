@@ -38,9 +38,15 @@ fn sigma_cell(solution: &Solution, p: Param, std: Option<f64>) -> String {
 pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
     let mut out = String::new();
     let boot = solution.bootstrap.as_ref();
+    let shown = shown_parameters(solution);
+    let name_width = shown.iter().map(|p| p.name().len()).fold(14, usize::max);
+    let unit_width = shown
+        .iter()
+        .map(|p| p.unit().name().chars().count())
+        .fold(4, usize::max);
     let _ = write!(
         out,
-        "{:<14} {:>10} {:>9}  {:<4} {:>9}",
+        "{:<name_width$} {:>10} {:>9}  {:<unit_width$} {:>9}",
         "parameter", "value", "±1σ", "unit", "sandwich"
     );
     if boot.is_some() {
@@ -50,14 +56,14 @@ pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
         let _ = write!(out, " {:>10} {:>9} {:>6}", "truth", "error", "err/σ");
     }
     out.push('\n');
-    for p in shown_parameters(solution) {
+    for p in shown {
         let unit = p.unit();
         let value = solution.report_value(p);
         let std = sigma_cell(solution, p, Some(solution.std[p.index()]));
         let sandwich = sigma_cell(solution, p, solution.sandwich_std.map(|s| s[p.index()]));
         let _ = write!(
             out,
-            "{:<14} {:>10.4} {:>9}  {:<4} {:>9}",
+            "{:<name_width$} {:>10.4} {:>9}  {:<unit_width$} {:>9}",
             p.name(),
             value,
             std,
@@ -90,22 +96,6 @@ pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
     for line in diagnosis(solution) {
         let _ = writeln!(out, "{line}");
     }
-    if solution.outliers.len() > 1 {
-        for o in solution.outliers.iter().take(20) {
-            let _ = writeln!(
-                out,
-                "  capture {} ({},{}): ({:+.2}, {:+.2})",
-                o.capture, o.vertex.row, o.vertex.col, o.residual[0], o.residual[1]
-            );
-        }
-        if solution.outliers.len() > 20 {
-            let _ = writeln!(
-                out,
-                "  … and {} more (see --json)",
-                solution.outliers.len() - 20
-            );
-        }
-    }
     let s = &solution.summary;
     let _ = writeln!(
         out,
@@ -117,9 +107,10 @@ pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
 }
 
 /// What the fit says about itself, one line each (sub-items indented by two spaces):
-/// convergence, the residuals, the noise model, the captures that stand out, outliers,
-/// and identifiability (rank, strongly correlated pairs, weakly and not determined
-/// combinations, what to hold fixed). Used by [`table`] and the HTML report.
+/// convergence, the residuals, the noise model, the model fitted and the misfit verdict,
+/// the captures that stand out, outliers, and identifiability (rank, strongly correlated
+/// pairs, weakly and not determined combinations, what to hold fixed). Used by [`table`]
+/// and the HTML report.
 pub fn diagnosis(solution: &Solution) -> Vec<String> {
     let mut lines = Vec::new();
     let s = &solution.summary;
@@ -150,9 +141,16 @@ pub fn diagnosis(solution: &Solution) -> Vec<String> {
             noise.joint.to_degrees(),
             solution.residual_variance
         ));
+    } else if solution.misfit.noise_model_set_aside {
+        lines.push(
+            "uncertainty: capture-clustered sandwich (the noise model is set aside: the \
+             residuals are not noise)"
+                .into(),
+        );
     } else {
         lines.push("uncertainty: plain σ̂²(JᵀJ)⁻¹ (no noise model)".into());
     }
+    lines.extend(model_text(solution).lines().map(String::from));
     if let Some(b) = &solution.bootstrap {
         lines.push(format!(
             "bootstrap: {} refits over resampled captures ({} failed)",
@@ -177,19 +175,23 @@ pub fn diagnosis(solution: &Solution) -> Vec<String> {
             ));
         }
     }
-    match solution.outliers.len() {
-        0 => {}
-        1 => {
-            let o = &solution.outliers[0];
+    if !solution.outliers.is_empty() {
+        lines.push(format!(
+            "outliers left out: {} vertices (capture row,col: residual px)",
+            solution.outliers.len()
+        ));
+        for o in solution.outliers.iter().take(20) {
             lines.push(format!(
-                "outliers left out: 1 vertex, capture {} ({},{}): ({:+.2}, {:+.2}) px",
+                "  capture {} ({},{}): ({:+.2}, {:+.2})",
                 o.capture, o.vertex.row, o.vertex.col, o.residual[0], o.residual[1]
             ));
         }
-        n => lines.push(format!(
-            "outliers left out: {n} vertices beyond {} robust sigmas (capture row,col: residual px)",
-            crate::solve::OUTLIER_SIGMAS
-        )),
+        if solution.outliers.len() > 20 {
+            lines.push(format!(
+                "  … and {} more (see --json)",
+                solution.outliers.len() - 20
+            ));
+        }
     }
     lines.extend(identifiability_text(solution).lines().map(String::from));
     lines
@@ -214,7 +216,6 @@ pub fn json(solution: &Solution, truth: Option<&[f64]>) -> Value {
             "unit": p.unit().name(),
         });
         if !fixed && !determined {
-            entry["determined"] = Value::Bool(false);
             entry["undetermined"] = Value::Bool(true);
         }
         if let (Some(sw), false, true) = (solution.sandwich_std, fixed, determined) {
@@ -250,12 +251,60 @@ pub fn json(solution: &Solution, truth: Option<&[f64]>) -> Value {
             "joint_deg": n.joint.to_degrees(),
         })),
         "identifiability": identifiability_json(solution),
+        "families": solution.families.iter().map(|f| f.name()).collect::<Vec<_>>(),
+        "misfit": {
+            "detected": solution.misfit.detected,
+            "suggest": solution.misfit.suggest.iter().map(|f| f.name()).collect::<Vec<_>>(),
+            "message": solution.misfit.message,
+            "noise_model_set_aside": solution.misfit.noise_model_set_aside,
+            "tests": solution.misfit.tests.iter().map(|t| json!({
+                "family": t.family.name(),
+                "parameters": t.params.iter().map(|p| p.name()).collect::<Vec<_>>(),
+                "df": t.df,
+                "statistic": t.statistic,
+                "p_value": t.p_value,
+                "significant": t.significant,
+            })).collect::<Vec<_>>(),
+        },
+        "chosen": solution.chosen.iter().map(|t| json!({
+            "family": t.family.name(), "statistic": t.statistic, "p_value": t.p_value,
+        })).collect::<Vec<_>>(),
+        "undetermined": solution.undetermined.iter().map(|u| json!({
+            "parameter": u.param.name(),
+            "combination": u.direction.describe(),
+        })).collect::<Vec<_>>(),
         "outliers": solution.outliers.iter().map(|o| json!({
             "capture": o.capture, "row": o.vertex.row, "col": o.vertex.col,
             "residual_px": o.residual,
         })).collect::<Vec<_>>(),
         "parameters": Value::Object(params),
     })
+}
+
+/// The model part of the text report: the families fitted (and chosen, with
+/// `--model auto`), undetermined parameters with the combination they form, and the misfit
+/// verdict in one plain line.
+pub fn model_text(solution: &Solution) -> String {
+    let mut out = String::new();
+    let families: Vec<&str> = solution.families.iter().map(|f| f.name()).collect();
+    let _ = writeln!(out, "model: {}", families.join(", "));
+    for t in &solution.chosen {
+        let _ = writeln!(
+            out,
+            "  freed {} (misfit test F = {:.1} on {} directions, p = {:.1e})",
+            t.family, t.statistic, t.df, t.p_value
+        );
+    }
+    for u in &solution.undetermined {
+        let _ = writeln!(
+            out,
+            "  {} undetermined, held at nominal: the data cannot see a change along {}",
+            u.param,
+            u.direction.describe()
+        );
+    }
+    let _ = writeln!(out, "diagnosis: {}", solution.misfit.message);
+    out
 }
 
 /// The identifiability part of the text report.

@@ -100,7 +100,7 @@ mod tests {
     fn z_scores(preset: CameraPreset) -> Vec<f64> {
         use crate::model::{FixedSet, Model, PAPER_PARAMETERS, Param};
         use crate::sim::{SimOptions, simulate};
-        use crate::solve::{Problem, backend, solve};
+        use crate::solve::{Problem, UncertaintyOptions, backend, calibrate};
         let model = Model {
             camera: preset.camera(),
             ..Model::default()
@@ -116,7 +116,8 @@ mod tests {
             let dataset = simulate(&model, &options).expect("stances in view");
             let truth = dataset.truth.as_ref().expect("a truth").values;
             let problem = Problem::from_dataset(&dataset, FixedSet::default()).unwrap();
-            let s = solve(&problem, backend("lm", false).unwrap().as_ref()).unwrap();
+            let lm = backend("lm", false).unwrap();
+            let s = calibrate(&problem, lm.as_ref(), &UncertaintyOptions::plain()).unwrap();
             assert!(s.summary.converged, "{} seed {seed}", preset.name());
             for p in &Param::ALL[..PAPER_PARAMETERS] {
                 z.push((s.values[p.index()] - truth[p.index()]) / s.std[p.index()]);

@@ -12,9 +12,9 @@ use naocalib::report::export::{
 };
 use naocalib::report::plot;
 use naocalib::sim::{SimOptions, simulate};
-use naocalib::solve::{Problem, Solution, UncertaintyOptions, backend, calibrate, solve};
+use naocalib::solve::{Problem, Solution, UncertaintyOptions, backend, calibrate};
 
-use crate::util::{naocalib, simulate_small, stderr};
+use crate::util::{naocalib, simulate_small, solve, stderr};
 
 fn small_solution(seed: u64) -> (naocalib::dataset::Dataset, Solution) {
     let options = SimOptions {

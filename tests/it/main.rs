@@ -17,6 +17,7 @@ mod detect_render;
 mod export_robustness;
 mod export_roundtrip;
 mod export_teams;
+mod extended;
 mod plot_files;
 mod pure_rust_agreement;
 mod pure_rust_cli;

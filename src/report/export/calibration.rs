@@ -51,9 +51,9 @@ pub const COMPENSATION: &str = "joint offsets are added to requested joint angle
      subtracted from measured joint angles; camera offsets are rotation corrections of the \
      lower camera in the camera matrix";
 
-/// A final RMS residual beyond this [px] is no plausible detection noise (sub-pixel
-/// detection reaches ~1 px and less): such a fit is not a calibration.
-pub const MAX_PLAUSIBLE_RMS_PX: f64 = 5.0;
+/// A final RMS residual beyond this [px] is no plausible detection noise: such a fit is
+/// not a calibration (the same bound as [`Solution::is_calibration`]).
+pub const MAX_PLAUSIBLE_RMS_PX: f64 = crate::solve::misfit::IMPLAUSIBLE_RMS_PX;
 
 /// One calibrated parameter, in report units (deg, mm, px, 1, deg/(N·m)).
 #[derive(Debug, Clone, Copy, PartialEq)]
