@@ -116,7 +116,7 @@ fn refuses_inputs_and_existing_files() {
     // A malformed file is a clear error.
     std::fs::write(
         dir.path().join("bad.toml"),
-        "format = \"naocalib-calibration\"\n",
+        "format = \"naocalib-calibration\"\nversion = 1\n",
     )
     .unwrap();
     let e = read_calibration(&dir.path().join("bad.toml")).unwrap_err();

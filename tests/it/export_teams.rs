@@ -137,12 +137,15 @@ fn naoth_camera_convention() {
 
 #[test]
 fn hulks_camera_convention() {
-    // HULKs, crates/control/src/camera_matrix_calculator.rs: head_to_camera = Rx(−pitch) ·
-    // Ry(−π/2) · Rx(π/2) · T(−p), mapping head coordinates into the camera frame; and
+    // HULKs, crates/control/src/camera_matrix_calculator.rs: head_to_camera(pitch) =
+    // Rx(−pitch) · Ry(−π/2) · Rx(π/2) · T(−p), mapping head coordinates into the camera
+    // frame, where a camera pitched *down* has a negative pitch (crates/projection/tests/
+    // projection.rs, pixel_to_ground_with_z_pitch_45_degree_down passes −π/4); and
     // crates/projection/src/camera_matrix.rs, CameraMatrix::to_corrected:
     // corrected head_to_camera = correction_in_camera * head_to_camera, the correction
     // being nalgebra's Rotation3::from_euler_angles(x, y, z) = Rz(z)·Ry(y)·Rx(x) [rad].
-    let uncorrected = mul(&mul(&rx(-TILT_DEG.to_radians()), &ry(-FRAC_PI_2)), &rx(FRAC_PI_2));
+    let pitch = -TILT_DEG.to_radians();
+    let uncorrected = mul(&mul(&rx(-pitch), &ry(-FRAC_PI_2)), &rx(FRAC_PI_2));
     // The frames: HULKs' camera is the optical frame, tilted like naocalib's.
     assert_close(
         &transpose(&uncorrected),

@@ -5,9 +5,10 @@
 //!   turned into `Rotation3::from_euler_angles(x, y, z)` = `Rz(z) · Ry(y) · Rx(x)` and
 //!   applied as `correction_in_camera * head_to_camera` (HULKs
 //!   `crates/projection/src/camera_matrix.rs`, `CameraMatrix::to_corrected`), where
-//!   `head_to_camera = Rx(−tilt) · Ry(−π/2) · Rx(π/2) · T(−p)` maps the head frame into
+//!   `head_to_camera = Rx(−pitch) · Ry(−π/2) · Rx(π/2) · T(−p)` maps the head frame into
 //!   an optical camera frame (z forward, x right, y down; HULKs
-//!   `crates/control/src/camera_matrix_calculator.rs`). [`super::camera::hulks`] solves
+//!   `crates/control/src/camera_matrix_calculator.rs`), a camera looking down having a
+//!   negative pitch (HULKs `crates/projection/tests/projection.rs`), here −39.7°. [`super::camera::hulks`] solves
 //!   that for naocalib's rotation exactly; for small angles `x ≈ CamPitch`,
 //!   `y ≈ CamYaw`, `z ≈ −CamRoll` (the optical frame's axes are others).
 //! - Body: `joint_calibration_offsets.{head,left_leg,right_leg}.<joint>` in radians
