@@ -91,7 +91,8 @@ text-align:right;border-bottom:1px solid #eee}th{background:#f4f4f4}td.name,th.n
 .bad{color:#b00;font-weight:bold}.diag{font-family:monospace;white-space:pre-wrap;\
 background:#f8f8f8;padding:.7em;border:1px solid #ddd}figure{margin:1em 0}\
 figcaption{color:#555;font-size:.9em}svg,img{max-width:100%;height:auto}\
-.captures{max-height:24em;overflow:auto;display:inline-block}";
+.captures{max-height:24em;overflow:auto;display:inline-block}\
+.overlays{display:flex;flex-wrap:wrap;gap:1em}.overlays figure{flex:1 1 30%;margin:0}";
 
 /// One solution's part of a page.
 pub struct Section<'a> {
@@ -320,7 +321,7 @@ fn section(out: &mut String, s: &Section<'_>) -> Result<(), ReportError> {
     );
     capture_table(out, s.solution, sides);
     if let (true, Some(dataset)) = (s.overlays, s.dataset) {
-        out.push_str("<h3>Worst captures</h3>\n");
+        out.push_str("<h3>Worst captures</h3>\n<div class=\"overlays\">\n");
         for (id, rms) in worst_captures(s.solution, OVERLAYS) {
             let png = overlay_png(s.solution, dataset, id)?;
             let _ = writeln!(
@@ -332,6 +333,7 @@ fn section(out: &mut String, s: &Section<'_>) -> Result<(), ReportError> {
                 base64(&png)
             );
         }
+        out.push_str("</div>\n");
     }
     Ok(())
 }

@@ -132,6 +132,7 @@ mod tests {
             let z = z_scores(preset);
             let rms = (z.iter().map(|z| z * z).sum::<f64>() / z.len() as f64).sqrt();
             let max = z.iter().fold(0.0f64, |m, z| m.max(z.abs()));
+            eprintln!("{}: rms z {rms:.3}, max |z| {max:.2}", preset.name());
             // Unbiased estimates with honest sigmas: z-scores like draws of N(0, 1).
             assert!((0.6..1.5).contains(&rms), "{}: rms z {rms}", preset.name());
             assert!(max < 4.5, "{}: max |z| {max}", preset.name());
