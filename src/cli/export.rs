@@ -46,12 +46,13 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
     if args.out.is_empty() && args.dir.is_none() {
         bail!("nothing to write: give --out FILE or --dir DIR");
     }
-    let format = match &args.format {
-        Some(name) => Some(ExportFormat::from_name(name).with_context(|| {
-            format!("unknown --format '{name}' ({})", ExportFormat::names())
-        })?),
-        None => None,
-    };
+    let format =
+        match &args.format {
+            Some(name) => Some(ExportFormat::from_name(name).with_context(|| {
+                format!("unknown --format '{name}' ({})", ExportFormat::names())
+            })?),
+            None => None,
+        };
     let calibration = read_calibration(&args.input)?;
     let problems = calibration.problems();
     if !problems.is_empty() {

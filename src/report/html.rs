@@ -63,8 +63,7 @@ pub fn escape(text: &str) -> String {
 
 /// Standard base64 (RFC 4648, with padding) of `bytes`, for `data:` URLs.
 pub fn base64(bytes: &[u8]) -> String {
-    const ALPHABET: &[u8; 64] =
-        b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
     for chunk in bytes.chunks(3) {
         let b = [
@@ -108,6 +107,8 @@ pub struct Section<'a> {
     pub truth: Option<&'a [f64]>,
     /// Whether to draw overlays of the worst captures (needs `dataset`).
     pub overlays: bool,
+    /// Appended to the section's element ids, to keep them unique on a page of several.
+    pub id_suffix: String,
 }
 
 fn page_start(out: &mut String, title: &str) {
@@ -134,8 +135,10 @@ fn inline_svg(svg: &str) -> &str {
 }
 
 fn parameter_table(out: &mut String, solution: &Solution, truth: Option<&[f64]>) {
-    out.push_str("<table>\n<tr><th class=\"name\">parameter</th><th>value</th><th>±1σ</th>\
-                  <th class=\"name\">unit</th><th>sandwich σ</th>");
+    out.push_str(
+        "<table>\n<tr><th class=\"name\">parameter</th><th>value</th><th>±1σ</th>\
+                  <th class=\"name\">unit</th><th>sandwich σ</th>",
+    );
     if truth.is_some() {
         out.push_str("<th>truth</th><th>error</th><th>err/σ</th>");
     }
@@ -179,12 +182,12 @@ fn parameter_table(out: &mut String, solution: &Solution, truth: Option<&[f64]>)
 fn capture_table(out: &mut String, solution: &Solution, sides: Option<&BTreeMap<u64, Side>>) {
     let mut rms = plot::capture_rms_values(solution);
     rms.sort_by(|a, b| b.1.total_cmp(&a.1));
-    out.push_str("<div class=\"captures\"><table>\n<tr><th>capture</th><th class=\"name\">board</th>\
-                  <th>RMS [px]</th></tr>\n");
+    out.push_str(
+        "<div class=\"captures\"><table>\n<tr><th>capture</th><th class=\"name\">board</th>\
+                  <th>RMS [px]</th></tr>\n",
+    );
     for (id, r) in rms {
-        let side = sides
-            .and_then(|s| s.get(&id))
-            .map_or("–", |s| s.name());
+        let side = sides.and_then(|s| s.get(&id)).map_or("–", |s| s.name());
         let _ = writeln!(
             out,
             "<tr><td>{id}</td><td class=\"name\">{side}</td><td>{r:.3}</td></tr>"
@@ -257,8 +260,10 @@ pub fn overlay_png(
                 continue;
             };
             // Residual = projection − detection.
-            for (res, color) in [(r.initial, RGBColor(230, 0, 0)), (r.solved, RGBColor(0, 90, 255))]
-            {
+            for (res, color) in [
+                (r.initial, RGBColor(230, 0, 0)),
+                (r.solved, RGBColor(0, 90, 255)),
+            ] {
                 let p = [d[0] + res[0], d[1] + res[1]];
                 if ok(p) {
                     root.draw(&Circle::new(at(p), 5, color.stroke_width(2)))
@@ -300,23 +305,29 @@ fn section(out: &mut String, s: &Section<'_>) -> Result<(), ReportError> {
     parameter_table(out, s.solution, s.truth);
     out.push_str("<h3>Diagnosis</h3>\n<div class=\"diag\">");
     for line in super::diagnosis(s.solution) {
-        let class = if line.contains("NOT") { " class=\"bad\"" } else { "" };
+        let class = if line.contains("NOT") {
+            " class=\"bad\""
+        } else {
+            ""
+        };
         let _ = writeln!(out, "<span{class}>{}</span>", escape(&line));
     }
     out.push_str("</div>\n<h3>Residuals</h3>\n");
     let scatter = plot::residual_scatter_svg(s.solution, sides)?;
     let _ = writeln!(
         out,
-        "<figure id=\"residuals\">{}<figcaption>Residual (projection − detection) of every \
+        "<figure id=\"residuals{}\">{}<figcaption>Residual (projection − detection) of every \
          vertex before and after the solve, by board.</figcaption></figure>",
+        s.id_suffix,
         inline_svg(&scatter)
     );
     out.push_str("<h3>RMS residual per capture</h3>\n");
     let captures = plot::capture_rms_svg(s.solution, sides)?;
     let _ = writeln!(
         out,
-        "<figure id=\"captures\">{}<figcaption>RMS residual of each capture after the solve.\
+        "<figure id=\"captures{}\">{}<figcaption>RMS residual of each capture after the solve.\
          </figcaption></figure>",
+        s.id_suffix,
         inline_svg(&captures)
     );
     capture_table(out, s.solution, sides);
@@ -354,6 +365,7 @@ pub fn solve_page(solution: &Solution, dataset: &Dataset) -> Result<String, Repo
             sides: None,
             truth,
             overlays: true,
+            id_suffix: String::new(),
         },
     )?;
     page_end(&mut out);
@@ -366,7 +378,10 @@ pub fn batch_page(batch: &Batch, drift: &DriftOptions) -> Result<String, ReportE
     let mut out = String::new();
     page_start(
         &mut out,
-        &format!("naocalib batch of {} datasets", batch.runs.len() + batch.failures.len()),
+        &format!(
+            "naocalib batch of {} datasets",
+            batch.runs.len() + batch.failures.len()
+        ),
     );
     out.push_str("<h2>Summary</h2>\n<div class=\"diag\">");
     out.push_str(&escape(&batch.table(drift)));
@@ -381,7 +396,7 @@ pub fn batch_page(batch: &Batch, drift: &DriftOptions) -> Result<String, ReportE
             inline_svg(&svg)
         );
     }
-    for run in &batch.runs {
+    for (k, run) in batch.runs.iter().enumerate() {
         section(
             &mut out,
             &Section {
@@ -391,6 +406,7 @@ pub fn batch_page(batch: &Batch, drift: &DriftOptions) -> Result<String, ReportE
                 sides: Some(&run.sides),
                 truth: run.truth.as_ref().map(|t| &t[..]),
                 overlays: false,
+                id_suffix: format!("-{}", k + 1),
             },
         )?;
     }

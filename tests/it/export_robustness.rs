@@ -59,7 +59,10 @@ fn plots_of_non_finite_residuals_end() {
     assert_eq!(files.unwrap(), 4);
     assert!(svg);
     let text = std::fs::read_to_string(dir.path().join("bad_residuals.svg")).unwrap();
-    assert!(text.contains("non-finite left out"), "says what it left out");
+    assert!(
+        text.contains("non-finite left out"),
+        "says what it left out"
+    );
 }
 
 #[test]

@@ -233,7 +233,11 @@ fn joint_formats_round_trip() {
         assert_eq!(name, read_name);
         assert_eq!(entry.offset, param.map_or(0.0, |p| cal.value(p)), "{name}");
         let play = param.and_then(nomadz::play_param);
-        assert_eq!(entry.joint_play, play.map_or(0.0, |p| cal.value(p)), "{name}");
+        assert_eq!(
+            entry.joint_play,
+            play.map_or(0.0, |p| cal.value(p)),
+            "{name}"
+        );
         assert!(entry.min_angle <= entry.max_angle);
     }
     let knee = back.iter().find(|(n, _)| n == "lKneePitch").unwrap().1;
@@ -249,7 +253,10 @@ fn joint_formats_round_trip() {
     assert_eq!(naoth, export::camera::naoth(&cal));
     let runswift =
         runswift::read_kinematics_cfg(&runswift::kinematics_cfg(&cal), Path::new("-")).unwrap();
-    assert_eq!(runswift, export::camera::runswift(&cal).map(f64::to_degrees));
+    assert_eq!(
+        runswift,
+        export::camera::runswift(&cal).map(f64::to_degrees)
+    );
 }
 
 #[test]
@@ -264,7 +271,10 @@ fn every_format_is_written_by_export_all_and_says_its_units() {
         let text = std::fs::read_to_string(dir.path().join(file)).unwrap();
         assert!(!text.contains("NOT A CALIBRATION"), "{file}");
         if !file.ends_with(".json") {
-            assert!(text.contains("ADDED to requested"), "{file} states the rule");
+            assert!(
+                text.contains("ADDED to requested"),
+                "{file} states the rule"
+            );
             assert!(text.contains("Units:"), "{file} states its units");
         }
     }

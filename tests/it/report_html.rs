@@ -70,7 +70,10 @@ fn sample_report_is_well_formed_and_complete() {
     }
     // The diagnosis, line by line.
     for line in report::diagnosis(&solution) {
-        assert!(page.contains(&html::escape(&line)), "diagnosis lacks {line}");
+        assert!(
+            page.contains(&html::escape(&line)),
+            "diagnosis lacks {line}"
+        );
     }
     assert!(page.contains("converged after"));
     // The residual plot and the per-capture RMS, inline SVG.
@@ -83,7 +86,12 @@ fn sample_report_is_well_formed_and_complete() {
             .descendants()
             .find(|n| n.tag_name().name() == "svg")
             .expect("an inline svg");
-        assert!(svg.descendants().filter(|n| n.has_tag_name("circle")).count() > 20);
+        assert!(
+            svg.descendants()
+                .filter(|n| n.has_tag_name("circle"))
+                .count()
+                > 20
+        );
     }
     // Overlays of the worst captures: PNG images in data URLs.
     let images: Vec<&str> = doc
@@ -133,4 +141,63 @@ fn solve_report_flag_writes_the_file() {
         .output()
         .unwrap();
     crate::util::assert_clean_failure(&out, &["already exists"]);
+}
+
+#[test]
+fn batch_report_holds_every_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    for seed in [1, 2] {
+        crate::util::simulate_small(&tmp.path().join(format!("robot/run{seed}")), seed);
+    }
+    let path = tmp.path().join("batch.html");
+    let out = naocalib()
+        .args(["batch", "--solver", "lm", "--no-progress", "--report"])
+        .arg(&path)
+        .arg(tmp.path().join("robot"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = std::fs::read_to_string(&path).unwrap();
+    let doc = roxmltree::Document::parse_with_options(
+        &text,
+        roxmltree::ParsingOptions {
+            allow_dtd: true,
+            ..Default::default()
+        },
+    )
+    .expect("well-formed");
+    check_self_contained(&doc, &text);
+    assert!(text.contains("run1") && text.contains("run2"));
+    assert!(
+        doc.descendants()
+            .any(|n| n.attribute("id") == Some("estimates"))
+    );
+    assert_eq!(
+        doc.descendants()
+            .filter(|n| n
+                .attribute("id")
+                .is_some_and(|id| id.starts_with("residuals-")))
+            .count(),
+        2
+    );
+}
+
+#[test]
+fn element_ids_are_unique() {
+    let dataset = Dataset::load(&sample()).unwrap();
+    let problem = Problem::from_dataset(&dataset, FixedSet::default()).unwrap();
+    let lm = backend("lm", false).unwrap();
+    let solution = calibrate(&problem, lm.as_ref(), &UncertaintyOptions::plain()).unwrap();
+    let page = html::solve_page(&solution, &dataset).unwrap();
+    let mut ids: Vec<&str> = page
+        .match_indices(" id=\"")
+        .map(|(i, m)| {
+            let rest = &page[i + m.len()..];
+            &rest[..rest.find('"').unwrap()]
+        })
+        .collect();
+    let n = ids.len();
+    ids.sort();
+    ids.dedup();
+    assert_eq!(ids.len(), n, "duplicate ids");
 }

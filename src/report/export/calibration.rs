@@ -228,9 +228,8 @@ impl Calibration {
     /// Reads a calibration JSON written by [`Calibration::to_json`], or the result JSON of
     /// `naocalib solve --json` (a run of `naocalib batch --out`).
     pub fn from_json(text: &str, path: &Path) -> Result<Self, ExportError> {
-        let json_error = |e: serde_json::Error| {
-            parse_error(path, format!("line {}: {e}", e.line()))
-        };
+        let json_error =
+            |e: serde_json::Error| parse_error(path, format!("line {}: {e}", e.line()));
         let probe: Value = serde_json::from_str(text).map_err(json_error)?;
         if probe.get("format").is_some() {
             let file: CalibrationIn = serde_json::from_str(text).map_err(json_error)?;

@@ -329,7 +329,9 @@ pub fn export_all(
     dir: &Path,
     options: &WriteOptions,
 ) -> Result<Vec<PathBuf>, ExportError> {
-    check_usable(cal, || format!("the calibration files into {}", dir.display()))?;
+    check_usable(cal, || {
+        format!("the calibration files into {}", dir.display())
+    })?;
     let paths: Vec<PathBuf> = ExportFormat::ALL
         .iter()
         .map(|(_, _, name)| dir.join(name))

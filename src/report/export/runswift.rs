@@ -79,9 +79,9 @@ pub fn ini_section(
         if !inside {
             continue;
         }
-        let (key, value) = line.split_once('=').ok_or_else(|| {
-            parse_error(path, format!("line {}: expected key=value", n + 1))
-        })?;
+        let (key, value) = line
+            .split_once('=')
+            .ok_or_else(|| parse_error(path, format!("line {}: expected key=value", n + 1)))?;
         let value: f64 = value.trim().parse().map_err(|_| {
             parse_error(
                 path,
