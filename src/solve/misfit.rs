@@ -19,7 +19,7 @@
 use nalgebra::{DMatrix, DVector};
 use statrs::distribution::{ContinuousCDF, FisherSnedecor};
 
-use super::identify::UNDETERMINED_RATIO;
+use super::identify::threshold;
 use super::jacobian::Evaluator;
 use super::problem::Problem;
 use crate::model::{Family, FixedSet, PARAMETER_COUNT, Param};
@@ -138,7 +138,7 @@ pub fn family_tests(
                     continue;
                 }
                 let projected = &j - &q * (q.transpose() * &j);
-                if projected.norm() / norm >= UNDETERMINED_RATIO {
+                if projected.norm() / norm >= threshold(p) {
                     kept.push(p);
                     cols.push(projected / norm);
                 }
@@ -210,7 +210,7 @@ pub fn verdict(tests: Vec<FamilyTest>, rms_px: [f64; 2], joint_noise_deg: Option
     significant.sort_by(|a, b| b.explained_px2.total_cmp(&a.explained_px2));
     let suggest: Vec<Family> = significant.iter().map(|t| t.family).collect();
     let rms = rms_px[0].max(rms_px[1]);
-    let implausible = !(rms <= IMPLAUSIBLE_RMS_PX);
+    let implausible = rms.is_nan() || rms > IMPLAUSIBLE_RMS_PX;
     let noisy = joint_noise_deg.is_some_and(|j| j > IMPLAUSIBLE_JOINT_NOISE_DEG);
     let detected = !suggest.is_empty() || implausible || noisy;
     let names: Vec<&str> = suggest.iter().map(|f| f.name()).collect();

@@ -18,6 +18,7 @@ mod export_robustness;
 mod export_roundtrip;
 mod export_teams;
 mod extended;
+mod misfit;
 mod plot_files;
 mod pure_rust_agreement;
 mod pure_rust_cli;
