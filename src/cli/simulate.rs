@@ -102,8 +102,10 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
             force: args.force,
         }),
     };
-    let mut model = Model::default();
-    model.camera = args.camera.camera();
+    let mut model = Model {
+        camera: args.camera.camera(),
+        ..Model::default()
+    };
     if let Some(d) = &args.distortion {
         anyhow::ensure!(
             d.len() == 5,
