@@ -321,7 +321,7 @@ pub fn residual_scatter(
     )
 }
 
-/// The RMS residual `√(mean(Δu² + Δv²))` of each capture at the solution [px], by capture
+/// The RMS residual `√(mean(Δu² + Δv²))` of each capture at the solution (px), by capture
 /// id, with its board.
 pub fn capture_rms_values(solution: &Solution) -> Vec<(u64, f64)> {
     let mut sums: BTreeMap<u64, (f64, usize)> = BTreeMap::new();

@@ -20,9 +20,9 @@ pub enum CameraPreset {
     V6Hd,
 }
 
-/// The V6 cameras' horizontal field of view [deg].
+/// The V6 cameras' horizontal field of view (deg).
 pub const V6_HFOV_DEG: f64 = 56.3;
-/// The V6 cameras' vertical field of view [deg].
+/// The V6 cameras' vertical field of view (deg).
 pub const V6_VFOV_DEG: f64 = 43.7;
 
 impl CameraPreset {
@@ -60,7 +60,7 @@ impl CameraPreset {
 }
 
 /// A distortion-free camera of `width` × `height` pixels with the given fields of view
-/// [deg]: `fx = (w/2) / tan(hfov/2)`, `fy = (h/2) / tan(vfov/2)`, principal point at the
+/// (deg): `fx = (w/2) / tan(hfov/2)`, `fy = (h/2) / tan(vfov/2)`, principal point at the
 /// image centre.
 pub fn from_fov(width: u32, height: u32, hfov_deg: f64, vfov_deg: f64) -> Camera {
     let focal = |size: u32, fov: f64| (f64::from(size) / 2.0) / (fov.to_radians() / 2.0).tan();

@@ -51,7 +51,7 @@ pub const COMPENSATION: &str = "joint offsets are added to requested joint angle
      subtracted from measured joint angles; camera offsets are rotation corrections of the \
      lower camera in the camera matrix";
 
-/// A final RMS residual beyond this [px] is no plausible detection noise: such a fit is
+/// A final RMS residual beyond this (px) is no plausible detection noise: such a fit is
 /// not a calibration (the same bound as [`Solution::is_calibration`]).
 pub const MAX_PLAUSIBLE_RMS_PX: f64 = crate::solve::misfit::IMPLAUSIBLE_RMS_PX;
 
@@ -96,7 +96,7 @@ pub struct Calibration {
     pub dataset: Option<String>,
     /// Whether the solver converged, when known.
     pub converged: Option<bool>,
-    /// The final RMS residual `[x, y]` [px], when known.
+    /// The final RMS residual `[x, y]` (px), when known.
     pub rms_px: Option<[f64; 2]>,
     /// The parameters, in the order of [`Param::ALL`].
     pub parameters: Vec<Entry>,

@@ -18,7 +18,7 @@ use nalgebra::{Matrix3, Rotation3, Vector3};
 use super::Calibration;
 use crate::model::Param;
 
-/// The lower camera's tilt below the head's x axis that the teams' code hard-codes [deg]
+/// The lower camera's tilt below the head's x axis that the teams' code hard-codes (deg)
 /// (`tiltNeckToLowerCamera`, `CAMERA_BOTTOM_PITCH_DEGREES`, `camera_bottom_angle`, …).
 pub const NOMINAL_TILT_DEG: f64 = 39.7;
 
@@ -46,12 +46,12 @@ pub fn optical_axes() -> Matrix3<f64> {
     Matrix3::from_fn(|r, c| OPTICAL_AXES[r][c])
 }
 
-/// naocalib's camera offsets `(CamYaw, CamPitch, CamRoll)` [rad] of `cal`.
+/// naocalib's camera offsets `(CamYaw, CamPitch, CamRoll)` (rad) of `cal`.
 pub fn offsets_rad(cal: &Calibration) -> [f64; 3] {
     [Param::CamYaw, Param::CamPitch, Param::CamRoll].map(|p| cal.value(p).to_radians())
 }
 
-/// naocalib's correction `Rc = Ry(pitch) · Rx(roll) · Rz(yaw)` [rad].
+/// naocalib's correction `Rc = Ry(pitch) · Rx(roll) · Rz(yaw)` (rad).
 pub fn correction(yaw: f64, pitch: f64, roll: f64) -> Matrix3<f64> {
     rot_y(pitch) * rot_x(roll) * rot_z(yaw)
 }
@@ -83,14 +83,14 @@ pub fn zxz_angles_negative(m: &Matrix3<f64>) -> [f64; 3] {
 
 /// B-Human (and its descendants): `rotateY(tilt + y) · rotateX(x) · rotateZ(z)` in the
 /// same camera frame — naocalib's order, so `[x, y, z] = [CamRoll, CamPitch, CamYaw]`
-/// [rad], exactly.
+/// (rad), exactly.
 pub fn bhuman(cal: &Calibration) -> [f64; 3] {
     let [yaw, pitch, roll] = offsets_rad(cal);
     [roll, pitch, yaw]
 }
 
 /// NaoTH: `rotateZ(z) · rotateY(y + tilt) · rotateX(x)` in the same camera frame (x
-/// forward, y left, z up): `[x, y, z]` [rad] with `Rz(z) · Ry(tilt + y) · Rx(x) = Ry(tilt)
+/// forward, y left, z up): `[x, y, z]` (rad) with `Rz(z) · Ry(tilt + y) · Rx(x) = Ry(tilt)
 /// · Rc`.
 pub fn naoth(cal: &Calibration) -> [f64; 3] {
     let [z, b, x] = zyx_angles(&head_from_camera(cal));
@@ -99,7 +99,7 @@ pub fn naoth(cal: &Calibration) -> [f64; 3] {
 
 /// HULKs: the head → camera rotation (optical frame) is `C · R₀` with the correction
 /// `C = Rz(z) · Ry(y) · Rx(x)` (nalgebra's `from_euler_angles(x, y, z)`) applied on the
-/// camera side. With `Q` = [`optical_axes`], `C = Qᵀ · Rcᵀ · Q`; returns `[x, y, z]` [rad].
+/// camera side. With `Q` = [`optical_axes`], `C = Qᵀ · Rcᵀ · Q`; returns `[x, y, z]` (rad).
 pub fn hulks(cal: &Calibration) -> [f64; 3] {
     let [yaw, pitch, roll] = offsets_rad(cal);
     let q = optical_axes();
@@ -116,7 +116,7 @@ pub fn runswift_base() -> Matrix3<f64> {
 }
 
 /// rUNSWift: camera → head is `A · Rz(π/2 + yaw) · Rx(−π/2 + pitch) · Rz(roll)` in the
-/// optical camera frame; returns `[yaw, pitch, roll]` [rad] with that equal to
+/// optical camera frame; returns `[yaw, pitch, roll]` (rad) with that equal to
 /// `Ry(tilt) · Rc · Q`.
 pub fn runswift(cal: &Calibration) -> [f64; 3] {
     use std::f64::consts::FRAC_PI_2;

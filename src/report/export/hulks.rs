@@ -77,7 +77,7 @@ fn pretty(value: &impl Serialize) -> String {
     s
 }
 
-/// The per-head JSON: the lower camera's correction `[x, y, z]` [rad].
+/// The per-head JSON: the lower camera's correction `[x, y, z]` (rad).
 pub fn head_json(cal: &Calibration) -> String {
     pretty(&HeadFile {
         naocalib_not_a_calibration: marker(cal),
@@ -90,7 +90,7 @@ pub fn head_json(cal: &Calibration) -> String {
 }
 
 /// The leg (and head, when estimated) joint offsets of `cal` by HULKs group and name
-/// [rad]; joints whose offsets are absent are left out (HULKs keeps its default).
+/// (rad); joints whose offsets are absent are left out (HULKs keeps its default).
 fn offsets(cal: &Calibration) -> BTreeMap<String, BTreeMap<String, f64>> {
     let mut out: BTreeMap<String, BTreeMap<String, f64>> = BTreeMap::new();
     for side in [Side::Left, Side::Right] {
@@ -116,7 +116,7 @@ fn offsets(cal: &Calibration) -> BTreeMap<String, BTreeMap<String, f64>> {
     out
 }
 
-/// The per-body JSON: `joint_calibration_offsets` [rad].
+/// The per-body JSON: `joint_calibration_offsets` (rad).
 pub fn body_json(cal: &Calibration) -> String {
     pretty(&BodyFile {
         naocalib_not_a_calibration: marker(cal),
@@ -124,7 +124,7 @@ pub fn body_json(cal: &Calibration) -> String {
     })
 }
 
-/// Reads back a [`head_json`] file: the correction `[x, y, z]` [rad].
+/// Reads back a [`head_json`] file: the correction `[x, y, z]` (rad).
 pub fn read_head_json(text: &str, path: &Path) -> Result<[f64; 3], ExportError> {
     let file: HeadFile = serde_json::from_str(text)
         .map_err(|e| parse_error(path, format!("line {}: {e}", e.line())))?;
@@ -134,7 +134,7 @@ pub fn read_head_json(text: &str, path: &Path) -> Result<[f64; 3], ExportError> 
         .correction_in_camera_bottom)
 }
 
-/// Reads back a [`body_json`] file: each offset by naocalib parameter [rad].
+/// Reads back a [`body_json`] file: each offset by naocalib parameter (rad).
 pub fn read_body_json(text: &str, path: &Path) -> Result<Vec<(Param, f64)>, ExportError> {
     let file: BodyFile = serde_json::from_str(text)
         .map_err(|e| parse_error(path, format!("line {}: {e}", e.line())))?;

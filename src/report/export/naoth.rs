@@ -40,7 +40,7 @@ pub fn camera_matrix_offset_cfg(cal: &Calibration) -> String {
     s
 }
 
-/// Reads back a [`camera_matrix_offset_cfg`] file: `[x, y, z]` [rad].
+/// Reads back a [`camera_matrix_offset_cfg`] file: `[x, y, z]` (rad).
 pub fn read_camera_matrix_offset_cfg(text: &str, path: &Path) -> Result<[f64; 3], ExportError> {
     let values = super::runswift::ini_section(text, SECTION, path)?;
     let mut out = [0.0; 3];

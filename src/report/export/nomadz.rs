@@ -20,7 +20,7 @@ use super::bhuman::BHUMAN_JOINTS;
 use super::{Calibration, ExportError, header, num, parse_error};
 use crate::model::Param;
 
-/// NomadZ's default `(minAngle, maxAngle)` [deg] of each joint, in [`BHUMAN_JOINTS`]
+/// NomadZ's default `(minAngle, maxAngle)` (deg) of each joint, in [`BHUMAN_JOINTS`]
 /// order.
 pub const LIMITS_DEG: [(f64, f64); 26] = [
     (-120.0, 120.0),
@@ -57,7 +57,7 @@ pub fn play_param(offset: Param) -> Option<Param> {
     Param::from_name(&format!("{}Play", offset.name()))
 }
 
-/// One joint as NomadZ reads it [deg].
+/// One joint as NomadZ reads it (deg).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct JointEntry {
     /// The offset.

@@ -41,7 +41,7 @@ pub fn kinematics_cfg(cal: &Calibration) -> String {
     s
 }
 
-/// Reads back a [`kinematics_cfg`] file: `[yaw, pitch, roll]` [deg].
+/// Reads back a [`kinematics_cfg`] file: `[yaw, pitch, roll]` (deg).
 pub fn read_kinematics_cfg(text: &str, path: &Path) -> Result<[f64; 3], ExportError> {
     let values = ini_section(text, SECTION, path)?;
     let mut out = [0.0; 3];
