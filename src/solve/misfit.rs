@@ -221,9 +221,14 @@ pub fn verdict(tests: Vec<FamilyTest>, rms_px: [f64; 2], joint_noise_deg: Option
              angles"
         )
     } else if !suggest.is_empty() {
+        let auto = if suggest.iter().any(|f| super::AUTO_FAMILIES.contains(f)) {
+            " (or --model auto)"
+        } else {
+            ""
+        };
         format!(
             "misfit: the residuals hold structure the fitted model cannot produce; the data \
-             point to {} — try --free {} (or --model auto)",
+             point to {} — try --free {}{auto}",
             names.join(", "),
             names.join(",")
         )
