@@ -49,6 +49,10 @@ pub struct BatchArgs {
     /// each run's residuals and per-capture RMS.
     #[arg(long, value_name = "DIR")]
     plots: Option<PathBuf>,
+    /// Write one self-contained HTML report of every run (summary, estimates across runs,
+    /// each run's parameters, diagnosis and plots) to this file.
+    #[arg(long, value_name = "FILE.html")]
+    report: Option<PathBuf>,
     /// Replace existing output files (never a dataset's files).
     #[arg(long)]
     force: bool,
@@ -138,6 +142,11 @@ pub fn run(args: &BatchArgs, verbose: bool) -> Result<ExitCode> {
     if let Some(dir) = &args.plots {
         let files = result.plots(dir, &write_options).context("--plots")?;
         eprintln!("wrote {} plot files into {}", files.len(), dir.display());
+    }
+    if let Some(path) = &args.report {
+        naocalib::report::html::write_batch_report(&result, &options.drift, path, &write_options)
+            .context("--report")?;
+        eprintln!("wrote {}", path.display());
     }
     let mut stdout = std::io::stdout().lock();
     if args.json {

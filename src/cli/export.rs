@@ -7,8 +7,10 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 
+use naocalib::report::export::io::check_writable;
 use naocalib::report::export::{
-    Calibration, ExportFormat, WriteOptions, export, export_all, read_calibration,
+    Calibration, ExportError, ExportFormat, WriteOptions, export, export_all, read_calibration,
+    write_atomic,
 };
 use naocalib::report::plot;
 use naocalib::solve::Solution;
@@ -22,16 +24,21 @@ pub struct ExportArgs {
     /// *camera*.cfg, *joint*.cfg). May be given several times.
     #[arg(long, value_name = "FILE")]
     out: Vec<PathBuf>,
-    /// Format of the --out files: toml, json, bhuman-camera, bhuman-joints.
+    /// Format of the --out files: toml, json, bhuman-camera, bhuman-joints, hulks-head,
+    /// hulks-body, naoth-camera, nomadz-joints, runswift-camera (docs/EXPORTS.md).
     #[arg(long, value_name = "FORMAT")]
     format: Option<String>,
     /// Write every format into this directory (calibration.toml, calibration.json,
-    /// cameraCalibration.cfg, jointCalibration.cfg).
+    /// cameraCalibration.cfg, jointCalibration.cfg, hulks/, naoth/, nomadz/, runswift/).
     #[arg(long, value_name = "DIR")]
     dir: Option<PathBuf>,
     /// Replace existing files (never the input).
     #[arg(long)]
     force: bool,
+    /// Write robot files even for a result that is not a calibration (not converged,
+    /// non-finite, implausible residuals); they start with a NOT A CALIBRATION marker.
+    #[arg(long)]
+    allow_unconverged: bool,
 }
 
 /// Runs `naocalib export`.
@@ -39,30 +46,59 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
     if args.out.is_empty() && args.dir.is_none() {
         bail!("nothing to write: give --out FILE or --dir DIR");
     }
-    let format = match &args.format {
-        Some(name) => Some(ExportFormat::from_name(name).with_context(|| {
-            format!("unknown --format '{name}' (toml, json, bhuman-camera, bhuman-joints)")
-        })?),
-        None => None,
-    };
+    let format =
+        match &args.format {
+            Some(name) => Some(ExportFormat::from_name(name).with_context(|| {
+                format!("unknown --format '{name}' ({})", ExportFormat::names())
+            })?),
+            None => None,
+        };
     let calibration = read_calibration(&args.input)?;
+    let problems = calibration.problems();
+    if !problems.is_empty() {
+        eprintln!(
+            "warning: {} is not a calibration: {}",
+            args.input.display(),
+            problems.join("; ")
+        );
+    }
     let options = WriteOptions {
         force: args.force,
         inputs: vec![args.input.clone()],
     };
     let mut written = Vec::new();
+    let mut targets: Vec<(ExportFormat, PathBuf)> = Vec::new();
     for path in &args.out {
         let format = match format.or_else(|| ExportFormat::from_path(path)) {
             Some(f) => f,
-            None => {
-                bail!(naocalib::report::export::ExportError::UnknownFormat { path: path.clone() })
-            }
+            None => bail!(ExportError::UnknownFormat { path: path.clone() }),
         };
-        export(&calibration, format, path, &options)?;
-        written.push(path.clone());
+        targets.push((format, path.clone()));
     }
     if let Some(dir) = &args.dir {
-        written.extend(export_all(&calibration, dir, &options)?);
+        targets.extend(
+            ExportFormat::ALL
+                .iter()
+                .map(|(format, _, name)| (*format, dir.join(name))),
+        );
+    }
+    if !args.allow_unconverged
+        && !problems.is_empty()
+        && let Some((_, path)) = targets.iter().find(|(f, _)| f.is_robot_format())
+    {
+        return Err(anyhow::Error::new(ExportError::NotACalibration {
+            what: path.display().to_string(),
+            reasons: problems,
+        })
+        .context("give --allow-unconverged to write it anyway, marked NOT A CALIBRATION"));
+    }
+    // Every path is checked before any file is written.
+    for (_, path) in &targets {
+        check_writable(path, &options)?;
+    }
+    for (format, path) in targets {
+        write_atomic(&path, format.render(&calibration).as_bytes(), &options)?;
+        written.push(path);
     }
     for path in written {
         println!("wrote {}", path.display());
@@ -70,13 +106,16 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// The extra outputs of `naocalib solve`: plots into `plots` and the calibration files
-/// into `export_dir`, never over a file of the dataset in `dataset`. Reports on stderr.
+/// The extra outputs of `naocalib solve`: plots into `plots`, the calibration files into
+/// `export_dir` and the HTML report into `report`, never over a file of the dataset in
+/// `dataset`. Reports on stderr. A result that is not a calibration gets only naocalib's
+/// own calibration.toml/.json (which say so), with a warning, and no robot files.
 pub fn solve_outputs(
     solution: &Solution,
     dataset: &naocalib::dataset::Dataset,
     plots: Option<&Path>,
     export_dir: Option<&Path>,
+    report: Option<&Path>,
     force: bool,
 ) -> Result<()> {
     let options = WriteOptions::protecting_dataset(&dataset.dir, force);
@@ -88,10 +127,31 @@ pub fn solve_outputs(
     }
     if let Some(dir) = export_dir {
         let calibration = Calibration::from_solution(solution, Some(&dataset.dir));
-        let files: Vec<PathBuf> = export_all(&calibration, dir, &options).context("--export")?;
+        let problems = calibration.problems();
+        let files: Vec<PathBuf> = if problems.is_empty() {
+            export_all(&calibration, dir, &options).context("--export")?
+        } else {
+            eprintln!(
+                "warning: not a calibration ({}); --export writes only calibration.toml and \
+                 calibration.json, marked so, and no robot files",
+                problems.join("; ")
+            );
+            let mut files = Vec::new();
+            for format in [ExportFormat::Toml, ExportFormat::Json] {
+                let path = dir.join(format!("calibration.{}", format.name()));
+                export(&calibration, format, &path, &options).context("--export")?;
+                files.push(path);
+            }
+            files
+        };
         for f in files {
             eprintln!("wrote {}", f.display());
         }
+    }
+    if let Some(path) = report {
+        naocalib::report::html::write_report(solution, dataset, path, &options)
+            .context("--report")?;
+        eprintln!("wrote {}", path.display());
     }
     Ok(())
 }

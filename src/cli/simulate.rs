@@ -8,6 +8,7 @@ use clap::Args;
 
 use naocalib::model::{Family, Model};
 use naocalib::sim::SimOptions;
+use naocalib::sim::camera::CameraPreset;
 
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
@@ -52,6 +53,10 @@ pub struct SimulateArgs {
     /// Image vignetting: relative loss of brightness in the corners (with --images).
     #[arg(long, default_value_t = 0.3, requires = "images")]
     vignetting: f64,
+    /// The simulated lower camera: v4 (the paper's: 640×480, f 562.5 px), v6 (V6 field of
+    /// view 56.3°×43.7° at 640×480) or v6-1280x960; its intrinsics go into dataset.toml.
+    #[arg(long, default_value = "v4", value_name = "CAMERA", value_parser = parse_camera)]
+    camera: CameraPreset,
     /// Lens distortion k1,k2,p1,p2,k3 (OpenCV order) of the simulated camera.
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     distortion: Option<Vec<f64>>,
@@ -97,7 +102,10 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
             force: args.force,
         }),
     };
-    let mut model = Model::default();
+    let mut model = Model {
+        camera: args.camera.camera(),
+        ..Model::default()
+    };
     if let Some(d) = &args.distortion {
         anyhow::ensure!(
             d.len() == 5,
@@ -169,4 +177,12 @@ fn parse_effects(text: &str) -> Result<Effects, String> {
         }
     }
     Ok(Effects(out))
+}
+
+/// Parses `--camera`.
+fn parse_camera(text: &str) -> Result<CameraPreset, String> {
+    CameraPreset::from_name(text).ok_or_else(|| {
+        let names: Vec<&str> = CameraPreset::ALL.iter().map(|(_, n)| *n).collect();
+        format!("unknown camera '{text}' ({})", names.join(", "))
+    })
 }

@@ -31,11 +31,15 @@ pub struct SolveArgs {
     /// Write plots (PNG and SVG) into this directory: residuals before/after, per capture.
     #[arg(long, value_name = "DIR")]
     plots: Option<PathBuf>,
-    /// Write the calibration files into this directory: calibration.toml/.json and B-Human
-    /// style cameraCalibration.cfg and jointCalibration.cfg.
+    /// Write the calibration files into this directory: calibration.toml/.json and the
+    /// teams' formats (B-Human, HULKs, NaoTH, NomadZ, rUNSWift; see `naocalib export`).
     #[arg(long, value_name = "DIR")]
     export: Option<PathBuf>,
-    /// Replace existing --plots/--export files (never the dataset's).
+    /// Write one self-contained HTML report (parameters, diagnosis, residual plots,
+    /// per-capture RMS, overlays of the worst captures) to this file.
+    #[arg(long, value_name = "FILE.html")]
+    report: Option<PathBuf>,
+    /// Replace existing --plots/--export/--report files (never the dataset's).
     #[arg(long)]
     force: bool,
 }
@@ -81,6 +85,7 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
         &dataset,
         args.plots.as_deref(),
         args.export.as_deref(),
+        args.report.as_deref(),
         args.force,
     )?;
     let truth = dataset.truth.as_ref().map(|t| &t.values[..]);

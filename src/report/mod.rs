@@ -2,6 +2,7 @@
 //! section 7. A report sees a solution (and optionally the truth), never a solver.
 
 pub mod export;
+pub mod html;
 pub mod plot;
 
 use std::fmt::Write as _;
@@ -91,10 +92,30 @@ pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
         }
         out.push('\n');
     }
+    out.push('\n');
+    for line in diagnosis(solution) {
+        let _ = writeln!(out, "{line}");
+    }
     let s = &solution.summary;
     let _ = writeln!(
         out,
-        "\nsolver {}: {} after {} iterations ({})",
+        "time {:.1} ms (optimiser and covariance {:.1} ms)",
+        solution.seconds * 1e3,
+        s.seconds * 1e3
+    );
+    out
+}
+
+/// What the fit says about itself, one line each (sub-items indented by two spaces):
+/// convergence, the residuals, the noise model, the model fitted and the misfit verdict,
+/// the captures that stand out, outliers, and identifiability (rank, strongly correlated
+/// pairs, weakly and not determined combinations, what to hold fixed). Used by [`table`]
+/// and the HTML report.
+pub fn diagnosis(solution: &Solution) -> Vec<String> {
+    let mut lines = Vec::new();
+    let s = &solution.summary;
+    lines.push(format!(
+        "solver {}: {} after {} iterations ({})",
         s.solver,
         if s.converged {
             "converged"
@@ -103,9 +124,8 @@ pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
         },
         s.iterations,
         s.termination
-    );
-    let _ = writeln!(
-        out,
+    ));
+    lines.push(format!(
         "captures {}, vertices {}; rms x {:.4} px, y {:.4} px (before: x {:.2} px, y {:.2} px)",
         solution.captures,
         solution.observations,
@@ -113,61 +133,68 @@ pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
         solution.rms_px[1],
         solution.initial_rms_px[0],
         solution.initial_rms_px[1]
-    );
+    ));
     if let Some(noise) = solution.noise {
-        let _ = writeln!(
-            out,
+        lines.push(format!(
             "noise model: pixel σ {:.3} px, joint σ {:.3}° per capture; χ²/dof {:.2}",
             noise.px,
             noise.joint.to_degrees(),
             solution.residual_variance
-        );
+        ));
     } else if solution.misfit.noise_model_set_aside {
-        let _ = writeln!(
-            out,
+        lines.push(
             "uncertainty: capture-clustered sandwich (the noise model is set aside: the \
              residuals are not noise)"
+                .into(),
         );
     } else {
-        let _ = writeln!(out, "uncertainty: plain σ̂²(JᵀJ)⁻¹ (no noise model)");
+        lines.push("uncertainty: plain σ̂²(JᵀJ)⁻¹ (no noise model)".into());
     }
-    out.push_str(&model_text(solution));
-    if let Some(b) = boot {
-        let _ = writeln!(
-            out,
+    lines.extend(model_text(solution).lines().map(String::from));
+    if let Some(b) = &solution.bootstrap {
+        lines.push(format!(
             "bootstrap: {} refits over resampled captures ({} failed)",
             b.replicates, b.failed
-        );
+        ));
+    }
+    let rms = plot::capture_rms_values(solution);
+    let mut sorted: Vec<f64> = rms.iter().map(|r| r.1).filter(|r| r.is_finite()).collect();
+    sorted.sort_by(f64::total_cmp);
+    if let Some(&median) = sorted.get(sorted.len() / 2) {
+        let threshold = plot::OUTLIER_FACTOR * median;
+        let standing: Vec<String> = rms
+            .iter()
+            .filter(|r| r.1 > threshold || r.1.is_nan())
+            .map(|(id, r)| format!("{id} ({r:.2} px)"))
+            .collect();
+        if !standing.is_empty() {
+            lines.push(format!(
+                "captures standing out (RMS above {}× the median {median:.3} px): {}",
+                plot::OUTLIER_FACTOR,
+                standing.join(", ")
+            ));
+        }
     }
     if !solution.outliers.is_empty() {
-        let _ = writeln!(
-            out,
+        lines.push(format!(
             "outliers left out: {} vertices (capture row,col: residual px)",
             solution.outliers.len()
-        );
+        ));
         for o in solution.outliers.iter().take(20) {
-            let _ = writeln!(
-                out,
+            lines.push(format!(
                 "  capture {} ({},{}): ({:+.2}, {:+.2})",
                 o.capture, o.vertex.row, o.vertex.col, o.residual[0], o.residual[1]
-            );
+            ));
         }
         if solution.outliers.len() > 20 {
-            let _ = writeln!(
-                out,
+            lines.push(format!(
                 "  … and {} more (see --json)",
                 solution.outliers.len() - 20
-            );
+            ));
         }
     }
-    out.push_str(&identifiability_text(solution));
-    let _ = writeln!(
-        out,
-        "time {:.1} ms (optimiser and covariance {:.1} ms)",
-        solution.seconds * 1e3,
-        s.seconds * 1e3
-    );
-    out
+    lines.extend(identifiability_text(solution).lines().map(String::from));
+    lines
 }
 
 /// The result JSON of SPEC section 7 (plus a few extra keys).

@@ -86,6 +86,51 @@ fn err<E: std::fmt::Display>(e: E) -> String {
     e.to_string()
 }
 
+/// Draws `fig` as SVG text.
+fn svg_text(fig: &impl Figure) -> Result<String, String> {
+    register_fonts();
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, fig.size()).into_drawing_area();
+        fig.draw(&root).and_then(|()| root.present().map_err(err))?;
+    }
+    Ok(text)
+}
+
+/// The residual scatter of [`residual_scatter`] as SVG text (for embedding in a page).
+pub fn residual_scatter_svg(
+    solution: &Solution,
+    sides: Option<&BTreeMap<u64, Side>>,
+) -> Result<String, PlotError> {
+    if solution.residuals.is_empty() {
+        return Err(PlotError::Empty("the solution has no residuals"));
+    }
+    svg_text(&Scatter {
+        residuals: &solution.residuals,
+        sides,
+        rms: [solution.initial_rms_px, solution.rms_px],
+    })
+    .map_err(|message| PlotError::Draw {
+        path: PathBuf::from("residuals.svg"),
+        message,
+    })
+}
+
+/// The per-capture RMS plot of [`capture_rms`] as SVG text (for embedding in a page).
+pub fn capture_rms_svg(
+    solution: &Solution,
+    sides: Option<&BTreeMap<u64, Side>>,
+) -> Result<String, PlotError> {
+    let rms = capture_rms_values(solution);
+    if rms.is_empty() {
+        return Err(PlotError::Empty("the solution has no residuals"));
+    }
+    svg_text(&Captures { rms, sides }).map_err(|message| PlotError::Draw {
+        path: PathBuf::from("captures.svg"),
+        message,
+    })
+}
+
 /// Draws `fig` into `<stem>.png` and `<stem>.svg`.
 fn save(fig: &impl Figure, stem: &Path, options: &WriteOptions) -> Result<Vec<PathBuf>, PlotError> {
     register_fonts();
@@ -132,9 +177,18 @@ fn tick(x: &f64) -> String {
     }
 }
 
-/// A range `[lo, hi]` around the values with a margin, never empty.
+/// Values beyond this magnitude are not plotted: the plotting library's tick search does
+/// not end for ranges near the limits of `f64` (nor for non-finite ones).
+pub const PLOT_LIMIT: f64 = 1e12;
+
+/// Whether `x` can be plotted (finite, within [`PLOT_LIMIT`]).
+fn plottable(x: f64) -> bool {
+    x.is_finite() && x.abs() <= PLOT_LIMIT
+}
+
+/// A range `[lo, hi]` around the values with a margin, never empty, always plottable.
 fn padded(lo: f64, hi: f64) -> (f64, f64) {
-    let (lo, hi) = if lo.is_finite() && hi.is_finite() {
+    let (lo, hi) = if plottable(lo) && plottable(hi) && lo <= hi {
         (lo, hi)
     } else {
         (-1.0, 1.0)
@@ -171,7 +225,7 @@ impl Figure for Scatter<'_> {
                 .residuals
                 .iter()
                 .map(|r| (pick(r), self.sides.and_then(|s| s.get(&r.capture).copied())))
-                .filter(|(p, _)| p[0].is_finite() && p[1].is_finite())
+                .filter(|(p, _)| plottable(p[0]) && plottable(p[1]))
                 .collect();
             let extent = points
                 .iter()
@@ -179,11 +233,17 @@ impl Figure for Scatter<'_> {
                 .fold(0.0f64, f64::max)
                 .max(1e-6)
                 * 1.08;
+            let left_out = self.residuals.len() - points.len();
             let caption = format!(
-                "{} the solve: rms x {:.3} px, y {:.3} px",
+                "{} the solve: rms x {:.3} px, y {:.3} px{}",
                 if k == 0 { "before" } else { "after" },
                 self.rms[k][0],
-                self.rms[k][1]
+                self.rms[k][1],
+                if left_out > 0 {
+                    format!(" ({left_out} non-finite left out)")
+                } else {
+                    String::new()
+                }
             );
             let mut chart = ChartBuilder::on(panel)
                 .caption(caption, (FONT, 22))
@@ -261,7 +321,7 @@ pub fn residual_scatter(
     )
 }
 
-/// The RMS residual `√(mean(Δu² + Δv²))` of each capture at the solution [px], by capture
+/// The RMS residual `√(mean(Δu² + Δv²))` of each capture at the solution (px), by capture
 /// id, with its board.
 pub fn capture_rms_values(solution: &Solution) -> Vec<(u64, f64)> {
     let mut sums: BTreeMap<u64, (f64, usize)> = BTreeMap::new();
@@ -290,17 +350,25 @@ impl Figure for Captures<'_> {
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult {
         root.fill(&WHITE).map_err(err)?;
-        let mut sorted: Vec<f64> = self.rms.iter().map(|r| r.1).collect();
+        let all = &self.rms;
+        let rms: Vec<(u64, f64)> = all.iter().copied().filter(|r| plottable(r.1)).collect();
+        let left_out = all.len() - rms.len();
+        let mut sorted: Vec<f64> = rms.iter().map(|r| r.1).collect();
         sorted.sort_by(f64::total_cmp);
-        let median = sorted[sorted.len() / 2];
+        let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
         let threshold = OUTLIER_FACTOR * median;
-        let max_y = sorted.last().copied().unwrap_or(1.0).max(threshold) * 1.12;
-        let first = self.rms.first().map_or(0, |r| r.0) as f64;
-        let last = self.rms.last().map_or(1, |r| r.0) as f64;
+        let max_y = (sorted.last().copied().unwrap_or(1.0).max(threshold) * 1.12).max(1e-9);
+        let first = all.first().map_or(0, |r| r.0) as f64;
+        let last = all.last().map_or(1, |r| r.0) as f64;
         let (x0, x1) = padded(first, last);
-        let outliers = self.rms.iter().filter(|r| r.1 > threshold).count();
+        let outliers = rms.iter().filter(|r| r.1 > threshold).count();
         let caption = format!(
-            "RMS residual per capture after the solve (median {median:.3} px; {outliers} above {OUTLIER_FACTOR}× median)"
+            "RMS residual per capture after the solve (median {median:.3} px; {outliers} above {OUTLIER_FACTOR}× median{})",
+            if left_out > 0 {
+                format!("; {left_out} non-finite left out")
+            } else {
+                String::new()
+            }
         );
         let mut chart = ChartBuilder::on(root)
             .caption(caption, (FONT, 22))
@@ -323,8 +391,7 @@ impl Figure for Captures<'_> {
             (Some(Side::Right), RIGHT, "right board"),
             (None, GREY, "capture"),
         ] {
-            let pts: Vec<(f64, f64)> = self
-                .rms
+            let pts: Vec<(f64, f64)> = rms
                 .iter()
                 .filter(|(id, _)| self.sides.and_then(|s| s.get(id).copied()) == side)
                 .map(|&(id, r)| (id as f64, r))
@@ -357,7 +424,7 @@ impl Figure for Captures<'_> {
             .legend(|(x, y)| PathElement::new(vec![(x - 8, y), (x + 8, y)], BLACK));
         // Name the captures that stand out.
         chart
-            .draw_series(self.rms.iter().filter(|r| r.1 > threshold).map(|&(id, r)| {
+            .draw_series(rms.iter().filter(|r| r.1 > threshold).map(|&(id, r)| {
                 Text::new(
                     format!("{id}"),
                     (id as f64, r + max_y * 0.02),
@@ -453,6 +520,7 @@ impl Figure for Estimates<'_> {
                 .enumerate()
                 .filter(|(_, s)| !s.fixed.is_fixed(p))
                 .map(|(i, s)| ((i + 1) as f64, s.report_value(p), s.report_std(p)))
+                .filter(|&(_, v, s)| plottable(v) && plottable(s))
                 .collect();
             let lo = pts
                 .iter()
@@ -507,6 +575,30 @@ impl Figure for Estimates<'_> {
     }
 }
 
+/// The per-parameter estimates plot of [`parameter_estimates`] as SVG text.
+pub fn parameter_estimates_svg(runs: &[&Solution]) -> Result<String, PlotError> {
+    if runs.is_empty() {
+        return Err(PlotError::Empty("no runs"));
+    }
+    svg_text(&Estimates {
+        runs,
+        params: estimated_params(runs),
+    })
+    .map_err(|message| PlotError::Draw {
+        path: PathBuf::from("parameters.svg"),
+        message,
+    })
+}
+
+/// The paper's 21 and any further parameter some run estimated.
+fn estimated_params(runs: &[&Solution]) -> Vec<Param> {
+    Param::ALL
+        .iter()
+        .copied()
+        .filter(|p| p.index() < PAPER_PARAMETERS || runs.iter().any(|s| !s.fixed.is_fixed(*p)))
+        .collect()
+}
+
 /// Writes the per-parameter estimates of several runs with ±1σ error bars and the mean
 /// across runs (one panel per parameter: the paper's 21 and any further one estimated) to
 /// `<stem>.png` and `<stem>.svg`.
@@ -518,10 +610,6 @@ pub fn parameter_estimates(
     if runs.is_empty() {
         return Err(PlotError::Empty("no runs"));
     }
-    let params = Param::ALL
-        .iter()
-        .copied()
-        .filter(|p| p.index() < PAPER_PARAMETERS || runs.iter().any(|s| !s.fixed.is_fixed(*p)))
-        .collect();
+    let params = estimated_params(runs);
     save(&Estimates { runs, params }, stem, options)
 }

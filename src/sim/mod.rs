@@ -4,6 +4,7 @@
 //! As in the paper's measurement phase, each leg takes `stances` stances, and each stance is
 //! photographed with `heads` head postures (24 × 3 × 2 = 144 captures by default).
 
+pub mod camera;
 pub mod render;
 
 use rand::{Rng, SeedableRng};

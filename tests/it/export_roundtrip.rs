@@ -43,6 +43,7 @@ fn toml_and_json_round_trip() {
     let text = std::fs::read_to_string(&toml_path).unwrap();
     assert!(text.contains("ADDED to requested") && text.contains("SUBTRACTED from measured"));
     assert!(text.contains("unit = \"deg\"") && text.contains("unit = \"mm\""));
+    assert!(text.contains("converged = true"));
 
     let json_path = dir.path().join("calibration.json");
     export::export(
@@ -115,11 +116,21 @@ fn refuses_inputs_and_existing_files() {
     // A malformed file is a clear error.
     std::fs::write(
         dir.path().join("bad.toml"),
-        "format = \"naocalib-calibration\"\n",
+        "format = \"naocalib-calibration\"\nversion = 1\n",
     )
     .unwrap();
     let e = read_calibration(&dir.path().join("bad.toml")).unwrap_err();
-    assert!(e.to_string().contains("missing table 'parameters'"), "{e}");
+    assert!(e.to_string().contains("parameters"), "{e}");
+    // Unknown keys are refused, naming the line.
+    let text = Calibration::from_solution(&solution(), None)
+        .to_toml()
+        .replace("version = 1", "version = 1\ncolour = \"red\"");
+    std::fs::write(dir.path().join("extra.toml"), text).unwrap();
+    let e = read_calibration(&dir.path().join("extra.toml")).unwrap_err();
+    assert!(
+        e.to_string().contains("line ") && e.to_string().contains("colour"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -153,11 +164,7 @@ fn cli_solve_export_and_export_command() {
     for (a, b) in from_result.parameters.iter().zip(&from_solve.parameters) {
         assert_eq!(a.value, b.value, "{}", a.param);
     }
-    for name in [
-        "calibration.json",
-        "cameraCalibration.cfg",
-        "jointCalibration.cfg",
-    ] {
+    for (_, _, name) in ExportFormat::ALL {
         assert!(exports.join(name).is_file(), "{name}");
     }
     // `export` refuses to overwrite its input, and writes by file name.

@@ -14,12 +14,15 @@ mod dataset_io;
 mod detect_files;
 #[cfg(feature = "detect")]
 mod detect_render;
+mod export_robustness;
 mod export_roundtrip;
+mod export_teams;
 mod extended;
 mod misfit;
 mod plot_files;
 mod pure_rust_agreement;
 mod pure_rust_cli;
+mod report_html;
 mod spec_reference;
 #[cfg(feature = "ceres")]
 mod uncertainty;

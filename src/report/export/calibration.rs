@@ -1,0 +1,488 @@
+//! naocalib's own calibration file, TOML or JSON: every parameter with its one-sigma and
+//! unit, whether the solver converged and the RMS residual it reached. Written and read
+//! with serde (unknown keys refused), so that what is written is what is read.
+//!
+//! ```toml
+//! format = "naocalib-calibration"
+//! version = 1
+//! solver = "ceres"
+//! converged = true
+//! rms_px = [0.94, 1.23]
+//!
+//! [parameters.CamYaw]
+//! value = 0.5835      # report units: deg, mm, px, 1, deg/(N·m)
+//! std = 0.0292        # one sigma, same unit; absent when the data do not determine it
+//! unit = "deg"
+//!
+//! [parameters.HeadYaw]
+//! value = 0.0
+//! std = 0.0
+//! unit = "deg"
+//! fixed = true        # held at `value`, not estimated
+//!
+//! [parameters.RKneePitch]
+//! value = 0.12
+//! unit = "deg"
+//! undetermined = true # the data do not determine it: no sigma, an arbitrary value
+//! ```
+//!
+//! The JSON form has the same keys; [`Calibration::from_json`] also reads the result JSON
+//! of `naocalib solve --json`, whose `parameters` object has the same entries (a `null`
+//! `std` or `"determined": false` marks a parameter the data do not determine).
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use serde::ser::SerializeMap;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use super::{ExportError, parse_error};
+use crate::model::{PAPER_PARAMETERS, Param};
+use crate::solve::Solution;
+
+/// The `format` key of the TOML and JSON calibration files.
+pub const FORMAT: &str = "naocalib-calibration";
+/// The `version` key of the TOML and JSON calibration files.
+pub const VERSION: i64 = 1;
+
+/// The compensation rule, as stated in every exported file.
+pub const COMPENSATION: &str = "joint offsets are added to requested joint angles and \
+     subtracted from measured joint angles; camera offsets are rotation corrections of the \
+     lower camera in the camera matrix";
+
+/// A final RMS residual beyond this (px) is no plausible detection noise: such a fit is
+/// not a calibration (the same bound as [`Solution::is_calibration`]).
+pub const MAX_PLAUSIBLE_RMS_PX: f64 = crate::solve::misfit::IMPLAUSIBLE_RMS_PX;
+
+/// One calibrated parameter, in report units (deg, mm, px, 1, deg/(N·m)).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Entry {
+    /// The parameter.
+    pub param: Param,
+    /// Its estimate (or the value it was held at).
+    pub value: f64,
+    /// Its one-sigma uncertainty; `Some(0)` when held fixed, `None` when the data do not
+    /// determine it.
+    pub std: Option<f64>,
+    /// Whether it was held fixed (at `value`).
+    pub fixed: bool,
+}
+
+impl Entry {
+    /// Whether the value means something: held fixed, or determined by the data.
+    pub fn is_determined(&self) -> bool {
+        self.fixed || self.std.is_some()
+    }
+
+    /// `value ± std unit`, `value unit (fixed)` or `value unit (NOT determined)`.
+    pub fn describe(&self) -> String {
+        let unit = self.param.unit().name();
+        match (self.fixed, self.std) {
+            (true, _) => format!("{} {unit} (held fixed)", self.value),
+            (false, Some(s)) => format!("{} ± {s} {unit}", self.value),
+            (false, None) => format!("{} {unit} (NOT determined by the data)", self.value),
+        }
+    }
+}
+
+/// A calibration as exported: every parameter with its one-sigma and unit, and how the
+/// fit went.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Calibration {
+    /// The solver that produced it (`ceres`, …), when known.
+    pub solver: Option<String>,
+    /// The dataset it was calibrated from, when known.
+    pub dataset: Option<String>,
+    /// Whether the solver converged, when known.
+    pub converged: Option<bool>,
+    /// The final RMS residual `[x, y]` (px), when known.
+    pub rms_px: Option<[f64; 2]>,
+    /// The parameters, in the order of [`Param::ALL`].
+    pub parameters: Vec<Entry>,
+}
+
+impl Calibration {
+    /// The calibration of `solution` (from the dataset at `dataset`, if given).
+    pub fn from_solution(solution: &Solution, dataset: Option<&Path>) -> Self {
+        Calibration {
+            solver: Some(solution.summary.solver.clone()),
+            dataset: dataset.map(|d| d.display().to_string()),
+            converged: Some(solution.summary.converged),
+            rms_px: Some(solution.rms_px),
+            parameters: Param::ALL
+                .iter()
+                .map(|&p| {
+                    let fixed = solution.fixed.is_fixed(p);
+                    let std = if fixed {
+                        Some(0.0)
+                    } else if solution.is_determined(p) {
+                        Some(solution.report_std(p))
+                    } else {
+                        None
+                    };
+                    Entry {
+                        param: p,
+                        value: solution.report_value(p),
+                        std,
+                        fixed,
+                    }
+                })
+                .collect(),
+        }
+    }
+
+    /// The entry of `param`, if present.
+    pub fn get(&self, param: Param) -> Option<&Entry> {
+        self.parameters.iter().find(|e| e.param == param)
+    }
+
+    /// The value of `param` in report units; 0 when absent.
+    pub fn value(&self, param: Param) -> f64 {
+        self.get(param).map_or(0.0, |e| e.value)
+    }
+
+    /// Why this result is not a calibration a robot should load (empty when it is one):
+    /// the solver did not converge, a value or sigma is not finite, or the residuals are
+    /// far beyond any plausible noise ([`MAX_PLAUSIBLE_RMS_PX`]).
+    pub fn problems(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.converged == Some(false) {
+            out.push("the solver did not converge".to_string());
+        }
+        let bad: Vec<&str> = self
+            .parameters
+            .iter()
+            .filter(|e| !e.value.is_finite() || e.std.is_some_and(|s| !s.is_finite()))
+            .map(|e| e.param.name())
+            .collect();
+        if !bad.is_empty() {
+            out.push(format!("non-finite values or sigmas: {}", bad.join(", ")));
+        }
+        if let Some(rms) = self.rms_px {
+            if rms.iter().any(|r| !r.is_finite()) {
+                out.push("the RMS residual is not finite".to_string());
+            } else if rms.iter().any(|&r| r > MAX_PLAUSIBLE_RMS_PX) {
+                out.push(format!(
+                    "RMS residual ({:.2}, {:.2}) px is far beyond any plausible detection \
+                     noise ({MAX_PLAUSIBLE_RMS_PX} px): the model does not explain the data",
+                    rms[0], rms[1]
+                ));
+            }
+        }
+        out
+    }
+
+    fn file(&self, json: bool) -> CalibrationOut<'_> {
+        CalibrationOut {
+            format: FORMAT,
+            version: VERSION,
+            solver: self.solver.as_deref(),
+            dataset: self.dataset.as_deref(),
+            converged: self.converged,
+            rms_px: self.rms_px,
+            units: json.then(|| {
+                BTreeMap::from([
+                    ("angles".to_string(), "deg".to_string()),
+                    ("lengths".to_string(), "mm".to_string()),
+                ])
+            }),
+            compensation: COMPENSATION,
+            parameters: Entries(&self.parameters),
+        }
+    }
+
+    /// The calibration as TOML, with a header stating units and the compensation rule.
+    pub fn to_toml(&self) -> String {
+        let mut s = String::new();
+        super::header(
+            &mut s,
+            "#",
+            self,
+            "angles in degrees (deg), lengths in millimetres (mm), intrinsics in pixels \
+             (px); std is the one-sigma uncertainty in the same unit",
+        );
+        s.push('\n');
+        s.push_str(&toml::to_string(&self.file(false)).expect("TOML of plain values"));
+        s
+    }
+
+    /// The calibration as JSON (the same keys as the TOML).
+    pub fn to_json(&self) -> Value {
+        serde_json::to_value(self.file(true)).expect("JSON of plain values")
+    }
+
+    /// Reads a calibration TOML written by [`Calibration::to_toml`]; `path` names the
+    /// source in errors (with the line).
+    pub fn from_toml(text: &str, path: &Path) -> Result<Self, ExportError> {
+        let file: CalibrationIn = toml::from_str(text).map_err(|e| {
+            let line = e
+                .span()
+                .map(|s| format!("line {}: ", text[..s.start].matches('\n').count() + 1))
+                .unwrap_or_default();
+            parse_error(path, format!("{line}{}", e.message()))
+        })?;
+        file.into_calibration(path)
+    }
+
+    /// Reads a calibration JSON written by [`Calibration::to_json`], or the result JSON of
+    /// `naocalib solve --json` (a run of `naocalib batch --out`).
+    pub fn from_json(text: &str, path: &Path) -> Result<Self, ExportError> {
+        let json_error =
+            |e: serde_json::Error| parse_error(path, format!("line {}: {e}", e.line()));
+        let probe: Value = serde_json::from_str(text).map_err(json_error)?;
+        if probe.get("format").is_some() {
+            let file: CalibrationIn = serde_json::from_str(text).map_err(json_error)?;
+            file.into_calibration(path)
+        } else {
+            let file: ResultIn = serde_json::from_str(text).map_err(json_error)?;
+            file.into_calibration(path)
+        }
+    }
+}
+
+/// Reads a calibration file: TOML by the `.toml` extension, otherwise JSON (a calibration
+/// JSON or the result JSON of `naocalib solve --json`).
+pub fn read_calibration(path: &Path) -> Result<Calibration, ExportError> {
+    let text = std::fs::read_to_string(path).map_err(|source| ExportError::Io {
+        path: path.to_path_buf(),
+        action: "read",
+        source,
+    })?;
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+    {
+        Calibration::from_toml(&text, path)
+    } else {
+        Calibration::from_json(&text, path)
+    }
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
+}
+
+/// The file as written.
+#[derive(Serialize)]
+struct CalibrationOut<'a> {
+    format: &'a str,
+    version: i64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    solver: Option<&'a str>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    dataset: Option<&'a str>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    converged: Option<bool>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rms_px: Option<[f64; 2]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    units: Option<BTreeMap<String, String>>,
+    compensation: &'a str,
+    parameters: Entries<'a>,
+}
+
+/// The parameters as a map in registry order.
+struct Entries<'a>(&'a [Entry]);
+
+impl Serialize for Entries<'_> {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let mut map = serializer.serialize_map(Some(self.0.len()))?;
+        for e in self.0 {
+            map.serialize_entry(
+                e.param.name(),
+                &EntryFile {
+                    value: e.value,
+                    std: e.std,
+                    unit: Some(e.param.unit().name().to_string()),
+                    fixed: e.fixed,
+                    undetermined: !e.is_determined(),
+                },
+            )?;
+        }
+        map.end()
+    }
+}
+
+/// One parameter as written and read.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct EntryFile {
+    value: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    std: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    unit: Option<String>,
+    #[serde(default, skip_serializing_if = "is_false")]
+    fixed: bool,
+    #[serde(default, skip_serializing_if = "is_false")]
+    undetermined: bool,
+}
+
+/// The file as read.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CalibrationIn {
+    format: String,
+    version: i64,
+    solver: Option<String>,
+    dataset: Option<String>,
+    converged: Option<bool>,
+    rms_px: Option<[f64; 2]>,
+    #[allow(dead_code)]
+    units: Option<BTreeMap<String, String>>,
+    #[allow(dead_code)]
+    compensation: Option<String>,
+    parameters: BTreeMap<String, EntryFile>,
+}
+
+impl CalibrationIn {
+    fn into_calibration(self, path: &Path) -> Result<Calibration, ExportError> {
+        if self.format != FORMAT {
+            return Err(parse_error(
+                path,
+                format!("format is \"{}\", expected \"{FORMAT}\"", self.format),
+            ));
+        }
+        if self.version != VERSION {
+            return Err(parse_error(
+                path,
+                format!(
+                    "version {} is not supported (expected {VERSION})",
+                    self.version
+                ),
+            ));
+        }
+        let entries = self
+            .parameters
+            .into_iter()
+            .map(|(name, e)| {
+                let determined = !e.undetermined;
+                (name, e.value, e.std, e.unit, e.fixed, determined)
+            })
+            .collect();
+        Ok(Calibration {
+            solver: self.solver,
+            dataset: self.dataset,
+            converged: self.converged,
+            rms_px: self.rms_px,
+            parameters: entries_from(entries, path)?,
+        })
+    }
+}
+
+/// The result JSON of `naocalib solve --json`, as far as a calibration needs it.
+#[derive(Deserialize)]
+struct ResultIn {
+    solver: Option<String>,
+    dataset: Option<String>,
+    converged: Option<bool>,
+    rms_px: Option<[f64; 2]>,
+    parameters: BTreeMap<String, ResultEntry>,
+}
+
+/// One parameter of the result JSON (further keys such as `std_sandwich` and `truth` are
+/// ignored).
+#[derive(Deserialize)]
+struct ResultEntry {
+    value: f64,
+    std: Option<f64>,
+    unit: Option<String>,
+    #[serde(default)]
+    fixed: bool,
+    determined: Option<bool>,
+    undetermined: Option<bool>,
+}
+
+impl ResultIn {
+    fn into_calibration(self, path: &Path) -> Result<Calibration, ExportError> {
+        let entries = self
+            .parameters
+            .into_iter()
+            .map(|(name, e)| {
+                let determined = e.determined.unwrap_or(true)
+                    && !e.undetermined.unwrap_or(false)
+                    && (e.fixed || e.std.is_some());
+                (name, e.value, e.std, e.unit, e.fixed, determined)
+            })
+            .collect();
+        Ok(Calibration {
+            solver: self.solver,
+            dataset: self.dataset,
+            converged: self.converged,
+            rms_px: self.rms_px,
+            parameters: entries_from(entries, path)?,
+        })
+    }
+}
+
+type RawEntry = (String, f64, Option<f64>, Option<String>, bool, bool);
+
+/// Checks the entries read (names, units, numbers) and orders them as [`Param::ALL`].
+fn entries_from(raw: Vec<RawEntry>, path: &Path) -> Result<Vec<Entry>, ExportError> {
+    let mut by_param = BTreeMap::new();
+    for (name, value, std, unit, fixed, determined) in raw {
+        let Some(p) = Param::from_name(&name) else {
+            return Err(parse_error(
+                path,
+                format!("parameters.{name}: unknown parameter"),
+            ));
+        };
+        let at = |key: &str| format!("parameters.{name}.{key}");
+        if !value.is_finite() {
+            return Err(parse_error(
+                path,
+                format!("{}: {value} is not a finite number", at("value")),
+            ));
+        }
+        if let Some(u) = &unit
+            && u != p.unit().name()
+        {
+            return Err(parse_error(
+                path,
+                format!(
+                    "{}: \"{u}\", but {name} is in {}",
+                    at("unit"),
+                    p.unit().name()
+                ),
+            ));
+        }
+        if fixed && !determined {
+            return Err(parse_error(
+                path,
+                format!("parameters.{name}: both fixed and undetermined"),
+            ));
+        }
+        let std = match (fixed, determined, std) {
+            (true, _, s) => Some(s.unwrap_or(0.0)),
+            (false, false, _) => None,
+            (false, true, s) => s,
+        };
+        if let Some(s) = std
+            && !(s.is_finite() && s >= 0.0)
+        {
+            return Err(parse_error(
+                path,
+                format!("{}: {s} is not a finite, non-negative number", at("std")),
+            ));
+        }
+        by_param.insert(
+            p,
+            Entry {
+                param: p,
+                value,
+                std,
+                fixed,
+            },
+        );
+    }
+    for p in &Param::ALL[..PAPER_PARAMETERS] {
+        if !by_param.contains_key(p) {
+            return Err(parse_error(
+                path,
+                format!("parameters.{}: missing", p.name()),
+            ));
+        }
+    }
+    Ok(by_param.into_values().collect())
+}

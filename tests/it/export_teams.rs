@@ -1,0 +1,281 @@
+//! The teams' formats: each exported camera correction, rebuilt with that team's own
+//! formula (cited below), gives naocalib's corrected camera rotation for random offsets;
+//! every format round-trips (write, read back, same values).
+
+use std::f64::consts::{FRAC_PI_2, PI};
+use std::path::Path;
+
+use naocalib::model::{JointAngles, Param, RobotGeometry};
+use naocalib::report::export::{
+    self, Calibration, Entry, ExportFormat, bhuman, hulks, naoth, nomadz, runswift,
+};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+type M3 = [[f64; 3]; 3];
+
+fn mul(a: &M3, b: &M3) -> M3 {
+    std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
+}
+
+fn transpose(a: &M3) -> M3 {
+    std::array::from_fn(|i| std::array::from_fn(|j| a[j][i]))
+}
+
+fn rx(t: f64) -> M3 {
+    let (s, c) = t.sin_cos();
+    [[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]]
+}
+
+fn ry(t: f64) -> M3 {
+    let (s, c) = t.sin_cos();
+    [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]
+}
+
+fn rz(t: f64) -> M3 {
+    let (s, c) = t.sin_cos();
+    [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
+}
+
+fn assert_close(a: &M3, b: &M3, what: &str) {
+    for i in 0..3 {
+        for j in 0..3 {
+            assert!(
+                (a[i][j] - b[i][j]).abs() < 1e-12,
+                "{what}: {a:?} != {b:?} at ({i},{j})"
+            );
+        }
+    }
+}
+
+/// An "optical" camera frame (z forward, x right, y down) in naocalib's camera frame (x
+/// forward, y left, z up): its axes as columns.
+const OPTICAL: M3 = [[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]];
+
+const TILT_DEG: f64 = 39.7;
+
+/// A calibration with random values for every parameter (camera offsets up to
+/// `camera_deg`), all determined and converged.
+fn random_calibration(rng: &mut impl Rng, camera_deg: f64) -> Calibration {
+    Calibration {
+        solver: Some("test".into()),
+        dataset: None,
+        converged: Some(true),
+        rms_px: Some([0.4, 0.5]),
+        parameters: Param::ALL
+            .iter()
+            .map(|&p| {
+                let value = match p {
+                    Param::CamYaw | Param::CamPitch | Param::CamRoll => {
+                        rng.random_range(-camera_deg..camera_deg)
+                    }
+                    _ => rng.random_range(-3.0..3.0),
+                };
+                Entry {
+                    param: p,
+                    value,
+                    std: Some(rng.random_range(0.01..0.2)),
+                    fixed: false,
+                }
+            })
+            .collect(),
+    }
+}
+
+/// naocalib's own corrected camera rotation (camera → head, naocalib's camera frame) for
+/// the offsets of `cal` and head pitch `head_pitch`: the model's camera chain itself.
+fn naocalib_camera(cal: &Calibration, head_pitch: f64) -> M3 {
+    let mut params = vec![0.0; Param::ALL.len()];
+    for p in [Param::CamYaw, Param::CamPitch, Param::CamRoll] {
+        params[p.index()] = cal.value(p).to_radians();
+    }
+    let mut joints = JointAngles::default();
+    joints.set(naocalib::model::Joint::HeadPitch, head_pitch);
+    let geometry = RobotGeometry::default();
+    assert!((geometry.lower_camera_tilt.to_degrees() - TILT_DEG).abs() < 1e-12);
+    geometry.camera_chain(&joints).eval(&params).rotation
+}
+
+fn calibrations() -> Vec<Calibration> {
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    // Realistic offsets, and large ones: the conversions are exact, not small-angle.
+    (0..40)
+        .map(|k| random_calibration(&mut rng, if k % 2 == 0 { 4.0 } else { 25.0 }))
+        .collect()
+}
+
+#[test]
+fn bhuman_camera_convention() {
+    // B-Human, Src/Representations/Perception/ImagePreprocessing/CameraMatrix.cpp,
+    // RobotCameraMatrix::computeRobotCameraMatrix: ... rotateY(tiltNeckToLowerCamera +
+    // correction.y()); rotateX(correction.x()); rotateZ(correction.z()); camera frame x
+    // forward, y left, z up (naocalib's).
+    for cal in calibrations() {
+        let text = export::bhuman_camera_cfg(&cal);
+        let [x, y, z] = bhuman::read_bhuman_camera_cfg(&text, Path::new("-"))
+            .unwrap()
+            .map(f64::to_radians);
+        let team = mul(&mul(&ry(TILT_DEG.to_radians() + y), &rx(x)), &rz(z));
+        assert_close(&team, &naocalib_camera(&cal, 0.0), "B-Human");
+    }
+}
+
+#[test]
+fn naoth_camera_convention() {
+    // NaoTH, NaoTHSoccer/Source/Tools/CameraGeometry.cpp, CameraGeometry::
+    // calculateCameraMatrix: chest.translate(offset); chest.rotateZ(cam_rot.z)
+    // .rotateY(cam_rot.y + rotationOffsetY).rotateX(cam_rot.x); camera frame x forward,
+    // y left, z up (CameraGeometry::relativePointToImage divides by x).
+    for cal in calibrations() {
+        let text = naoth::camera_matrix_offset_cfg(&cal);
+        assert!(text.contains("[CameraMatrixOffset]"), "{text}");
+        let [x, y, z] = naoth::read_camera_matrix_offset_cfg(&text, Path::new("-")).unwrap();
+        let team = mul(&mul(&rz(z), &ry(y + TILT_DEG.to_radians())), &rx(x));
+        assert_close(&team, &naocalib_camera(&cal, 0.0), "NaoTH");
+    }
+}
+
+#[test]
+fn hulks_camera_convention() {
+    // HULKs, crates/control/src/camera_matrix_calculator.rs: head_to_camera(pitch) =
+    // Rx(−pitch) · Ry(−π/2) · Rx(π/2) · T(−p), mapping head coordinates into the camera
+    // frame, where a camera pitched *down* has a negative pitch (crates/projection/tests/
+    // projection.rs, pixel_to_ground_with_z_pitch_45_degree_down passes −π/4); and
+    // crates/projection/src/camera_matrix.rs, CameraMatrix::to_corrected:
+    // corrected head_to_camera = correction_in_camera * head_to_camera, the correction
+    // being nalgebra's Rotation3::from_euler_angles(x, y, z) = Rz(z)·Ry(y)·Rx(x) [rad].
+    let pitch = -TILT_DEG.to_radians();
+    let uncorrected = mul(&mul(&rx(-pitch), &ry(-FRAC_PI_2)), &rx(FRAC_PI_2));
+    // The frames: HULKs' camera is the optical frame, tilted like naocalib's.
+    assert_close(
+        &transpose(&uncorrected),
+        &mul(&ry(TILT_DEG.to_radians()), &OPTICAL),
+        "HULKs camera frame",
+    );
+    for cal in calibrations() {
+        let text = hulks::head_json(&cal);
+        let [x, y, z] = hulks::read_head_json(&text, Path::new("-")).unwrap();
+        let correction = mul(&mul(&rz(z), &ry(y)), &rx(x));
+        let head_to_camera = mul(&correction, &uncorrected);
+        assert_close(
+            &transpose(&head_to_camera),
+            &mul(&naocalib_camera(&cal, 0.0), &OPTICAL),
+            "HULKs",
+        );
+    }
+}
+
+#[test]
+fn runswift_camera_convention() {
+    // rUNSWift, robot/perception/kinematics/Kinematics.cpp, Kinematics::updateDHChain:
+    // transformLBot[9] = DH(0, −π/2, 0, a3Bot + HeadPitch) with a3Bot = camera_bottom_angle
+    // − π; [10] = DH(0, −π/2, l10Bot, π/2 + DEG2RAD(cameraYawBottom)); [11] = DH(0, −π/2 +
+    // DEG2RAD(cameraPitchBottom), d11Bot, DEG2RAD(cameraRollBottom)); createDHMatrix(a, α,
+    // d, θ) rotates by Rx(α)·Rz(θ) (robot/utils/matrix_helpers).
+    let dh = |alpha: f64, theta: f64| mul(&rx(alpha), &rz(theta));
+    let tilt = TILT_DEG.to_radians();
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    for cal in calibrations() {
+        let text = runswift::kinematics_cfg(&cal);
+        assert!(text.contains("[kinematics]") && text.contains("cameraPitchBottom="));
+        let [yaw, pitch, roll] = runswift::read_kinematics_cfg(&text, Path::new("-"))
+            .unwrap()
+            .map(f64::to_radians);
+        // The head pitch turns both chains alike.
+        let head_pitch = rng.random_range(-0.6..0.5);
+        let team = mul(
+            &mul(
+                &dh(-FRAC_PI_2, tilt - PI + head_pitch),
+                &dh(-FRAC_PI_2, FRAC_PI_2 + yaw),
+            ),
+            &dh(-FRAC_PI_2 + pitch, roll),
+        );
+        assert_close(
+            &team,
+            &mul(&naocalib_camera(&cal, head_pitch), &OPTICAL),
+            "rUNSWift",
+        );
+    }
+}
+
+#[test]
+fn joint_formats_round_trip() {
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    let cal = random_calibration(&mut rng, 4.0);
+    let legs: Vec<Param> = naocalib::model::Joint::ALL
+        .iter()
+        .map(|j| j.offset())
+        .collect();
+
+    // B-Human: degrees, exactly.
+    let text = export::bhuman_joint_cfg(&cal);
+    let back = bhuman::read_bhuman_joint_cfg(&text, Path::new("-")).unwrap();
+    for (name, param) in bhuman::BHUMAN_JOINTS {
+        let value = back.iter().find(|(n, _)| n == name).unwrap().1;
+        assert_eq!(value, param.map_or(0.0, |p| cal.value(p)), "{name}");
+    }
+
+    // HULKs: radians, every calibrated joint.
+    let text = hulks::body_json(&cal);
+    let back = hulks::read_body_json(&text, Path::new("-")).unwrap();
+    assert_eq!(back.len(), legs.len());
+    for (param, value) in back {
+        assert_eq!(value, cal.value(param).to_radians(), "{param}");
+    }
+    let head = hulks::read_head_json(&hulks::head_json(&cal), Path::new("-")).unwrap();
+    assert_eq!(head, export::camera::hulks(&cal));
+
+    // NomadZ: offset and jointPlay in degrees; jointPlay from the play family.
+    let text = nomadz::joint_calibration_cfg(&cal);
+    let back = nomadz::read_joint_calibration_cfg(&text, Path::new("-")).unwrap();
+    assert_eq!(back.len(), 26);
+    for ((name, param), (read_name, entry)) in bhuman::BHUMAN_JOINTS.iter().zip(&back) {
+        assert_eq!(name, read_name);
+        assert_eq!(entry.offset, param.map_or(0.0, |p| cal.value(p)), "{name}");
+        let play = param.and_then(nomadz::play_param);
+        assert_eq!(
+            entry.joint_play,
+            play.map_or(0.0, |p| cal.value(p)),
+            "{name}"
+        );
+        assert!(entry.min_angle <= entry.max_angle);
+    }
+    let knee = back.iter().find(|(n, _)| n == "lKneePitch").unwrap().1;
+    assert_eq!(knee.joint_play, cal.value(Param::LKneePitchPlay));
+    assert_ne!(knee.joint_play, 0.0);
+
+    // Camera formats read back what was written.
+    let naoth = naoth::read_camera_matrix_offset_cfg(
+        &naoth::camera_matrix_offset_cfg(&cal),
+        Path::new("-"),
+    )
+    .unwrap();
+    assert_eq!(naoth, export::camera::naoth(&cal));
+    let runswift =
+        runswift::read_kinematics_cfg(&runswift::kinematics_cfg(&cal), Path::new("-")).unwrap();
+    assert_eq!(
+        runswift,
+        export::camera::runswift(&cal).map(f64::to_degrees)
+    );
+}
+
+#[test]
+fn every_format_is_written_by_export_all_and_says_its_units() {
+    let mut rng = ChaCha8Rng::seed_from_u64(10);
+    let cal = random_calibration(&mut rng, 3.0);
+    let dir = tempfile::tempdir().unwrap();
+    let files = export::export_all(&cal, dir.path(), &export::WriteOptions::default()).unwrap();
+    assert_eq!(files.len(), ExportFormat::ALL.len());
+    for (format, name, file) in ExportFormat::ALL {
+        assert_eq!(ExportFormat::from_name(name), Some(format));
+        let text = std::fs::read_to_string(dir.path().join(file)).unwrap();
+        assert!(!text.contains("NOT A CALIBRATION"), "{file}");
+        if !file.ends_with(".json") {
+            assert!(
+                text.contains("ADDED to requested"),
+                "{file} states the rule"
+            );
+            assert!(text.contains("Units:"), "{file} states its units");
+        }
+    }
+}
