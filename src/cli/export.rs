@@ -121,8 +121,12 @@ pub fn solve_outputs(
     let options = WriteOptions::protecting_dataset(&dataset.dir, force);
     if let Some(dir) = plots {
         let sides = plot::capture_sides(dataset);
-        let files = plot::solution_plots(solution, Some(&sides), dir, "solve", &options)
+        let mut files = plot::solution_plots(solution, Some(&sides), dir, "solve", &options)
             .context("--plots")?;
+        files.extend(
+            naocalib::report::misfit_plot::misfit_plots(solution, dataset, dir, "misfit", &options)
+                .context("--plots")?,
+        );
         eprintln!("wrote {} plot files into {}", files.len(), dir.display());
     }
     if let Some(dir) = export_dir {

@@ -55,7 +55,9 @@ impl Figure for Grid {
             }
             let (mut x0, mut x1) = all
                 .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.0), b.max(p.0)));
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                    (a.min(p.0), b.max(p.0))
+                });
             let ymax = all.iter().map(|p| p.1.abs()).fold(0.0, f64::max).max(1e-6) * 1.1;
             if x1 - x0 < 1e-9 {
                 x0 -= 1.0;
@@ -122,9 +124,21 @@ pub fn misfit_plots(
     let torques: BTreeMap<u64, [f64; 6]> = dataset
         .captures
         .iter()
-        .map(|c| (c.id, leg_torques(&model.robot, &model.board, c.side, &c.joints)))
+        .map(|c| {
+            (
+                c.id,
+                leg_torques(&model.robot, &model.board, c.side, &c.joints),
+            )
+        })
         .collect();
-    let names = ["HipYawPitch", "HipRoll", "HipPitch", "KneePitch", "AnklePitch", "AnkleRoll"];
+    let names = [
+        "HipYawPitch",
+        "HipRoll",
+        "HipPitch",
+        "KneePitch",
+        "AnklePitch",
+        "AnkleRoll",
+    ];
     let mut joint_panels: Vec<Panel> = names
         .iter()
         .map(|n| Panel {

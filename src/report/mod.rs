@@ -3,6 +3,7 @@
 
 pub mod export;
 pub mod html;
+pub mod misfit_plot;
 pub mod plot;
 
 use std::fmt::Write as _;

@@ -59,7 +59,7 @@ pub enum PlotError {
 const LEFT: RGBColor = RGBColor(31, 119, 180);
 const RIGHT: RGBColor = RGBColor(214, 39, 40);
 const GREY: RGBColor = RGBColor(120, 120, 120);
-const FONT: &str = "sans-serif";
+pub(super) const FONT: &str = "sans-serif";
 
 fn register_fonts() {
     static ONCE: Once = Once::new();
@@ -74,15 +74,15 @@ pub fn capture_sides(dataset: &Dataset) -> BTreeMap<u64, Side> {
     dataset.captures.iter().map(|c| (c.id, c.side)).collect()
 }
 
-type DrawResult = Result<(), String>;
+pub(super) type DrawResult = Result<(), String>;
 
 /// A figure that can be drawn on any backend.
-trait Figure {
+pub(super) trait Figure {
     fn size(&self) -> (u32, u32);
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult;
 }
 
-fn err<E: std::fmt::Display>(e: E) -> String {
+pub(super) fn err<E: std::fmt::Display>(e: E) -> String {
     e.to_string()
 }
 
@@ -132,7 +132,11 @@ pub fn capture_rms_svg(
 }
 
 /// Draws `fig` into `<stem>.png` and `<stem>.svg`.
-fn save(fig: &impl Figure, stem: &Path, options: &WriteOptions) -> Result<Vec<PathBuf>, PlotError> {
+pub(super) fn save(
+    fig: &impl Figure,
+    stem: &Path,
+    options: &WriteOptions,
+) -> Result<Vec<PathBuf>, PlotError> {
     register_fonts();
     let png = stem.with_extension("png");
     let svg = stem.with_extension("svg");

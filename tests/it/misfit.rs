@@ -151,3 +151,29 @@ fn auto_model_on_realistic_robots_gives_honest_sigma() {
         z2.len()
     );
 }
+
+/// `solve --plots` draws the misfit pictures: residuals against the gravity torques,
+/// image position, head angles and per capture.
+#[test]
+fn plots_show_the_misfit() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let dir = tmp.path().join("ds");
+    crate::util::simulate_small(&dir, 5);
+    let plots = tmp.path().join("plots");
+    let out = crate::util::naocalib()
+        .args(["solve", "--plots"])
+        .arg(&plots)
+        .arg(&dir)
+        .output()
+        .expect("ran");
+    assert!(out.status.success(), "{}", crate::util::stderr(&out));
+    for name in ["misfit_torques", "misfit_image_head"] {
+        for ext in ["png", "svg"] {
+            let path = plots.join(format!("{name}.{ext}"));
+            let len = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
+            assert!(len > 1000, "{} missing or empty", path.display());
+        }
+    }
+    let svg = std::fs::read_to_string(plots.join("misfit_torques.svg")).unwrap();
+    assert!(svg.contains("gravity torque") && svg.contains("KneePitch"));
+}
