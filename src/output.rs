@@ -181,7 +181,11 @@ pub fn check_writable(path: &Path, options: &WriteOptions) -> Result<(), WriteEr
 /// then renamed; the directory is created if missing). Refuses a path that is one of
 /// `options.inputs`, and an existing one unless `options.force`; on any failure, what was
 /// at `path` is untouched and no temporary file is left.
-pub fn write_atomic(path: &Path, contents: &[u8], options: &WriteOptions) -> Result<(), WriteError> {
+pub fn write_atomic(
+    path: &Path,
+    contents: &[u8],
+    options: &WriteOptions,
+) -> Result<(), WriteError> {
     write_atomic_with(path, options, |tmp| {
         let mut file = std::fs::OpenOptions::new().write(true).open(tmp)?;
         file.write_all(contents)?;
@@ -266,7 +270,11 @@ mod tests {
         assert_eq!(std::fs::read(&path).unwrap(), b"one");
         write_atomic(&path, b"two", &WriteOptions::new(true)).unwrap();
         assert_eq!(std::fs::read(&path).unwrap(), b"two");
-        assert_eq!(names(dir.path()), ["a.csv"], "no temporary file left behind");
+        assert_eq!(
+            names(dir.path()),
+            ["a.csv"],
+            "no temporary file left behind"
+        );
     }
 
     #[cfg(unix)]
@@ -328,7 +336,10 @@ mod tests {
         let dotted = d.join("../data/./captures.csv");
         let e = write_atomic(&dotted, b"x", &options).unwrap_err();
         assert!(matches!(e, WriteError::Input { .. }), "{e}");
-        assert!(e.to_string().ends_with("is an input file; refusing to overwrite it"));
+        assert!(
+            e.to_string()
+                .ends_with("is an input file; refusing to overwrite it")
+        );
         #[cfg(unix)]
         {
             let link = dir.path().join("link.csv");
@@ -369,8 +380,8 @@ mod tests {
     fn missing_parent_that_is_a_file_is_an_io_error() {
         let dir = tempfile::tempdir().unwrap();
         std::fs::write(dir.path().join("f"), b"").unwrap();
-        let e = write_atomic(&dir.path().join("f/a.csv"), b"x", &WriteOptions::default())
-            .unwrap_err();
+        let e =
+            write_atomic(&dir.path().join("f/a.csv"), b"x", &WriteOptions::default()).unwrap_err();
         assert!(matches!(e, WriteError::Io { .. }), "{e}");
     }
 }

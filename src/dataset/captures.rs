@@ -30,7 +30,9 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Vec<Capture>, DatasetEr
         if captures.len() == MAX_CAPTURES {
             return Err(DatasetError::invalid(
                 Location::line(path, row.line),
-                format!("more than {MAX_CAPTURES} captures; a dataset may have at most {MAX_CAPTURES}"),
+                format!(
+                    "more than {MAX_CAPTURES} captures; a dataset may have at most {MAX_CAPTURES}"
+                ),
             ));
         }
         let id = row.uint::<u64>(id_col, "capture")?;

@@ -261,9 +261,8 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Model, DatasetError> {
 /// Checks a model in memory against the same rules as [`parse`]; errors name `path` and the
 /// TOML key.
 pub(crate) fn validate(path: &Path, model: &Model) -> Result<(), DatasetError> {
-    check(model).map_err(|(key, message)| {
-        DatasetError::invalid(Location::file(path).field(key), message)
-    })
+    check(model)
+        .map_err(|(key, message)| DatasetError::invalid(Location::file(path).field(key), message))
 }
 
 /// The one check of a model's values: every number finite, and within the ranges a NAO team
@@ -313,8 +312,18 @@ fn check(model: &Model) -> Result<(), KeyError> {
             return fail(key, format!("must be {lo} … {hi} px, got {n}"));
         }
     }
-    within("camera.fx", camera.fx, FOCAL, "px (a camera's focal length)")?;
-    within("camera.fy", camera.fy, FOCAL, "px (a camera's focal length)")?;
+    within(
+        "camera.fx",
+        camera.fx,
+        FOCAL,
+        "px (a camera's focal length)",
+    )?;
+    within(
+        "camera.fy",
+        camera.fy,
+        FOCAL,
+        "px (a camera's focal length)",
+    )?;
     for (key, c, size) in [
         ("camera.cx", camera.cx, camera.width),
         ("camera.cy", camera.cy, camera.height),
@@ -336,12 +345,19 @@ fn check(model: &Model) -> Result<(), KeyError> {
         if n < lo || n > hi {
             return fail(
                 key,
-                format!("must be {lo} … {hi} squares (the vertex finder needs at least 2 × 2 inner vertices), got {n}"),
+                format!(
+                    "must be {lo} … {hi} squares (the vertex finder needs at least 2 × 2 inner vertices), got {n}"
+                ),
             );
         }
     }
     within("board.square_mm", board.square, SQUARE_MM, "mm")?;
-    each_within("board.mount_origin_mm", &board.mount_origin, POSITION_MM, "mm")?;
+    each_within(
+        "board.mount_origin_mm",
+        &board.mount_origin,
+        POSITION_MM,
+        "mm",
+    )?;
     each_within(
         "board.mount_rpy_deg",
         &board.mount_rpy.map(f64::to_degrees),
@@ -461,11 +477,11 @@ mod tests {
             ),
             (
                 &MINIMAL.replace("640", "0"),
-                "line 2, field camera.width: must be at least 1, got 0",
+                "line 2, field camera.width: must be 16 … 8192 px, got 0",
             ),
             (
                 &MINIMAL.replace("fy = 562.5", "fy = -1"),
-                "line 5, field camera.fy: must be greater than 0",
+                "line 5, field camera.fy: must be 50 … 20000 px (a camera's focal length), got -1",
             ),
             (
                 &MINIMAL.replace("cx = 324.0", "cx = nan"),
@@ -477,11 +493,11 @@ mod tests {
             ),
             (
                 &format!("{MINIMAL}[board]\nsquares_y = 1\n"),
-                "line 9, field board.squares_y: must be at least 2, got 1",
+                "line 9, field board.squares_y: must be 3 … 64 squares",
             ),
             (
                 &format!("{MINIMAL}[board]\nsquare_mm = 0\n"),
-                "line 9, field board.square_mm: must be greater than 0",
+                "line 9, field board.square_mm: must be 1 … 500 mm, got 0",
             ),
             (
                 &format!("{MINIMAL}[robot]\nthigh_mm = inf\n"),
@@ -522,11 +538,13 @@ mod tests {
         ];
         model.board.mount_origin = [1.0 / 3.0, 2.5, -7.0];
         model.robot.lower_camera_tilt = 39.5f64.to_radians();
-        let text = render(&model);
+        let text = render(&model).unwrap();
         let back = parse(Path::new("x"), text.as_bytes()).unwrap();
         assert_eq!(back, model);
         assert!(
-            render(&Model::default()).contains("lower_camera_tilt_deg = 39.7\n"),
+            render(&Model::default())
+                .unwrap()
+                .contains("lower_camera_tilt_deg = 39.7\n"),
             "{text}"
         );
     }
@@ -540,7 +558,8 @@ mod tests {
         let e = validate(path, &m).unwrap_err().to_string();
         assert_eq!(
             e,
-            "o/dataset.toml, field camera.fx: must be greater than 0, got 0"
+            "o/dataset.toml, field camera.fx: must be 50 … 20000 px (a camera's focal length), \
+             got 0"
         );
         let mut m = Model::default();
         m.camera.distortion[3] = f64::NAN;
@@ -554,7 +573,100 @@ mod tests {
         let e = validate(path, &m).unwrap_err().to_string();
         assert_eq!(
             e,
-            "o/dataset.toml, field board.squares_x: must be at least 2, got 1"
+            "o/dataset.toml, field board.squares_x: must be 3 … 64 squares (the vertex finder \
+             needs at least 2 × 2 inner vertices), got 1"
+        );
+        let mut m = Model::default();
+        m.robot.tibia = -102.9;
+        let e = validate(path, &m).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "o/dataset.toml, field robot.tibia_mm: must be 1 … 1000 mm (a link length), got -102.9"
+        );
+        let mut m = Model::default();
+        m.robot.gravity = [0.0, 0.0, 2.0];
+        let e = validate(path, &m).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "o/dataset.toml, field robot.gravity: must be a unit vector, got one of length 2"
+        );
+        let mut m = Model::default();
+        m.board.mass_g = -1.0;
+        let e = validate(path, &m).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "o/dataset.toml, field board.mass_g: must be 0 … 10000 g, got -1"
+        );
+    }
+
+    #[test]
+    fn physical_ranges_name_line_and_key() {
+        let cases = [
+            (
+                "[camera]\nwidth = 640\nheight = 480\nfx = 1e9\nfy = 562.5\ncx = 324\ncy = 189\n",
+                "d/dataset.toml line 4, field camera.fx: must be 50 … 20000 px",
+            ),
+            (
+                &MINIMAL.replace("cx = 324.0", "cx = 1000"),
+                "d/dataset.toml line 6, field camera.cx: must be -320 … 960 px (the principal \
+                 point lies within the image ± 50 %), got 1000",
+            ),
+            (
+                &MINIMAL.replace("height = 480", "height = 100000"),
+                "d/dataset.toml line 3, field camera.height: must be 16 … 8192 px, got 100000",
+            ),
+            (
+                &format!("{MINIMAL}[robot]\nthigh_mm = 0\n"),
+                "d/dataset.toml line 9, field robot.thigh_mm: must be 1 … 1000 mm (a link length)",
+            ),
+            (
+                &format!("{MINIMAL}[robot]\ngravity = [0, 0, 0]\n"),
+                "d/dataset.toml line 9, field robot.gravity: must be a non-zero direction",
+            ),
+            (
+                &format!("{MINIMAL}[robot]\ngravity = [0, 1]\n"),
+                "d/dataset.toml line 9, field robot.gravity: expected exactly 3 numbers, found 2",
+            ),
+            (
+                &format!("{MINIMAL}[board]\nmass_g = -5\n"),
+                "d/dataset.toml line 9, field board.mass_g: must be 0 … 10000 g, got -5",
+            ),
+            (
+                &format!("{MINIMAL}[board]\ncom_mm = [1, 2, nan]\n"),
+                "d/dataset.toml line 9, field board.com_mm[2]: nan is not a finite number",
+            ),
+            (
+                &format!("{MINIMAL}[board]\nmount_rpy_deg = [0, 0, 720]\n"),
+                "d/dataset.toml line 9, field board.mount_rpy_deg[2]: must be within ±360 °",
+            ),
+        ];
+        for (text, expected) in cases {
+            let e = parse_str(text).unwrap_err();
+            assert!(
+                e.starts_with(expected),
+                "{e:?} should start with {expected:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn gravity_mass_and_centre_of_mass() {
+        let text = format!(
+            "{MINIMAL}[board]\nmass_g = 95.5\ncom_mm = [140, -2, 3.5]\n[robot]\n\
+             gravity = [0, -3, 4]\n"
+        );
+        let m = parse_str(&text).unwrap();
+        assert_eq!(m.board.mass_g, 95.5);
+        assert_eq!(m.board.com_mm, [140.0, -2.0, 3.5]);
+        assert_eq!(m.robot.gravity, [0.0, -0.6, 0.8], "stored as a unit vector");
+        // Written and read again: the very same bits.
+        let mut m = m;
+        m.robot.gravity = [1.0, 1.0, 1.0].map(|x: f64| x / 3f64.sqrt());
+        let back = parse(Path::new("x"), render(&m).unwrap().as_bytes()).unwrap();
+        assert_eq!(back, m);
+        assert_eq!(
+            back.robot.gravity.map(f64::to_bits),
+            m.robot.gravity.map(f64::to_bits)
         );
     }
 }

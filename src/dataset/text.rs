@@ -34,10 +34,7 @@ fn kind_of(meta: &std::fs::Metadata) -> &'static str {
 /// Opens `path` for reading without ever blocking on it: a FIFO or device is refused
 /// (checked on the opened handle, so it cannot be swapped in between), and so is a file
 /// larger than `limit` bytes. Returns the file and its size.
-pub(crate) fn open_regular(
-    path: &Path,
-    limit: u64,
-) -> Result<(std::fs::File, u64), io::Error> {
+pub(crate) fn open_regular(path: &Path, limit: u64) -> Result<(std::fs::File, u64), io::Error> {
     let mut options = std::fs::OpenOptions::new();
     options.read(true);
     #[cfg(unix)]

@@ -50,7 +50,8 @@ impl<'t> TomlDoc<'t> {
         };
         doc.index_table("", parsed.get_ref())?;
         doc.keys.sort_by_key(|(_, key, value)| {
-            key.as_ref().map_or(value.start, |k| k.start.min(value.start))
+            key.as_ref()
+                .map_or(value.start, |k| k.start.min(value.start))
         });
         Ok(doc)
     }
@@ -117,6 +118,7 @@ impl<'t> TomlDoc<'t> {
     }
 
     /// The key paths of the document, in file order (array items included).
+    #[cfg(test)]
     pub fn key_paths(&self) -> impl Iterator<Item = &str> {
         self.keys.iter().map(|(path, ..)| path.as_str())
     }
@@ -315,7 +317,10 @@ mod tests {
                 "[cam]\nw = 3\n",
                 "d.toml line 1, field cam.f: [cam] has no key 'f'",
             ),
-            ("x = 1\n", "d.toml line 1, field x: unknown key 'x' at the top level"),
+            (
+                "x = 1\n",
+                "d.toml line 1, field x: unknown key 'x' at the top level",
+            ),
             (
                 "[cam]\nw = 3\nf = 1\nzoom = 2\n",
                 "d.toml line 4, field cam.zoom: unknown key 'zoom' in [cam] (known keys: w, f, d)",
@@ -348,7 +353,10 @@ mod tests {
         ];
         for (text, expected) in cases {
             let e = read(text);
-            assert!(e.starts_with(expected), "{text:?}: {e:?} should start with {expected:?}");
+            assert!(
+                e.starts_with(expected),
+                "{text:?}: {e:?} should start with {expected:?}"
+            );
         }
     }
 
@@ -357,10 +365,16 @@ mod tests {
         let text = "[cam]\nw = 3\nf = 1\nd = [1,\n 2]\n";
         let doc = TomlDoc::new(Path::new("d.toml"), text.as_bytes()).unwrap();
         assert_eq!(doc.at("cam.f").to_string(), "d.toml line 3, field cam.f");
-        assert_eq!(doc.at("cam.d[1]").to_string(), "d.toml line 5, field cam.d[1]");
+        assert_eq!(
+            doc.at("cam.d[1]").to_string(),
+            "d.toml line 5, field cam.d[1]"
+        );
         assert_eq!(doc.at("cam").to_string(), "d.toml line 1, field cam");
         assert_eq!(doc.at("cam.x").to_string(), "d.toml, field cam.x");
         let paths: Vec<_> = doc.key_paths().collect();
-        assert_eq!(paths, ["cam", "cam.w", "cam.f", "cam.d", "cam.d[0]", "cam.d[1]"]);
+        assert_eq!(
+            paths,
+            ["cam", "cam.w", "cam.f", "cam.d", "cam.d[0]", "cam.d[1]"]
+        );
     }
 }

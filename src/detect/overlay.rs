@@ -118,9 +118,7 @@ pub fn write(
     Some(
         draw(&grey, &detected, before.as_deref(), after.as_deref())
             .map_err(cv)
-            .and_then(|png| {
-                Ok(crate::output::write_atomic(&out, &png, options)?)
-            })
+            .and_then(|png| Ok(crate::output::write_atomic(&out, &png, options)?))
             .map(|()| out.clone()),
     )
 }

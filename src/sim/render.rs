@@ -126,7 +126,7 @@ impl GreyImage {
     }
 
     /// Writes the image as PNG to `path` with [`crate::output::write_atomic`], replacing an
-/// existing file (callers check for existing images first).
+    /// existing file (callers check for existing images first).
     pub fn write_png(&self, path: &Path) -> Result<(), RenderError> {
         let bytes = self.to_png().map_err(|message| RenderError::Encode {
             path: path.to_path_buf(),
