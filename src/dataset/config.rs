@@ -6,7 +6,10 @@
 
 use std::path::Path;
 
-use serde::{Deserialize, Serialize};
+use std::fmt;
+
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
+use serde::{Deserialize, Serialize, Serializer};
 
 use crate::model::{Board, Camera, Model, RobotGeometry};
 
@@ -56,7 +59,7 @@ struct CameraToml {
     cy: f64,
     /// OpenCV's `[k1, k2, p1, p2, k3]`; zero when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    distortion: Option<Vec<f64>>,
+    distortion: Option<Numbers<5>>,
 }
 
 /// `[board]`: the sandal pattern, its mount and its mass; every key optional.
@@ -66,11 +69,11 @@ struct BoardToml {
     squares_x: u32,
     squares_y: u32,
     square_mm: f64,
-    mount_origin_mm: Vec<f64>,
+    mount_origin_mm: Numbers<3>,
     /// Roll, pitch, yaw.
-    mount_rpy_deg: Vec<f64>,
+    mount_rpy_deg: Numbers<3>,
     mass_g: f64,
-    com_mm: Vec<f64>,
+    com_mm: Numbers<3>,
 }
 
 /// `[robot]`: link lengths, the lower camera's mounting and gravity; every key optional.
@@ -82,10 +85,10 @@ struct RobotToml {
     thigh_mm: f64,
     tibia_mm: f64,
     foot_height_mm: f64,
-    lower_camera_offset_mm: Vec<f64>,
+    lower_camera_offset_mm: Numbers<3>,
     lower_camera_tilt_deg: f64,
     /// The direction of gravity in the origin frame; normalised when read.
-    gravity: Vec<f64>,
+    gravity: Numbers<3>,
 }
 
 impl Default for BoardToml {
@@ -109,7 +112,7 @@ impl From<&Camera> for CameraToml {
             fy: c.fy,
             cx: c.cx,
             cy: c.cy,
-            distortion: Some(c.distortion.to_vec()),
+            distortion: Some(Numbers(c.distortion)),
         }
     }
 }
@@ -120,10 +123,10 @@ impl From<&Board> for BoardToml {
             squares_x: b.squares_x,
             squares_y: b.squares_y,
             square_mm: b.square,
-            mount_origin_mm: b.mount_origin.to_vec(),
-            mount_rpy_deg: b.mount_rpy.map(degrees_for).to_vec(),
+            mount_origin_mm: Numbers(b.mount_origin),
+            mount_rpy_deg: Numbers(b.mount_rpy.map(degrees_for)),
             mass_g: b.mass_g,
-            com_mm: b.com_mm.to_vec(),
+            com_mm: Numbers(b.com_mm),
         }
     }
 }
@@ -136,9 +139,9 @@ impl From<&RobotGeometry> for RobotToml {
             thigh_mm: r.thigh,
             tibia_mm: r.tibia,
             foot_height_mm: r.foot_height,
-            lower_camera_offset_mm: r.lower_camera_offset.to_vec(),
+            lower_camera_offset_mm: Numbers(r.lower_camera_offset),
             lower_camera_tilt_deg: degrees_for(r.lower_camera_tilt),
-            gravity: r.gravity.to_vec(),
+            gravity: Numbers(r.gravity),
         }
     }
 }
@@ -146,14 +149,42 @@ impl From<&RobotGeometry> for RobotToml {
 /// A problem with one key: its TOML key path and what is wrong.
 type KeyError = (String, String);
 
-/// Exactly `N` numbers from the array at `key`.
-fn array<const N: usize>(key: &str, values: &[f64]) -> Result<[f64; N], KeyError> {
-    values.try_into().map_err(|_| {
-        (
-            key.to_string(),
-            format!("expected exactly {N} numbers, found {}", values.len()),
-        )
-    })
+/// Exactly `N` numbers: a TOML array of that length (serde's own arrays would accept a
+/// longer one and drop the rest).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Numbers<const N: usize>([f64; N]);
+
+impl<'de, const N: usize> Deserialize<'de> for Numbers<N> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Expect<const N: usize>;
+        impl<'de, const N: usize> Visitor<'de> for Expect<N> {
+            type Value = Numbers<N>;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                write!(f, "an array of {N} numbers")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+                let mut out = [0.0; N];
+                let mut n = 0;
+                while let Some(x) = seq.next_element::<f64>()? {
+                    if let Some(slot) = out.get_mut(n) {
+                        *slot = x;
+                    }
+                    n += 1;
+                }
+                if n != N {
+                    return Err(de::Error::invalid_length(n, &self));
+                }
+                Ok(Numbers(out))
+            }
+        }
+        d.deserialize_seq(Expect::<N>)
+    }
+}
+
+impl<const N: usize> Serialize for Numbers<N> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(self.0.iter())
+    }
 }
 
 impl DatasetToml {
@@ -184,20 +215,17 @@ impl DatasetToml {
             fy: c.fy,
             cx: c.cx,
             cy: c.cy,
-            distortion: match &c.distortion {
-                Some(d) => array("camera.distortion", d)?,
-                None => [0.0; 5],
-            },
+            distortion: c.distortion.map_or([0.0; 5], |d| d.0),
         };
         let b = self.board;
         let board = Board {
             squares_x: b.squares_x,
             squares_y: b.squares_y,
             square: b.square_mm,
-            mount_origin: array("board.mount_origin_mm", &b.mount_origin_mm)?,
-            mount_rpy: array("board.mount_rpy_deg", &b.mount_rpy_deg)?.map(f64::to_radians),
+            mount_origin: b.mount_origin_mm.0,
+            mount_rpy: b.mount_rpy_deg.0.map(f64::to_radians),
             mass_g: b.mass_g,
-            com_mm: array("board.com_mm", &b.com_mm)?,
+            com_mm: b.com_mm.0,
         };
         let r = self.robot;
         let robot = RobotGeometry {
@@ -206,9 +234,9 @@ impl DatasetToml {
             thigh: r.thigh_mm,
             tibia: r.tibia_mm,
             foot_height: r.foot_height_mm,
-            lower_camera_offset: array("robot.lower_camera_offset_mm", &r.lower_camera_offset_mm)?,
+            lower_camera_offset: r.lower_camera_offset_mm.0,
             lower_camera_tilt: r.lower_camera_tilt_deg.to_radians(),
-            gravity: unit_vector(array("robot.gravity", &r.gravity)?)?,
+            gravity: unit_vector(r.gravity.0)?,
         };
         Ok(Model {
             robot,

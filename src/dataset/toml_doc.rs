@@ -225,6 +225,14 @@ fn reword(path: &str, message: &str) -> (String, String) {
             format!("expected {}, found {}", kind(expected), kind(found)),
         );
     }
+    if let Some(rest) = message.strip_prefix("invalid length ")
+        && let Some((found, expected)) = rest.split_once(", expected an array of ")
+    {
+        return (
+            path.to_string(),
+            format!("expected exactly {expected}, found {found}"),
+        );
+    }
     if let Some(rest) = message.strip_prefix("invalid value: ")
         && let Some((found, expected)) = rest.split_once(", expected ")
     {
