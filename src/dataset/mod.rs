@@ -128,6 +128,13 @@ impl Dataset {
     }
 
     fn load_parts(dir: &Path, with_corners: bool) -> Result<Dataset, DatasetError> {
+        if dir.metadata().is_ok_and(|m| !m.is_dir()) {
+            return Err(DatasetError::invalid(
+                Location::file(dir),
+                "is not a directory; a dataset is a directory holding dataset.toml and \
+                 captures.csv",
+            ));
+        }
         let path = dir.join(DATASET_TOML);
         let bytes = text::read_file(&path, true, " (it needs at least a [camera] table)")?;
         let model = config::parse(&path, &bytes.unwrap_or_default())?;

@@ -15,6 +15,8 @@ mod detect_files;
 #[cfg(feature = "detect")]
 mod detect_render;
 mod export_roundtrip;
+mod fuzz_readers;
+mod hostile_inputs;
 mod extended;
 mod plot_files;
 mod pure_rust_agreement;
