@@ -74,9 +74,10 @@ fn check_bounds(args: &SimulateArgs) -> Result<()> {
         .checked_mul(args.heads)
         .and_then(|n| n.checked_mul(2));
     if captures.is_none_or(|n| n > MAX_CAPTURES) {
+        let count = captures.map_or("more than 2⁶⁴".to_string(), |n| n.to_string());
         bail!(
-            "--stances {} --heads {} would make 2 × {} × {} captures; at most {MAX_CAPTURES} \
-             are allowed",
+            "--stances {} --heads {} would make 2 × {} × {} = {count} captures; at most \
+             {MAX_CAPTURES} are allowed",
             args.stances,
             args.heads,
             args.stances,

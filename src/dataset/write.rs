@@ -9,8 +9,7 @@ pub(crate) fn create_dir(dir: &Path) -> Result<(), DatasetError> {
     if dir.metadata().is_ok_and(|m| !m.is_dir()) {
         return Err(DatasetError::Refused {
             path: dir.to_path_buf(),
-            reason: "exists and is not a directory; a dataset is written into a directory"
-                .into(),
+            reason: "exists and is not a directory; a dataset is written into a directory".into(),
         });
     }
     std::fs::create_dir_all(dir).map_err(|e| DatasetError::io(dir, "create the directory", e))

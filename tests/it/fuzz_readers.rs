@@ -73,7 +73,11 @@ fn valid() -> &'static Valid {
             .map(|&name| (name, std::fs::read(dir.join(name)).unwrap()))
             .collect();
         let out = run(&["solve", "--json", "--solver", "lm"], &dir);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         Valid {
             files,
             result_json: out.stdout,
@@ -130,7 +134,10 @@ fn apply(bytes: &mut Vec<u8>, m: &Mutation) {
         }
         Mutation::DuplicateLine(p) => {
             let i = at(bytes, *p);
-            let start = bytes[..i].iter().rposition(|&b| b == b'\n').map_or(0, |k| k + 1);
+            let start = bytes[..i]
+                .iter()
+                .rposition(|&b| b == b'\n')
+                .map_or(0, |k| k + 1);
             let end = bytes[i..]
                 .iter()
                 .position(|&b| b == b'\n')

@@ -25,7 +25,11 @@ fn dataset(tmp: &Path) -> std::path::PathBuf {
 fn simulate_with_huge_counts_fails_cleanly_and_writes_nothing() {
     let tmp = tempfile::tempdir().unwrap();
     let out_dir = tmp.path().join("out");
-    for (stances, heads) in [("100000000000", "3"), ("18446744073709551615", "2"), ("0", "3")] {
+    for (stances, heads) in [
+        ("100000000000", "3"),
+        ("18446744073709551615", "2"),
+        ("0", "3"),
+    ] {
         let out = naocalib()
             .args(["simulate", "--stances", stances, "--heads", heads])
             .arg(&out_dir)
@@ -40,7 +44,7 @@ fn simulate_with_huge_counts_fails_cleanly_and_writes_nothing() {
         .arg(&out_dir)
         .output()
         .unwrap();
-    assert_clean_failure(&out, &["100002 captures", "at most 100000"]);
+    assert_clean_failure(&out, &["= 100002 captures", "at most 100000"]);
 }
 
 #[cfg(unix)]
@@ -87,14 +91,21 @@ fn a_corner_far_outside_the_image_is_refused() {
     let out = run(&["solve", "--solver", "lm"], &dir);
     assert_clean_failure(
         &out,
-        &["corners.csv line 2, field u", "1e20 px is outside -640 … 1280 px"],
+        &[
+            "corners.csv line 2, field u",
+            "100000000000000000000 px is outside -640 … 1280 px",
+        ],
     );
 }
 
 #[test]
 fn absurd_link_and_focal_lengths_are_refused() {
     let cases = [
-        ("thigh_mm = 100.0", "thigh_mm = -100.0", "field robot.thigh_mm"),
+        (
+            "thigh_mm = 100.0",
+            "thigh_mm = -100.0",
+            "field robot.thigh_mm",
+        ),
         ("tibia_mm = 102.9", "tibia_mm = 0", "field robot.tibia_mm"),
         ("fx = 562.5", "fx = 1e9", "field camera.fx"),
         ("fy = 562.5", "fy = 3", "field camera.fy"),
@@ -121,7 +132,10 @@ fn a_board_smaller_than_3x3_squares_is_refused_when_read() {
     let out = run(&["solve", "--solver", "lm"], &dir);
     assert_clean_failure(
         &out,
-        &["dataset.toml line 15, field board.squares_y", "3 … 64 squares"],
+        &[
+            "dataset.toml line 15, field board.squares_y",
+            "3 … 64 squares",
+        ],
     );
 }
 
@@ -157,7 +171,11 @@ fn messages_blame_the_right_thing_and_print_the_os_error_once() {
     // A file given as the dataset: the file is not a directory, not "dataset.toml missing".
     let out = run(&["solve"], dir.join("dataset.toml"));
     assert_clean_failure(&out, &["dataset.toml: is not a directory"]);
-    assert!(!stderr(&out).contains("dataset.toml/dataset.toml"), "{}", stderr(&out));
+    assert!(
+        !stderr(&out).contains("dataset.toml/dataset.toml"),
+        "{}",
+        stderr(&out)
+    );
 
     // A directory where captures.csv should be.
     std::fs::rename(dir.join("captures.csv"), tmp.path().join("c.csv")).unwrap();
@@ -258,5 +276,8 @@ fn an_overlay_never_replaces_an_input_image() {
         image,
         "the input image is untouched"
     );
-    assert!(dir.join("images/capture_0001.png").exists(), "other overlays written");
+    assert!(
+        dir.join("images/capture_0001.png").exists(),
+        "other overlays written"
+    );
 }

@@ -15,9 +15,9 @@ mod detect_files;
 #[cfg(feature = "detect")]
 mod detect_render;
 mod export_roundtrip;
+mod extended;
 mod fuzz_readers;
 mod hostile_inputs;
-mod extended;
 mod plot_files;
 mod pure_rust_agreement;
 mod pure_rust_cli;
