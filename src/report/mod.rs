@@ -190,6 +190,7 @@ pub fn json(solution: &Solution, truth: Option<&[f64]>) -> Value {
         });
         if !fixed && !determined {
             entry["undetermined"] = Value::Bool(true);
+            entry["determined"] = Value::Bool(false);
         }
         if let (Some(sw), false, true) = (solution.sandwich_std, fixed, determined) {
             entry["std_sandwich"] = json!(p.unit().to_report(sw[p.index()]));

@@ -1,12 +1,14 @@
-//! Undetermined parameters: free parameters whose effect on the residuals the other free
-//! parameters already produce (CamPitch, HeadPitch, CamX and CamZ, for one, trade against
-//! each other). They are held at their nominal value instead of being fitted, and the
-//! combination they form is named (docs/MODEL.md, "Undetermined directions").
+//! Undetermined parameters of the extended model: free parameters whose effect on the
+//! residuals the other free parameters already produce (CamPitch, HeadPitch, CamX and CamZ,
+//! for one, trade against each other). They are held at their nominal value instead of
+//! being fitted, and the combination they form is named (docs/MODEL.md, "Undetermined
+//! directions"). The paper's 21 parameters are never held: a dataset that cannot determine
+//! them is diagnosed by the identifiability report, which suggests what to `--fix`.
 //!
 //! The test is a Gram–Schmidt pass over the column-scaled Jacobian in registry order (the
-//! paper's parameters first): a parameter whose column keeps less than
-//! [`UNDETERMINED_RATIO`] of its length once the columns before it are projected out adds
-//! nothing the data can tell apart, and is held.
+//! paper's parameters first): a parameter whose column keeps less than [`threshold`] of its
+//! length once the columns before it are projected out adds nothing the data can tell
+//! apart, and is held.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -15,10 +17,26 @@ use super::uncertainty::Direction;
 use super::{Problem, SolveError};
 use crate::model::{PARAMETER_COUNT, Param};
 
-/// A free parameter is undetermined when less than this fraction of its (column-scaled)
-/// Jacobian column lies outside the span of the parameters before it: its σ would be
-/// inflated more than 50-fold by the trade-off.
+/// A parameter of the paper's model is undetermined when less than this fraction of its
+/// (column-scaled) Jacobian column lies outside the span of the parameters before it: its
+/// σ would be inflated more than 50-fold by the trade-off.
 pub const UNDETERMINED_RATIO: f64 = 0.02;
+
+/// A parameter of the extended model must bring a direction of its own: it is held when
+/// less than this fraction of its column lies outside the span of the parameters before it
+/// (it correlates at more than 0.98 with a combination of them). Any effect the model
+/// lacks moves such a parameter along that direction far beyond its σ: HeadPitch against
+/// CamPitch (−0.99) is the known case.
+pub const EXTENDED_UNDETERMINED_RATIO: f64 = 0.2;
+
+/// The threshold that applies to `p`.
+pub fn threshold(p: Param) -> f64 {
+    if p.family() == crate::model::Family::Paper {
+        UNDETERMINED_RATIO
+    } else {
+        EXTENDED_UNDETERMINED_RATIO
+    }
+}
 
 /// A parameter the data cannot tell apart from others, and the combination it forms.
 #[derive(Debug, Clone, PartialEq)]
@@ -48,39 +66,63 @@ pub fn undetermined(problem: &Problem) -> Result<Vec<Undetermined>, SolveError> 
 
 /// [`undetermined`] from the Jacobian `jac` over the `free` parameters.
 pub fn undetermined_of(free: &[Param], jac: &DMatrix<f64>) -> Vec<Undetermined> {
-    let m = jac.nrows();
     let mut basis: Vec<DVector<f64>> = Vec::new();
-    // The kept columns (unit length) and their indices, for naming combinations.
+    // The kept columns' indices and their coefficients in the orthonormal basis (the
+    // columns of the triangular factor R of the kept, scaled columns).
     let mut kept: Vec<usize> = Vec::new();
+    let mut r_columns: Vec<DVector<f64>> = Vec::new();
     let mut out = Vec::new();
     for (j, &p) in free.iter().enumerate() {
+        let paper = p.family() == crate::model::Family::Paper;
         let norm = jac.column(j).norm();
         if norm == 0.0 {
-            continue; // unobserved: the identifiability report names it
+            // Unobserved: the identifiability report names a paper parameter; an
+            // extended one is held.
+            if !paper {
+                out.push(Undetermined {
+                    param: p,
+                    ratio: 0.0,
+                    direction: Direction {
+                        relative_singular_value: 0.0,
+                        terms: vec![(p, 1.0)],
+                    },
+                });
+            }
+            continue;
         }
         let column: DVector<f64> = jac.column(j) / norm;
         let mut v = column.clone();
-        for q in &basis {
+        let mut coefficients = DVector::zeros(basis.len());
+        for (k, q) in basis.iter().enumerate() {
             let d = q.dot(&v);
+            coefficients[k] = d;
             v.axpy(-d, q, 1.0);
         }
         let ratio = v.norm();
-        if ratio >= UNDETERMINED_RATIO {
+        if ratio >= threshold(p) {
+            let mut r = DVector::zeros(basis.len() + 1);
+            r.rows_mut(0, basis.len()).copy_from(&coefficients);
+            r[basis.len()] = ratio;
             basis.push(v / ratio);
             kept.push(j);
+            r_columns.push(r);
             continue;
         }
-        // column ≈ Σ c_k · (kept column k, scaled): least squares on the kept columns.
-        let mut a = DMatrix::zeros(m, kept.len());
-        for (k, &i) in kept.iter().enumerate() {
-            let n = jac.column(i).norm();
-            a.set_column(k, &(jac.column(i) / n));
+        if paper {
+            // The paper's model keeps its parameters: a rank-deficient dataset is
+            // diagnosed by the identifiability report (with a suggestion to --fix).
+            continue;
         }
-        let c = a
-            .clone()
-            .svd(true, true)
-            .solve(&column, 1e-12)
-            .unwrap_or_else(|_| DVector::zeros(kept.len()));
+        // column ≈ Σ c_k · (kept column k, scaled) with R·c = Qᵀ·column (R upper
+        // triangular: the kept columns in the orthonormal basis).
+        let n = kept.len();
+        let mut r = DMatrix::zeros(n, n);
+        for (k, rc) in r_columns.iter().enumerate() {
+            r.view_mut((0, k), (k + 1, 1)).copy_from(rc);
+        }
+        let c = r
+            .solve_upper_triangular(&coefficients)
+            .unwrap_or_else(|| DVector::zeros(n));
         // Moving p by δ (scaled units) and each kept k by −c_k·δ leaves the residuals
         // (nearly) unchanged. In internal units: δp = 1/‖J_p‖, δk = −c_k/‖J_k‖.
         let mut terms: Vec<(Param, f64)> = vec![(p, p.unit().to_report(1.0 / norm))];

@@ -19,7 +19,7 @@
 use nalgebra::{DMatrix, DVector};
 use statrs::distribution::{ContinuousCDF, FisherSnedecor};
 
-use super::identify::UNDETERMINED_RATIO;
+use super::identify::threshold;
 use super::jacobian::Evaluator;
 use super::problem::Problem;
 use crate::model::{Family, FixedSet, PARAMETER_COUNT, Param};
@@ -138,7 +138,7 @@ pub fn family_tests(
                     continue;
                 }
                 let projected = &j - &q * (q.transpose() * &j);
-                if projected.norm() / norm >= UNDETERMINED_RATIO {
+                if projected.norm() / norm >= threshold(p) {
                     kept.push(p);
                     cols.push(projected / norm);
                 }

@@ -7,7 +7,7 @@ use naocalib::model::{Family, FixedSet, Model, PARAMETER_COUNT, Param};
 use naocalib::sim::{SimOptions, simulate};
 use naocalib::solve::{Problem, Solution, UncertaintyOptions, backend, backend_names, calibrate};
 
-use crate::util::{assert_clean_failure, naocalib, stderr};
+use crate::util::{assert_clean_failure, determined_truth, naocalib, stderr};
 
 /// A noise-free dataset of `stances` stances × 2 head postures per leg whose robot has the
 /// effects of `effects`, and its truth.
@@ -37,27 +37,6 @@ fn free(families: &[Family]) -> FixedSet {
         }
     }
     fixed
-}
-
-/// The truth moved along the undetermined directions to where the solution holds them
-/// (each undetermined parameter at its start value 0): what the data determine.
-fn determined_truth(solution: &Solution, truth: &[f64; PARAMETER_COUNT]) -> [f64; PARAMETER_COUNT] {
-    let mut t = *truth;
-    for u in &solution.undetermined {
-        // The direction is in report units with the held parameter's coefficient first.
-        let lead = u
-            .direction
-            .terms
-            .iter()
-            .find(|(p, _)| *p == u.param)
-            .expect("own term");
-        let step = u.param.unit().to_report(t[u.param.index()]) / lead.1;
-        for (p, c) in &u.direction.terms {
-            let moved = p.unit().to_report(t[p.index()]) - step * c;
-            t[p.index()] = p.unit().from_report(moved);
-        }
-    }
-    t
 }
 
 /// Largest |estimate − truth| in report units over the free parameters.

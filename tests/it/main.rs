@@ -18,6 +18,7 @@ mod export_roundtrip;
 mod extended;
 mod fuzz_readers;
 mod hostile_inputs;
+mod misfit;
 mod plot_files;
 mod pure_rust_agreement;
 mod pure_rust_cli;
