@@ -200,7 +200,7 @@ pub fn find_datasets(paths: &[PathBuf]) -> (Vec<PathBuf>, Vec<Failure>) {
     let mut found: Vec<PathBuf> = Vec::new();
     let mut failures = Vec::new();
     let add = |p: PathBuf, found: &mut Vec<PathBuf>| {
-        if !found.contains(&p) {
+        if !found.iter().any(|f| crate::output::same_file(f, &p)) {
             found.push(p);
         }
     };

@@ -328,17 +328,7 @@ impl Batch {
 }
 
 fn write_atomic_check(path: &Path, options: &WriteOptions) -> Result<(), ExportError> {
-    if let Some(input) = options.inputs.iter().find(|i| **i == path) {
-        return Err(ExportError::Input {
-            path: input.clone(),
-        });
-    }
-    if !options.force && path.symlink_metadata().is_ok() {
-        return Err(ExportError::Exists {
-            path: path.to_path_buf(),
-        });
-    }
-    Ok(())
+    Ok(crate::output::check_writable(path, options)?)
 }
 
 fn pretty(value: &Value) -> String {

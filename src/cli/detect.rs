@@ -162,10 +162,20 @@ pub fn run(args: &DetectArgs) -> Result<ExitCode> {
     }
 
     let bar = progress_bar(dataset.captures.len());
+    let overlay_options =
+        naocalib::output::WriteOptions::protecting_dataset(&args.dataset, args.force)
+            .protecting(
+                dataset
+                    .captures
+                    .iter()
+                    .filter_map(|c| dataset.image_path(c)),
+            )
+            .protecting(args.after.clone());
     let overlay_errors = Mutex::new(Vec::new());
     let done = |r: &ImageResult| {
         if let Some(dir) = &args.overlay
-            && let Some(Err(e)) = detect::overlay::write(&dataset, r, dir, after.as_ref())
+            && let Some(Err(e)) =
+                detect::overlay::write(&dataset, r, dir, after.as_ref(), &overlay_options)
         {
             overlay_errors
                 .lock()

@@ -62,8 +62,53 @@ pub struct SimulateArgs {
     distortion: Option<Vec<f64>>,
 }
 
+/// The most captures `simulate` writes (as many as a dataset may have).
+const MAX_CAPTURES: usize = 100_000;
+
+/// Checks the counts and noise levels before anything is simulated or written.
+fn check_bounds(args: &SimulateArgs) -> Result<()> {
+    if args.stances == 0 || args.heads == 0 {
+        bail!(
+            "--stances and --heads must be at least 1 (got {} and {})",
+            args.stances,
+            args.heads
+        );
+    }
+    let captures = args
+        .stances
+        .checked_mul(args.heads)
+        .and_then(|n| n.checked_mul(2));
+    if captures.is_none_or(|n| n > MAX_CAPTURES) {
+        let count = captures.map_or("more than 2⁶⁴".to_string(), |n| n.to_string());
+        bail!(
+            "--stances {} --heads {} would make 2 × {} × {} = {count} captures; at most \
+             {MAX_CAPTURES} are allowed",
+            args.stances,
+            args.heads,
+            args.stances,
+            args.heads
+        );
+    }
+    let within = |flag: &str, x: f64, hi: f64, unit: &str| {
+        if x.is_finite() && (0.0..=hi).contains(&x) {
+            Ok(())
+        } else {
+            Err(anyhow::anyhow!("{flag} must be 0 … {hi} {unit}, got {x}"))
+        }
+    };
+    within("--px-noise", args.px_noise, 100.0, "px")?;
+    within("--joint-noise-deg", args.joint_noise_deg, 10.0, "°")?;
+    if let Some(d) = &args.distortion
+        && let Some(k) = d.iter().find(|k| !(k.is_finite() && k.abs() <= 100.0))
+    {
+        bail!("--distortion coefficients must be finite and within ±100, got {k}");
+    }
+    Ok(())
+}
+
 /// Runs `naocalib simulate`.
 pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
+    check_bounds(args)?;
     let truth = match &args.truth {
         Some(path) => {
             // With --force the dataset's truth.toml would be replaced: never the input.

@@ -10,6 +10,13 @@ use super::csv_table::CsvTable;
 use super::error::{DatasetError, Location};
 use super::units::csv_float;
 
+/// The most captures a dataset may have (the paper's datasets have a few hundred).
+pub(crate) const MAX_CAPTURES: usize = 100_000;
+
+/// The largest magnitude of a logged joint angle [rad] (a NAO's joints turn less than
+/// ±2.1 rad; more than a full turn is a unit or logging error).
+pub(crate) const MAX_ANGLE_RAD: f64 = std::f64::consts::TAU;
+
 /// Reads the captures from the content of `captures.csv` at `path`.
 pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Vec<Capture>, DatasetError> {
     let table = CsvTable::parse(path, bytes)?;
@@ -20,6 +27,14 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Vec<Capture>, DatasetEr
     let image_col = table.column("image")?;
     let mut captures = Vec::new();
     for row in table.rows() {
+        if captures.len() == MAX_CAPTURES {
+            return Err(DatasetError::invalid(
+                Location::line(path, row.line),
+                format!(
+                    "more than {MAX_CAPTURES} captures; a dataset may have at most {MAX_CAPTURES}"
+                ),
+            ));
+        }
         let id = row.uint::<u64>(id_col, "capture")?;
         let board = row.str(board_col);
         let side = Side::from_name(board).ok_or_else(|| {
@@ -89,6 +104,15 @@ pub(crate) fn validate(
     captures: &[Capture],
     line: impl Fn(usize, &Capture) -> u64,
 ) -> Result<HashMap<u64, u64>, DatasetError> {
+    if captures.len() > MAX_CAPTURES {
+        return Err(DatasetError::invalid(
+            Location::file(path),
+            format!(
+                "{} captures; a dataset may have at most {MAX_CAPTURES}",
+                captures.len()
+            ),
+        ));
+    }
     let mut seen: HashMap<u64, u64> = HashMap::with_capacity(captures.len());
     for (i, capture) in captures.iter().enumerate() {
         let here = line(i, capture);
@@ -108,6 +132,15 @@ pub(crate) fn validate(
                 return Err(DatasetError::invalid(
                     at(joint.name()),
                     format!("{angle} is not a finite number"),
+                ));
+            }
+            if angle.abs() > MAX_ANGLE_RAD {
+                return Err(DatasetError::invalid(
+                    at(joint.name()),
+                    format!(
+                        "{angle} rad is more than a full turn (joint angles are in radians, \
+                         within ±{MAX_ANGLE_RAD:.4})"
+                    ),
                 ));
             }
         }

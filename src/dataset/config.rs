@@ -1,139 +1,308 @@
 //! `dataset.toml`: camera intrinsics, board and robot geometry (SPEC section 6).
+//!
+//! The file is a [`DatasetToml`], read and written with serde; every key is named once, in
+//! that struct. [`validate`] is the one check of a model's values (finite, and within the
+//! ranges a NAO can have), for models read from a file and for models about to be written.
 
-use std::fmt::Write as _;
 use std::path::Path;
+
+use std::fmt;
+
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
+use serde::{Deserialize, Serialize, Serializer};
 
 use crate::model::{Board, Camera, Model, RobotGeometry};
 
 use super::error::{DatasetError, Location};
-use super::toml_doc::{Table, TomlDoc};
-use super::units::{degrees_for, toml_float};
+use super::toml_doc::TomlDoc;
+use super::units::degrees_for;
 
-const CAMERA_KEYS: [&str; 7] = ["width", "height", "fx", "fy", "cx", "cy", "distortion"];
-const BOARD_KEYS: [&str; 5] = [
-    "squares_x",
-    "squares_y",
-    "square_mm",
-    "mount_origin_mm",
-    "mount_rpy_deg",
-];
-const ROBOT_KEYS: [&str; 7] = [
-    "hip_offset_y_mm",
-    "hip_to_neck_z_mm",
-    "thigh_mm",
-    "tibia_mm",
-    "foot_height_mm",
-    "lower_camera_offset_mm",
-    "lower_camera_tilt_deg",
-];
+/// Image width and height [px].
+pub(crate) const IMAGE_SIZE: (u32, u32) = (16, 8192);
+/// Focal lengths fx, fy [px].
+pub(crate) const FOCAL: (f64, f64) = (50.0, 20000.0);
+/// Squares of the board along either side.
+pub(crate) const SQUARES: (u32, u32) = (3, 64);
+/// Edge length of one square [mm].
+pub(crate) const SQUARE_MM: (f64, f64) = (1.0, 500.0);
+/// Link lengths [mm].
+pub(crate) const LINK_MM: (f64, f64) = (1.0, 1000.0);
+/// Largest magnitude of a position (board mount, centre of mass, camera offset) [mm].
+pub(crate) const POSITION_MM: f64 = 1000.0;
+/// Largest magnitude of a fixed angle (board mount, camera tilt) [deg].
+pub(crate) const ANGLE_DEG: f64 = 360.0;
+/// Largest sandal mass [g].
+pub(crate) const MASS_G: f64 = 10_000.0;
 
-/// Reads a model from the content of `dataset.toml` at `path`.
+/// The content of `dataset.toml`.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct DatasetToml {
+    /// The lower camera's intrinsics (required; an `Option` so that a missing table gets
+    /// its own message).
+    camera: Option<CameraToml>,
+    #[serde(default)]
+    board: BoardToml,
+    #[serde(default)]
+    robot: RobotToml,
+}
+
+/// `[camera]`: the lower camera's a-priori intrinsics.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct CameraToml {
+    width: u32,
+    height: u32,
+    fx: f64,
+    fy: f64,
+    cx: f64,
+    cy: f64,
+    /// OpenCV's `[k1, k2, p1, p2, k3]`; zero when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    distortion: Option<Numbers<5>>,
+}
+
+/// `[board]`: the sandal pattern, its mount and its mass; every key optional.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+struct BoardToml {
+    squares_x: u32,
+    squares_y: u32,
+    square_mm: f64,
+    mount_origin_mm: Numbers<3>,
+    /// Roll, pitch, yaw.
+    mount_rpy_deg: Numbers<3>,
+    mass_g: f64,
+    com_mm: Numbers<3>,
+}
+
+/// `[robot]`: link lengths, the lower camera's mounting and gravity; every key optional.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+struct RobotToml {
+    hip_offset_y_mm: f64,
+    hip_to_neck_z_mm: f64,
+    thigh_mm: f64,
+    tibia_mm: f64,
+    foot_height_mm: f64,
+    lower_camera_offset_mm: Numbers<3>,
+    lower_camera_tilt_deg: f64,
+    /// The direction of gravity in the origin frame; normalised when read.
+    gravity: Numbers<3>,
+}
+
+impl Default for BoardToml {
+    fn default() -> Self {
+        BoardToml::from(&Board::default())
+    }
+}
+
+impl Default for RobotToml {
+    fn default() -> Self {
+        RobotToml::from(&RobotGeometry::default())
+    }
+}
+
+impl From<&Camera> for CameraToml {
+    fn from(c: &Camera) -> Self {
+        CameraToml {
+            width: c.width,
+            height: c.height,
+            fx: c.fx,
+            fy: c.fy,
+            cx: c.cx,
+            cy: c.cy,
+            distortion: Some(Numbers(c.distortion)),
+        }
+    }
+}
+
+impl From<&Board> for BoardToml {
+    fn from(b: &Board) -> Self {
+        BoardToml {
+            squares_x: b.squares_x,
+            squares_y: b.squares_y,
+            square_mm: b.square,
+            mount_origin_mm: Numbers(b.mount_origin),
+            mount_rpy_deg: Numbers(b.mount_rpy.map(degrees_for)),
+            mass_g: b.mass_g,
+            com_mm: Numbers(b.com_mm),
+        }
+    }
+}
+
+impl From<&RobotGeometry> for RobotToml {
+    fn from(r: &RobotGeometry) -> Self {
+        RobotToml {
+            hip_offset_y_mm: r.hip_offset_y,
+            hip_to_neck_z_mm: r.hip_to_neck_z,
+            thigh_mm: r.thigh,
+            tibia_mm: r.tibia,
+            foot_height_mm: r.foot_height,
+            lower_camera_offset_mm: Numbers(r.lower_camera_offset),
+            lower_camera_tilt_deg: degrees_for(r.lower_camera_tilt),
+            gravity: Numbers(r.gravity),
+        }
+    }
+}
+
+/// A problem with one key: its TOML key path and what is wrong.
+type KeyError = (String, String);
+
+/// Exactly `N` numbers: a TOML array of that length (serde's own arrays would accept a
+/// longer one and drop the rest).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Numbers<const N: usize>([f64; N]);
+
+impl<'de, const N: usize> Deserialize<'de> for Numbers<N> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Expect<const N: usize>;
+        impl<'de, const N: usize> Visitor<'de> for Expect<N> {
+            type Value = Numbers<N>;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                write!(f, "an array of {N} numbers")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+                let mut out = [0.0; N];
+                let mut n = 0;
+                while let Some(x) = seq.next_element::<f64>()? {
+                    if let Some(slot) = out.get_mut(n) {
+                        *slot = x;
+                    }
+                    n += 1;
+                }
+                if n != N {
+                    return Err(de::Error::invalid_length(n, &self));
+                }
+                Ok(Numbers(out))
+            }
+        }
+        d.deserialize_seq(Expect::<N>)
+    }
+}
+
+impl<const N: usize> Serialize for Numbers<N> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(self.0.iter())
+    }
+}
+
+impl DatasetToml {
+    /// The file for `model`, every value written out.
+    fn from_model(model: &Model) -> Self {
+        DatasetToml {
+            camera: Some(CameraToml::from(&model.camera)),
+            board: BoardToml::from(&model.board),
+            robot: RobotToml::from(&model.robot),
+        }
+    }
+
+    /// The model this file describes (not yet validated), or the first key whose value has
+    /// the wrong shape. Angles become radians and gravity a unit vector.
+    fn into_model(self) -> Result<Model, KeyError> {
+        let Some(c) = self.camera else {
+            return Err((
+                "camera".into(),
+                "missing table [camera] (the lower camera's intrinsics: width, height, fx, fy, \
+                 cx, cy)"
+                    .into(),
+            ));
+        };
+        let camera = Camera {
+            width: c.width,
+            height: c.height,
+            fx: c.fx,
+            fy: c.fy,
+            cx: c.cx,
+            cy: c.cy,
+            distortion: c.distortion.map_or([0.0; 5], |d| d.0),
+        };
+        let b = self.board;
+        let board = Board {
+            squares_x: b.squares_x,
+            squares_y: b.squares_y,
+            square: b.square_mm,
+            mount_origin: b.mount_origin_mm.0,
+            mount_rpy: b.mount_rpy_deg.0.map(f64::to_radians),
+            mass_g: b.mass_g,
+            com_mm: b.com_mm.0,
+        };
+        let r = self.robot;
+        let robot = RobotGeometry {
+            hip_offset_y: r.hip_offset_y_mm,
+            hip_to_neck_z: r.hip_to_neck_z_mm,
+            thigh: r.thigh_mm,
+            tibia: r.tibia_mm,
+            foot_height: r.foot_height_mm,
+            lower_camera_offset: r.lower_camera_offset_mm.0,
+            lower_camera_tilt: r.lower_camera_tilt_deg.to_radians(),
+            gravity: unit_vector(r.gravity.0)?,
+        };
+        Ok(Model {
+            robot,
+            camera,
+            board,
+        })
+    }
+}
+
+/// `g` scaled to length 1 (left as it is when it already has length 1 to within rounding,
+/// so that a written model reads back bit for bit).
+fn unit_vector(g: [f64; 3]) -> Result<[f64; 3], KeyError> {
+    let norm = g.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if !(norm.is_finite() && norm > 0.0) {
+        return Err((
+            "robot.gravity".into(),
+            format!(
+                "must be a non-zero direction (e.g. [-1, 0, 0] for a NAO on its back), got \
+                 [{}, {}, {}]",
+                g[0], g[1], g[2]
+            ),
+        ));
+    }
+    if (norm - 1.0).abs() <= UNIT_TOLERANCE {
+        return Ok(g);
+    }
+    Ok(g.map(|x| x / norm))
+}
+
+/// How far from 1 the length of a stored gravity direction may be.
+const UNIT_TOLERANCE: f64 = 1e-12;
+
+/// Reads a model from the content of `dataset.toml` at `path`, and validates it.
 pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Model, DatasetError> {
     let doc = TomlDoc::new(path, bytes)?;
-    let parsed = doc.parse()?;
-    let root = doc.root(&parsed);
-    root.deny_unknown(&["camera", "board", "robot"])?;
-    let camera = match root.table("camera")? {
-        Some(table) => camera(&table)?,
-        None => {
-            return Err(DatasetError::invalid(
-                Location::file(path).field("camera"),
-                "missing table [camera] (the lower camera's intrinsics: width, height, fx, fy, \
-                 cx, cy)",
-            ));
+    let file: DatasetToml = doc.deserialize()?;
+    let at = |(key, message): KeyError| {
+        if key == "camera" {
+            // A missing table has no line.
+            DatasetError::invalid(Location::file(path).field(key), message)
+        } else {
+            doc.error(&key, message)
         }
     };
-    let board = match root.table("board")? {
-        Some(table) => board(&table)?,
-        None => Board::default(),
-    };
-    let robot = match root.table("robot")? {
-        Some(table) => robot(&table)?,
-        None => RobotGeometry::default(),
-    };
-    Ok(Model {
-        robot,
-        camera,
-        board,
-    })
-}
-
-fn camera(t: &Table<'_, '_>) -> Result<Camera, DatasetError> {
-    t.deny_unknown(&CAMERA_KEYS)?;
-    Ok(Camera {
-        width: t.require("width")?.u32_at_least(1)?,
-        height: t.require("height")?.u32_at_least(1)?,
-        fx: t.require("fx")?.positive()?,
-        fy: t.require("fy")?.positive()?,
-        cx: t.require("cx")?.f64()?,
-        cy: t.require("cy")?.f64()?,
-        distortion: match t.get("distortion") {
-            Some(v) => v.f64_array::<5>()?,
-            None => [0.0; 5],
-        },
-    })
-}
-
-fn board(t: &Table<'_, '_>) -> Result<Board, DatasetError> {
-    t.deny_unknown(&BOARD_KEYS)?;
-    let mut board = Board::default();
-    if let Some(v) = t.get("squares_x") {
-        board.squares_x = v.u32_at_least(2)?;
-    }
-    if let Some(v) = t.get("squares_y") {
-        board.squares_y = v.u32_at_least(2)?;
-    }
-    if let Some(v) = t.get("square_mm") {
-        board.square = v.positive()?;
-    }
-    if let Some(v) = t.get("mount_origin_mm") {
-        board.mount_origin = v.f64_array::<3>()?;
-    }
-    if let Some(v) = t.get("mount_rpy_deg") {
-        board.mount_rpy = v.f64_array::<3>()?.map(f64::to_radians);
-    }
-    Ok(board)
-}
-
-fn robot(t: &Table<'_, '_>) -> Result<RobotGeometry, DatasetError> {
-    t.deny_unknown(&ROBOT_KEYS)?;
-    let mut robot = RobotGeometry::default();
-    let lengths = [
-        ("hip_offset_y_mm", &mut robot.hip_offset_y),
-        ("hip_to_neck_z_mm", &mut robot.hip_to_neck_z),
-        ("thigh_mm", &mut robot.thigh),
-        ("tibia_mm", &mut robot.tibia),
-        ("foot_height_mm", &mut robot.foot_height),
-    ];
-    for (key, slot) in lengths {
-        if let Some(v) = t.get(key) {
-            *slot = v.f64()?;
-        }
-    }
-    if let Some(v) = t.get("lower_camera_offset_mm") {
-        robot.lower_camera_offset = v.f64_array::<3>()?;
-    }
-    if let Some(v) = t.get("lower_camera_tilt_deg") {
-        robot.lower_camera_tilt = v.f64()?.to_radians();
-    }
-    Ok(robot)
+    let model = file.into_model().map_err(at)?;
+    check(&model).map_err(|(key, message)| doc.error(&key, message))?;
+    Ok(model)
 }
 
 /// Checks a model in memory against the same rules as [`parse`]; errors name `path` and the
 /// TOML key.
 pub(crate) fn validate(path: &Path, model: &Model) -> Result<(), DatasetError> {
-    let fail = |key: &str, message: String| {
-        Err(DatasetError::invalid(
-            Location::file(path).field(key),
-            message,
-        ))
-    };
+    check(model)
+        .map_err(|(key, message)| DatasetError::invalid(Location::file(path).field(key), message))
+}
+
+/// The one check of a model's values: every number finite, and within the ranges a NAO team
+/// would accept (the ranges are in the messages).
+fn check(model: &Model) -> Result<(), KeyError> {
+    let fail = |key: &str, message: String| Err((key.to_string(), message));
     let Model {
         robot,
         camera,
         board,
     } = model;
-    let finite = |key: &str, values: &[f64]| -> Result<(), DatasetError> {
+    let finite = |key: &str, values: &[f64]| -> Result<(), KeyError> {
         match values.iter().position(|x| !x.is_finite()) {
             None => Ok(()),
             Some(i) if values.len() == 1 => {
@@ -145,109 +314,128 @@ pub(crate) fn validate(path: &Path, model: &Model) -> Result<(), DatasetError> {
             ),
         }
     };
+    let within = |key: &str, x: f64, (lo, hi): (f64, f64), what: &str| -> Result<(), KeyError> {
+        finite(key, &[x])?;
+        if x < lo || x > hi {
+            return fail(key, format!("must be {lo} … {hi} {what}, got {x}"));
+        }
+        Ok(())
+    };
+    let each_within = |key: &str, values: &[f64], limit: f64, what: &str| {
+        finite(key, values)?;
+        match values.iter().position(|x| x.abs() > limit) {
+            None => Ok(()),
+            Some(i) => fail(
+                &format!("{key}[{i}]"),
+                format!("must be within ±{limit} {what}, got {}", values[i]),
+            ),
+        }
+    };
+    let (lo, hi) = IMAGE_SIZE;
     for (key, n) in [
         ("camera.width", camera.width),
         ("camera.height", camera.height),
     ] {
-        if n == 0 {
-            return fail(key, "must be at least 1, got 0".into());
+        if n < lo || n > hi {
+            return fail(key, format!("must be {lo} … {hi} px, got {n}"));
         }
     }
-    for (key, x) in [("camera.fx", camera.fx), ("camera.fy", camera.fy)] {
-        finite(key, &[x])?;
-        if x <= 0.0 {
-            return fail(key, format!("must be greater than 0, got {x}"));
-        }
+    within(
+        "camera.fx",
+        camera.fx,
+        FOCAL,
+        "px (a camera's focal length)",
+    )?;
+    within(
+        "camera.fy",
+        camera.fy,
+        FOCAL,
+        "px (a camera's focal length)",
+    )?;
+    for (key, c, size) in [
+        ("camera.cx", camera.cx, camera.width),
+        ("camera.cy", camera.cy, camera.height),
+    ] {
+        let size = f64::from(size);
+        within(
+            key,
+            c,
+            (-0.5 * size, 1.5 * size),
+            "px (the principal point lies within the image ± 50 %)",
+        )?;
     }
-    finite("camera.cx", &[camera.cx])?;
-    finite("camera.cy", &[camera.cy])?;
     finite("camera.distortion", &camera.distortion)?;
+    let (lo, hi) = SQUARES;
     for (key, n) in [
         ("board.squares_x", board.squares_x),
         ("board.squares_y", board.squares_y),
     ] {
-        if n < 2 {
-            return fail(key, format!("must be at least 2, got {n}"));
+        if n < lo || n > hi {
+            return fail(
+                key,
+                format!(
+                    "must be {lo} … {hi} squares (the vertex finder needs at least 2 × 2 inner vertices), got {n}"
+                ),
+            );
         }
     }
-    finite("board.square_mm", &[board.square])?;
-    if board.square <= 0.0 {
+    within("board.square_mm", board.square, SQUARE_MM, "mm")?;
+    each_within(
+        "board.mount_origin_mm",
+        &board.mount_origin,
+        POSITION_MM,
+        "mm",
+    )?;
+    each_within(
+        "board.mount_rpy_deg",
+        &board.mount_rpy.map(f64::to_degrees),
+        ANGLE_DEG,
+        "°",
+    )?;
+    within("board.mass_g", board.mass_g, (0.0, MASS_G), "g")?;
+    each_within("board.com_mm", &board.com_mm, POSITION_MM, "mm")?;
+    for (key, x) in [
+        ("robot.hip_offset_y_mm", robot.hip_offset_y),
+        ("robot.hip_to_neck_z_mm", robot.hip_to_neck_z),
+        ("robot.thigh_mm", robot.thigh),
+        ("robot.tibia_mm", robot.tibia),
+        ("robot.foot_height_mm", robot.foot_height),
+    ] {
+        within(key, x, LINK_MM, "mm (a link length)")?;
+    }
+    each_within(
+        "robot.lower_camera_offset_mm",
+        &robot.lower_camera_offset,
+        POSITION_MM,
+        "mm",
+    )?;
+    within(
+        "robot.lower_camera_tilt_deg",
+        robot.lower_camera_tilt.to_degrees(),
+        (-ANGLE_DEG, ANGLE_DEG),
+        "°",
+    )?;
+    finite("robot.gravity", &robot.gravity)?;
+    let norm = robot.gravity.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if (norm - 1.0).abs() > 1e-9 {
         return fail(
-            "board.square_mm",
-            format!("must be greater than 0, got {}", board.square),
+            "robot.gravity",
+            format!("must be a unit vector, got one of length {norm}"),
         );
     }
-    finite("board.mount_origin_mm", &board.mount_origin)?;
-    finite("board.mount_rpy_deg", &board.mount_rpy)?;
-    finite("robot.hip_offset_y_mm", &[robot.hip_offset_y])?;
-    finite("robot.hip_to_neck_z_mm", &[robot.hip_to_neck_z])?;
-    finite("robot.thigh_mm", &[robot.thigh])?;
-    finite("robot.tibia_mm", &[robot.tibia])?;
-    finite("robot.foot_height_mm", &[robot.foot_height])?;
-    finite("robot.lower_camera_offset_mm", &robot.lower_camera_offset)?;
-    finite("robot.lower_camera_tilt_deg", &[robot.lower_camera_tilt])
+    Ok(())
 }
 
 /// `dataset.toml` for `model`, every value written out. Floats round-trip exactly; angles
 /// are written in degrees chosen so that reading them back gives the same radians whenever
 /// such a decimal exists.
-pub(crate) fn render(model: &Model) -> String {
-    let Model {
-        robot,
-        camera,
-        board,
-    } = model;
-    let list = |values: &[f64]| {
-        let items: Vec<_> = values.iter().map(|&x| toml_float(x)).collect();
-        format!("[{}]", items.join(", "))
-    };
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "# naocalib dataset (SPEC section 6): lengths in mm, angles in degrees."
-    );
-    let _ = writeln!(s);
-    let _ = writeln!(s, "[camera]");
-    let _ = writeln!(s, "width = {}", camera.width);
-    let _ = writeln!(s, "height = {}", camera.height);
-    let _ = writeln!(s, "fx = {}", toml_float(camera.fx));
-    let _ = writeln!(s, "fy = {}", toml_float(camera.fy));
-    let _ = writeln!(s, "cx = {}", toml_float(camera.cx));
-    let _ = writeln!(s, "cy = {}", toml_float(camera.cy));
-    let _ = writeln!(
-        s,
-        "distortion = {}   # k1 k2 p1 p2 k3",
-        list(&camera.distortion)
-    );
-    let _ = writeln!(s);
-    let _ = writeln!(s, "[board]");
-    let _ = writeln!(s, "squares_x = {}", board.squares_x);
-    let _ = writeln!(s, "squares_y = {}", board.squares_y);
-    let _ = writeln!(s, "square_mm = {}", toml_float(board.square));
-    let _ = writeln!(s, "mount_origin_mm = {}", list(&board.mount_origin));
-    let _ = writeln!(
-        s,
-        "mount_rpy_deg = {}   # roll, pitch, yaw",
-        list(&board.mount_rpy.map(degrees_for))
-    );
-    let _ = writeln!(s);
-    let _ = writeln!(s, "[robot]");
-    let _ = writeln!(s, "hip_offset_y_mm = {}", toml_float(robot.hip_offset_y));
-    let _ = writeln!(s, "hip_to_neck_z_mm = {}", toml_float(robot.hip_to_neck_z));
-    let _ = writeln!(s, "thigh_mm = {}", toml_float(robot.thigh));
-    let _ = writeln!(s, "tibia_mm = {}", toml_float(robot.tibia));
-    let _ = writeln!(s, "foot_height_mm = {}", toml_float(robot.foot_height));
-    let _ = writeln!(
-        s,
-        "lower_camera_offset_mm = {}",
-        list(&robot.lower_camera_offset)
-    );
-    let _ = writeln!(
-        s,
-        "lower_camera_tilt_deg = {}",
-        toml_float(degrees_for(robot.lower_camera_tilt))
-    );
-    s
+pub(crate) fn render(model: &Model) -> Result<String, toml::ser::Error> {
+    let body = toml::to_string(&DatasetToml::from_model(model))?;
+    Ok(format!(
+        "# naocalib dataset: lengths in mm, angles in degrees, masses in g; \
+         distortion is OpenCV's [k1, k2, p1, p2, k3];\n# gravity is a direction in the origin \
+         frame.\n\n{body}"
+    ))
 }
 
 #[cfg(test)]
@@ -317,11 +505,11 @@ mod tests {
             ),
             (
                 &MINIMAL.replace("640", "0"),
-                "line 2, field camera.width: must be at least 1, got 0",
+                "line 2, field camera.width: must be 16 … 8192 px, got 0",
             ),
             (
                 &MINIMAL.replace("fy = 562.5", "fy = -1"),
-                "line 5, field camera.fy: must be greater than 0",
+                "line 5, field camera.fy: must be 50 … 20000 px (a camera's focal length), got -1",
             ),
             (
                 &MINIMAL.replace("cx = 324.0", "cx = nan"),
@@ -333,11 +521,11 @@ mod tests {
             ),
             (
                 &format!("{MINIMAL}[board]\nsquares_y = 1\n"),
-                "line 9, field board.squares_y: must be at least 2, got 1",
+                "line 9, field board.squares_y: must be 3 … 64 squares",
             ),
             (
                 &format!("{MINIMAL}[board]\nsquare_mm = 0\n"),
-                "line 9, field board.square_mm: must be greater than 0",
+                "line 9, field board.square_mm: must be 1 … 500 mm, got 0",
             ),
             (
                 &format!("{MINIMAL}[robot]\nthigh_mm = inf\n"),
@@ -378,11 +566,13 @@ mod tests {
         ];
         model.board.mount_origin = [1.0 / 3.0, 2.5, -7.0];
         model.robot.lower_camera_tilt = 39.5f64.to_radians();
-        let text = render(&model);
+        let text = render(&model).unwrap();
         let back = parse(Path::new("x"), text.as_bytes()).unwrap();
         assert_eq!(back, model);
         assert!(
-            render(&Model::default()).contains("lower_camera_tilt_deg = 39.7\n"),
+            render(&Model::default())
+                .unwrap()
+                .contains("lower_camera_tilt_deg = 39.7\n"),
             "{text}"
         );
     }
@@ -396,7 +586,8 @@ mod tests {
         let e = validate(path, &m).unwrap_err().to_string();
         assert_eq!(
             e,
-            "o/dataset.toml, field camera.fx: must be greater than 0, got 0"
+            "o/dataset.toml, field camera.fx: must be 50 … 20000 px (a camera's focal length), \
+             got 0"
         );
         let mut m = Model::default();
         m.camera.distortion[3] = f64::NAN;
@@ -410,7 +601,100 @@ mod tests {
         let e = validate(path, &m).unwrap_err().to_string();
         assert_eq!(
             e,
-            "o/dataset.toml, field board.squares_x: must be at least 2, got 1"
+            "o/dataset.toml, field board.squares_x: must be 3 … 64 squares (the vertex finder \
+             needs at least 2 × 2 inner vertices), got 1"
+        );
+        let mut m = Model::default();
+        m.robot.tibia = -102.9;
+        let e = validate(path, &m).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "o/dataset.toml, field robot.tibia_mm: must be 1 … 1000 mm (a link length), got -102.9"
+        );
+        let mut m = Model::default();
+        m.robot.gravity = [0.0, 0.0, 2.0];
+        let e = validate(path, &m).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "o/dataset.toml, field robot.gravity: must be a unit vector, got one of length 2"
+        );
+        let mut m = Model::default();
+        m.board.mass_g = -1.0;
+        let e = validate(path, &m).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "o/dataset.toml, field board.mass_g: must be 0 … 10000 g, got -1"
+        );
+    }
+
+    #[test]
+    fn physical_ranges_name_line_and_key() {
+        let cases = [
+            (
+                "[camera]\nwidth = 640\nheight = 480\nfx = 1e9\nfy = 562.5\ncx = 324\ncy = 189\n",
+                "d/dataset.toml line 4, field camera.fx: must be 50 … 20000 px",
+            ),
+            (
+                &MINIMAL.replace("cx = 324.0", "cx = 1000"),
+                "d/dataset.toml line 6, field camera.cx: must be -320 … 960 px (the principal \
+                 point lies within the image ± 50 %), got 1000",
+            ),
+            (
+                &MINIMAL.replace("height = 480", "height = 100000"),
+                "d/dataset.toml line 3, field camera.height: must be 16 … 8192 px, got 100000",
+            ),
+            (
+                &format!("{MINIMAL}[robot]\nthigh_mm = 0\n"),
+                "d/dataset.toml line 9, field robot.thigh_mm: must be 1 … 1000 mm (a link length)",
+            ),
+            (
+                &format!("{MINIMAL}[robot]\ngravity = [0, 0, 0]\n"),
+                "d/dataset.toml line 9, field robot.gravity: must be a non-zero direction",
+            ),
+            (
+                &format!("{MINIMAL}[robot]\ngravity = [0, 1]\n"),
+                "d/dataset.toml line 9, field robot.gravity: expected exactly 3 numbers, found 2",
+            ),
+            (
+                &format!("{MINIMAL}[board]\nmass_g = -5\n"),
+                "d/dataset.toml line 9, field board.mass_g: must be 0 … 10000 g, got -5",
+            ),
+            (
+                &format!("{MINIMAL}[board]\ncom_mm = [1, 2, nan]\n"),
+                "d/dataset.toml line 9, field board.com_mm[2]: nan is not a finite number",
+            ),
+            (
+                &format!("{MINIMAL}[board]\nmount_rpy_deg = [0, 0, 720]\n"),
+                "d/dataset.toml line 9, field board.mount_rpy_deg[2]: must be within ±360 °",
+            ),
+        ];
+        for (text, expected) in cases {
+            let e = parse_str(text).unwrap_err();
+            assert!(
+                e.starts_with(expected),
+                "{e:?} should start with {expected:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn gravity_mass_and_centre_of_mass() {
+        let text = format!(
+            "{MINIMAL}[board]\nmass_g = 95.5\ncom_mm = [140, -2, 3.5]\n[robot]\n\
+             gravity = [0, -3, 4]\n"
+        );
+        let m = parse_str(&text).unwrap();
+        assert_eq!(m.board.mass_g, 95.5);
+        assert_eq!(m.board.com_mm, [140.0, -2.0, 3.5]);
+        assert_eq!(m.robot.gravity, [0.0, -0.6, 0.8], "stored as a unit vector");
+        // Written and read again: the very same bits.
+        let mut m = m;
+        m.robot.gravity = [1.0, 1.0, 1.0].map(|x: f64| x / 3f64.sqrt());
+        let back = parse(Path::new("x"), render(&m).unwrap().as_bytes()).unwrap();
+        assert_eq!(back, m);
+        assert_eq!(
+            back.robot.gravity.map(f64::to_bits),
+            m.robot.gravity.map(f64::to_bits)
         );
     }
 }

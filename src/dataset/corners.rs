@@ -3,7 +3,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use crate::model::{Board, Vertex};
+use crate::model::{Model, Vertex};
 
 use super::Corner;
 use super::csv_table::CsvTable;
@@ -34,14 +34,19 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Vec<Corner>, DatasetErr
         .collect()
 }
 
+/// How far outside the image a vertex may lie, as a fraction of the image size: detections
+/// are inside it, and a prediction-based or hand-made table a little outside at most.
+pub(crate) const PIXEL_BAND: f64 = 1.0;
+
 /// Checks corners in memory: finite pixels and no vertex twice in one capture; with
-/// `captures` (id → line in `captures.csv`), that every capture is known, and with `board`,
-/// that every vertex is on it. `line` gives the line of each corner (by index).
+/// `captures` (id → line in `captures.csv`), that every capture is known, and with `model`,
+/// that every vertex is on its board and every pixel within the image ± [`PIXEL_BAND`].
+/// `line` gives the line of each corner (by index).
 pub(crate) fn validate(
     path: &Path,
     corners: &[Corner],
     captures: Option<&HashMap<u64, u64>>,
-    board: Option<&Board>,
+    model: Option<&Model>,
     line: impl Fn(usize, &Corner) -> u64,
 ) -> Result<(), DatasetError> {
     let mut seen: HashMap<(u64, Vertex), u64> = HashMap::with_capacity(corners.len());
@@ -56,7 +61,7 @@ pub(crate) fn validate(
                 format!("capture {} is not in captures.csv", corner.capture),
             ));
         }
-        if let Some(board) = board {
+        if let Some(Model { board, .. }) = model {
             let Vertex { row, col } = corner.vertex;
             if row >= board.rows() {
                 return Err(DatasetError::invalid(
@@ -83,12 +88,28 @@ pub(crate) fn validate(
                 ));
             }
         }
-        for (field, x) in [("u", corner.pixel[0]), ("v", corner.pixel[1])] {
+        for (field, x, size) in [
+            ("u", corner.pixel[0], model.map(|m| m.camera.width)),
+            ("v", corner.pixel[1], model.map(|m| m.camera.height)),
+        ] {
             if !x.is_finite() {
                 return Err(DatasetError::invalid(
                     at(field),
                     format!("{x} is not a finite number"),
                 ));
+            }
+            if let Some(size) = size {
+                let size = f64::from(size);
+                let (lo, hi) = (-PIXEL_BAND * size, (1.0 + PIXEL_BAND) * size);
+                if x < lo || x > hi {
+                    return Err(DatasetError::invalid(
+                        at(field),
+                        format!(
+                            "{x} px is outside {lo} … {hi} px (the {size} px of the camera in \
+                             dataset.toml, ± 100 %)"
+                        ),
+                    ));
+                }
             }
         }
         if let Some(first) = seen.insert((corner.capture, corner.vertex), here) {
@@ -136,7 +157,7 @@ mod tests {
             Path::new("d/corners.csv"),
             &corners,
             Some(&captures),
-            Some(&Board::default()),
+            Some(&Model::default()),
             |_, c| c.line,
         )
         .map_err(|e| e.to_string())

@@ -78,16 +78,17 @@ pub enum DatasetError {
         /// What the file must at least contain (starts with a separator, may be empty).
         hint: String,
     },
-    /// Reading, writing or creating a file or directory failed.
-    #[error("{}: cannot {action}: {source}", path.display())]
+    /// Reading, writing or creating a file or directory failed. The operating system's
+    /// error is part of the message, and deliberately not also the error's `source`, so
+    /// that a printed error chain does not repeat it.
+    #[error("{}: cannot {action}: {error}", path.display())]
     Io {
         /// The file or directory.
         path: PathBuf,
         /// What was attempted (`read`, `write`, `create the directory`, …).
         action: &'static str,
         /// The operating system's error.
-        #[source]
-        source: io::Error,
+        error: io::Error,
     },
     /// Writing would replace (or leave behind) an existing file, and `force` was not given.
     #[error("{}: {reason}; use --force to overwrite", path.display())]
@@ -96,6 +97,14 @@ pub enum DatasetError {
         path: PathBuf,
         /// Why it is in the way.
         reason: &'static str,
+    },
+    /// Writing would replace an input file, or something that is not a file.
+    #[error("{}: {reason}", path.display())]
+    Refused {
+        /// The file not written.
+        path: PathBuf,
+        /// Why.
+        reason: String,
     },
     /// The content of a file (or of a dataset about to be written) is wrong.
     #[error("{at}: {message}")]
@@ -122,7 +131,8 @@ impl DatasetError {
             DatasetError::NotFound { path, .. }
             | DatasetError::Empty { path, .. }
             | DatasetError::Io { path, .. }
-            | DatasetError::Exists { path, .. } => path,
+            | DatasetError::Exists { path, .. }
+            | DatasetError::Refused { path, .. } => path,
             DatasetError::Invalid { at, .. } => &at.path,
         }
     }
@@ -143,11 +153,39 @@ impl DatasetError {
         }
     }
 
-    pub(crate) fn io(path: &Path, action: &'static str, source: io::Error) -> Self {
+    pub(crate) fn io(path: &Path, action: &'static str, error: io::Error) -> Self {
         DatasetError::Io {
             path: path.to_path_buf(),
             action,
-            source,
+            error,
+        }
+    }
+}
+
+impl From<crate::output::WriteError> for DatasetError {
+    fn from(e: crate::output::WriteError) -> Self {
+        use crate::output::WriteError as W;
+        match e {
+            W::Io {
+                path,
+                action,
+                error,
+            } => DatasetError::Io {
+                path,
+                action,
+                error,
+            },
+            W::Exists { path } => DatasetError::Exists {
+                path,
+                reason: "already exists",
+            },
+            e @ (W::Input { .. } | W::NotAFile { .. }) => {
+                let path = e.path().to_path_buf();
+                let text = e.to_string();
+                let prefix = format!("{}: ", path.display());
+                let reason = text.strip_prefix(&prefix).unwrap_or(&text).to_string();
+                DatasetError::Refused { path, reason }
+            }
         }
     }
 }

@@ -128,6 +128,13 @@ impl Dataset {
     }
 
     fn load_parts(dir: &Path, with_corners: bool) -> Result<Dataset, DatasetError> {
+        if dir.metadata().is_ok_and(|m| !m.is_dir()) {
+            return Err(DatasetError::invalid(
+                Location::file(dir),
+                "is not a directory; a dataset is a directory holding dataset.toml and \
+                 captures.csv",
+            ));
+        }
         let path = dir.join(DATASET_TOML);
         let bytes = text::read_file(&path, true, " (it needs at least a [camera] table)")?;
         let model = config::parse(&path, &bytes.unwrap_or_default())?;
@@ -147,9 +154,7 @@ impl Dataset {
             Some(bytes) => corners::parse(&path, &bytes)?,
             None => Vec::new(),
         };
-        corners::validate(&path, &corners, Some(&ids), Some(&model.board), |_, c| {
-            c.line
-        })?;
+        corners::validate(&path, &corners, Some(&ids), Some(&model), |_, c| c.line)?;
 
         let path = dir.join(TRUTH_TOML);
         let truth = match text::read_file(&path, false, " (it needs a [parameters] table)")? {
@@ -190,7 +195,7 @@ impl Dataset {
             &dir.join(CORNERS_CSV),
             &self.corners,
             Some(&ids),
-            Some(&self.model.board),
+            Some(&self.model),
             |i, c| line(i, c.line),
         )?;
         if let Some(truth) = &self.truth {
@@ -219,7 +224,12 @@ impl Dataset {
         let captures_path = dir.join(CAPTURES_CSV);
         let corners_path = dir.join(CORNERS_CSV);
         let truth_path = dir.join(TRUTH_TOML);
-        let dataset_toml = config::render(&self.model);
+        let dataset_toml = config::render(&self.model).map_err(|e| {
+            DatasetError::invalid(
+                Location::file(&toml_path),
+                format!("cannot be written as TOML: {e}"),
+            )
+        })?;
         let captures_csv = captures::render(&self.captures)
             .map_err(|e| DatasetError::io(&captures_path, "write", e.into()))?;
         let corners_csv = corners::render(&self.corners)

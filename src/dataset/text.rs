@@ -5,14 +5,88 @@ use std::path::Path;
 
 use super::error::DatasetError;
 
+/// The largest dataset file read [bytes] (1 GiB: far more than the 100 000 captures a
+/// dataset may have, with all their vertices).
+pub(crate) const MAX_FILE_BYTES: u64 = 1 << 30;
+
+/// What kind of thing `meta` describes, for a message refusing it.
+fn kind_of(meta: &std::fs::Metadata) -> &'static str {
+    let t = meta.file_type();
+    if t.is_dir() {
+        return "a directory";
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return "a FIFO (named pipe)";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+        if t.is_char_device() || t.is_block_device() {
+            return "a device";
+        }
+    }
+    "not a regular file"
+}
+
+/// Opens `path` for reading without ever blocking on it: a FIFO or device is refused
+/// (checked on the opened handle, so it cannot be swapped in between), and so is a file
+/// larger than `limit` bytes. Returns the file and its size.
+pub(crate) fn open_regular(path: &Path, limit: u64) -> Result<(std::fs::File, u64), io::Error> {
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        // Opening a FIFO for reading blocks until a writer appears; non-blocking, it
+        // returns at once and is then refused below.
+        options.custom_flags(libc::O_NONBLOCK);
+    }
+    let file = options.open(path)?;
+    let meta = file.metadata()?;
+    if !meta.is_file() {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("it is {}; expected a regular file", kind_of(&meta)),
+        ));
+    }
+    if meta.len() > limit {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!(
+                "it is {} bytes, more than the {limit} bytes a file may have here",
+                meta.len()
+            ),
+        ));
+    }
+    Ok((file, meta.len()))
+}
+
 /// Reads a whole file. `Ok(None)` when it does not exist and is optional; an error when it
-/// does not exist and is `required`, cannot be read, or holds only white space.
+/// does not exist and is `required`, is not a regular file (a FIFO, a device, a
+/// directory), is larger than [`MAX_FILE_BYTES`], cannot be read, or holds only white
+/// space.
 pub(crate) fn read_file(
     path: &Path,
     required: bool,
     empty_hint: &str,
 ) -> Result<Option<Vec<u8>>, DatasetError> {
-    let bytes = match std::fs::read(path) {
+    let read = open_regular(path, MAX_FILE_BYTES).and_then(|(file, len)| {
+        use std::io::Read as _;
+        let mut bytes = Vec::with_capacity(len as usize);
+        // Bounded even if the file grows while it is read.
+        file.take(MAX_FILE_BYTES + 1).read_to_end(&mut bytes)?;
+        if bytes.len() as u64 > MAX_FILE_BYTES {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!("it grew past {MAX_FILE_BYTES} bytes while being read"),
+            ));
+        }
+        Ok(bytes)
+    });
+    let bytes = match read {
         Ok(bytes) => bytes,
         Err(e) if e.kind() == io::ErrorKind::NotFound => {
             if !required {

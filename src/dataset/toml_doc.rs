@@ -1,39 +1,32 @@
-//! Reading TOML files key by key with toml's spans, so that every error names the line and
-//! the key path (`camera.fx`, `camera.distortion[2]`).
+//! Reading a TOML file into a `#[derive(Deserialize)]` struct with errors that name the
+//! file, the line and the key path (`camera.fx`, `camera.distortion[2]`).
+//!
+//! serde does the typed reading; this module adds what serde's errors lack: the key path of
+//! the error's position (from the document's spans), wording in the dataset's terms
+//! ("expected a number, found a string"), a check that no float anywhere is NaN or infinite,
+//! and [`TomlDoc::at`] to place the errors of a later `validate()` on their line.
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use toml::Spanned;
+use serde::de::DeserializeOwned;
 use toml::de::{DeTable, DeValue};
 
 use super::error::{DatasetError, Location};
 use super::text::line_at;
 
-/// A TOML document being read: its path and text, for locations.
+/// A TOML document that parsed: its path and text, and every key path with its spans.
 pub(crate) struct TomlDoc<'t> {
     path: PathBuf,
     text: &'t str,
-}
-
-/// One table of the document, with the key path leading to it (empty for the root).
-pub(crate) struct Table<'a, 't> {
-    doc: &'a TomlDoc<'t>,
-    prefix: String,
-    span: Option<Range<usize>>,
-    table: &'a DeTable<'t>,
-}
-
-/// One value of the document, with its key path and span.
-pub(crate) struct Value<'a, 't> {
-    doc: &'a TomlDoc<'t>,
-    /// The key path, e.g. `camera.fx`.
-    pub key: String,
-    value: &'a Spanned<DeValue<'t>>,
+    /// Every key path of the document (tables, keys, array items), with the span of its
+    /// key (none for array items) and of its value, in file order.
+    keys: Vec<(String, Option<Range<usize>>, Range<usize>)>,
 }
 
 impl<'t> TomlDoc<'t> {
-    /// A document: `bytes` is the content of `path`.
+    /// Parses `bytes`, the content of `path`: UTF-8, TOML syntax, and finite floats
+    /// everywhere (`nan` and `inf` are valid TOML but never a valid dataset value).
     pub fn new(path: &Path, bytes: &'t [u8]) -> Result<Self, DatasetError> {
         let text = std::str::from_utf8(bytes).map_err(|e| {
             DatasetError::invalid(
@@ -41,47 +34,123 @@ impl<'t> TomlDoc<'t> {
                 "the file is not valid UTF-8",
             )
         })?;
-        Ok(TomlDoc {
-            path: path.to_path_buf(),
-            text,
-        })
-    }
-
-    /// Parses the document.
-    pub fn parse(&self) -> Result<Spanned<DeTable<'t>>, DatasetError> {
-        DeTable::parse(self.text).map_err(|e| {
-            let line = e.span().map(|s| line_at(self.text.as_bytes(), s.start));
+        let parsed = DeTable::parse(text).map_err(|e| {
+            let line = e.span().map(|s| line_at(bytes, s.start));
             let at = Location {
-                path: self.path.clone(),
+                path: path.to_path_buf(),
                 line,
                 field: None,
             };
             DatasetError::invalid(at, format!("invalid TOML: {}", e.message()))
-        })
+        })?;
+        let mut doc = TomlDoc {
+            path: path.to_path_buf(),
+            text,
+            keys: Vec::new(),
+        };
+        doc.index_table("", parsed.get_ref())?;
+        doc.keys.sort_by_key(|(_, key, value)| {
+            key.as_ref()
+                .map_or(value.start, |k| k.start.min(value.start))
+        });
+        Ok(doc)
     }
 
-    /// The root table of a parsed document.
-    pub fn root<'a>(&'a self, parsed: &'a Spanned<DeTable<'t>>) -> Table<'a, 't> {
-        Table {
-            doc: self,
-            prefix: String::new(),
-            span: None,
-            table: parsed.get_ref(),
+    fn index_table(&mut self, prefix: &str, table: &DeTable<'t>) -> Result<(), DatasetError> {
+        for (key, value) in table {
+            let path = join(prefix, key.get_ref());
+            self.keys
+                .push((path.clone(), Some(key.span()), value.span()));
+            self.index_value(&path, value.get_ref(), value.span())?;
+        }
+        Ok(())
+    }
+
+    fn index_value(
+        &mut self,
+        path: &str,
+        value: &DeValue<'t>,
+        span: Range<usize>,
+    ) -> Result<(), DatasetError> {
+        match value {
+            DeValue::Float(f) => match f.as_str().parse::<f64>() {
+                Ok(x) if x.is_finite() => Ok(()),
+                _ => Err(DatasetError::invalid(
+                    self.location(path, Some(span.start)),
+                    format!("{} is not a finite number", f.as_str()),
+                )),
+            },
+            DeValue::Array(items) => {
+                for (i, item) in items.iter().enumerate() {
+                    let item_path = format!("{path}[{i}]");
+                    self.keys.push((item_path.clone(), None, item.span()));
+                    self.index_value(&item_path, item.get_ref(), item.span())?;
+                }
+                Ok(())
+            }
+            DeValue::Table(table) => self.index_table(path, table),
+            _ => Ok(()),
         }
     }
 
-    /// The location of `span`, field `key`.
-    pub fn at(&self, span: Option<Range<usize>>, key: &str) -> Location {
+    fn location(&self, field: &str, offset: Option<usize>) -> Location {
         Location {
             path: self.path.clone(),
-            line: span.map(|s| line_at(self.text.as_bytes(), s.start)),
-            field: (!key.is_empty()).then(|| key.to_string()),
+            line: offset.map(|o| line_at(self.text.as_bytes(), o)),
+            field: (!field.is_empty()).then(|| field.to_string()),
         }
     }
 
-    /// The whole text (to hand to `toml::from_str` for free-form tables).
-    pub fn text(&self) -> &'t str {
-        self.text
+    /// The location of key path `field`: the line its key (or array item) is on, when the
+    /// document has it; just the file and the field when not.
+    pub fn at(&self, field: &str) -> Location {
+        let offset = self
+            .keys
+            .iter()
+            .find(|(path, ..)| path == field)
+            .map(|(_, key, value)| key.as_ref().unwrap_or(value).start);
+        self.location(field, offset)
+    }
+
+    /// An [`DatasetError::Invalid`] at key path `field` (see [`TomlDoc::at`]).
+    pub fn error(&self, field: &str, message: impl Into<String>) -> DatasetError {
+        DatasetError::invalid(self.at(field), message)
+    }
+
+    /// The key paths of the document, in file order (array items included).
+    #[cfg(test)]
+    pub fn key_paths(&self) -> impl Iterator<Item = &str> {
+        self.keys.iter().map(|(path, ..)| path.as_str())
+    }
+
+    /// The key path at byte `offset`: the innermost key or value whose span holds it.
+    fn path_at(&self, offset: usize) -> String {
+        self.keys
+            .iter()
+            .filter_map(|(path, key, value)| {
+                let hit = |r: &Range<usize>| r.start <= offset && offset < r.end.max(r.start + 1);
+                [key.as_ref(), Some(value)]
+                    .into_iter()
+                    .flatten()
+                    .filter(|r| hit(r))
+                    .map(|r| (r.len(), path))
+                    .min()
+            })
+            .min()
+            .map(|(_, path)| path.clone())
+            .unwrap_or_default()
+    }
+
+    /// Deserializes the whole document into `T`; serde's errors become errors naming the
+    /// line and the key path, worded in this crate's terms.
+    pub fn deserialize<T: DeserializeOwned>(&self) -> Result<T, DatasetError> {
+        toml::from_str(self.text).map_err(|e| {
+            // An empty span is the document itself (a key missing at the top level).
+            let offset = e.span().filter(|s| !s.is_empty()).map(|s| s.start);
+            let path = offset.map(|o| self.path_at(o)).unwrap_or_default();
+            let (field, message) = reword(&path, e.message());
+            DatasetError::invalid(self.location(&field, offset), message)
+        })
     }
 }
 
@@ -93,320 +162,227 @@ fn join(prefix: &str, key: &str) -> String {
     }
 }
 
-fn describe(value: &DeValue<'_>) -> &'static str {
-    match value {
-        DeValue::String(_) => "a string",
-        DeValue::Integer(_) => "an integer",
-        DeValue::Float(_) => "a float",
-        DeValue::Boolean(_) => "a boolean",
-        DeValue::Datetime(_) => "a date-time",
-        DeValue::Array(_) => "an array",
-        DeValue::Table(_) => "a table",
+/// The names quoted in backticks in a serde message, in order.
+fn quoted(message: &str) -> Vec<&str> {
+    message.split('`').skip(1).step_by(2).collect()
+}
+
+/// serde's name of a value's type → ours.
+fn kind(serde: &str) -> String {
+    let serde = serde.trim();
+    let word = serde.split([' ', '`', '"']).next().unwrap_or(serde);
+    match word {
+        "string" | "char" => "a string".into(),
+        "integer" | "u8" | "u16" | "u32" | "u64" | "i8" | "i16" | "i32" | "i64" => {
+            "an integer".into()
+        }
+        "floating" => "a float".into(),
+        "f64" | "f32" => "a number".into(),
+        "boolean" | "bool" => "a boolean".into(),
+        "sequence" => "an array".into(),
+        "map" | "struct" => "a table".into(),
+        "a" if serde.starts_with("a sequence") => "an array".into(),
+        "a" if serde.starts_with("a map") => "a table".into(),
+        _ => serde.to_string(),
     }
 }
 
-impl<'a, 't> Table<'a, 't> {
-    /// The entries, in the order they appear in the file.
-    pub fn entries(&self) -> Vec<Value<'a, 't>> {
-        let mut entries: Vec<_> = self.table.iter().collect();
-        entries.sort_by_key(|(k, _)| k.span().start);
-        entries
-            .into_iter()
-            .map(|(k, v)| Value {
-                doc: self.doc,
-                key: join(&self.prefix, k.get_ref()),
-                value: v,
-            })
-            .collect()
+/// The key path and the message for serde's error `message` at key path `path`.
+fn reword(path: &str, message: &str) -> (String, String) {
+    let table = if path.is_empty() {
+        "the file".to_string()
+    } else {
+        format!("[{path}]")
+    };
+    if let Some(rest) = message.strip_prefix("missing field ") {
+        let name = quoted(rest).first().copied().unwrap_or(rest).to_string();
+        return (join(path, &name), format!("{table} has no key '{name}'"));
     }
-
-    /// Fails on the first key (in file order) that is not in `known`.
-    pub fn deny_unknown(&self, known: &[&str]) -> Result<(), DatasetError> {
-        let mut keys: Vec<_> = self.table.keys().collect();
-        keys.sort_by_key(|k| k.span().start);
-        match keys
-            .into_iter()
-            .find(|k| !known.contains(&k.get_ref().as_ref()))
-        {
-            None => Ok(()),
-            Some(k) => {
-                let what = if self.prefix.is_empty() {
-                    "at the top level".to_string()
-                } else {
-                    format!("in [{}]", self.prefix)
-                };
-                Err(DatasetError::invalid(
-                    self.doc
-                        .at(Some(k.span()), &join(&self.prefix, k.get_ref())),
-                    format!(
-                        "unknown key '{}' {what} (known keys: {})",
-                        k.get_ref(),
-                        known.join(", ")
-                    ),
-                ))
-            }
-        }
-    }
-
-    /// The value of `key`, if present.
-    pub fn get(&self, key: &str) -> Option<Value<'a, 't>> {
-        self.table
-            .iter()
-            .find(|(k, _)| k.get_ref() == key)
-            .map(|(_, v)| Value {
-                doc: self.doc,
-                key: join(&self.prefix, key),
-                value: v,
-            })
-    }
-
-    /// The value of `key`, which must be present.
-    pub fn require(&self, key: &str) -> Result<Value<'a, 't>, DatasetError> {
-        self.get(key).ok_or_else(|| {
-            let table = if self.prefix.is_empty() {
-                "the file".to_string()
-            } else {
-                format!("[{}]", self.prefix)
-            };
-            DatasetError::invalid(
-                self.doc.at(self.span.clone(), &join(&self.prefix, key)),
-                format!("{table} has no key '{key}'"),
-            )
-        })
-    }
-
-    /// The sub-table `key`, if present (an error if `key` is not a table).
-    pub fn table(&self, key: &str) -> Result<Option<Table<'a, 't>>, DatasetError> {
-        self.get(key).map(|v| v.table()).transpose()
-    }
-}
-
-impl<'a, 't> Value<'a, 't> {
-    /// The location of this value.
-    pub fn at(&self) -> Location {
-        self.doc.at(Some(self.value.span()), &self.key)
-    }
-
-    fn invalid(&self, message: impl Into<String>) -> DatasetError {
-        DatasetError::invalid(self.at(), message)
-    }
-
-    fn expected(&self, what: &str) -> DatasetError {
-        self.invalid(format!(
-            "expected {what}, found {}",
-            describe(self.value.get_ref())
-        ))
-    }
-
-    /// The value as a table.
-    pub fn table(&self) -> Result<Table<'a, 't>, DatasetError> {
-        match self.value.get_ref() {
-            DeValue::Table(table) => Ok(Table {
-                doc: self.doc,
-                prefix: self.key.clone(),
-                span: Some(self.value.span()),
-                table,
-            }),
-            _ => Err(self.expected("a table")),
-        }
-    }
-
-    /// The value as a finite number (a TOML float or integer).
-    pub fn f64(&self) -> Result<f64, DatasetError> {
-        match self.value.get_ref() {
-            DeValue::Float(f) => match f.as_str().parse::<f64>() {
-                Ok(x) if x.is_finite() => Ok(x),
-                Ok(_) => Err(self.invalid(format!("{} is not a finite number", f.as_str()))),
-                Err(_) => Err(self.invalid(format!("'{}' is not a number", f.as_str()))),
-            },
-            DeValue::Integer(_) => Ok(self.i64()? as f64),
-            _ => Err(self.expected("a number")),
-        }
-    }
-
-    /// The value as an integer.
-    pub fn i64(&self) -> Result<i64, DatasetError> {
-        match self.value.get_ref() {
-            DeValue::Integer(i) => i64::from_str_radix(i.as_str(), i.radix())
-                .map_err(|_| self.invalid(format!("integer {i} is out of range"))),
-            _ => Err(self.expected("an integer")),
-        }
-    }
-
-    /// The value as an integer of at least `min` that fits a `u32`.
-    pub fn u32_at_least(&self, min: u32) -> Result<u32, DatasetError> {
-        let n = self.i64()?;
-        if n < i64::from(min) {
-            return Err(self.invalid(format!("must be at least {min}, got {n}")));
-        }
-        u32::try_from(n).map_err(|_| self.invalid(format!("{n} is too large")))
-    }
-
-    /// The value as a number greater than zero.
-    pub fn positive(&self) -> Result<f64, DatasetError> {
-        let x = self.f64()?;
-        if x > 0.0 {
-            Ok(x)
-        } else {
-            Err(self.invalid(format!("must be greater than 0, got {x}")))
-        }
-    }
-
-    /// The value as an array of exactly `N` finite numbers.
-    pub fn f64_array<const N: usize>(&self) -> Result<[f64; N], DatasetError> {
-        let DeValue::Array(items) = self.value.get_ref() else {
-            return Err(self.expected(&format!("an array of {N} numbers")));
+    if let Some(rest) = message.strip_prefix("unknown field ") {
+        // The error is at the unknown key itself: `path` ends with its name.
+        let names = quoted(rest);
+        let name = names.first().copied().unwrap_or(rest);
+        let place = match path.rsplit_once('.') {
+            Some((parent, _)) => format!("in [{parent}]"),
+            None => "at the top level".to_string(),
         };
-        if items.len() != N {
-            return Err(self.invalid(format!(
-                "expected exactly {N} numbers, found {}",
-                items.len()
-            )));
-        }
-        let mut out = [0.0; N];
-        for (i, (slot, item)) in out.iter_mut().zip(items.iter()).enumerate() {
-            let value = Value {
-                doc: self.doc,
-                key: format!("{}[{i}]", self.key),
-                value: item,
-            };
-            *slot = value.f64()?;
-        }
-        Ok(out)
+        let known = names.get(1..).unwrap_or_default().join(", ");
+        return (
+            path.to_string(),
+            format!("unknown key '{name}' {place} (known keys: {known})"),
+        );
     }
-
-    /// Fails if any float in this value (recursively) is NaN or infinite.
-    pub fn deny_non_finite(&self) -> Result<(), DatasetError> {
-        match self.value.get_ref() {
-            DeValue::Float(_) => self.f64().map(|_| ()),
-            DeValue::Array(items) => items.iter().enumerate().try_for_each(|(i, item)| {
-                Value {
-                    doc: self.doc,
-                    key: format!("{}[{i}]", self.key),
-                    value: item,
-                }
-                .deny_non_finite()
-            }),
-            DeValue::Table(_) => self
-                .table()?
-                .entries()
-                .iter()
-                .try_for_each(Value::deny_non_finite),
-            _ => Ok(()),
+    if let Some(rest) = message.strip_prefix("invalid type: ")
+        && let Some((found, expected)) = rest.split_once(", expected ")
+    {
+        if found.ends_with(" as i128") {
+            // An integer too large for any integer type.
+            let value = quoted(found).first().copied().unwrap_or(found).to_string();
+            return (path.to_string(), format!("integer {value} is out of range"));
         }
+        return (
+            path.to_string(),
+            format!("expected {}, found {}", kind(expected), kind(found)),
+        );
     }
+    if let Some(rest) = message.strip_prefix("invalid length ")
+        && let Some((found, expected)) = rest.split_once(", expected an array of ")
+    {
+        return (
+            path.to_string(),
+            format!("expected exactly {expected}, found {found}"),
+        );
+    }
+    if let Some(rest) = message.strip_prefix("invalid value: ")
+        && let Some((found, expected)) = rest.split_once(", expected ")
+    {
+        let value = quoted(found).first().copied().unwrap_or(found).to_string();
+        let range = match expected {
+            "u32" => " (a whole number from 0 to 4294967295)",
+            "u64" => " (a whole number from 0 to 18446744073709551615)",
+            _ => "",
+        };
+        return (path.to_string(), format!("{value} is out of range{range}"));
+    }
+    (path.to_string(), message.to_string())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use serde::Deserialize;
 
-    fn with_doc(text: &str, f: impl FnOnce(Table<'_, '_>) -> Result<(), DatasetError>) -> String {
-        let doc = TomlDoc::new(Path::new("d.toml"), text.as_bytes()).unwrap();
-        match doc.parse() {
+    #[derive(Debug, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    #[allow(dead_code)]
+    struct Doc {
+        cam: Cam,
+        #[serde(default)]
+        other: Option<Other>,
+    }
+
+    #[derive(Debug, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    #[allow(dead_code)]
+    struct Cam {
+        w: u32,
+        f: f64,
+        #[serde(default)]
+        d: Vec<f64>,
+    }
+
+    #[derive(Debug, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    #[allow(dead_code)]
+    struct Other {
+        q: u32,
+    }
+
+    fn read(text: &str) -> String {
+        let doc = match TomlDoc::new(Path::new("d.toml"), text.as_bytes()) {
+            Ok(doc) => doc,
+            Err(e) => return e.to_string(),
+        };
+        match doc.deserialize::<Doc>() {
+            Ok(d) => format!("ok {d:?}"),
             Err(e) => e.to_string(),
-            Ok(parsed) => match f(doc.root(&parsed)) {
-                Ok(()) => "ok".into(),
-                Err(e) => e.to_string(),
-            },
         }
     }
 
     #[test]
     fn syntax_errors_have_lines() {
-        let e = with_doc("[a]\nx = 1\nx = 2\n", |_| Ok(()));
+        let e = read("[a]\nx = 1\nx = 2\n");
         assert_eq!(e, "d.toml line 3: invalid TOML: duplicate key");
-        let e = with_doc("[a]\nx = [1,\n", |_| Ok(()));
+        let e = read("[a]\nx = [1,\n");
         assert!(e.starts_with("d.toml line 2: invalid TOML: "), "{e}");
+        let e = TomlDoc::new(Path::new("d.toml"), b"a = 1\n\xff = 2\n")
+            .err()
+            .unwrap();
+        assert_eq!(e.to_string(), "d.toml line 2: the file is not valid UTF-8");
     }
 
     #[test]
-    fn values() {
-        let text = "# c\n[cam]\nw = 640\nf = 1_000.5\nn = -nan\ni = +inf\nd = [1, 2.0,\n  'x']\n\
-                    s = 'str'\nneg = -3\nbig = 99999999999999999999\n";
-        let check = |key: &str, f: &dyn Fn(&Value<'_, '_>) -> Result<String, DatasetError>| {
-            with_doc(text, |root| {
-                let cam = root.table("cam")?.unwrap();
-                let s = f(&cam.require(key)?)?;
-                Err(DatasetError::invalid(Location::file("ok"), s))
-            })
-        };
-        assert_eq!(
-            check("w", &|v| v.u32_at_least(1).map(|n| n.to_string())),
-            "ok: 640"
-        );
-        assert_eq!(check("w", &|v| v.f64().map(|n| n.to_string())), "ok: 640");
-        assert_eq!(
-            check("f", &|v| v.f64().map(|n| n.to_string())),
-            "ok: 1000.5"
-        );
-        assert_eq!(
-            check("f", &|v| v.i64().map(|n| n.to_string())),
-            "d.toml line 4, field cam.f: expected an integer, found a float"
-        );
-        assert_eq!(
-            check("n", &|v| v.f64().map(|n| n.to_string())),
-            "d.toml line 5, field cam.n: -nan is not a finite number"
-        );
-        assert_eq!(
-            check("i", &|v| v.positive().map(|n| n.to_string())),
-            "d.toml line 6, field cam.i: +inf is not a finite number"
-        );
-        assert_eq!(
-            check("d", &|v| v.f64_array::<3>().map(|a| format!("{a:?}"))),
-            "d.toml line 8, field cam.d[2]: expected a number, found a string"
-        );
-        assert_eq!(
-            check("d", &|v| v.f64_array::<5>().map(|a| format!("{a:?}"))),
-            "d.toml line 7, field cam.d: expected exactly 5 numbers, found 3"
-        );
-        assert_eq!(
-            check("neg", &|v| v.u32_at_least(1).map(|n| n.to_string())),
-            "d.toml line 10, field cam.neg: must be at least 1, got -3"
-        );
-        assert_eq!(
-            check("neg", &|v| v.positive().map(|n| n.to_string())),
-            "d.toml line 10, field cam.neg: must be greater than 0, got -3"
-        );
-        assert_eq!(
-            check("big", &|v| v.f64().map(|n| n.to_string())),
-            "d.toml line 11, field cam.big: integer 99999999999999999999 is out of range"
-        );
-        assert_eq!(
-            check("nope", &|v| v.f64().map(|n| n.to_string())),
-            "d.toml line 2, field cam.nope: [cam] has no key 'nope'"
-        );
-        assert_eq!(
-            check("s", &|v| v.f64().map(|n| n.to_string())),
-            "d.toml line 9, field cam.s: expected a number, found a string"
-        );
+    fn typed_errors_name_line_and_key() {
+        let cases = [
+            ("# c\n[cam]\nw = 640\nf = 1_000.5\n", "ok Doc"),
+            (
+                "[cam]\nw = 640\nf = 1\nd = [1, 2.0,\n  'x']\n",
+                "d.toml line 5, field cam.d[2]: expected a number, found a string",
+            ),
+            (
+                "[cam]\nw = 640.0\nf = 1\n",
+                "d.toml line 2, field cam.w: expected an integer, found a float",
+            ),
+            (
+                "[cam]\nw = -3\nf = 1\n",
+                "d.toml line 2, field cam.w: -3 is out of range (a whole number from 0 to",
+            ),
+            (
+                "[cam]\nw = 3\nf = 's'\n",
+                "d.toml line 3, field cam.f: expected a number, found a string",
+            ),
+            (
+                "[cam]\nw = 3\n",
+                "d.toml line 1, field cam.f: [cam] has no key 'f'",
+            ),
+            (
+                "x = 1\n",
+                "d.toml line 1, field x: unknown key 'x' at the top level",
+            ),
+            (
+                "[cam]\nw = 3\nf = 1\nzoom = 2\n",
+                "d.toml line 4, field cam.zoom: unknown key 'zoom' in [cam] (known keys: w, f, d)",
+            ),
+            (
+                "[cam]\nw = 3\nf = 99999999999999999999\n",
+                "d.toml line 3, field cam.f: integer 99999999999999999999 is out of range",
+            ),
+            (
+                "cam = 3\n",
+                "d.toml line 1, field cam: expected a table, found an integer",
+            ),
+            (
+                "[cam]\nw = 3\nf = 1\nd = 2\n",
+                "d.toml line 4, field cam.d: expected an array, found an integer",
+            ),
+            (
+                "[cam]\nw = 3\nf = 1\n[other]\nq = 1\ny = 2\n",
+                "d.toml line 6, field other.y: unknown key 'y' in [other] (known keys: q)",
+            ),
+            (
+                "[cam]\nw = 3\nf = 1\nd = { c = [1.0, nan] }\n",
+                "d.toml line 4, field cam.d.c[1]: nan is not a finite number",
+            ),
+            (
+                "[cam]\nw = 3\nf = -inf\n",
+                "d.toml line 3, field cam.f: -inf is not a finite number",
+            ),
+            ("", "d.toml, field cam: the file has no key 'cam'"),
+        ];
+        for (text, expected) in cases {
+            let e = read(text);
+            assert!(
+                e.starts_with(expected),
+                "{text:?}: {e:?} should start with {expected:?}"
+            );
+        }
     }
 
     #[test]
-    fn unknown_keys_in_file_order() {
-        let e = with_doc("z = 1\n[b]\ny = 2\nx = 3\n", |root| {
-            root.deny_unknown(&["z", "b"])?;
-            root.table("b")?.unwrap().deny_unknown(&["q"])
-        });
+    fn locates_keys_for_later_checks() {
+        let text = "[cam]\nw = 3\nf = 1\nd = [1,\n 2]\n";
+        let doc = TomlDoc::new(Path::new("d.toml"), text.as_bytes()).unwrap();
+        assert_eq!(doc.at("cam.f").to_string(), "d.toml line 3, field cam.f");
         assert_eq!(
-            e,
-            "d.toml line 3, field b.y: unknown key 'y' in [b] (known keys: q)"
+            doc.at("cam.d[1]").to_string(),
+            "d.toml line 5, field cam.d[1]"
         );
-        let e = with_doc("z = 1\n[b]\n", |root| root.deny_unknown(&["b"]));
+        assert_eq!(doc.at("cam").to_string(), "d.toml line 1, field cam");
+        assert_eq!(doc.at("cam.x").to_string(), "d.toml, field cam.x");
+        let paths: Vec<_> = doc.key_paths().collect();
         assert_eq!(
-            e,
-            "d.toml line 1, field z: unknown key 'z' at the top level (known keys: b)"
-        );
-    }
-
-    #[test]
-    fn non_finite_anywhere() {
-        let e = with_doc("[s]\na = 1\nb = { c = [1.0, nan] }\n", |root| {
-            root.get("s").unwrap().deny_non_finite()
-        });
-        assert_eq!(
-            e,
-            "d.toml line 3, field s.b.c[1]: nan is not a finite number"
+            paths,
+            ["cam", "cam.w", "cam.f", "cam.d", "cam.d[0]", "cam.d[1]"]
         );
     }
 }

@@ -1,7 +1,11 @@
-//! `truth.toml`: the true parameters of a simulated dataset (SPEC section 6).
+//! `truth.toml`: the true parameters of a simulated dataset (SPEC section 6), read with
+//! serde ([`TruthToml`]).
 
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
+
+use serde::Deserialize;
 
 use crate::model::{PARAMETER_COUNT, Param};
 
@@ -10,48 +14,61 @@ use super::error::{DatasetError, Location};
 use super::toml_doc::TomlDoc;
 use super::units::{report_value, toml_float};
 
+/// The content of `truth.toml`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TruthToml {
+    /// Parameter name → true value in report units (deg / mm / px / 1). Required; an
+    /// `Option` so that a missing table gets its own message.
+    parameters: Option<BTreeMap<String, f64>>,
+    /// Free-form keys (noise levels, seed, …).
+    #[serde(default)]
+    simulation: toml::Table,
+}
+
 /// Reads the truth from the content of `truth.toml` at `path`.
 pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Truth, DatasetError> {
     let doc = TomlDoc::new(path, bytes)?;
-    let parsed = doc.parse()?;
-    let root = doc.root(&parsed);
-    root.deny_unknown(&["parameters", "simulation"])?;
-    let Some(parameters) = root.table("parameters")? else {
+    let file: TruthToml = doc.deserialize()?;
+    let Some(parameters) = file.parameters else {
         return Err(DatasetError::invalid(
             Location::file(path).field("parameters"),
             "missing table [parameters] (the true parameter values in deg / mm)",
         ));
     };
     let mut values = [0.0; PARAMETER_COUNT];
-    for entry in parameters.entries() {
-        let name = entry.key.strip_prefix("parameters.").unwrap_or(&entry.key);
-        let Some(param) = Param::from_name(name) else {
-            let known: Vec<_> = Param::ALL.iter().map(|p| p.name()).collect();
-            return Err(DatasetError::invalid(
-                entry.at(),
-                format!("unknown parameter '{name}' (known: {})", known.join(", ")),
-            ));
-        };
-        values[param.index()] = param.unit().from_report(entry.f64()?);
+    let mut unknown = Vec::new();
+    for (name, value) in &parameters {
+        match Param::from_name(name) {
+            Some(param) => values[param.index()] = param.unit().from_report(*value),
+            None => unknown.push(doc.at(&format!("parameters.{name}"))),
+        }
     }
-    let simulation = match root.get("simulation") {
-        None => toml::Table::new(),
-        Some(value) => {
-            value.table()?;
-            value.deny_non_finite()?;
-            let mut whole: toml::Table = toml::from_str(doc.text()).map_err(|e| {
-                DatasetError::invalid(
-                    Location::file(path),
-                    format!("invalid TOML: {}", e.message()),
-                )
-            })?;
-            match whole.remove("simulation") {
-                Some(toml::Value::Table(table)) => table,
-                _ => toml::Table::new(),
+    // The first unknown name in file order.
+    if let Some(at) = unknown.into_iter().min_by_key(|at| at.line) {
+        let name = at.field.as_deref().unwrap_or_default();
+        let name = name.strip_prefix("parameters.").unwrap_or(name).to_string();
+        let known: Vec<_> = Param::ALL.iter().map(|p| p.name()).collect();
+        return Err(DatasetError::invalid(
+            at,
+            format!("unknown parameter '{name}' (known: {})", known.join(", ")),
+        ));
+    }
+    let truth = Truth {
+        values,
+        simulation: file.simulation,
+    };
+    validate(path, &truth).map_err(|e| match e {
+        DatasetError::Invalid { at, message } => {
+            let located = at.field.as_deref().map(|f| doc.at(f)).unwrap_or(at);
+            DatasetError::Invalid {
+                at: located,
+                message,
             }
         }
-    };
-    Ok(Truth { values, simulation })
+        e => e,
+    })?;
+    Ok(truth)
 }
 
 /// Checks a truth in memory: finite values everywhere.

@@ -107,6 +107,9 @@ pub enum DetectError {
         /// The camera's resolution.
         camera: [u32; 2],
     },
+    /// An output file could not be written.
+    #[error(transparent)]
+    Write(#[from] crate::output::WriteError),
     /// OpenCV failed.
     #[error("{}: OpenCV: {message}", path.display())]
     OpenCv {

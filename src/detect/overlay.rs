@@ -90,12 +90,14 @@ fn encode_png(bgr: &Mat) -> opencv::Result<Vec<u8>> {
 
 /// Writes the overlay of one result into `dir` as `capture_NNNN.png` and returns its path:
 /// detected vertices, the nominal model's projection and, with `after`, the projection
-/// with those parameters. `None` for a capture without a readable image.
+/// with those parameters. `None` for a capture without a readable image. Written with
+/// [`crate::output::write_atomic`] under `options`.
 pub fn write(
     dataset: &Dataset,
     result: &ImageResult,
     dir: &Path,
     after: Option<&[f64; PARAMETER_COUNT]>,
+    options: &crate::output::WriteOptions,
 ) -> Option<Result<PathBuf, DetectError>> {
     let capture = dataset.capture(result.capture)?;
     let image = capture.image.as_ref()?;
@@ -116,12 +118,7 @@ pub fn write(
     Some(
         draw(&grey, &detected, before.as_deref(), after.as_deref())
             .map_err(cv)
-            .and_then(|png| {
-                std::fs::write(&out, png).map_err(|source| DetectError::Io {
-                    path: out.clone(),
-                    source,
-                })
-            })
+            .and_then(|png| Ok(crate::output::write_atomic(&out, &png, options)?))
             .map(|()| out.clone()),
     )
 }

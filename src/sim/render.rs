@@ -80,6 +80,9 @@ pub enum RenderError {
         /// What went wrong.
         message: String,
     },
+    /// The image could not be written.
+    #[error(transparent)]
+    Write(#[from] crate::output::WriteError),
     /// An image exists and `force` was not given.
     #[error("{}: already exists; use --force to overwrite", path.display())]
     Exists {
@@ -122,19 +125,15 @@ impl GreyImage {
         Ok(out)
     }
 
-    /// Writes the image as PNG to `path`, atomically (a temporary file, then a rename).
+    /// Writes the image as PNG to `path` with [`crate::output::write_atomic`], replacing an
+    /// existing file (callers check for existing images first).
     pub fn write_png(&self, path: &Path) -> Result<(), RenderError> {
         let bytes = self.to_png().map_err(|message| RenderError::Encode {
             path: path.to_path_buf(),
             message,
         })?;
-        let io = |source| RenderError::Io {
-            path: path.to_path_buf(),
-            source,
-        };
-        let tmp = path.with_extension("png.tmp");
-        std::fs::write(&tmp, bytes).map_err(io)?;
-        std::fs::rename(&tmp, path).map_err(io)
+        let options = crate::output::WriteOptions::new(true);
+        Ok(crate::output::write_atomic(path, &bytes, &options)?)
     }
 }
 

@@ -41,12 +41,21 @@ fn rich_dataset(dir: &Path) -> Dataset {
     model.camera.distortion = [rng.range(-0.3, 0.3), 1e-9, -0.0, 3.0, rng.range(-1.0, 1.0)];
     model.board.squares_x = 9;
     model.board.squares_y = 6;
-    model.board.square = 1.0 / 3.0;
+    model.board.square = 100.0 / 3.0;
     model.board.mount_origin = [rng.range(150.0, 200.0), -0.0, 1e-12];
     // Angles stored in degrees in dataset.toml: any angle that is some float of degrees
     // converted reads back bit for bit.
     model.board.mount_rpy = [rng.range(-5.0, 5.0), 90.0, -179.99].map(f64::to_radians);
     model.robot.thigh = rng.range(99.0, 101.0);
+    model.board.mass_g = rng.range(50.0, 150.0);
+    model.board.com_mm = [rng.range(100.0, 200.0), -0.0, 1.0 / 7.0];
+    let g = [
+        rng.range(-1.0, -0.5),
+        rng.range(-0.2, 0.2),
+        rng.range(-0.2, 0.2),
+    ];
+    let norm = g.iter().map(|x| x * x).sum::<f64>().sqrt();
+    model.robot.gravity = g.map(|x| x / norm);
     model.robot.lower_camera_offset = [50.71, 1e-300, 17.74];
     model.robot.lower_camera_tilt = rng.range(39.0, 40.0).to_radians();
 
@@ -958,21 +967,21 @@ fn camera_width_or_height_zero() {
         &toml_with("width = 640", "width = 0"),
         Some(2),
         Some("camera.width"),
-        "must be at least 1, got 0",
+        "must be 16 … 8192 px, got 0",
     );
     assert_broken(
         DATASET_TOML,
         &toml_with("height = 480", "height = 0"),
         Some(3),
         Some("camera.height"),
-        "must be at least 1, got 0",
+        "must be 16 … 8192 px, got 0",
     );
     assert_broken(
         DATASET_TOML,
         &toml_with("height = 480", "height = -480"),
         Some(3),
         Some("camera.height"),
-        "must be at least 1, got -480",
+        "-480 is out of range (a whole number from 0 to 4294967295)",
     );
 }
 
@@ -983,14 +992,14 @@ fn focal_length_not_positive() {
         &toml_with("fx = 562.5", "fx = 0"),
         Some(4),
         Some("camera.fx"),
-        "must be greater than 0, got 0",
+        "must be 50 … 20000 px (a camera's focal length), got 0",
     );
     assert_broken(
         DATASET_TOML,
         &toml_with("fy = 562.5", "fy = -562.5"),
         Some(5),
         Some("camera.fy"),
-        "must be greater than 0, got -562.5",
+        "must be 50 … 20000 px (a camera's focal length), got -562.5",
     );
 }
 
@@ -1024,14 +1033,14 @@ fn board_too_small() {
         &toml_with("squares_x = 7", "squares_x = 1"),
         Some(11),
         Some("board.squares_x"),
-        "must be at least 2, got 1",
+        "must be 3 … 64 squares (the vertex finder needs at least 2 × 2 inner vertices), got 1",
     );
     assert_broken(
         DATASET_TOML,
         &toml_with("squares_y = 5", "squares_y = 0"),
         Some(12),
         Some("board.squares_y"),
-        "must be at least 2, got 0",
+        "must be 3 … 64 squares (the vertex finder needs at least 2 × 2 inner vertices), got 0",
     );
 }
 
@@ -1042,14 +1051,14 @@ fn board_square_not_positive() {
         &toml_with("square_mm = 25.0", "square_mm = 0.0"),
         Some(13),
         Some("board.square_mm"),
-        "must be greater than 0, got 0",
+        "must be 1 … 500 mm, got 0",
     );
     assert_broken(
         DATASET_TOML,
         &toml_with("square_mm = 25.0", "square_mm = -25"),
         Some(13),
         Some("board.square_mm"),
-        "must be greater than 0, got -25",
+        "must be 1 … 500 mm, got -25",
     );
 }
 

@@ -18,6 +18,8 @@ mod export_robustness;
 mod export_roundtrip;
 mod export_teams;
 mod extended;
+mod fuzz_readers;
+mod hostile_inputs;
 mod misfit;
 mod plot_files;
 mod pure_rust_agreement;
