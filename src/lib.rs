@@ -34,6 +34,7 @@ pub mod dataset;
 #[cfg(feature = "detect")]
 pub mod detect;
 pub mod model;
+pub mod plan;
 pub mod report;
 pub mod sim;
 pub mod solve;
