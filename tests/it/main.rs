@@ -15,6 +15,7 @@ mod detect_files;
 #[cfg(feature = "detect")]
 mod detect_render;
 mod export_roundtrip;
+mod extended;
 mod plan;
 mod plot_files;
 mod pure_rust_agreement;
