@@ -24,7 +24,7 @@ pub struct PlanArgs {
     /// Parameter families the calibration will free (paper, head, intrinsics, distortion,
     /// links, compliance, play), comma-separated; the plan is made for them.
     #[arg(long, value_name = "FAMILIES", default_value = "paper", value_parser = parse_families)]
-    families: Vec<Family>,
+    families: Families,
     /// Pixel noise σ per coordinate the prediction assumes [px].
     #[arg(long, default_value_t = 0.1, value_parser = positive)]
     px_noise: f64,
@@ -51,8 +51,12 @@ pub struct PlanArgs {
     force: bool,
 }
 
+/// The families of `--families`.
+#[derive(Debug, Clone)]
+struct Families(Vec<Family>);
+
 /// Parses `--families`.
-fn parse_families(text: &str) -> Result<Vec<Family>, String> {
+fn parse_families(text: &str) -> Result<Families, String> {
     let mut out = Vec::new();
     for name in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
         let family = Family::from_name(name).ok_or_else(|| {
@@ -66,7 +70,7 @@ fn parse_families(text: &str) -> Result<Vec<Family>, String> {
     if out.is_empty() {
         return Err("name at least one family".into());
     }
-    Ok(out)
+    Ok(Families(out))
 }
 
 /// A finite number not below zero.
@@ -90,7 +94,7 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
         None => Model::default(),
     };
     let mut fixed = FixedSet::with(&Param::ALL);
-    for family in &args.families {
+    for family in &args.families.0 {
         for p in family.params() {
             fixed.set(p, false);
         }
@@ -153,7 +157,7 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
     println!(
         "criterion: A-optimal column-scaled variance of the free parameters (families {}), \
          greedy selection and exchange",
-        args.families.iter().map(|f| f.name()).collect::<Vec<_>>().join(", ")
+        args.families.0.iter().map(|f| f.name()).collect::<Vec<_>>().join(", ")
     );
     println!(
         "\npredicted one-sigma at {} px and {}° joint noise per capture:",

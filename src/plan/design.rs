@@ -13,7 +13,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::model::{FixedSet, Model, PARAMETER_COUNT, Param, Side, Vertex};
 use crate::solve::jacobian::Evaluator;
-use crate::solve::noise::{CaptureNoise, NoiseLevels};
+use crate::solve::noise::{self, NoiseLevels, NoiseOptions};
 use crate::solve::{CaptureTerm, Loss, Observation, Problem, Tolerances};
 
 use crate::model::JointAngles;
@@ -51,7 +51,7 @@ pub fn capture_information(
             index.push(None);
             continue;
         };
-        let mut term = CaptureTerm {
+        let term = CaptureTerm {
             capture: terms.len() as u64,
             chains,
             observations: vertices
@@ -65,15 +65,10 @@ pub fn capture_information(
                 .collect(),
             whitening: None,
         };
-        let Some(noise) = CaptureNoise::new(&term, &model.camera, &zero) else {
-            index.push(None);
-            continue;
-        };
-        term.whitening = Some(noise.whitening(levels));
         index.push(Some(terms.len()));
         terms.push(term);
     }
-    let problem = Problem {
+    let mut problem = Problem {
         camera: model.camera,
         captures: terms,
         initial: zero,
@@ -81,6 +76,17 @@ pub fn capture_information(
         loss: Loss::Squared,
         tolerances: Tolerances::default(),
     };
+    // The noise model's whitening at the given levels (nothing is estimated when both are
+    // given; the residuals are zero here).
+    let given = NoiseOptions {
+        px: Some(levels.px),
+        joint: Some(levels.joint),
+    };
+    if let Some((levels, noise)) = noise::estimate(&problem, &zero, 0, given) {
+        for (term, n) in problem.captures.iter_mut().zip(&noise) {
+            term.whitening = Some(n.whitening(levels));
+        }
+    }
     let evaluator = Evaluator::new(&problem);
     index
         .into_iter()
@@ -151,7 +157,7 @@ fn criterion_with(
     let n = cov.nrows();
     let k = info.factor.nrows();
     // A = C[:, cols]·Gᵀ  (n × k)
-    let mut a = DMatrix::zeros(n, k);
+    let mut a: DMatrix<f64> = DMatrix::zeros(n, k);
     for (c, &col) in info.columns.iter().enumerate() {
         for r in 0..k {
             let g = info.factor[(r, c)];
@@ -163,7 +169,7 @@ fn criterion_with(
         }
     }
     // S = I + G·A[cols, :]
-    let mut s = DMatrix::identity(k, k);
+    let mut s: DMatrix<f64> = DMatrix::identity(k, k);
     for r in 0..k {
         for (c, &col) in info.columns.iter().enumerate() {
             let g = info.factor[(r, c)];
@@ -207,7 +213,7 @@ impl Default for DesignOptions {
     fn default() -> Self {
         DesignOptions {
             power: 1.0,
-            exchange_passes: 2,
+            exchange_passes: 1,
         }
     }
 }
@@ -225,13 +231,14 @@ pub fn select(
 ) -> Vec<usize> {
     // Column scaling: the average information per pool capture about each parameter.
     let total = information(n, pool);
-    let weights: Vec<f64> = (0..n)
+    let column: Vec<f64> = (0..n)
         .map(|i| (total[(i, i)] / pool.len().max(1) as f64).max(1e-300))
         .collect();
+    let weights = &column;
     // A weak prior (as much as a thousandth of one capture's) keeps M invertible at the start.
     let prior = DMatrix::from_diagonal(&DVector::from_iterator(
         n,
-        weights.iter().map(|w| w * 1e-3),
+        column.iter().map(|w| w * 1e-3),
     ));
     let mut m = prior.clone();
     let mut chosen: Vec<usize> = Vec::with_capacity(count);
@@ -240,7 +247,7 @@ pub fn select(
         pool.iter()
             .enumerate()
             .filter(|(c, _)| !used[*c])
-            .map(|(c, info)| (c, criterion_with(cov, info, &weights, options.power)))
+            .map(|(c, info)| (c, criterion_with(cov, info, weights, options.power)))
             .min_by(|a, b| a.1.total_cmp(&b.1))
     };
     while chosen.len() < count.min(pool.len()) {
@@ -257,7 +264,7 @@ pub fn select(
         for slot in 0..chosen.len() {
             let current = chosen[slot];
             let cov_all = inverse(&m);
-            let now = criterion(cov_all.diagonal().iter().copied(), &weights, options.power);
+            let now = criterion(cov_all.diagonal().iter().copied(), weights, options.power);
             accumulate(&mut m, pool[current], -1.0);
             used[current] = false;
             let cov = inverse(&m);

@@ -16,8 +16,11 @@ pub struct Feasibility {
     /// The board must stay in view for every angle offset (camera rotation, head and leg
     /// joints, sandal rotation) within ± this [rad] …
     pub offset_angle: f64,
-    /// … and every sandal mounting translation within ± this [mm].
+    /// … and every sandal mounting translation within ± this [mm] …
     pub offset_length: f64,
+    /// … and the head joint offsets (not part of the paper's model, held at zero by
+    /// default) within ± this [rad].
+    pub head_offset: f64,
     /// Smallest distance of a vertex from the image border [px].
     pub margin_px: f64,
     /// Smallest projected square edge at the nominal model [px].
@@ -29,13 +32,15 @@ pub struct Feasibility {
 }
 
 impl Default for Feasibility {
-    /// Joint margin 5° (more than the offsets of ±3°), offsets ±3° and ±3 mm, vertices 12 px
+    /// Joint margin 5° (more than the offsets of ±3°), offsets ±3° and ±3 mm (head ±0.5°,
+    /// the simulator's realistic range), vertices 12 px
     /// from the border, squares of at least 14 px, boards seen at most 60° off their normal.
     fn default() -> Self {
         Feasibility {
             joint_margin: 5f64.to_radians(),
             offset_angle: 3f64.to_radians(),
             offset_length: 3.0,
+            head_offset: 0.5f64.to_radians(),
             margin_px: 12.0,
             min_square_px: 14.0,
             max_view_angle: 60f64.to_radians(),
@@ -74,17 +79,13 @@ impl std::fmt::Display for Infeasible {
 /// The offsets whose unknown values the view must tolerate for a capture of `side`, each
 /// with its bound.
 fn uncertain(side: Side, f: &Feasibility) -> Vec<(Param, f64)> {
-    let mut out: Vec<(Param, f64)> = [
-        Param::CamYaw,
-        Param::CamPitch,
-        Param::CamRoll,
-        Param::HeadYaw,
-        Param::HeadPitch,
-    ]
-    .into_iter()
-    .chain(side.leg_joints().map(Joint::offset))
-    .map(|p| (p, f.offset_angle))
-    .collect();
+    let mut out: Vec<(Param, f64)> = [Param::CamYaw, Param::CamPitch, Param::CamRoll]
+        .into_iter()
+        .chain(side.leg_joints().map(Joint::offset))
+        .map(|p| (p, f.offset_angle))
+        .collect();
+    out.push((Param::HeadYaw, f.head_offset));
+    out.push((Param::HeadPitch, f.head_offset));
     let [rot_z, trans_x, trans_y] = side.board_params();
     out.push((rot_z, f.offset_angle));
     out.push((trans_x, f.offset_length));
@@ -400,6 +401,8 @@ pub fn candidates(
         if found == stances {
             break;
         }
+        // Uniform within the limits less the margin (drawing near stances found before
+        // was tried: it gives a larger but less varied pool and worse plans).
         let mut joints = JointAngles::default();
         for j in side.leg_joints() {
             let (lo, hi) = j.limits();

@@ -186,6 +186,11 @@ pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
     let usable: Vec<usize> = (0..pool.len()).filter(|&k| infos[k].is_some()).collect();
     let refs: Vec<&design::CaptureInformation> =
         usable.iter().map(|&k| infos[k].as_ref().expect("usable")).collect();
+    let random = random_stances(model, options.captures, 3, options.seed)?;
+    let random_infos = information_parallel(model, &random, &options.fixed, options.levels);
+    let random_refs: Vec<&design::CaptureInformation> =
+        random_infos.iter().flatten().collect();
+    let baseline = design::predict(&free, &random_refs);
     let picked = design::select(&refs, free.len(), options.captures, &options.design);
     let chosen: Vec<usize> = picked.iter().map(|&k| usable[k]).collect();
     let prediction = design::predict(&free, &chosen.iter().map(|&k| infos[k].as_ref().expect("usable")).collect::<Vec<_>>());
@@ -206,11 +211,6 @@ pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
     stances.sort_unstable();
     stances.dedup();
 
-    let random = random_stances(model, options.captures, 3, options.seed)?;
-    let random_infos = information_parallel(model, &random, &options.fixed, options.levels);
-    let random_refs: Vec<&design::CaptureInformation> =
-        random_infos.iter().flatten().collect();
-    let baseline = design::predict(&free, &random_refs);
     let baseline_duration = options
         .timing
         .duration(&random.iter().map(|c| c.1).collect::<Vec<_>>());
