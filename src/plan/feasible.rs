@@ -6,7 +6,9 @@
 use rand::Rng;
 
 use super::collision::{self, BodyModel};
-use crate::model::{Joint, JointAngles, Model, PARAMETER_COUNT, Param, Side, StanceChains};
+use crate::model::{
+    Joint, JointAngles, Model, PARAMETER_COUNT, Param, Side, StanceChains, gravity,
+};
 
 /// How far the planned captures must stay from the limits of what can be seen and reached.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -365,7 +367,8 @@ fn park(side: Side, joints: &mut JointAngles) {
 
 /// Draws up to `stances` feasible leg stances for `side`, each with up to `heads` head
 /// postures (the board aimed at the image centre and at points around it), all passing
-/// [`check`]. Gives up after `tries` random leg postures.
+/// [`check`], within `tries` random leg postures; then up to `tries` more draws look only
+/// for stances that load a joint with a sign of gravity torque the pool lacks.
 pub fn candidates(
     model: &Model,
     side: Side,
@@ -397,8 +400,14 @@ pub fn candidates(
     .collect();
     let mut out = Vec::new();
     let mut found = 0;
-    for _ in 0..tries {
-        if found == stances {
+    // Which signs of each joint's gravity torque the pool has: compliance and play can only
+    // be told from the offset by stances that load a joint both ways.
+    let mut signs = [[false; 2]; 6];
+    let torque_signs = |joints: &JointAngles| {
+        gravity::leg_torques(&model.robot, &model.board, side, joints).map(|t| [t > 0.0, t < 0.0])
+    };
+    for _ in 0..2 * tries {
+        if found >= stances && signs.iter().all(|s| s[0] && s[1]) {
             break;
         }
         // Uniform within the limits less the margin (drawing near stances found before
@@ -409,6 +418,12 @@ pub fn candidates(
             joints.set(j, rng.random_range(lo + f.joint_margin..hi - f.joint_margin));
         }
         park(other, &mut joints);
+        let these = torque_signs(&joints);
+        // Once the pool is full, only stances that load a joint in a way it lacks.
+        let new_sign = (0..6).any(|k| (0..2).any(|s| these[k][s] && !signs[k][s]));
+        if found >= stances && !new_sign {
+            continue;
+        }
         if collision::collision(&model.robot, &f.body, &joints).is_some() {
             continue;
         }
@@ -429,6 +444,11 @@ pub fn candidates(
         }
         let stance = first_stance + found;
         found += 1;
+        for k in 0..6 {
+            for s in 0..2 {
+                signs[k][s] |= these[k][s];
+            }
+        }
         out.extend(postures.into_iter().map(|joints| Candidate {
             side,
             joints,
