@@ -145,7 +145,9 @@ fn known_colliding_and_unseen_stances_are_refused() {
         Err(Infeasible::Limits(LKneePitch))
     );
     // The head turned away from the board.
-    let away = with(&[(HeadYaw, base.joints.get(HeadYaw) + 0.8)]);
+    // (towards yaw 0, where the head's pitch range is widest).
+    let yaw = base.joints.get(HeadYaw);
+    let away = with(&[(HeadYaw, yaw - 0.4 * yaw.signum())]);
     assert_eq!(feasible::check(&model, base.side, &away, &f), Err(Infeasible::View));
 }
 
