@@ -84,7 +84,10 @@ fn not_negative(text: &str) -> Result<f64, String> {
 /// Runs `naocalib plan`.
 pub fn run(args: &PlanArgs) -> Result<ExitCode> {
     if args.out.is_dir() {
-        bail!("{} is a directory; name the CSV file to write", args.out.display());
+        bail!(
+            "{} is a directory; name the CSV file to write",
+            args.out.display()
+        );
     }
     if !args.force && args.out.symlink_metadata().is_ok() {
         bail!("{} exists (use --force to replace it)", args.out.display());
@@ -157,7 +160,12 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
     println!(
         "criterion: A-optimal column-scaled variance of the free parameters (families {}), \
          greedy selection and exchange",
-        args.families.0.iter().map(|f| f.name()).collect::<Vec<_>>().join(", ")
+        args.families
+            .0
+            .iter()
+            .map(|f| f.name())
+            .collect::<Vec<_>>()
+            .join(", ")
     );
     println!(
         "\npredicted one-sigma at {} px and {}° joint noise per capture:",
@@ -226,7 +234,11 @@ pub fn is_angle_offset(p: Param) -> bool {
 
 fn report_rank(what: &str, p: &Prediction) {
     if p.undetermined.is_empty() {
-        println!("{what}: rank {} of {}, every free parameter determined", p.rank, p.free.len());
+        println!(
+            "{what}: rank {} of {}, every free parameter determined",
+            p.rank,
+            p.free.len()
+        );
     } else {
         println!(
             "{what}: rank {} of {}; undetermined: {}",

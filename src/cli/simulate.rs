@@ -169,7 +169,9 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
             args.joint_noise_deg
         );
         if outside > 0 {
-            println!("{outside} vertices fell outside the image at the true offsets and were left out");
+            println!(
+                "{outside} vertices fell outside the image at the true offsets and were left out"
+            );
         }
     }
     Ok(ExitCode::SUCCESS)

@@ -357,12 +357,27 @@ mod tests {
 
     #[test]
     fn segment_distance_cases() {
-        let d = segment_distance([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 1.0, 0.0], [0.5, 2.0, 0.0]);
+        let d = segment_distance(
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.5, 1.0, 0.0],
+            [0.5, 2.0, 0.0],
+        );
         assert!((d - 1.0).abs() < 1e-12);
-        let d = segment_distance([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 1.0], [3.0, 0.0, 1.0]);
+        let d = segment_distance(
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [2.0, 0.0, 1.0],
+            [3.0, 0.0, 1.0],
+        );
         assert!((d - 2f64.sqrt()).abs() < 1e-12);
         // Crossing segments.
-        let d = segment_distance([-1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 1.0, 0.0]);
+        let d = segment_distance(
+            [-1.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        );
         assert!(d.abs() < 1e-12);
     }
 
@@ -394,7 +409,11 @@ mod tests {
         assert!(what.contains("left") && what.contains("right"), "{what}");
         // A straight leg pushed backwards goes through the floor.
         let floor = pose(&[(LHipPitch, 0.48)]);
-        assert!(collision(&robot, &body, &floor).expect("floor").contains("floor"));
+        assert!(
+            collision(&robot, &body, &floor)
+                .expect("floor")
+                .contains("floor")
+        );
         // Hip and knee fully bent bring the sandal into the torso or the own thigh.
         let folded = pose(&[(LHipPitch, -1.5), (LKneePitch, 2.1), (LAnklePitch, 0.9)]);
         assert!(collision(&robot, &body, &folded).is_some());

@@ -182,7 +182,10 @@ fn criterion_with(
         return f64::INFINITY;
     };
     // diag(A·S⁻¹·Aᵀ) = column norms of L⁻¹·Aᵀ.
-    let y = chol.l().solve_lower_triangular(&a.transpose()).unwrap_or_else(|| a.transpose());
+    let y = chol
+        .l()
+        .solve_lower_triangular(&a.transpose())
+        .unwrap_or_else(|| a.transpose());
     let var = (0..n).map(|i| cov[(i, i)] - y.column(i).norm_squared());
     criterion(var, weights, power)
 }
@@ -236,10 +239,7 @@ pub fn select(
         .collect();
     let weights = &column;
     // A weak prior (as much as a thousandth of one capture's) keeps M invertible at the start.
-    let prior = DMatrix::from_diagonal(&DVector::from_iterator(
-        n,
-        column.iter().map(|w| w * 1e-3),
-    ));
+    let prior = DMatrix::from_diagonal(&DVector::from_iterator(n, column.iter().map(|w| w * 1e-3)));
     let mut m = prior.clone();
     let mut chosen: Vec<usize> = Vec::with_capacity(count);
     let mut used = vec![false; pool.len()];

@@ -160,12 +160,18 @@ pub fn board_in_view_for_all_offsets(
             return false;
         };
         for v in 0..uv.len() {
-            d_uv[k][v] = [(up[v][0] - um[v][0]) / (2.0 * h), (up[v][1] - um[v][1]) / (2.0 * h)];
+            d_uv[k][v] = [
+                (up[v][0] - um[v][0]) / (2.0 * h),
+                (up[v][1] - um[v][1]) / (2.0 * h),
+            ];
         }
         d_angle[k] = (ap - am) / (2.0 * h);
     }
     let (w, hgt) = (model.camera.width as f64, model.camera.height as f64);
-    let (lo, hi) = ([f.margin_px; 2], [w - 1.0 - f.margin_px, hgt - 1.0 - f.margin_px]);
+    let (lo, hi) = (
+        [f.margin_px; 2],
+        [w - 1.0 - f.margin_px, hgt - 1.0 - f.margin_px],
+    );
     // Linear bounds; remember the vertex closest to each border.
     let mut worst: [(f64, usize); 4] = [(f64::INFINITY, 0); 4];
     for v in 0..uv.len() {
@@ -300,7 +306,11 @@ pub fn aim_head(
         model.camera.project(&pose.translation)
     };
     let mut j = *joints;
-    let sole = model.robot.sole_chain(side, joints, &[0.0; 6]).eval(&zero).translation;
+    let sole = model
+        .robot
+        .sole_chain(side, joints, &[0.0; 6])
+        .eval(&zero)
+        .translation;
     j.set(Joint::HeadYaw, sole[1].atan2(sole[0]));
     j.set(Joint::HeadPitch, 0.2);
     let mut reached = false;
@@ -326,8 +336,14 @@ pub fn aim_head(
         }
         let d_yaw = (jac[1][1] * e[0] - jac[0][1] * e[1]) / det;
         let d_pitch = (-jac[1][0] * e[0] + jac[0][0] * e[1]) / det;
-        j.set(Joint::HeadYaw, j.get(Joint::HeadYaw) - d_yaw.clamp(-0.3, 0.3));
-        j.set(Joint::HeadPitch, j.get(Joint::HeadPitch) - d_pitch.clamp(-0.3, 0.3));
+        j.set(
+            Joint::HeadYaw,
+            j.get(Joint::HeadYaw) - d_yaw.clamp(-0.3, 0.3),
+        );
+        j.set(
+            Joint::HeadPitch,
+            j.get(Joint::HeadPitch) - d_pitch.clamp(-0.3, 0.3),
+        );
     }
     let within = |joint: Joint| {
         let (lo, hi) = joint.limits();
@@ -415,7 +431,10 @@ pub fn candidates(
         let mut joints = JointAngles::default();
         for j in side.leg_joints() {
             let (lo, hi) = j.limits();
-            joints.set(j, rng.random_range(lo + f.joint_margin..hi - f.joint_margin));
+            joints.set(
+                j,
+                rng.random_range(lo + f.joint_margin..hi - f.joint_margin),
+            );
         }
         park(other, &mut joints);
         let these = torque_signs(&joints);

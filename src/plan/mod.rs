@@ -136,7 +136,9 @@ pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
         return Err(PlanError::Options("--captures must be at least 2".into()));
     }
     let positive = |x: f64| x.is_finite() && x > 0.0;
-    if !positive(options.levels.px) || !(options.levels.joint.is_finite() && options.levels.joint >= 0.0) {
+    if !positive(options.levels.px)
+        || !(options.levels.joint.is_finite() && options.levels.joint >= 0.0)
+    {
         return Err(PlanError::Options(
             "the pixel noise must be positive and the joint noise not negative".into(),
         ));
@@ -184,16 +186,23 @@ pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
     let as_pairs: Vec<(Side, JointAngles)> = pool.iter().map(|c| (c.side, c.joints)).collect();
     let infos = information_parallel(model, &as_pairs, &options.fixed, options.levels);
     let usable: Vec<usize> = (0..pool.len()).filter(|&k| infos[k].is_some()).collect();
-    let refs: Vec<&design::CaptureInformation> =
-        usable.iter().map(|&k| infos[k].as_ref().expect("usable")).collect();
+    let refs: Vec<&design::CaptureInformation> = usable
+        .iter()
+        .map(|&k| infos[k].as_ref().expect("usable"))
+        .collect();
     let random = random_stances(model, options.captures, 3, options.seed)?;
     let random_infos = information_parallel(model, &random, &options.fixed, options.levels);
-    let random_refs: Vec<&design::CaptureInformation> =
-        random_infos.iter().flatten().collect();
+    let random_refs: Vec<&design::CaptureInformation> = random_infos.iter().flatten().collect();
     let baseline = design::predict(&free, &random_refs);
     let picked = design::select(&refs, free.len(), options.captures, &options.design);
     let chosen: Vec<usize> = picked.iter().map(|&k| usable[k]).collect();
-    let prediction = design::predict(&free, &chosen.iter().map(|&k| infos[k].as_ref().expect("usable")).collect::<Vec<_>>());
+    let prediction = design::predict(
+        &free,
+        &chosen
+            .iter()
+            .map(|&k| infos[k].as_ref().expect("usable"))
+            .collect::<Vec<_>>(),
+    );
 
     let angles: Vec<JointAngles> = chosen.iter().map(|&k| pool[k].joints).collect();
     let tour = order::order(&angles, &options.timing);

@@ -152,8 +152,10 @@ mod tests {
         }
         let timing = Timing::default();
         let before = timing.duration(&captures);
-        let ordered: Vec<JointAngles> =
-            order(&captures, &timing).into_iter().map(|i| captures[i]).collect();
+        let ordered: Vec<JointAngles> = order(&captures, &timing)
+            .into_iter()
+            .map(|i| captures[i])
+            .collect();
         let after = timing.duration(&ordered);
         assert_eq!(ordered.len(), captures.len());
         // Out along the line and back: 2 × 1.45 rad of knee travel plus the stops.

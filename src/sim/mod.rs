@@ -343,7 +343,10 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
         }
     };
     let mut stances = options.schedule.clone().unwrap_or_default();
-    for side in Side::BOTH.into_iter().filter(|_| options.schedule.is_none()) {
+    for side in Side::BOTH
+        .into_iter()
+        .filter(|_| options.schedule.is_none())
+    {
         stances.extend(choose_stances(
             model,
             side,

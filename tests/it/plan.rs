@@ -41,7 +41,10 @@ fn planned_stances_are_within_limits_and_collision_free() {
                 j.name()
             );
         }
-        assert_eq!(c.joints.get(Joint::LHipYawPitch), c.joints.get(Joint::RHipYawPitch));
+        assert_eq!(
+            c.joints.get(Joint::LHipYawPitch),
+            c.joints.get(Joint::RHipYawPitch)
+        );
         assert_eq!(
             plan::collision::collision(&model.robot, &f.body, &c.joints),
             None
@@ -96,7 +99,11 @@ fn planned_boards_stay_in_view_for_random_offsets_of_three_degrees() {
             // Facing the camera: the line of sight within 60° of the board normal.
             let pose = chains.camera_to_board(&params);
             let to_camera: Vec<f64> = (0..3)
-                .map(|j| -(0..3).map(|i| pose.rotation[i][j] * pose.translation[i]).sum::<f64>())
+                .map(|j| {
+                    -(0..3)
+                        .map(|i| pose.rotation[i][j] * pose.translation[i])
+                        .sum::<f64>()
+                })
                 .collect();
             let dist = to_camera.iter().map(|x| x * x).sum::<f64>().sqrt();
             assert!(to_camera[2] / dist >= f.max_view_angle.cos());
@@ -120,13 +127,23 @@ fn known_colliding_and_unseen_stances_are_refused() {
     };
     use Joint::*;
     // Both hips rolled inward: the legs cross.
-    let crossed = with(&[(LHipRoll, -0.27), (RHipRoll, 0.27), (LHipPitch, -0.3), (RHipPitch, -0.3)]);
+    let crossed = with(&[
+        (LHipRoll, -0.27),
+        (RHipRoll, 0.27),
+        (LHipPitch, -0.3),
+        (RHipPitch, -0.3),
+    ]);
     assert!(matches!(
         feasible::check(&model, base.side, &crossed, &f),
         Err(Infeasible::Collision(_))
     ));
     // A straight leg pushed back into the floor.
-    let floor = with(&[(LHipPitch, 0.39), (LKneePitch, 0.0), (RHipPitch, 0.39), (RKneePitch, 0.0)]);
+    let floor = with(&[
+        (LHipPitch, 0.39),
+        (LKneePitch, 0.0),
+        (RHipPitch, 0.39),
+        (RKneePitch, 0.0),
+    ]);
     match feasible::check(&model, base.side, &floor, &f) {
         Err(Infeasible::Collision(what)) => assert!(what.contains("floor"), "{what}"),
         other => panic!("expected a floor collision, got {other:?}"),
@@ -148,7 +165,10 @@ fn known_colliding_and_unseen_stances_are_refused() {
     // (towards yaw 0, where the head's pitch range is widest).
     let yaw = base.joints.get(HeadYaw);
     let away = with(&[(HeadYaw, yaw - 0.4 * yaw.signum())]);
-    assert_eq!(feasible::check(&model, base.side, &away, &f), Err(Infeasible::View));
+    assert_eq!(
+        feasible::check(&model, base.side, &away, &f),
+        Err(Infeasible::View)
+    );
 }
 
 /// The worst scatter (std across runs) of the 15 angle offsets over `runs` calibrations of
@@ -248,7 +268,11 @@ fn compliance_and_play_are_determined_with_144_planned_captures() {
     assert_eq!(plan.captures.len(), 144);
     let p = &plan.prediction;
     assert_eq!(p.free.len(), 45);
-    assert!(p.undetermined.is_empty(), "undetermined: {:?}", p.undetermined);
+    assert!(
+        p.undetermined.is_empty(),
+        "undetermined: {:?}",
+        p.undetermined
+    );
     assert_eq!(p.rank, 45);
     assert!(p.std.iter().all(|s| s.is_finite() && *s > 0.0));
 }
@@ -264,7 +288,10 @@ fn cli_plans_simulates_and_solves() {
         .unwrap();
     assert!(run.status.success(), "{}", stderr(&run));
     let text = String::from_utf8_lossy(&run.stdout);
-    assert!(text.contains("predicted one-sigma") && text.contains("measurement phase"), "{text}");
+    assert!(
+        text.contains("predicted one-sigma") && text.contains("measurement phase"),
+        "{text}"
+    );
     let csv = std::fs::read_to_string(&out).unwrap();
     let mut lines = csv.lines();
     let header = lines.next().unwrap();
@@ -273,7 +300,11 @@ fn cli_plans_simulates_and_solves() {
     assert_eq!(lines.count(), 24);
 
     // Not replaced without --force.
-    let again = naocalib().args(["plan", "--captures", "24"]).arg(&out).output().unwrap();
+    let again = naocalib()
+        .args(["plan", "--captures", "24"])
+        .arg(&out)
+        .output()
+        .unwrap();
     assert_clean_failure(&again, &["exists", "--force"]);
 
     let data = dir.path().join("data");
@@ -291,7 +322,11 @@ fn cli_plans_simulates_and_solves() {
         assert_eq!((c.side, c.joints), (p.side, p.joints));
     }
     assert_eq!(dataset.corners.len(), 24 * 24);
-    let solve = naocalib().args(["solve", "--json"]).arg(&data).output().unwrap();
+    let solve = naocalib()
+        .args(["solve", "--json"])
+        .arg(&data)
+        .output()
+        .unwrap();
     assert!(solve.status.success(), "{}", stderr(&solve));
 }
 
@@ -314,7 +349,11 @@ fn cli_refuses_bad_input_cleanly() {
     }
     text.push_str("\n0,left");
     for j in Joint::ALL {
-        text.push_str(if j == Joint::LKneePitch { ",abc" } else { ",0.1" });
+        text.push_str(if j == Joint::LKneePitch {
+            ",abc"
+        } else {
+            ",0.1"
+        });
     }
     text.push('\n');
     std::fs::write(&out, text).unwrap();
