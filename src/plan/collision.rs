@@ -55,8 +55,8 @@ impl OrientedBox {
             let mut p = self.centre;
             for k in 0..3 {
                 let s = if n >> k & 1 == 1 { 1.0 } else { -1.0 };
-                for i in 0..3 {
-                    p[i] += s * self.half[k] * self.axes[k][i];
+                for (pi, ai) in p.iter_mut().zip(self.axes[k]) {
+                    *pi += s * self.half[k] * ai;
                 }
             }
             p

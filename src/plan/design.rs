@@ -261,8 +261,8 @@ pub fn select(
     }
     for _ in 0..options.exchange_passes {
         let mut improved = false;
-        for slot in 0..chosen.len() {
-            let current = chosen[slot];
+        for slot in chosen.iter_mut() {
+            let current = *slot;
             let cov_all = inverse(&m);
             let now = criterion(cov_all.diagonal().iter().copied(), weights, options.power);
             accumulate(&mut m, pool[current], -1.0);
@@ -276,7 +276,7 @@ pub fn select(
                 _ => current,
             };
             used[pick] = true;
-            chosen[slot] = pick;
+            *slot = pick;
             accumulate(&mut m, pool[pick], 1.0);
         }
         if !improved {

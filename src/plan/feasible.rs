@@ -385,6 +385,7 @@ fn park(side: Side, joints: &mut JointAngles) {
 /// postures (the board aimed at the image centre and at points around it), all passing
 /// [`check`], within `tries` random leg postures; then up to `tries` more draws look only
 /// for stances that load a joint with a sign of gravity torque the pool lacks.
+#[allow(clippy::too_many_arguments)] // each is one plain setting of the pool
 pub fn candidates(
     model: &Model,
     side: Side,

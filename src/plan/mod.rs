@@ -136,9 +136,8 @@ pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
         return Err(PlanError::Options("--captures must be at least 2".into()));
     }
     let positive = |x: f64| x.is_finite() && x > 0.0;
-    if !positive(options.levels.px)
-        || !(options.levels.joint.is_finite() && options.levels.joint >= 0.0)
-    {
+    let joint = options.levels.joint;
+    if !(positive(options.levels.px) && joint.is_finite() && joint >= 0.0) {
         return Err(PlanError::Options(
             "the pixel noise must be positive and the joint noise not negative".into(),
         ));
