@@ -35,6 +35,7 @@ pub mod dataset;
 pub mod detect;
 pub mod model;
 pub mod output;
+pub mod plan;
 pub mod report;
 pub mod sim;
 pub mod solve;

@@ -6,6 +6,7 @@ mod compare;
 mod detect;
 mod export;
 mod options;
+mod plan;
 mod simulate;
 mod solve;
 
@@ -29,6 +30,9 @@ pub struct Cli {
 enum Command {
     /// Simulate a dataset: true offsets, stances with a board in view, noisy corners.
     Simulate(simulate::SimulateArgs),
+    /// Design a stance schedule for a robot: feasible before calibration, chosen to
+    /// determine the free parameters best, ordered to run quickly.
+    Plan(plan::PlanArgs),
     /// Calibrate: fit the offsets to a dataset's corners and print them with their
     /// uncertainty.
     Solve(solve::SolveArgs),
@@ -82,6 +86,7 @@ pub fn main() -> ExitCode {
 pub fn run(cli: &Cli) -> Result<ExitCode> {
     match &cli.command {
         Command::Simulate(args) => simulate::run(args),
+        Command::Plan(args) => plan::run(args),
         Command::Solve(args) => solve::run(args, cli.verbose),
         Command::Compare(args) => compare::run(args),
         Command::Batch(args) => batch::run(args, cli.verbose),

@@ -57,6 +57,11 @@ pub struct SimulateArgs {
     /// view 56.3°×43.7° at 640×480) or v6-1280x960; its intrinsics go into dataset.toml.
     #[arg(long, default_value = "v4", value_name = "CAMERA", value_parser = parse_camera)]
     camera: CameraPreset,
+    /// Photograph the stances of this plan (`naocalib plan`) instead of random ones:
+    /// one capture per row, in its order. Vertices that the true offsets put outside the
+    /// image are left out, as a camera would.
+    #[arg(long, value_name = "PLAN.csv", conflicts_with_all = ["stances", "heads"])]
+    stance_file: Option<PathBuf>,
     /// Lens distortion k1,k2,p1,p2,k3 (OpenCV order) of the simulated camera.
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     distortion: Option<Vec<f64>>,
@@ -126,6 +131,16 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
         }
         None => None,
     };
+    let schedule = match &args.stance_file {
+        Some(path) => {
+            let plan = naocalib::plan::read_csv(path)?;
+            if plan.is_empty() {
+                bail!("{}: the plan has no captures", path.display());
+            }
+            Some(naocalib::plan::to_stances(&plan))
+        }
+        None => None,
+    };
     let options = SimOptions {
         seed: args.seed,
         stances: args.stances,
@@ -146,6 +161,7 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
             },
             force: args.force,
         }),
+        schedule,
     };
     let mut model = Model {
         camera: args.camera.camera(),
@@ -161,6 +177,24 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
     let mut dataset = naocalib::sim::simulate(&model, &options)?;
     if args.images {
         dataset.corners.clear();
+    }
+    let mut outside = 0;
+    if let Some(path) = &args.stance_file {
+        // A planned stance may show part of the board outside the image for offsets beyond
+        // the plan's bounds: those vertices are not seen.
+        let camera = model.camera;
+        let before = dataset.corners.len();
+        dataset.corners.retain(|c| camera.contains(c.pixel, 0.0));
+        outside = before - dataset.corners.len();
+        if let Some(truth) = &mut dataset.truth {
+            for key in ["stances_per_leg", "head_postures"] {
+                truth.simulation.remove(key);
+            }
+            truth.simulation.insert(
+                "stance_file".into(),
+                toml::Value::String(path.display().to_string()),
+            );
+        }
     }
     dataset.dir = args.out.clone();
     dataset.write(&args.out, args.force)?;
@@ -187,6 +221,11 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
             args.px_noise,
             args.joint_noise_deg
         );
+        if outside > 0 {
+            println!(
+                "{outside} vertices fell outside the image at the true offsets and were left out"
+            );
+        }
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -314,6 +314,27 @@ pub fn read_truth(path: &Path) -> Result<Truth, DatasetError> {
     truth::parse(path, &bytes.unwrap_or_default())
 }
 
+/// Reads a captures table on its own (such as the stance schedule `naocalib plan` writes):
+/// the format and checks of `captures.csv`, its `image` column optional.
+pub fn read_captures(path: &Path) -> Result<Vec<Capture>, DatasetError> {
+    let bytes = text::read_file(path, true, " (it needs at least its header line)")?;
+    let captures = captures::parse(path, &bytes.unwrap_or_default())?;
+    captures::validate(path, &captures, |_, c| c.line)?;
+    Ok(captures)
+}
+
+/// Reads a `dataset.toml` on its own: the camera, board and robot it describes.
+pub fn read_model(path: &Path) -> Result<Model, DatasetError> {
+    let bytes = text::read_file(path, true, " (it needs at least a [camera] table)")?;
+    config::parse(path, &bytes.unwrap_or_default())
+}
+
+/// Writes `contents` to the file `path` atomically (its directory must exist); refuses to
+/// replace an existing file unless `force`.
+pub fn write_file(path: &Path, contents: &[u8], force: bool) -> Result<(), DatasetError> {
+    write::write_atomic(path, contents, force)
+}
+
 /// Writes `corners.csv` into `dir` (created if missing), atomically; refuses to replace an
 /// existing file unless `force`. For detection, which adds corners to an existing dataset.
 ///

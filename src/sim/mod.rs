@@ -37,6 +37,9 @@ pub struct SimOptions {
     pub noise_seed: Option<u64>,
     /// Render one image per capture (true pose, actual joints) and name it in the capture.
     pub images: Option<render::ImageOutput>,
+    /// Stances to photograph instead of drawing them (a plan's schedule); `stances` and
+    /// `heads` are then ignored.
+    pub schedule: Option<Vec<Stance>>,
 }
 
 impl Default for SimOptions {
@@ -51,6 +54,7 @@ impl Default for SimOptions {
             effects: Vec::new(),
             noise_seed: None,
             images: None,
+            schedule: None,
         }
     }
 }
@@ -339,8 +343,11 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
             t
         }
     };
-    let mut stances = Vec::new();
-    for side in Side::BOTH {
+    let mut stances = options.schedule.clone().unwrap_or_default();
+    for side in Side::BOTH
+        .into_iter()
+        .filter(|_| options.schedule.is_none())
+    {
         stances.extend(choose_stances(
             model,
             side,

@@ -21,6 +21,7 @@ mod extended;
 mod fuzz_readers;
 mod hostile_inputs;
 mod misfit;
+mod plan;
 mod plot_files;
 mod pure_rust_agreement;
 mod pure_rust_cli;

@@ -1,0 +1,34 @@
+//! How long `naocalib plan` takes to design a paper-sized schedule (144 captures of the
+//! paper's 21 parameters, the default pool), and with compliance and play freed too.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+
+use naocalib::model::{Family, FixedSet, Model};
+use naocalib::plan::{PlanOptions, plan};
+
+fn bench(c: &mut Criterion) {
+    let model = Model::default();
+    let mut group = c.benchmark_group("plan");
+    group.sample_size(10);
+    group.bench_function("plan_144_paper", |b| {
+        let options = PlanOptions::default();
+        b.iter(|| plan(&model, &options).expect("plan"));
+    });
+    group.bench_function("plan_144_paper_compliance_play", |b| {
+        let mut fixed = FixedSet::default();
+        for family in [Family::Compliance, Family::Play] {
+            for p in family.params() {
+                fixed.set(p, false);
+            }
+        }
+        let options = PlanOptions {
+            fixed,
+            ..PlanOptions::default()
+        };
+        b.iter(|| plan(&model, &options).expect("plan"));
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,250 @@
+//! `naocalib plan`: design a stance schedule and predict what it will determine.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+
+use naocalib::model::{Family, FixedSet, Model, Param, Unit};
+use naocalib::plan::{PlanOptions, Prediction};
+use naocalib::solve::noise::NoiseLevels;
+
+use super::options::positive;
+
+#[derive(Debug, Args)]
+pub struct PlanArgs {
+    /// The stance schedule to write (CSV: capture,board,HeadYaw,…,RAnkleRoll in radians).
+    out: PathBuf,
+    /// Number of captures, both legs together.
+    #[arg(long, default_value_t = 144,
+          value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(2..=5000))]
+    captures: usize,
+    /// Parameter families the calibration will free (paper, head, intrinsics, distortion,
+    /// links, compliance, play), comma-separated; the plan is made for them.
+    #[arg(long, value_name = "FAMILIES", default_value = "paper", value_parser = parse_families)]
+    families: Families,
+    /// Pixel noise σ per coordinate the prediction assumes [px].
+    #[arg(long, default_value_t = 0.1, value_parser = positive)]
+    px_noise: f64,
+    /// Joint-angle noise σ per joint and capture the prediction assumes [deg].
+    #[arg(long, default_value_t = 0.1, value_parser = not_negative)]
+    joint_noise_deg: f64,
+    /// Seed of the random candidate pool.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// The robot's dataset.toml (camera intrinsics, board, robot geometry); the defaults
+    /// when not given.
+    #[arg(long, value_name = "DATASET_TOML")]
+    camera: Option<PathBuf>,
+    /// The board must stay in view for every angle offset within ± this [deg] (and sandal
+    /// translations within ± this in mm).
+    #[arg(long, default_value_t = 3.0, value_parser = not_negative)]
+    offset_deg: f64,
+    /// Leg stances drawn into the candidate pool per leg.
+    #[arg(long, default_value_t = 200,
+          value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=100_000))]
+    pool: usize,
+    /// Replace an existing OUT.
+    #[arg(long)]
+    force: bool,
+}
+
+/// The families of `--families`.
+#[derive(Debug, Clone)]
+struct Families(Vec<Family>);
+
+/// Parses `--families`.
+fn parse_families(text: &str) -> Result<Families, String> {
+    let mut out = Vec::new();
+    for name in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        let family = Family::from_name(name).ok_or_else(|| {
+            let names: Vec<_> = Family::ALL.iter().map(|f| f.name()).collect();
+            format!("unknown family '{name}' (families: {})", names.join(", "))
+        })?;
+        if !out.contains(&family) {
+            out.push(family);
+        }
+    }
+    if out.is_empty() {
+        return Err("name at least one family".into());
+    }
+    Ok(Families(out))
+}
+
+/// A finite number not below zero.
+fn not_negative(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("must be a number not below zero, got '{text}'")),
+    }
+}
+
+/// Runs `naocalib plan`.
+pub fn run(args: &PlanArgs) -> Result<ExitCode> {
+    if args.out.is_dir() {
+        bail!(
+            "{} is a directory; name the CSV file to write",
+            args.out.display()
+        );
+    }
+    if !args.force && args.out.symlink_metadata().is_ok() {
+        bail!("{} exists (use --force to replace it)", args.out.display());
+    }
+    let model = match &args.camera {
+        Some(path) => naocalib::dataset::read_model(path)?,
+        None => Model::default(),
+    };
+    let mut fixed = FixedSet::with(&Param::ALL);
+    for family in &args.families.0 {
+        for p in family.params() {
+            fixed.set(p, false);
+        }
+    }
+    let mut options = PlanOptions {
+        captures: args.captures,
+        fixed,
+        levels: NoiseLevels {
+            px: args.px_noise,
+            joint: args.joint_noise_deg.to_radians(),
+        },
+        seed: args.seed,
+        pool_stances: args.pool,
+        ..PlanOptions::default()
+    };
+    options.feasibility.offset_angle = args.offset_deg.to_radians();
+    options.feasibility.offset_length = args.offset_deg;
+    let start = Instant::now();
+    let plan = naocalib::plan::plan(&model, &options)?;
+    let elapsed = start.elapsed().as_secs_f64();
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty())
+        && !dir.is_dir()
+    {
+        bail!("the directory {} does not exist", dir.display());
+    }
+    naocalib::dataset::write_file(
+        &args.out,
+        &naocalib::plan::render_csv(&plan.captures),
+        args.force,
+    )
+    .with_context(|| format!("writing the plan {}", args.out.display()))?;
+
+    let left = plan
+        .captures
+        .iter()
+        .filter(|c| c.side == naocalib::model::Side::Left)
+        .count();
+    let f = &options.feasibility;
+    println!(
+        "wrote {}: {} captures ({} left, {} right) in {} leg stances, chosen from {} feasible \
+         captures in {elapsed:.1} s",
+        args.out.display(),
+        plan.captures.len(),
+        left,
+        plan.captures.len() - left,
+        plan.stances,
+        plan.pool
+    );
+    println!(
+        "feasible: every angle at least {:.0}° inside its limits, LHipYawPitch = RHipYawPitch, \
+         no collision (capsules for thighs and tibias; boxes for feet, sandals and torso; the \
+         floor), the whole board at least {} px inside the image and at most {:.0}° off \
+         facing the camera for any offsets within ±{}° (sandal translations ±{} mm)",
+        f.joint_margin.to_degrees(),
+        f.margin_px,
+        f.max_view_angle.to_degrees(),
+        args.offset_deg,
+        args.offset_deg
+    );
+    println!(
+        "criterion: A-optimal column-scaled variance of the free parameters (families {}), \
+         greedy selection and exchange",
+        args.families
+            .0
+            .iter()
+            .map(|f| f.name())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    println!(
+        "\npredicted one-sigma at {} px and {}° joint noise per capture:",
+        args.px_noise, args.joint_noise_deg
+    );
+    print!("{}", table(&plan.prediction, &plan.baseline));
+    report_rank("plan", &plan.prediction);
+    report_rank("random stances", &plan.baseline);
+    println!(
+        "\nmeasurement phase: predicted {:.0} s for the plan ({:.0} s for the random stances in \
+         the simulator's order; the paper's took 590 s)",
+        plan.duration, plan.baseline_duration
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The table of predicted sigmas, plan beside random stances, with the worst angle offset.
+fn table(plan: &Prediction, random: &Prediction) -> String {
+    let mut out = format!(
+        "{:<24} {:>9} {:>11} {:>11} {:>8}\n",
+        "parameter", "unit", "plan", "random", "ratio"
+    );
+    let show = |x: f64, unit: Unit| {
+        if x.is_finite() {
+            format!("{:.4}", unit.to_report(x))
+        } else {
+            "undet.".to_string()
+        }
+    };
+    let mut worst = [0.0f64; 2];
+    for (k, p) in plan.free.iter().enumerate() {
+        let (a, b) = (plan.std[k], random.std_of(*p).unwrap_or(f64::INFINITY));
+        let ratio = if a.is_finite() && b.is_finite() && a > 0.0 {
+            format!("{:.2}", b / a)
+        } else {
+            "-".into()
+        };
+        out.push_str(&format!(
+            "{:<24} {:>9} {:>11} {:>11} {:>8}\n",
+            p.name(),
+            p.unit().name(),
+            show(a, p.unit()),
+            show(b, p.unit()),
+            ratio
+        ));
+        if is_angle_offset(*p) {
+            worst[0] = worst[0].max(a);
+            worst[1] = worst[1].max(b);
+        }
+    }
+    if worst[0] > 0.0 {
+        out.push_str(&format!(
+            "worst of the 15 camera and joint offsets: plan {}°, random {}° (random/plan {:.2})\n",
+            show(worst[0], Unit::Deg),
+            show(worst[1], Unit::Deg),
+            worst[1] / worst[0]
+        ));
+    }
+    out
+}
+
+/// The paper's 15 angle offsets: camera rotation and the 12 leg joints.
+pub fn is_angle_offset(p: Param) -> bool {
+    p.family() == Family::Paper && p.unit() == Unit::Deg && !p.name().contains("Board")
+}
+
+fn report_rank(what: &str, p: &Prediction) {
+    if p.undetermined.is_empty() {
+        println!(
+            "{what}: rank {} of {}, every free parameter determined",
+            p.rank,
+            p.free.len()
+        );
+    } else {
+        println!(
+            "{what}: rank {} of {}; undetermined: {}",
+            p.rank,
+            p.free.len(),
+            p.undetermined.join("; ")
+        );
+    }
+}

@@ -1,0 +1,347 @@
+//! The optimal choice of captures: the Fisher information each candidate capture adds
+//! under the per-capture noise model, and a greedy selection refined by exchange passes.
+//!
+//! Criterion: the sum of the column-scaled variances of the free parameters,
+//! `Φ = Σ_i w_i·var_i` with `var = diag(M⁻¹)`, `M = Σ_c J_cᵀ Σ_c⁻¹ J_c` and `w_i` the
+//! average information one pool capture carries about parameter `i` (so `w_i·var_i` is the
+//! parameter's variance in units of what one typical capture alone would give: unit-free,
+//! comparable across degrees, millimetres and compliances). This is A-optimality of the
+//! column-scaled information; optionally raised to a power `q > 1` per parameter, which
+//! leans towards the worst-determined parameter (`q → ∞` is minimax).
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::model::{FixedSet, Model, PARAMETER_COUNT, Param, Side, Vertex};
+use crate::solve::jacobian::Evaluator;
+use crate::solve::noise::{self, NoiseLevels, NoiseOptions};
+use crate::solve::{CaptureTerm, Loss, Observation, Problem, Tolerances};
+
+use crate::model::JointAngles;
+
+/// The information one capture carries: `M_c = Gᵀ·G` on a few of the free parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CaptureInformation {
+    /// Indices into the free parameters of `G`'s columns.
+    pub columns: Vec<usize>,
+    /// `k × columns.len()` factor with `k` the rank of the capture's information.
+    pub factor: DMatrix<f64>,
+}
+
+/// The Fisher information of each capture `(side, joints)` about the parameters left free
+/// by `fixed`, at the nominal model (all offsets zero), under the noise model with
+/// `levels`: pixel noise on every vertex plus joint noise shared by the capture's vertices.
+/// `None` for a capture whose board is (partly) behind the camera.
+pub fn capture_information(
+    model: &Model,
+    captures: &[(Side, JointAngles)],
+    fixed: &FixedSet,
+    levels: NoiseLevels,
+) -> Vec<Option<CaptureInformation>> {
+    let zero = [0.0; PARAMETER_COUNT];
+    let vertices: Vec<Vertex> = model.board.vertices().collect();
+    let mut terms = Vec::with_capacity(captures.len());
+    let mut index = Vec::with_capacity(captures.len());
+    for (side, joints) in captures {
+        let chains = model.chains(*side, joints);
+        let Some(pixels) = model
+            .project(&chains, &zero, &vertices)
+            .into_iter()
+            .collect::<Option<Vec<_>>>()
+        else {
+            index.push(None);
+            continue;
+        };
+        let term = CaptureTerm {
+            capture: terms.len() as u64,
+            chains,
+            observations: vertices
+                .iter()
+                .zip(&pixels)
+                .map(|(v, uv)| Observation {
+                    vertex: *v,
+                    point: model.board.vertex_position(*v),
+                    pixel: *uv,
+                })
+                .collect(),
+            whitening: None,
+        };
+        index.push(Some(terms.len()));
+        terms.push(term);
+    }
+    let mut problem = Problem {
+        camera: model.camera,
+        captures: terms,
+        initial: zero,
+        fixed: fixed.clone(),
+        loss: Loss::Squared,
+        tolerances: Tolerances::default(),
+    };
+    // The noise model's whitening at the given levels (nothing is estimated when both are
+    // given; the residuals are zero here).
+    let given = NoiseOptions {
+        px: Some(levels.px),
+        joint: Some(levels.joint),
+    };
+    if let Some((levels, noise)) = noise::estimate(&problem, &zero, 0, given) {
+        for (term, n) in problem.captures.iter_mut().zip(&noise) {
+            term.whitening = Some(n.whitening(levels));
+        }
+    }
+    let evaluator = Evaluator::new(&problem);
+    index
+        .into_iter()
+        .map(|k| {
+            let k = k?;
+            let cj = evaluator.capture_at(k, &zero)?;
+            let cols = cj.columns.len();
+            let rows = cj.residuals.len();
+            let jac = DMatrix::from_row_slice(rows, cols, &cj.jacobian);
+            let info = jac.tr_mul(&jac);
+            let eigen = info.symmetric_eigen();
+            let max = eigen.eigenvalues.iter().copied().fold(0.0, f64::max);
+            let keep: Vec<usize> = (0..cols)
+                .filter(|&i| eigen.eigenvalues[i] > 1e-12 * max && eigen.eigenvalues[i] > 0.0)
+                .collect();
+            let mut factor = DMatrix::zeros(keep.len(), cols);
+            for (r, &i) in keep.iter().enumerate() {
+                let s = eigen.eigenvalues[i].sqrt();
+                for c in 0..cols {
+                    factor[(r, c)] = s * eigen.eigenvectors[(c, i)];
+                }
+            }
+            Some(CaptureInformation {
+                columns: cj.columns,
+                factor,
+            })
+        })
+        .collect()
+}
+
+/// Adds `sign · M_c` to the information `m`.
+pub fn accumulate(m: &mut DMatrix<f64>, info: &CaptureInformation, sign: f64) {
+    let local = info.factor.tr_mul(&info.factor);
+    for (a, &i) in info.columns.iter().enumerate() {
+        for (b, &j) in info.columns.iter().enumerate() {
+            m[(i, j)] += sign * local[(a, b)];
+        }
+    }
+}
+
+/// The information of a set of captures.
+pub fn information(n: usize, infos: &[&CaptureInformation]) -> DMatrix<f64> {
+    let mut m = DMatrix::zeros(n, n);
+    for info in infos {
+        accumulate(&mut m, info, 1.0);
+    }
+    m
+}
+
+/// The design criterion of a variance vector: `Σ (w_i·var_i)^q`.
+fn criterion(var: impl Iterator<Item = f64>, weights: &[f64], power: f64) -> f64 {
+    var.zip(weights)
+        .map(|(v, w)| {
+            let x = (v * w).max(0.0);
+            if power == 1.0 { x } else { x.powf(power) }
+        })
+        .sum()
+}
+
+/// The criterion after adding capture `info` to the design with covariance `cov`
+/// (Woodbury: `(M + GᵀG)⁻¹ = C − C·Gᵀ·(I + G·C·Gᵀ)⁻¹·G·C`, only its diagonal).
+fn criterion_with(
+    cov: &DMatrix<f64>,
+    info: &CaptureInformation,
+    weights: &[f64],
+    power: f64,
+) -> f64 {
+    let n = cov.nrows();
+    let k = info.factor.nrows();
+    // A = C[:, cols]·Gᵀ  (n × k)
+    let mut a: DMatrix<f64> = DMatrix::zeros(n, k);
+    for (c, &col) in info.columns.iter().enumerate() {
+        for r in 0..k {
+            let g = info.factor[(r, c)];
+            if g != 0.0 {
+                for i in 0..n {
+                    a[(i, r)] += cov[(i, col)] * g;
+                }
+            }
+        }
+    }
+    // S = I + G·A[cols, :]
+    let mut s: DMatrix<f64> = DMatrix::identity(k, k);
+    for r in 0..k {
+        for (c, &col) in info.columns.iter().enumerate() {
+            let g = info.factor[(r, c)];
+            for q in 0..k {
+                s[(r, q)] += g * a[(col, q)];
+            }
+        }
+    }
+    let Some(chol) = s.cholesky() else {
+        return f64::INFINITY;
+    };
+    // diag(A·S⁻¹·Aᵀ) = column norms of L⁻¹·Aᵀ.
+    let y = chol
+        .l()
+        .solve_lower_triangular(&a.transpose())
+        .unwrap_or_else(|| a.transpose());
+    let var = (0..n).map(|i| cov[(i, i)] - y.column(i).norm_squared());
+    criterion(var, weights, power)
+}
+
+/// Inverse of a symmetric positive definite matrix (with a tiny ridge when needed).
+fn inverse(m: &DMatrix<f64>) -> DMatrix<f64> {
+    let n = m.nrows();
+    if let Some(c) = m.clone().cholesky() {
+        return c.inverse();
+    }
+    let ridge = 1e-12 * m.diagonal().max().max(1e-300);
+    (m + DMatrix::identity(n, n) * ridge)
+        .cholesky()
+        .map(|c| c.inverse())
+        .unwrap_or_else(|| DMatrix::identity(n, n) / ridge)
+}
+
+/// How the selection runs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DesignOptions {
+    /// Exponent `q` of the criterion `Σ (w_i·var_i)^q`: 1 is A-optimality.
+    pub power: f64,
+    /// Exchange passes after the greedy selection.
+    pub exchange_passes: usize,
+}
+
+impl Default for DesignOptions {
+    fn default() -> Self {
+        DesignOptions {
+            power: 1.0,
+            exchange_passes: 1,
+        }
+    }
+}
+
+/// Picks `count` captures from `pool` (a capture may be picked once) that minimise the
+/// criterion: greedily, each step adding the capture that lowers it most (exactly, by a
+/// rank-k update), then exchange passes that swap each picked capture for the best one of
+/// the pool while that lowers the criterion. `n` is the number of free parameters. Returns
+/// the indices into `pool`.
+pub fn select(
+    pool: &[&CaptureInformation],
+    n: usize,
+    count: usize,
+    options: &DesignOptions,
+) -> Vec<usize> {
+    // Column scaling: the average information per pool capture about each parameter.
+    let total = information(n, pool);
+    let column: Vec<f64> = (0..n)
+        .map(|i| (total[(i, i)] / pool.len().max(1) as f64).max(1e-300))
+        .collect();
+    let weights = &column;
+    // A weak prior (as much as a thousandth of one capture's) keeps M invertible at the start.
+    let prior = DMatrix::from_diagonal(&DVector::from_iterator(n, column.iter().map(|w| w * 1e-3)));
+    let mut m = prior.clone();
+    let mut chosen: Vec<usize> = Vec::with_capacity(count);
+    let mut used = vec![false; pool.len()];
+    let best_addition = |cov: &DMatrix<f64>, used: &[bool]| -> Option<(usize, f64)> {
+        pool.iter()
+            .enumerate()
+            .filter(|(c, _)| !used[*c])
+            .map(|(c, info)| (c, criterion_with(cov, info, weights, options.power)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+    };
+    while chosen.len() < count.min(pool.len()) {
+        let cov = inverse(&m);
+        let Some((c, _)) = best_addition(&cov, &used) else {
+            break;
+        };
+        used[c] = true;
+        chosen.push(c);
+        accumulate(&mut m, pool[c], 1.0);
+    }
+    for _ in 0..options.exchange_passes {
+        let mut improved = false;
+        for slot in chosen.iter_mut() {
+            let current = *slot;
+            let cov_all = inverse(&m);
+            let now = criterion(cov_all.diagonal().iter().copied(), weights, options.power);
+            accumulate(&mut m, pool[current], -1.0);
+            used[current] = false;
+            let cov = inverse(&m);
+            let pick = match best_addition(&cov, &used) {
+                Some((c, value)) if value < now * (1.0 - 1e-9) => {
+                    improved |= c != current;
+                    c
+                }
+                _ => current,
+            };
+            used[pick] = true;
+            *slot = pick;
+            accumulate(&mut m, pool[pick], 1.0);
+        }
+        if !improved {
+            break;
+        }
+    }
+    chosen
+}
+
+/// The predicted uncertainty of a design.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Prediction {
+    /// The free parameters.
+    pub free: Vec<Param>,
+    /// Predicted one-sigma of each free parameter, internal units (radians, mm, …);
+    /// infinite for a parameter the captures cannot determine.
+    pub std: Vec<f64>,
+    /// Rank of the column-scaled information (as `solve` counts it).
+    pub rank: usize,
+    /// Combinations of parameters the captures cannot determine, described.
+    pub undetermined: Vec<String>,
+}
+
+impl Prediction {
+    /// Predicted σ of `p` in internal units, if it is free.
+    pub fn std_of(&self, p: Param) -> Option<f64> {
+        self.free.iter().position(|q| *q == p).map(|k| self.std[k])
+    }
+}
+
+/// Predicted σ = sqrt(diag(M⁻¹)) of a set of captures, with the identifiability analysis
+/// `solve` applies to a fit (the same rank threshold and named undetermined directions).
+pub fn predict(free: &[Param], infos: &[&CaptureInformation]) -> Prediction {
+    let n = free.len();
+    // Stack the factors: a "Jacobian" whose Gram matrix is M.
+    let rows: usize = infos.iter().map(|i| i.factor.nrows()).sum();
+    let mut stacked = DMatrix::zeros(rows.max(1), n);
+    let mut r0 = 0;
+    for info in infos {
+        for r in 0..info.factor.nrows() {
+            for (c, &col) in info.columns.iter().enumerate() {
+                stacked[(r0 + r, col)] = info.factor[(r, c)];
+            }
+        }
+        r0 += info.factor.nrows();
+    }
+    let m = stacked.tr_mul(&stacked);
+    let (cov, _) = crate::solve::covariance::from_jacobian(&stacked);
+    let full = crate::solve::covariance::embed(free, &cov, 1.0);
+    let report = crate::solve::uncertainty::identifiability_of(free, &stacked, &full);
+    let std = free
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            if report.determined[p.index()] && m[(k, k)] > 0.0 {
+                cov[(k, k)].max(0.0).sqrt()
+            } else {
+                f64::INFINITY
+            }
+        })
+        .collect();
+    Prediction {
+        free: free.to_vec(),
+        std,
+        rank: report.rank,
+        undetermined: report.undetermined.iter().map(|d| d.describe()).collect(),
+    }
+}

@@ -1,0 +1,479 @@
+//! What a planned capture must satisfy on a real, not yet calibrated robot: joint angles
+//! inside the limits with a margin, no self-collision, and the whole board in view, facing
+//! the camera, for every offset within the stated bounds. And the pool of random captures
+//! that satisfy it, from which the design picks.
+
+use rand::Rng;
+
+use super::collision::{self, BodyModel};
+use crate::model::{
+    Joint, JointAngles, Model, PARAMETER_COUNT, Param, Side, StanceChains, gravity,
+};
+
+/// How far the planned captures must stay from the limits of what can be seen and reached.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Feasibility {
+    /// Distance of every planned angle from its joint's mechanical limit [rad].
+    pub joint_margin: f64,
+    /// The board must stay in view for every angle offset (camera rotation, head and leg
+    /// joints, sandal rotation) within ± this [rad] …
+    pub offset_angle: f64,
+    /// … and every sandal mounting translation within ± this [mm] …
+    pub offset_length: f64,
+    /// … and the head joint offsets (not part of the paper's model, held at zero by
+    /// default) within ± this [rad].
+    pub head_offset: f64,
+    /// Smallest distance of a vertex from the image border [px].
+    pub margin_px: f64,
+    /// Smallest projected square edge at the nominal model [px].
+    pub min_square_px: f64,
+    /// Largest angle between the board normal and the line of sight [rad].
+    pub max_view_angle: f64,
+    /// The collision model.
+    pub body: BodyModel,
+}
+
+impl Default for Feasibility {
+    /// Joint margin 5° (more than the offsets of ±3°), offsets ±3° and ±3 mm (head ±0.5°,
+    /// the simulator's realistic range), vertices 12 px
+    /// from the border, squares of at least 14 px, boards seen at most 60° off their normal.
+    fn default() -> Self {
+        Feasibility {
+            joint_margin: 5f64.to_radians(),
+            offset_angle: 3f64.to_radians(),
+            offset_length: 3.0,
+            head_offset: 0.5f64.to_radians(),
+            margin_px: 12.0,
+            min_square_px: 14.0,
+            max_view_angle: 60f64.to_radians(),
+            body: BodyModel::default(),
+        }
+    }
+}
+
+/// Why a capture is not feasible.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Infeasible {
+    /// A joint angle lies outside its limits less the margin.
+    Limits(Joint),
+    /// LHipYawPitch and RHipYawPitch differ (they are one motor).
+    HipYawPitch,
+    /// Two parts collide (named).
+    Collision(String),
+    /// The board leaves the image, turns away or is too small for some offsets in the box.
+    View,
+}
+
+impl std::fmt::Display for Infeasible {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Infeasible::Limits(j) => write!(f, "{} outside its limits less the margin", j.name()),
+            Infeasible::HipYawPitch => f.write_str("LHipYawPitch and RHipYawPitch differ"),
+            Infeasible::Collision(what) => write!(f, "collision: {what}"),
+            Infeasible::View => f.write_str(
+                "the board does not stay fully in view, facing the camera, for every offset \
+                 within the bounds",
+            ),
+        }
+    }
+}
+
+/// The offsets whose unknown values the view must tolerate for a capture of `side`, each
+/// with its bound.
+fn uncertain(side: Side, f: &Feasibility) -> Vec<(Param, f64)> {
+    let mut out: Vec<(Param, f64)> = [Param::CamYaw, Param::CamPitch, Param::CamRoll]
+        .into_iter()
+        .chain(side.leg_joints().map(Joint::offset))
+        .map(|p| (p, f.offset_angle))
+        .collect();
+    out.push((Param::HeadYaw, f.head_offset));
+    out.push((Param::HeadPitch, f.head_offset));
+    let [rot_z, trans_x, trans_y] = side.board_params();
+    out.push((rot_z, f.offset_angle));
+    out.push((trans_x, f.offset_length));
+    out.push((trans_y, f.offset_length));
+    out
+}
+
+/// The projected vertices and the angle between the board normal and the line of sight
+/// for parameters `params`; `None` when a vertex is behind the camera.
+fn view(model: &Model, chains: &StanceChains, params: &[f64]) -> Option<(Vec<[f64; 2]>, f64)> {
+    let pose = chains.camera_to_board(params);
+    let to_camera: [f64; 3] = std::array::from_fn(|j| {
+        -(0..3)
+            .map(|i| pose.rotation[i][j] * pose.translation[i])
+            .sum::<f64>()
+    });
+    let dist = to_camera.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let angle = (to_camera[2] / dist).clamp(-1.0, 1.0).acos();
+    let vertices: Vec<_> = model.board.vertices().collect();
+    let uv = model
+        .project(chains, params, &vertices)
+        .into_iter()
+        .collect::<Option<Vec<_>>>()?;
+    Some((uv, angle))
+}
+
+/// Whether the board on `side` stays fully in the image (with the margin) and facing the
+/// camera for every combination of offsets within the bounds, at the logged angles
+/// `joints`.
+///
+/// The pixel positions and the view angle are linear enough in the offsets over ±3° that
+/// their extremes over the box of offsets lie at its corners given by the signs of their
+/// derivatives; the test bounds each by the linear prediction and then evaluates the model
+/// exactly at the worst corner of each image border and of the view angle.
+pub fn board_in_view_for_all_offsets(
+    model: &Model,
+    side: Side,
+    joints: &JointAngles,
+    f: &Feasibility,
+) -> bool {
+    let chains = model.chains(side, joints);
+    let zero = [0.0; PARAMETER_COUNT];
+    let Some((uv, angle)) = view(model, &chains, &zero) else {
+        return false;
+    };
+    if angle > f.max_view_angle {
+        return false;
+    }
+    let cols = model.board.cols() as usize;
+    let min_edge = (0..uv.len())
+        .filter(|k| (k + 1) % cols != 0)
+        .map(|k| ((uv[k][0] - uv[k + 1][0]).powi(2) + (uv[k][1] - uv[k + 1][1]).powi(2)).sqrt())
+        .fold(f64::INFINITY, f64::min);
+    if min_edge < f.min_square_px {
+        return false;
+    }
+    let bounds = uncertain(side, f);
+    // Derivatives by central differences (the model is smooth; h of 1e-5 rad or mm).
+    let h = 1e-5;
+    let mut d_uv = vec![vec![[0.0; 2]; uv.len()]; bounds.len()];
+    let mut d_angle = vec![0.0; bounds.len()];
+    for (k, (p, _)) in bounds.iter().enumerate() {
+        let mut plus = zero;
+        let mut minus = zero;
+        plus[p.index()] = h;
+        minus[p.index()] = -h;
+        let (Some((up, ap)), Some((um, am))) =
+            (view(model, &chains, &plus), view(model, &chains, &minus))
+        else {
+            return false;
+        };
+        for v in 0..uv.len() {
+            d_uv[k][v] = [
+                (up[v][0] - um[v][0]) / (2.0 * h),
+                (up[v][1] - um[v][1]) / (2.0 * h),
+            ];
+        }
+        d_angle[k] = (ap - am) / (2.0 * h);
+    }
+    let (w, hgt) = (model.camera.width as f64, model.camera.height as f64);
+    let (lo, hi) = (
+        [f.margin_px; 2],
+        [w - 1.0 - f.margin_px, hgt - 1.0 - f.margin_px],
+    );
+    // Linear bounds; remember the vertex closest to each border.
+    let mut worst: [(f64, usize); 4] = [(f64::INFINITY, 0); 4];
+    for v in 0..uv.len() {
+        for axis in 0..2 {
+            let spread: f64 = bounds
+                .iter()
+                .enumerate()
+                .map(|(k, (_, b))| d_uv[k][v][axis].abs() * b)
+                .sum();
+            let low_room = uv[v][axis] - spread - lo[axis];
+            let high_room = hi[axis] - (uv[v][axis] + spread);
+            if low_room < 0.0 || high_room < 0.0 {
+                return false;
+            }
+            for (slot, room) in [(2 * axis, low_room), (2 * axis + 1, high_room)] {
+                if room < worst[slot].0 {
+                    worst[slot] = (room, v);
+                }
+            }
+        }
+    }
+    let angle_spread: f64 = bounds
+        .iter()
+        .enumerate()
+        .map(|(k, (_, b))| d_angle[k].abs() * b)
+        .sum();
+    if angle + angle_spread > f.max_view_angle {
+        return false;
+    }
+    // Exact checks at the worst corners.
+    let corner = |sign: &dyn Fn(usize) -> f64| {
+        let mut params = zero;
+        for (k, (p, b)) in bounds.iter().enumerate() {
+            params[p.index()] = sign(k) * b;
+        }
+        params
+    };
+    let inside = |params: &[f64; PARAMETER_COUNT]| match view(model, &chains, params) {
+        Some((uv, angle)) => {
+            angle <= f.max_view_angle && uv.iter().all(|p| model.camera.contains(*p, f.margin_px))
+        }
+        None => false,
+    };
+    for (slot, (_, v)) in worst.iter().enumerate() {
+        let axis = slot / 2;
+        // Towards the low border: against the derivative's sign; towards the high: with it.
+        let towards = if slot % 2 == 0 { -1.0 } else { 1.0 };
+        let params = corner(&|k| towards * d_uv[k][*v][axis].signum());
+        if !inside(&params) {
+            return false;
+        }
+    }
+    inside(&corner(&|k| d_angle[k].signum()))
+}
+
+/// The NAO documentation's head anti-collision limits: HeadPitch range [deg] by HeadYaw
+/// [deg] (the head must not hit the shoulders), interpolated linearly between rows.
+const HEAD_PITCH_BY_YAW: [(f64, f64, f64); 13] = [
+    (-119.52, -25.73, 18.91),
+    (-87.49, -18.91, 11.46),
+    (-62.45, -24.64, 17.19),
+    (-51.74, -27.50, 18.91),
+    (-43.32, -31.40, 21.20),
+    (-27.85, -38.50, 24.18),
+    (0.0, -38.50, 29.51),
+    (27.85, -38.50, 24.18),
+    (43.32, -31.40, 21.20),
+    (51.74, -27.50, 18.91),
+    (62.45, -24.64, 17.19),
+    (87.49, -18.91, 11.46),
+    (119.52, -25.73, 18.91),
+];
+
+/// The HeadPitch range [rad] allowed at HeadYaw `yaw` [rad].
+pub fn head_pitch_limits(yaw: f64) -> (f64, f64) {
+    let y = yaw.to_degrees().clamp(-119.52, 119.52);
+    let k = HEAD_PITCH_BY_YAW
+        .windows(2)
+        .position(|w| y <= w[1].0)
+        .unwrap_or(HEAD_PITCH_BY_YAW.len() - 2);
+    let (a, b) = (HEAD_PITCH_BY_YAW[k], HEAD_PITCH_BY_YAW[k + 1]);
+    let t = (y - a.0) / (b.0 - a.0);
+    (
+        (a.1 + t * (b.1 - a.1)).to_radians(),
+        (a.2 + t * (b.2 - a.2)).to_radians(),
+    )
+}
+
+/// Why the capture of `side` at `joints` cannot be executed safely, or `Ok` when it can.
+pub fn check(
+    model: &Model,
+    side: Side,
+    joints: &JointAngles,
+    f: &Feasibility,
+) -> Result<(), Infeasible> {
+    for j in Joint::ALL {
+        let (lo, hi) = j.limits();
+        let q = joints.get(j);
+        if !(lo + f.joint_margin..=hi - f.joint_margin).contains(&q) {
+            return Err(Infeasible::Limits(j));
+        }
+    }
+    let (lo, hi) = head_pitch_limits(joints.get(Joint::HeadYaw));
+    if !(lo + f.joint_margin..=hi - f.joint_margin).contains(&joints.get(Joint::HeadPitch)) {
+        return Err(Infeasible::Limits(Joint::HeadPitch));
+    }
+    if joints.get(Joint::LHipYawPitch) != joints.get(Joint::RHipYawPitch) {
+        return Err(Infeasible::HipYawPitch);
+    }
+    if let Some(what) = collision::collision(&model.robot, &f.body, joints) {
+        return Err(Infeasible::Collision(what));
+    }
+    if !board_in_view_for_all_offsets(model, side, joints, f) {
+        return Err(Infeasible::View);
+    }
+    Ok(())
+}
+
+/// Turns the head so that the board centre appears at pixel `target` at the nominal model
+/// (Gauss–Newton on HeadYaw and HeadPitch); `None` when it does not get there within the
+/// head's limits less the margin.
+pub fn aim_head(
+    model: &Model,
+    side: Side,
+    joints: &JointAngles,
+    target: [f64; 2],
+    joint_margin: f64,
+) -> Option<JointAngles> {
+    let zero = [0.0; PARAMETER_COUNT];
+    let centre = |j: &JointAngles| -> Option<[f64; 2]> {
+        let pose = model.chains(side, j).camera_to_board(&zero);
+        model.camera.project(&pose.translation)
+    };
+    let mut j = *joints;
+    let sole = model
+        .robot
+        .sole_chain(side, joints, &[0.0; 6])
+        .eval(&zero)
+        .translation;
+    j.set(Joint::HeadYaw, sole[1].atan2(sole[0]));
+    j.set(Joint::HeadPitch, 0.2);
+    let mut reached = false;
+    for _ in 0..15 {
+        let c = centre(&j)?;
+        let e = [c[0] - target[0], c[1] - target[1]];
+        if e[0].abs() < 0.5 && e[1].abs() < 0.5 {
+            reached = true;
+            break;
+        }
+        let h = 1e-6;
+        let mut jac = [[0.0; 2]; 2];
+        for (k, joint) in [Joint::HeadYaw, Joint::HeadPitch].into_iter().enumerate() {
+            let mut jp = j;
+            jp.set(joint, j.get(joint) + h);
+            let cp = centre(&jp)?;
+            jac[0][k] = (cp[0] - c[0]) / h;
+            jac[1][k] = (cp[1] - c[1]) / h;
+        }
+        let det = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
+        if det.abs() < 1e-9 {
+            return None;
+        }
+        let d_yaw = (jac[1][1] * e[0] - jac[0][1] * e[1]) / det;
+        let d_pitch = (-jac[1][0] * e[0] + jac[0][0] * e[1]) / det;
+        j.set(
+            Joint::HeadYaw,
+            j.get(Joint::HeadYaw) - d_yaw.clamp(-0.3, 0.3),
+        );
+        j.set(
+            Joint::HeadPitch,
+            j.get(Joint::HeadPitch) - d_pitch.clamp(-0.3, 0.3),
+        );
+    }
+    let within = |joint: Joint| {
+        let (lo, hi) = joint.limits();
+        (lo + joint_margin..=hi - joint_margin).contains(&j.get(joint))
+    };
+    (reached && within(Joint::HeadYaw) && within(Joint::HeadPitch)).then_some(j)
+}
+
+/// One feasible capture of the pool: a leg stance (shared by its head postures) and the
+/// head posture.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Candidate {
+    /// The leg whose board is in view.
+    pub side: Side,
+    /// The logged angles to command.
+    pub joints: JointAngles,
+    /// Index of its leg stance in the pool (captures of one stance differ in the head).
+    pub stance: usize,
+}
+
+/// The resting leg's posture while the other leg is measured: straight and slightly spread,
+/// its HipYawPitch equal to the measured leg's (one motor).
+fn park(side: Side, joints: &mut JointAngles) {
+    let [hyp, roll, pitch, knee, ankle_pitch, ankle_roll] = side.leg_joints();
+    let shared = match side {
+        Side::Left => Joint::RHipYawPitch,
+        Side::Right => Joint::LHipYawPitch,
+    };
+    joints.set(hyp, joints.get(shared));
+    joints.set(roll, side.sign() * 0.15);
+    for j in [pitch, ankle_roll] {
+        joints.set(j, 0.0);
+    }
+    joints.set(knee, 0.1);
+    joints.set(ankle_pitch, 0.0);
+}
+
+/// Draws up to `stances` feasible leg stances for `side`, each with up to `heads` head
+/// postures (the board aimed at the image centre and at points around it), all passing
+/// [`check`], within `tries` random leg postures; then up to `tries` more draws look only
+/// for stances that load a joint with a sign of gravity torque the pool lacks.
+#[allow(clippy::too_many_arguments)] // each is one plain setting of the pool
+pub fn candidates(
+    model: &Model,
+    side: Side,
+    stances: usize,
+    heads: usize,
+    tries: usize,
+    f: &Feasibility,
+    first_stance: usize,
+    rng: &mut impl Rng,
+) -> Vec<Candidate> {
+    let other = match side {
+        Side::Left => Side::Right,
+        Side::Right => Side::Left,
+    };
+    let (w, h) = (model.camera.width as f64, model.camera.height as f64);
+    let targets: Vec<[f64; 2]> = [
+        (0.0, 0.0),
+        (-0.12, -0.1),
+        (0.12, 0.1),
+        (0.12, -0.1),
+        (-0.12, 0.1),
+        (0.0, -0.15),
+        (0.0, 0.15),
+        (-0.18, 0.0),
+        (0.18, 0.0),
+    ]
+    .iter()
+    .map(|(du, dv)| [w * (0.5 + du), h * (0.5 + dv)])
+    .collect();
+    let mut out = Vec::new();
+    let mut found = 0;
+    // Which signs of each joint's gravity torque the pool has: compliance and play can only
+    // be told from the offset by stances that load a joint both ways.
+    let mut signs = [[false; 2]; 6];
+    let torque_signs = |joints: &JointAngles| {
+        gravity::leg_torques(&model.robot, &model.board, side, joints).map(|t| [t > 0.0, t < 0.0])
+    };
+    for _ in 0..2 * tries {
+        if found >= stances && signs.iter().all(|s| s[0] && s[1]) {
+            break;
+        }
+        // Uniform within the limits less the margin (drawing near stances found before
+        // was tried: it gives a larger but less varied pool and worse plans).
+        let mut joints = JointAngles::default();
+        for j in side.leg_joints() {
+            let (lo, hi) = j.limits();
+            joints.set(
+                j,
+                rng.random_range(lo + f.joint_margin..hi - f.joint_margin),
+            );
+        }
+        park(other, &mut joints);
+        let these = torque_signs(&joints);
+        // Once the pool is full, only stances that load a joint in a way it lacks.
+        let new_sign = (0..6).any(|k| (0..2).any(|s| these[k][s] && !signs[k][s]));
+        if found >= stances && !new_sign {
+            continue;
+        }
+        if collision::collision(&model.robot, &f.body, &joints).is_some() {
+            continue;
+        }
+        let mut postures: Vec<JointAngles> = Vec::new();
+        for target in &targets {
+            if postures.len() == heads {
+                break;
+            }
+            let Some(aimed) = aim_head(model, side, &joints, *target, f.joint_margin) else {
+                continue;
+            };
+            if check(model, side, &aimed, f).is_ok() {
+                postures.push(aimed);
+            }
+        }
+        if postures.is_empty() {
+            continue;
+        }
+        let stance = first_stance + found;
+        found += 1;
+        for k in 0..6 {
+            for s in 0..2 {
+                signs[k][s] |= these[k][s];
+            }
+        }
+        out.extend(postures.into_iter().map(|joints| Candidate {
+            side,
+            joints,
+            stance,
+        }));
+    }
+    out
+}

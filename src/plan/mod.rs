@@ -1,0 +1,320 @@
+//! Stance design: a schedule of captures that a robot can execute safely before it is
+//! calibrated, chosen so that the calibration determines the free parameters as well as
+//! possible, and ordered so that it runs quickly.
+//!
+//! How a plan is made ([`plan`]):
+//! 1. **Pool** ([`feasible::candidates`]): random leg stances within the joint limits less
+//!    a margin, the other leg resting straight with the same HipYawPitch (one motor), free of
+//!    self-collision ([`collision`]), each with several head postures that aim the board at
+//!    points around the image centre; a capture enters the pool only if its board stays fully
+//!    in the image and facing the camera for every offset within ±3° (and ±3 mm of the
+//!    sandal mounting).
+//! 2. **Design** ([`design::select`]): each candidate's Fisher information under the
+//!    per-capture noise model (pixel noise plus joint noise shared by a capture's vertices);
+//!    a greedy selection of the captures that most reduce the criterion (A-optimality of the
+//!    column-scaled information), then exchange passes.
+//! 3. **Order** ([`order::order`]): a short tour through the captures (nearest neighbour and
+//!    2-opt on the time of each move) and its predicted duration.
+//!
+//! The same prediction is made for the simulator's random stances at equal capture count,
+//! so that the gain is visible before the robot moves.
+
+pub mod collision;
+pub mod design;
+pub mod feasible;
+pub mod order;
+
+use std::path::Path;
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use crate::model::{FixedSet, Joint, JointAngles, Model, PARAMETER_COUNT, Side};
+use crate::sim::Stance;
+use crate::solve::noise::NoiseLevels;
+
+pub use design::{DesignOptions, Prediction};
+pub use feasible::{Feasibility, Infeasible};
+pub use order::Timing;
+
+/// What to plan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlanOptions {
+    /// Number of captures (both legs together).
+    pub captures: usize,
+    /// Which parameters the calibration will free (the others are held).
+    pub fixed: FixedSet,
+    /// The noise the prediction assumes: pixel σ [px] and joint σ [rad] per capture.
+    pub levels: NoiseLevels,
+    /// Seed of the random candidate pool (and of the random stances compared against).
+    pub seed: u64,
+    /// Leg stances drawn into the pool per leg.
+    pub pool_stances: usize,
+    /// Head postures tried per pool stance.
+    pub heads: usize,
+    /// What a capture must satisfy.
+    pub feasibility: Feasibility,
+    /// The selection.
+    pub design: DesignOptions,
+    /// The timing model of the measurement phase.
+    pub timing: Timing,
+}
+
+impl Default for PlanOptions {
+    /// 144 captures of the paper's 21 parameters at 0.1 px and 0.1° per capture.
+    fn default() -> Self {
+        PlanOptions {
+            captures: 144,
+            fixed: FixedSet::default(),
+            levels: NoiseLevels {
+                px: 0.1,
+                joint: 0.1f64.to_radians(),
+            },
+            seed: 1,
+            pool_stances: 200,
+            heads: 4,
+            feasibility: Feasibility::default(),
+            design: DesignOptions::default(),
+            timing: Timing::default(),
+        }
+    }
+}
+
+/// One capture of a plan.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlannedCapture {
+    /// The leg whose board is in view.
+    pub side: Side,
+    /// The joint angles to command (radians).
+    pub joints: JointAngles,
+}
+
+/// A stance schedule with its predicted outcome.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plan {
+    /// The captures in execution order.
+    pub captures: Vec<PlannedCapture>,
+    /// Predicted uncertainty of the free parameters after calibrating from the plan.
+    pub prediction: Prediction,
+    /// The same for the simulator's random stances at equal capture count.
+    pub baseline: Prediction,
+    /// Predicted duration of the measurement phase [s].
+    pub duration: f64,
+    /// Predicted duration of the random stances in the simulator's order [s].
+    pub baseline_duration: f64,
+    /// Number of feasible captures in the pool.
+    pub pool: usize,
+    /// Number of distinct leg stances in the plan.
+    pub stances: usize,
+}
+
+/// Why no plan could be made.
+#[derive(Debug, thiserror::Error)]
+pub enum PlanError {
+    /// An option is out of range.
+    #[error("{0}")]
+    Options(String),
+    /// Too few feasible captures were found for a leg.
+    #[error(
+        "found only {found} feasible captures for the {side} leg (board in view for all \
+         offsets, no collision, within the limits); check the camera intrinsics and board"
+    )]
+    Pool {
+        /// The leg.
+        side: &'static str,
+        /// Feasible captures found.
+        found: usize,
+    },
+    /// The random stances to compare with could not be drawn.
+    #[error(transparent)]
+    Sim(#[from] crate::sim::SimError),
+}
+
+/// Makes a plan for `model` (see the module documentation).
+pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
+    if options.captures < 2 {
+        return Err(PlanError::Options("--captures must be at least 2".into()));
+    }
+    let positive = |x: f64| x.is_finite() && x > 0.0;
+    let joint = options.levels.joint;
+    if !(positive(options.levels.px) && joint.is_finite() && joint >= 0.0) {
+        return Err(PlanError::Options(
+            "the pixel noise must be positive and the joint noise not negative".into(),
+        ));
+    }
+    if options.fixed.free().is_empty() {
+        return Err(PlanError::Options("no parameter is free".into()));
+    }
+    // The pool: both legs drawn in parallel, each from its own seeded generator.
+    let pools: Vec<Vec<feasible::Candidate>> = std::thread::scope(|scope| {
+        let handles: Vec<_> = Side::BOTH
+            .into_iter()
+            .enumerate()
+            .map(|(k, side)| {
+                scope.spawn(move || {
+                    let mut rng = ChaCha8Rng::seed_from_u64(options.seed.wrapping_add(k as u64));
+                    feasible::candidates(
+                        model,
+                        side,
+                        options.pool_stances,
+                        options.heads,
+                        options.pool_stances * 400,
+                        &options.feasibility,
+                        k * options.pool_stances,
+                        &mut rng,
+                    )
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("pool thread"))
+            .collect()
+    });
+    let need = options.captures.div_ceil(4);
+    for (side, pool) in Side::BOTH.iter().zip(&pools) {
+        if pool.len() < need {
+            return Err(PlanError::Pool {
+                side: side.name(),
+                found: pool.len(),
+            });
+        }
+    }
+    let pool: Vec<feasible::Candidate> = pools.into_iter().flatten().collect();
+    let free = options.fixed.free();
+    let as_pairs: Vec<(Side, JointAngles)> = pool.iter().map(|c| (c.side, c.joints)).collect();
+    let infos = information_parallel(model, &as_pairs, &options.fixed, options.levels);
+    let usable: Vec<usize> = (0..pool.len()).filter(|&k| infos[k].is_some()).collect();
+    let refs: Vec<&design::CaptureInformation> = usable
+        .iter()
+        .map(|&k| infos[k].as_ref().expect("usable"))
+        .collect();
+    let random = random_stances(model, options.captures, 3, options.seed)?;
+    let random_infos = information_parallel(model, &random, &options.fixed, options.levels);
+    let random_refs: Vec<&design::CaptureInformation> = random_infos.iter().flatten().collect();
+    let baseline = design::predict(&free, &random_refs);
+    let picked = design::select(&refs, free.len(), options.captures, &options.design);
+    let chosen: Vec<usize> = picked.iter().map(|&k| usable[k]).collect();
+    let prediction = design::predict(
+        &free,
+        &chosen
+            .iter()
+            .map(|&k| infos[k].as_ref().expect("usable"))
+            .collect::<Vec<_>>(),
+    );
+
+    let angles: Vec<JointAngles> = chosen.iter().map(|&k| pool[k].joints).collect();
+    let tour = order::order(&angles, &options.timing);
+    let captures: Vec<PlannedCapture> = tour
+        .iter()
+        .map(|&i| PlannedCapture {
+            side: pool[chosen[i]].side,
+            joints: pool[chosen[i]].joints,
+        })
+        .collect();
+    let duration = options
+        .timing
+        .duration(&captures.iter().map(|c| c.joints).collect::<Vec<_>>());
+    let mut stances: Vec<usize> = chosen.iter().map(|&k| pool[k].stance).collect();
+    stances.sort_unstable();
+    stances.dedup();
+
+    let baseline_duration = options
+        .timing
+        .duration(&random.iter().map(|c| c.1).collect::<Vec<_>>());
+    Ok(Plan {
+        captures,
+        prediction,
+        baseline,
+        duration,
+        baseline_duration,
+        pool: usable.len(),
+        stances: stances.len(),
+    })
+}
+
+/// [`design::capture_information`] on two threads.
+fn information_parallel(
+    model: &Model,
+    captures: &[(Side, JointAngles)],
+    fixed: &FixedSet,
+    levels: NoiseLevels,
+) -> Vec<Option<design::CaptureInformation>> {
+    let half = captures.len() / 2;
+    let (a, b) = captures.split_at(half);
+    std::thread::scope(|scope| {
+        let first = scope.spawn(|| design::capture_information(model, a, fixed, levels));
+        let mut second = design::capture_information(model, b, fixed, levels);
+        let mut out = first.join().expect("information thread");
+        out.append(&mut second);
+        out
+    })
+}
+
+/// The simulator's random stances (as `naocalib simulate` draws them, at the nominal
+/// model): `count` captures, half per leg, `heads` head postures per stance.
+pub fn random_stances(
+    model: &Model,
+    count: usize,
+    heads: usize,
+    seed: u64,
+) -> Result<Vec<(Side, JointAngles)>, crate::sim::SimError> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let zero = [0.0; PARAMETER_COUNT];
+    let mut out = Vec::with_capacity(count);
+    for (k, side) in Side::BOTH.into_iter().enumerate() {
+        let share = if k == 0 { count / 2 } else { count - count / 2 };
+        let stances =
+            crate::sim::choose_stances(model, side, &zero, share.div_ceil(heads), heads, &mut rng)?;
+        out.extend(
+            stances
+                .iter()
+                .flat_map(|s| s.postures.iter().map(move |p| (s.side, *p)))
+                .take(share),
+        );
+    }
+    Ok(out)
+}
+
+/// The plan as CSV: `capture,board,HeadYaw,…,RAnkleRoll` (the columns of `captures.csv`
+/// without `image`), one row per capture in execution order, angles in radians.
+pub fn render_csv(captures: &[PlannedCapture]) -> Vec<u8> {
+    let mut out = String::from("capture,board");
+    for j in Joint::ALL {
+        out.push(',');
+        out.push_str(j.name());
+    }
+    out.push('\n');
+    for (id, c) in captures.iter().enumerate() {
+        out.push_str(&format!("{id},{}", c.side.name()));
+        for j in Joint::ALL {
+            // Shortest text that reads back to the same number.
+            out.push_str(&format!(",{}", c.joints.get(j)));
+        }
+        out.push('\n');
+    }
+    out.into_bytes()
+}
+
+/// Reads a plan (or any captures table: columns by name, `image` and others ignored),
+/// checked as `captures.csv` is; errors name the file, line and field.
+pub fn read_csv(path: &Path) -> Result<Vec<PlannedCapture>, crate::dataset::DatasetError> {
+    Ok(crate::dataset::read_captures(path)?
+        .into_iter()
+        .map(|c| PlannedCapture {
+            side: c.side,
+            joints: c.joints,
+        })
+        .collect())
+}
+
+/// The plan's captures as the simulator's stances (one posture each), in plan order.
+pub fn to_stances(captures: &[PlannedCapture]) -> Vec<Stance> {
+    captures
+        .iter()
+        .map(|c| Stance {
+            side: c.side,
+            postures: vec![c.joints],
+        })
+        .collect()
+}
