@@ -52,6 +52,10 @@ pub struct SimulateArgs {
     /// Image vignetting: relative loss of brightness in the corners (with --images).
     #[arg(long, default_value_t = 0.3, requires = "images")]
     vignetting: f64,
+    /// Let boards come near and across the image border (to test detection): later head
+    /// postures aim anywhere in the image, and a board is kept with 8 vertices in view.
+    #[arg(long)]
+    near_border: bool,
     /// Lens distortion k1,k2,p1,p2,k3 (OpenCV order) of the simulated camera.
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     distortion: Option<Vec<f64>>,
@@ -85,6 +89,7 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
         truth,
         effects: args.effects.clone().unwrap_or_default(),
         noise_seed: None,
+        near_border: args.near_border,
         images: args.images.then(|| naocalib::sim::render::ImageOutput {
             dir: args.out.clone(),
             options: naocalib::sim::render::RenderOptions {

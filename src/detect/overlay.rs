@@ -9,6 +9,16 @@ use opencv::prelude::*;
 
 use crate::dataset::{Corner, Dataset};
 use crate::model::PARAMETER_COUNT;
+use crate::report::export::{ExportError, WriteOptions, write_atomic};
+
+/// Whether `a` and `b` name the same file (same canonical path; or the same path when
+/// either does not exist).
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => a == b,
+    }
+}
 
 use super::{DetectError, ImageResult, Outcome};
 
@@ -88,14 +98,37 @@ fn encode_png(bgr: &Mat) -> opencv::Result<Vec<u8>> {
     Ok(out)
 }
 
-/// Writes the overlay of one result into `dir` as `capture_NNNN.png` and returns its path:
-/// detected vertices, the nominal model's projection and, with `after`, the projection
-/// with those parameters. `None` for a capture without a readable image.
+/// The overlay file of capture `id` in `dir`: `capture_NNNN.png`.
+pub fn path(dir: &Path, id: u64) -> PathBuf {
+    dir.join(format!("capture_{id:04}.png"))
+}
+
+/// Checks that an overlay could be written to `path` with `options`: not an input, and
+/// not an existing file unless `options.force`.
+pub fn check_writable(path: &Path, options: &WriteOptions) -> Result<(), ExportError> {
+    if let Some(input) = options.inputs.iter().find(|i| same_file(i, path)) {
+        return Err(ExportError::Input {
+            path: input.clone(),
+        });
+    }
+    if !options.force && path.symlink_metadata().is_ok() {
+        return Err(ExportError::Exists {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(())
+}
+
+/// Writes the overlay of one result into `dir` as `capture_NNNN.png`, atomically and
+/// as `options` allow (never an input, an existing file only with `force`), and returns
+/// its path: detected vertices, the nominal model's projection and, with `after`, the
+/// projection with those parameters. `None` for a capture without a readable image.
 pub fn write(
     dataset: &Dataset,
     result: &ImageResult,
     dir: &Path,
     after: Option<&[f64; PARAMETER_COUNT]>,
+    options: &WriteOptions,
 ) -> Option<Result<PathBuf, DetectError>> {
     let capture = dataset.capture(result.capture)?;
     let image = capture.image.as_ref()?;
@@ -108,7 +141,7 @@ pub fn write(
     let model = &dataset.model;
     let before = super::predict(model, capture, &[0.0; PARAMETER_COUNT]);
     let after = after.and_then(|p| super::predict(model, capture, p));
-    let out = dir.join(format!("capture_{:04}.png", capture.id));
+    let out = path(dir, capture.id);
     let cv = |e: opencv::Error| DetectError::OpenCv {
         path: out.clone(),
         message: e.message,
@@ -117,9 +150,9 @@ pub fn write(
         draw(&grey, &detected, before.as_deref(), after.as_deref())
             .map_err(cv)
             .and_then(|png| {
-                std::fs::write(&out, png).map_err(|source| DetectError::Io {
+                write_atomic(&out, &png, options).map_err(|e| DetectError::Write {
                     path: out.clone(),
-                    source,
+                    message: e.to_string(),
                 })
             })
             .map(|()| out.clone()),
