@@ -35,7 +35,7 @@ pub struct SimulateArgs {
     /// distortion,links,compliance,play, or `realistic` for head,intrinsics,links,
     /// compliance,play); their true values go into truth.toml.
     #[arg(long, value_name = "FAMILIES", value_parser = parse_effects, conflicts_with = "truth")]
-    effects: Option<Vec<Family>>,
+    effects: Option<Effects>,
     /// Replace files of an existing dataset in OUT.
     #[arg(long)]
     force: bool,
@@ -87,7 +87,7 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
         px_noise: args.px_noise,
         joint_noise: args.joint_noise_deg.to_radians(),
         truth,
-        effects: args.effects.clone().unwrap_or_default(),
+        effects: args.effects.clone().map(|e| e.0).unwrap_or_default(),
         noise_seed: None,
         near_border: args.near_border,
         images: args.images.then(|| naocalib::sim::render::ImageOutput {
@@ -143,8 +143,12 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// The families of `--effects`.
+#[derive(Debug, Clone)]
+struct Effects(Vec<Family>);
+
 /// Parses `--effects`: family names, or `realistic`.
-fn parse_effects(text: &str) -> Result<Vec<Family>, String> {
+fn parse_effects(text: &str) -> Result<Effects, String> {
     let mut out = Vec::new();
     for name in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
         let named: Vec<Family> = match (name, Family::from_name(name)) {
@@ -169,5 +173,5 @@ fn parse_effects(text: &str) -> Result<Vec<Family>, String> {
             }
         }
     }
-    Ok(out)
+    Ok(Effects(out))
 }

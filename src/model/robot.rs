@@ -5,7 +5,7 @@ use std::f64::consts::FRAC_PI_4;
 
 use super::chain::{Affine, Chain};
 use super::parameters::Param;
-use super::pose::{Axis, Pose};
+use super::pose::Axis;
 
 /// A leg, and so the sandal (board) strapped to its foot.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]

@@ -18,7 +18,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
-use crate::model::{Camera, JointAngles, Model, Pose, Side};
+use crate::model::{JointAngles, Model, Pose, Side};
 
 /// How to render images.
 #[derive(Debug, Clone, PartialEq)]
@@ -547,7 +547,7 @@ pub fn render_all(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::Pose;
+    use crate::model::{Camera, Pose};
 
     #[test]
     fn undistort_inverts_the_camera() {

@@ -256,6 +256,13 @@ impl Problem {
             .collect()
     }
 
+    /// The projection with the held parameters frozen at their values.
+    pub fn frozen_projection(&self) -> crate::model::Projection {
+        self.camera
+            .projection()
+            .freeze(self.fixed.mask(), &self.initial)
+    }
+
     /// All unweighted residuals at `params` (full vector, internal units), or `None` when a
     /// vertex falls behind the camera.
     pub fn residuals(&self, params: &[f64]) -> Option<Vec<f64>> {
