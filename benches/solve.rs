@@ -7,19 +7,87 @@
 //! Every backend runs single-threaded in its own numerics (Ceres with one thread); only
 //! tiny-solver's residual-block loop uses rayon internally.
 //!
-//! Targets: Ceres median ≤ 10 ms (issue 2); fastest pure-Rust backend within 1.5× of Ceres
-//! (issue 4).
+//! `backend_extended` times the backends on the extended model: a paper-sized dataset of a
+//! robot with realistic effects (head, intrinsics, links, compliance, play), every family
+//! free, the undetermined parameters held as `calibrate` holds them (docs/MODEL.md).
+//! `calibrate_auto` is `naocalib solve --model auto` on that dataset.
+//!
+//! Targets: Ceres median ≤ 10 ms; fastest pure-Rust backend within 1.5× of Ceres; the
+//! extended Ceres backend within 3× of the paper's.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use naocalib::model::{FixedSet, Model};
+use naocalib::model::{Family, FixedSet, Model};
 use naocalib::sim::{SimOptions, simulate};
-use naocalib::solve::{Problem, UncertaintyOptions, backend, backend_names, calibrate, solve};
+use naocalib::solve::{Problem, UncertaintyOptions, backend, backend_names, calibrate};
 
 fn paper_sized() -> Problem {
     // As the CLI does at start (see its doc).
     naocalib::solve::retain_freed_memory();
     let dataset = simulate(&Model::default(), &SimOptions::default()).expect("simulated");
     Problem::from_dataset(&dataset, FixedSet::default()).expect("problem")
+}
+
+/// The realistic robot with every family free and the undetermined parameters held.
+fn extended() -> Problem {
+    naocalib::solve::retain_freed_memory();
+    let options = SimOptions {
+        effects: vec![
+            Family::Head,
+            Family::Intrinsics,
+            Family::Links,
+            Family::Compliance,
+            Family::Play,
+        ],
+        joint_noise: 0.1f64.to_radians(),
+        ..SimOptions::default()
+    };
+    let dataset = simulate(&Model::default(), &options).expect("simulated");
+    let all = FixedSet::from_lists("head,intrinsics,distortion,links,compliance,play", "")
+        .expect("families");
+    let problem = Problem::from_dataset(&dataset, all).expect("problem");
+    let undetermined = naocalib::solve::identify::undetermined(&problem).expect("analysed");
+    naocalib::solve::identify::hold(&problem, &undetermined)
+}
+
+fn bench_extended(c: &mut Criterion) {
+    let problem = extended();
+    let mut group = c.benchmark_group("backend_extended");
+    group.sample_size(10);
+    for name in backend_names() {
+        let backend = backend(name, false).expect("listed backend");
+        group.bench_function(backend.name(), |b| {
+            b.iter(|| backend.solve(&problem).expect("solved"))
+        });
+    }
+    group.finish();
+}
+
+fn bench_auto(c: &mut Criterion) {
+    naocalib::solve::retain_freed_memory();
+    let options = SimOptions {
+        effects: vec![
+            Family::Head,
+            Family::Intrinsics,
+            Family::Links,
+            Family::Compliance,
+            Family::Play,
+        ],
+        joint_noise: 0.1f64.to_radians(),
+        ..SimOptions::default()
+    };
+    let dataset = simulate(&Model::default(), &options).expect("simulated");
+    let problem = Problem::from_dataset(&dataset, FixedSet::default()).expect("problem");
+    let auto = UncertaintyOptions {
+        model: naocalib::solve::ModelChoice::Auto,
+        ..Default::default()
+    };
+    let mut group = c.benchmark_group("calibrate_auto");
+    group.sample_size(10);
+    let backend = backend(backend_names()[0], false).expect("listed backend");
+    group.bench_function(backend.name(), |b| {
+        b.iter(|| calibrate(&problem, backend.as_ref(), &auto).expect("calibrated"))
+    });
+    group.finish();
 }
 
 fn bench_backend(c: &mut Criterion) {
@@ -42,7 +110,9 @@ fn bench_solve(c: &mut Criterion) {
     for name in backend_names() {
         let backend = backend(name, false).expect("listed backend");
         group.bench_function(backend.name(), |b| {
-            b.iter(|| solve(&problem, backend.as_ref()).expect("solved"))
+            b.iter(|| {
+                calibrate(&problem, backend.as_ref(), &UncertaintyOptions::plain()).expect("solved")
+            })
         });
     }
     group.finish();
@@ -64,5 +134,12 @@ fn bench_calibrate(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_backend, bench_solve, bench_calibrate);
+criterion_group!(
+    benches,
+    bench_backend,
+    bench_solve,
+    bench_calibrate,
+    bench_extended,
+    bench_auto
+);
 criterion_main!(benches);

@@ -7,13 +7,13 @@
 //! ```
 //! # use naocalib::model::{FixedSet, Model};
 //! # use naocalib::sim::{SimOptions, simulate};
-//! # use naocalib::solve::{Problem, backend, solve};
+//! # use naocalib::solve::{Problem, UncertaintyOptions, backend, calibrate};
 //! use naocalib::batch::drift;
 //! # let solve_seed = |seed| {
 //! #     let options = SimOptions { seed, stances: 4, heads: 2, ..SimOptions::default() };
 //! #     let dataset = simulate(&Model::default(), &options).unwrap();
 //! #     let problem = Problem::from_dataset(&dataset, FixedSet::default()).unwrap();
-//! #     solve(&problem, backend("lm", false).unwrap().as_ref()).unwrap()
+//! #     calibrate(&problem, backend("lm", false).unwrap().as_ref(), &UncertaintyOptions::plain()).unwrap()
 //! # };
 //! let (before, after) = (solve_seed(1), solve_seed(2));
 //! for d in drift(&before, &after, 3.0).iter().filter(|d| d.flagged) {

@@ -54,7 +54,9 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
     for path in &args.out {
         let format = match format.or_else(|| ExportFormat::from_path(path)) {
             Some(f) => f,
-            None => bail!(naocalib::report::export::ExportError::UnknownFormat { path: path.clone() }),
+            None => {
+                bail!(naocalib::report::export::ExportError::UnknownFormat { path: path.clone() })
+            }
         };
         export(&calibration, format, path, &options)?;
         written.push(path.clone());

@@ -4,8 +4,8 @@
 use anyhow::{Context, Result};
 use clap::Args;
 
-use naocalib::model::{FixedSet, parameters::parse_param_list};
-use naocalib::solve::{self, Backend, Loss, UncertaintyOptions, noise::NoiseOptions};
+use naocalib::model::FixedSet;
+use naocalib::solve::{self, Backend, Loss, ModelChoice, UncertaintyOptions, noise::NoiseOptions};
 
 /// The backend used when `--solver` is not given.
 pub const DEFAULT_SOLVER: &str = if cfg!(feature = "ceres") {
@@ -20,10 +20,11 @@ pub const MAX_BOOTSTRAP: usize = 10_000;
 /// What is fitted: which parameters are free, and the loss.
 #[derive(Debug, Clone, Args)]
 pub struct ProblemArgs {
-    /// Parameters to hold fixed at zero, comma-separated (e.g. CamYaw,LBoardRotZ).
+    /// Parameters or families to hold fixed at zero, comma-separated (CamYaw,LBoardRotZ).
     #[arg(long, value_name = "NAMES")]
     pub fix: Option<String>,
-    /// Parameters to estimate that are held fixed by default (HeadYaw,HeadPitch).
+    /// Parameters or families to estimate beyond the paper's, comma-separated
+    /// (head, intrinsics, distortion, links, compliance, play, or names such as Fx).
     #[arg(long, value_name = "NAMES")]
     pub free: Option<String>,
     /// Robust first fit: huber or cauchy, optionally with a scale in px (huber:2);
@@ -33,22 +34,13 @@ pub struct ProblemArgs {
 }
 
 impl ProblemArgs {
-    /// The held parameters for `--fix` and `--free`.
+    /// The held parameters for `--fix` and `--free` (family or parameter names).
     pub fn fixed_set(&self) -> Result<FixedSet> {
-        let mut fixed = FixedSet::default();
-        for p in parse_param_list(self.free.as_deref().unwrap_or(""))
-            .map_err(anyhow::Error::msg)
-            .context("--free")?
-        {
-            fixed.set(p, false);
-        }
-        for p in parse_param_list(self.fix.as_deref().unwrap_or(""))
-            .map_err(anyhow::Error::msg)
-            .context("--fix")?
-        {
-            fixed.set(p, true);
-        }
-        Ok(fixed)
+        FixedSet::from_lists(
+            self.free.as_deref().unwrap_or(""),
+            self.fix.as_deref().unwrap_or(""),
+        )
+        .map_err(anyhow::Error::msg)
     }
 
     /// The loss (plain least squares without `--loss`).
@@ -74,9 +66,22 @@ impl SolverArgs {
     }
 }
 
-/// How the reported uncertainty is obtained.
+/// Which families `--model` fits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ModelArg {
+    /// The paper's 21 parameters, with `--free`/`--fix` applied.
+    Paper,
+    /// Also free, one at a time, the families the data support and can determine.
+    Auto,
+}
+
+/// How the model is chosen and the reported uncertainty obtained.
 #[derive(Debug, Clone, Args)]
 pub struct UncertaintyArgs {
+    /// Families to fit: paper (the paper's model with --free/--fix), or auto (free the
+    /// families the misfit tests point to, one at a time, until none is significant).
+    #[arg(long, value_enum, default_value = "paper")]
+    pub model: ModelArg,
     /// Pixel noise σ [px] for the noise model; estimated from the residuals if not given.
     #[arg(long, value_name = "PX", value_parser = positive)]
     pub px_noise: Option<f64>,
@@ -103,6 +108,10 @@ impl UncertaintyArgs {
                 joint: self.joint_noise_deg.map(f64::to_radians),
             },
             bootstrap: self.bootstrap,
+            model: match self.model {
+                ModelArg::Paper => ModelChoice::Given,
+                ModelArg::Auto => ModelChoice::Auto,
+            },
             ..UncertaintyOptions::default()
         }
     }

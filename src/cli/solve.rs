@@ -93,7 +93,7 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
         writeln!(stdout, "{}", args.dataset.display())?;
         write!(stdout, "{}", naocalib::report::table(&solution, truth))?;
     }
-    Ok(if solution.summary.converged {
+    Ok(if solution.is_calibration() {
         ExitCode::SUCCESS
     } else {
         ExitCode::from(3)

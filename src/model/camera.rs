@@ -47,7 +47,8 @@ pub fn distort<T: Scalar>(a: T, b: T, k: &[T; 5]) -> [T; 2] {
     let r2 = a.clone() * a.clone() + b.clone() * b.clone();
     let radial = lift::<T>(1.0) + r2.clone() * (k1 + r2.clone() * (k2 + r2.clone() * k3));
     let ab = a.clone() * b.clone();
-    let da = ab.clone() * p1.clone() * 2.0 + (r2.clone() + a.clone() * a.clone() * 2.0) * p2.clone();
+    let da =
+        ab.clone() * p1.clone() * 2.0 + (r2.clone() + a.clone() * a.clone() * 2.0) * p2.clone();
     let db = (r2 + b.clone() * b.clone() * 2.0) * p1 + ab * p2 * 2.0;
     [a * radial.clone() + da, b * radial + db]
 }
@@ -172,9 +173,15 @@ impl Projection {
     /// may become so).
     pub fn is_distorted(&self) -> bool {
         self.k1.depends() || self.k2.depends() || {
-            [self.k1.constant, self.k2.constant, self.p1, self.p2, self.k3]
-                .iter()
-                .any(|&k| k != 0.0)
+            [
+                self.k1.constant,
+                self.k2.constant,
+                self.p1,
+                self.p2,
+                self.k3,
+            ]
+            .iter()
+            .any(|&k| k != 0.0)
         }
     }
 

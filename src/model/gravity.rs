@@ -26,12 +26,36 @@ pub struct Link {
 /// The NAO H25 leg links after each joint (HipYawPitch … AnkleRoll), the public mass table
 /// SPL teams use.
 pub const LEG_LINKS: [Link; 6] = [
-    Link { name: "pelvis", mass_g: 69.81, com_mm: [-7.81, -11.14, 26.61] },
-    Link { name: "hip", mass_g: 140.53, com_mm: [-15.49, 0.29, -5.15] },
-    Link { name: "thigh", mass_g: 389.68, com_mm: [1.38, 2.21, -53.73] },
-    Link { name: "tibia", mass_g: 301.42, com_mm: [4.53, 2.25, -49.36] },
-    Link { name: "ankle", mass_g: 134.16, com_mm: [0.45, 0.29, 6.85] },
-    Link { name: "foot", mass_g: 171.84, com_mm: [25.42, 3.30, -32.39] },
+    Link {
+        name: "pelvis",
+        mass_g: 69.81,
+        com_mm: [-7.81, -11.14, 26.61],
+    },
+    Link {
+        name: "hip",
+        mass_g: 140.53,
+        com_mm: [-15.49, 0.29, -5.15],
+    },
+    Link {
+        name: "thigh",
+        mass_g: 389.68,
+        com_mm: [1.38, 2.21, -53.73],
+    },
+    Link {
+        name: "tibia",
+        mass_g: 301.42,
+        com_mm: [4.53, 2.25, -49.36],
+    },
+    Link {
+        name: "ankle",
+        mass_g: 134.16,
+        com_mm: [0.45, 0.29, 6.85],
+    },
+    Link {
+        name: "foot",
+        mass_g: 171.84,
+        com_mm: [25.42, 3.30, -32.39],
+    },
 ];
 
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -47,14 +71,23 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 fn column(pose: &Pose<f64>, k: usize) -> [f64; 3] {
-    [pose.rotation[0][k], pose.rotation[1][k], pose.rotation[2][k]]
+    [
+        pose.rotation[0][k],
+        pose.rotation[1][k],
+        pose.rotation[2][k],
+    ]
 }
 
 /// The gravity torque [N·m] about each joint of one leg (HipYawPitch, HipRoll, HipPitch,
 /// KneePitch, AnklePitch, AnkleRoll) at the logged angles, offsets left out:
 /// `τ_j = u_j · Σ_{i ≥ j} (c_i − o_j) × (m_i·g·d)` with `u_j` the axis about which a growing
 /// angle turns, `o_j` a point on it and `d` the unit gravity direction of `robot`.
-pub fn leg_torques(robot: &RobotGeometry, board: &Board, side: Side, joints: &JointAngles) -> [f64; 6] {
+pub fn leg_torques(
+    robot: &RobotGeometry,
+    board: &Board,
+    side: Side,
+    joints: &JointAngles,
+) -> [f64; 6] {
     let s = side.sign();
     let q = side.leg_joints().map(|j| joints.get(j));
     let base = Pose::translation(0.0, s * robot.hip_offset_y, 0.0)
@@ -83,7 +116,14 @@ pub fn leg_torques(robot: &RobotGeometry, board: &Board, side: Side, joints: &Jo
         column(&f5, 0),
     ];
     let hip = f0.translation;
-    let points = [hip, hip, hip, f3.translation, f4.translation, f4.translation];
+    let points = [
+        hip,
+        hip,
+        hip,
+        f3.translation,
+        f4.translation,
+        f4.translation,
+    ];
 
     let norm = dot(robot.gravity, robot.gravity).sqrt();
     let d = robot.gravity.map(|x| x / norm);
@@ -98,15 +138,16 @@ pub fn leg_torques(robot: &RobotGeometry, board: &Board, side: Side, joints: &Jo
     masses.push((board.mass_g, f5.apply(&[cx, cy, cz - robot.foot_height]), 5));
 
     std::array::from_fn(|j| {
-        let moment = masses
-            .iter()
-            .filter(|(_, _, i)| *i >= j)
-            .fold([0.0; 3], |acc, (mass, c, _)| {
-                let r = [0, 1, 2].map(|k| (c[k] - points[j][k]) / 1000.0);
-                let force = d.map(|x| mass / 1000.0 * G * x);
-                let m = cross(r, force);
-                [acc[0] + m[0], acc[1] + m[1], acc[2] + m[2]]
-            });
+        let moment =
+            masses
+                .iter()
+                .filter(|(_, _, i)| *i >= j)
+                .fold([0.0; 3], |acc, (mass, c, _)| {
+                    let r = [0, 1, 2].map(|k| (c[k] - points[j][k]) / 1000.0);
+                    let force = d.map(|x| mass / 1000.0 * G * x);
+                    let m = cross(r, force);
+                    [acc[0] + m[0], acc[1] + m[1], acc[2] + m[2]]
+                });
         dot(axes[j], moment)
     })
 }
@@ -147,7 +188,10 @@ mod tests {
         let want_right = [0.7307, -0.3333, 1.2896, 0.6048, 0.0533, -0.0243];
         for k in 0..6 {
             assert!((left[k] - want_left[k]).abs() < 1e-4, "left {k}: {left:?}");
-            assert!((right[k] - want_right[k]).abs() < 1e-4, "right {k}: {right:?}");
+            assert!(
+                (right[k] - want_right[k]).abs() < 1e-4,
+                "right {k}: {right:?}"
+            );
         }
     }
 }

@@ -410,10 +410,18 @@ mod tests {
         assert_eq!(count(Family::Links), 11);
         assert_eq!(count(Family::Compliance), 12);
         assert_eq!(count(Family::Play), 12);
-        assert!(Param::ALL[..PAPER_PARAMETERS].iter().all(|p| p.family() == Family::Paper));
+        assert!(
+            Param::ALL[..PAPER_PARAMETERS]
+                .iter()
+                .all(|p| p.family() == Family::Paper)
+        );
         let list = parse_param_list("compliance, Fx,LHipPitchCompliance").unwrap();
         assert_eq!(list.len(), 13);
         assert_eq!(list[12], Param::Fx);
-        assert!(parse_param_list("elasticity").unwrap_err().contains("elasticity"));
+        assert!(
+            parse_param_list("elasticity")
+                .unwrap_err()
+                .contains("elasticity")
+        );
     }
 }

@@ -300,7 +300,10 @@ mod tests {
             match j.leg_index() {
                 None => assert!(j.compliance().is_none() && j.play().is_none()),
                 Some(_) => {
-                    assert_eq!(j.compliance().unwrap().name(), format!("{}Compliance", j.name()));
+                    assert_eq!(
+                        j.compliance().unwrap().name(),
+                        format!("{}Compliance", j.name())
+                    );
                     assert_eq!(j.play().unwrap().name(), format!("{}Play", j.name()));
                 }
             }

@@ -22,11 +22,11 @@
 //! use naocalib::report::export::{Calibration, ExportFormat, WriteOptions, export};
 //! # use naocalib::model::{FixedSet, Model};
 //! # use naocalib::sim::{SimOptions, simulate};
-//! # use naocalib::solve::{Problem, backend, solve};
+//! # use naocalib::solve::{Problem, UncertaintyOptions, backend, calibrate};
 //! # let options = SimOptions { stances: 4, heads: 2, ..SimOptions::default() };
 //! # let dataset = simulate(&Model::default(), &options).unwrap();
 //! # let problem = Problem::from_dataset(&dataset, FixedSet::default()).unwrap();
-//! # let solution = solve(&problem, backend("lm", false).unwrap().as_ref()).unwrap();
+//! # let solution = calibrate(&problem, backend("lm", false).unwrap().as_ref(), &UncertaintyOptions::plain()).unwrap();
 //! let calibration = Calibration::from_solution(&solution, None);
 //! let dir = tempfile::tempdir().unwrap();
 //! let path = dir.path().join("calibration.toml");

@@ -37,9 +37,15 @@ fn sigma_cell(solution: &Solution, p: Param, std: Option<f64>) -> String {
 pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
     let mut out = String::new();
     let boot = solution.bootstrap.as_ref();
+    let shown = shown_parameters(solution);
+    let name_width = shown.iter().map(|p| p.name().len()).fold(14, usize::max);
+    let unit_width = shown
+        .iter()
+        .map(|p| p.unit().name().chars().count())
+        .fold(4, usize::max);
     let _ = write!(
         out,
-        "{:<14} {:>10} {:>9}  {:<4} {:>9}",
+        "{:<name_width$} {:>10} {:>9}  {:<unit_width$} {:>9}",
         "parameter", "value", "±1σ", "unit", "sandwich"
     );
     if boot.is_some() {
@@ -49,14 +55,14 @@ pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
         let _ = write!(out, " {:>10} {:>9} {:>6}", "truth", "error", "err/σ");
     }
     out.push('\n');
-    for p in shown_parameters(solution) {
+    for p in shown {
         let unit = p.unit();
         let value = solution.report_value(p);
         let std = sigma_cell(solution, p, Some(solution.std[p.index()]));
         let sandwich = sigma_cell(solution, p, solution.sandwich_std.map(|s| s[p.index()]));
         let _ = write!(
             out,
-            "{:<14} {:>10.4} {:>9}  {:<4} {:>9}",
+            "{:<name_width$} {:>10.4} {:>9}  {:<unit_width$} {:>9}",
             p.name(),
             value,
             std,
@@ -116,9 +122,16 @@ pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
             noise.joint.to_degrees(),
             solution.residual_variance
         );
+    } else if solution.misfit.noise_model_set_aside {
+        let _ = writeln!(
+            out,
+            "uncertainty: capture-clustered sandwich (the noise model is set aside: the \
+             residuals are not noise)"
+        );
     } else {
         let _ = writeln!(out, "uncertainty: plain σ̂²(JᵀJ)⁻¹ (no noise model)");
     }
+    out.push_str(&model_text(solution));
     if let Some(b) = boot {
         let _ = writeln!(
             out,
@@ -176,7 +189,7 @@ pub fn json(solution: &Solution, truth: Option<&[f64]>) -> Value {
             "unit": p.unit().name(),
         });
         if !fixed && !determined {
-            entry["determined"] = Value::Bool(false);
+            entry["undetermined"] = Value::Bool(true);
         }
         if let (Some(sw), false, true) = (solution.sandwich_std, fixed, determined) {
             entry["std_sandwich"] = json!(p.unit().to_report(sw[p.index()]));
@@ -211,12 +224,60 @@ pub fn json(solution: &Solution, truth: Option<&[f64]>) -> Value {
             "joint_deg": n.joint.to_degrees(),
         })),
         "identifiability": identifiability_json(solution),
+        "families": solution.families.iter().map(|f| f.name()).collect::<Vec<_>>(),
+        "misfit": {
+            "detected": solution.misfit.detected,
+            "suggest": solution.misfit.suggest.iter().map(|f| f.name()).collect::<Vec<_>>(),
+            "message": solution.misfit.message,
+            "noise_model_set_aside": solution.misfit.noise_model_set_aside,
+            "tests": solution.misfit.tests.iter().map(|t| json!({
+                "family": t.family.name(),
+                "parameters": t.params.iter().map(|p| p.name()).collect::<Vec<_>>(),
+                "df": t.df,
+                "statistic": t.statistic,
+                "p_value": t.p_value,
+                "significant": t.significant,
+            })).collect::<Vec<_>>(),
+        },
+        "chosen": solution.chosen.iter().map(|t| json!({
+            "family": t.family.name(), "statistic": t.statistic, "p_value": t.p_value,
+        })).collect::<Vec<_>>(),
+        "undetermined": solution.undetermined.iter().map(|u| json!({
+            "parameter": u.param.name(),
+            "combination": u.direction.describe(),
+        })).collect::<Vec<_>>(),
         "outliers": solution.outliers.iter().map(|o| json!({
             "capture": o.capture, "row": o.vertex.row, "col": o.vertex.col,
             "residual_px": o.residual,
         })).collect::<Vec<_>>(),
         "parameters": Value::Object(params),
     })
+}
+
+/// The model part of the text report: the families fitted (and chosen, with
+/// `--model auto`), undetermined parameters with the combination they form, and the misfit
+/// verdict in one plain line.
+pub fn model_text(solution: &Solution) -> String {
+    let mut out = String::new();
+    let families: Vec<&str> = solution.families.iter().map(|f| f.name()).collect();
+    let _ = writeln!(out, "model: {}", families.join(", "));
+    for t in &solution.chosen {
+        let _ = writeln!(
+            out,
+            "  freed {} (misfit test F = {:.1} on {} directions, p = {:.1e})",
+            t.family, t.statistic, t.df, t.p_value
+        );
+    }
+    for u in &solution.undetermined {
+        let _ = writeln!(
+            out,
+            "  {} undetermined, held at nominal: the data cannot see a change along {}",
+            u.param,
+            u.direction.describe()
+        );
+    }
+    let _ = writeln!(out, "diagnosis: {}", solution.misfit.message);
+    out
 }
 
 /// The identifiability part of the text report.

@@ -11,9 +11,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
 use crate::dataset::{Capture, Corner, Dataset, Truth};
-use crate::model::{
-    Family, Joint, JointAngles, Model, PARAMETER_COUNT, Param, Side, StanceChains,
-};
+use crate::model::{Family, Joint, JointAngles, Model, PARAMETER_COUNT, Param, Side, StanceChains};
 
 /// What to simulate.
 #[derive(Debug, Clone, PartialEq)]
@@ -111,11 +109,11 @@ pub fn draw_truth(rng: &mut impl Rng) -> [f64; PARAMETER_COUNT] {
 }
 
 /// Adds to `truth` effects of realistic size for each of `families` (the paper's family is
-/// drawn by [`draw_truth`]): head offsets ±0.5°, focal lengths ±1 % and principal point
-/// ±3 px, distortion k1, k2 ±0.01, link lengths σ 0.5 mm, compliance 0.1–0.5 deg/(N·m),
-/// play 0.2–1° full width.
+/// drawn by [`draw_truth`]), each with a random sign where the sign is physical: head
+/// offsets 0.5°, focal lengths 1 % (5.6 px) and principal point 3 px, distortion k1, k2
+/// 0.01, link lengths 0.5 mm, compliance 0.3 deg/(N·m) (bending with the load), play 0.5°
+/// full width.
 pub fn draw_effects(rng: &mut impl Rng, families: &[Family], truth: &mut [f64; PARAMETER_COUNT]) {
-    let link = Normal::new(0.0, 0.5).expect("valid σ");
     for p in Param::ALL {
         if !families.contains(&p.family()) {
             continue;
@@ -123,15 +121,15 @@ pub fn draw_effects(rng: &mut impl Rng, families: &[Family], truth: &mut [f64; P
         let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
         truth[p.index()] = match p.family() {
             Family::Paper => continue,
-            Family::Head => rng.random_range(-0.5f64..0.5).to_radians(),
+            Family::Head => sign * 0.5f64.to_radians(),
             Family::Intrinsics => match p {
-                Param::Fx | Param::Fy => sign * rng.random_range(0.5..1.0) * 5.625,
-                _ => sign * rng.random_range(1.5..3.0),
+                Param::Fx | Param::Fy => sign * 5.625,
+                _ => sign * 3.0,
             },
-            Family::Distortion => rng.random_range(-0.01..0.01),
-            Family::Links => link.sample(rng),
-            Family::Compliance => rng.random_range(0.1f64..0.5).to_radians(),
-            Family::Play => rng.random_range(0.2f64..1.0).to_radians(),
+            Family::Distortion => sign * 0.01,
+            Family::Links => sign * 0.5,
+            Family::Compliance => 0.3f64.to_radians(),
+            Family::Play => 0.5f64.to_radians(),
         };
     }
 }

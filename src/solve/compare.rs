@@ -103,9 +103,10 @@ pub fn compare(problem: &Problem, solvers: &[&str]) -> Result<Comparison, Compar
         .iter()
         .map(|b| {
             let start = Instant::now();
-            let outcome = super::solve(problem, b.as_ref())
-                .map(Box::new)
-                .map_err(|e| e.to_string());
+            let outcome =
+                super::calibrate(problem, b.as_ref(), &super::UncertaintyOptions::plain())
+                    .map(Box::new)
+                    .map_err(|e| e.to_string());
             let wall_seconds = start.elapsed().as_secs_f64();
             let rank = outcome
                 .as_ref()

@@ -145,9 +145,9 @@ impl<'a> Evaluator<'a> {
             .into_iter()
             .filter(|p| column[p.index()].is_some())
             .map(|p| {
-                let scales = projection.coefficients().map(|a| {
-                    a.terms().filter(|(q, _)| *q == p).map(|(_, s)| s).sum()
-                });
+                let scales = projection
+                    .coefficients()
+                    .map(|a| a.terms().filter(|(q, _)| *q == p).map(|(_, s)| s).sum());
                 (p, scales)
             })
             .collect();
@@ -343,7 +343,9 @@ impl<'a> Evaluator<'a> {
                 let seeded: [Dual3; 3] = std::array::from_fn(|i| {
                     Dual3::new(pc[i], Derivative::derivative_generic(Const::<3>, U1, i))
                 });
-                let [u, w] = self.projection.project_with(&coefficients.map(Dual3::from), &seeded)?;
+                let [u, w] = self
+                    .projection
+                    .project_with(&coefficients.map(Dual3::from), &seeded)?;
                 let g = |d: &Dual3| {
                     let e = d.eps.unwrap_generic(Const::<3>, U1);
                     std::array::from_fn(|i| if i < 3 { e[i] } else { 0.0 })
@@ -354,7 +356,8 @@ impl<'a> Evaluator<'a> {
                     Dual9::new(value, Derivative::derivative_generic(Const::<9>, U1, i))
                 };
                 let seeded: [Dual9; 3] = std::array::from_fn(|i| lane(pc[i], i));
-                let coefficients: [Dual9; 6] = std::array::from_fn(|c| lane(coefficients[c], 3 + c));
+                let coefficients: [Dual9; 6] =
+                    std::array::from_fn(|c| lane(coefficients[c], 3 + c));
                 let [u, w] = self.projection.project_with(&coefficients, &seeded)?;
                 let g = |d: &Dual9| {
                     let e = d.eps.unwrap_generic(Const::<9>, U1);

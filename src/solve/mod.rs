@@ -1,16 +1,20 @@
 //! Solving the calibration: the [`Problem`], the backends, and the [`Solution`] with its
-//! uncertainty.
+//! uncertainty and diagnosis.
 //!
-//! Every backend turns a [`Problem`] into a [`BackendResult`]; [`solve`] then adds what
-//! does not depend on the backend (residual statistics, scaled covariance, std), so that the
-//! report sees a solution, not a solver.
+//! Every backend turns a [`Problem`] into a [`BackendResult`]. [`calibrate`] is the one
+//! pipeline: it holds undetermined parameters, fits (robustly first with a loss), tests
+//! whether the model fits ([`misfit`]), weights by the noise model when the residuals are
+//! noise, and builds the [`Solution`] once from what the fits produced. With
+//! [`ModelChoice::Auto`] it first chooses the families the data support.
 
 #[cfg(feature = "ceres")]
 pub mod ceres;
 pub mod compare;
 pub mod covariance;
+pub mod identify;
 pub mod jacobian;
 pub mod lm;
+pub mod misfit;
 pub mod noise;
 pub mod problem;
 pub mod tiny;
@@ -20,7 +24,9 @@ use std::time::Instant;
 
 use nalgebra::DMatrix;
 
-use crate::model::{FixedSet, PARAMETER_COUNT, Param};
+use crate::model::{Family, FixedSet, PARAMETER_COUNT, Param};
+pub use identify::Undetermined;
+pub use misfit::{FamilyTest, Misfit};
 pub use problem::{CaptureTerm, Loss, Observation, Problem, Tolerances, Whitening};
 
 /// Why a solve could not be done.
@@ -144,6 +150,16 @@ pub struct Solution {
     pub identifiability: uncertainty::Identifiability,
     /// Vertices the robust first fit flagged as outliers and left out (with `--loss`).
     pub outliers: Vec<Outlier>,
+    /// The families with free parameters in this fit.
+    pub families: Vec<Family>,
+    /// Free parameters the data cannot tell apart from others: held at their nominal value
+    /// (zero std, `undetermined` in the JSON), with the combination they form.
+    pub undetermined: Vec<Undetermined>,
+    /// Whether the model explains the data, and what to free if not.
+    pub misfit: Misfit,
+    /// With [`ModelChoice::Auto`]: the tests of the families that were freed, in the order
+    /// they were chosen.
+    pub chosen: Vec<FamilyTest>,
 }
 
 /// A vertex whose residual after the robust fit is far beyond the noise.
@@ -174,11 +190,22 @@ pub struct BootstrapStd {
 impl Solution {
     /// Whether the data determine `p` (a held parameter counts as determined).
     pub fn is_determined(&self, p: Param) -> bool {
-        self.identifiability
-            .determined
-            .get(p.index())
-            .copied()
-            .unwrap_or(true)
+        !self.undetermined.iter().any(|u| u.param == p)
+            && self
+                .identifiability
+                .determined
+                .get(p.index())
+                .copied()
+                .unwrap_or(true)
+    }
+
+    /// Whether this is a calibration one may use: the optimiser converged to finite
+    /// values and the residuals are within any plausible noise
+    /// ([`misfit::IMPLAUSIBLE_RMS_PX`]).
+    pub fn is_calibration(&self) -> bool {
+        self.summary.converged
+            && self.values.iter().all(|v| v.is_finite())
+            && self.rms_px.iter().all(|r| *r <= misfit::IMPLAUSIBLE_RMS_PX)
     }
 }
 
@@ -275,28 +302,81 @@ pub fn validate(problem: &Problem) -> Result<(), SolveError> {
     Ok(())
 }
 
-/// Solves `problem` with `backend` and derives the statistics of the result.
-pub fn solve(problem: &Problem, backend: &dyn Backend) -> Result<Solution, SolveError> {
-    let mut solution = optimise(problem, backend)?;
-    add_statistics(problem, problem, &mut solution);
-    Ok(solution)
+/// Rounds of (estimate the noise, whitened refit) after the first fit.
+const NOISE_ROUNDS: usize = 2;
+
+/// The whitened fit may not end with an RMS (u and v together) beyond this multiple of the
+/// plain fit's: the noise model weights noise and must not trade the fit for it. Under real
+/// joint noise a whitened fit of few captures legitimately costs up to about 10 % RMS (the
+/// bundled sample: 9 %), so this is a safety net behind the misfit tests, which set the
+/// noise model aside first.
+const WHITENED_RMS_LIMIT: f64 = 1.25;
+
+/// Which families are fitted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ModelChoice {
+    /// Exactly the problem's free parameters (`--model paper` and `--free`/`--fix`).
+    #[default]
+    Given,
+    /// Start from the problem's free parameters and free, one at a time, the significant
+    /// family of the misfit test that explains most of the residuals, until none is
+    /// significant (`--model auto`).
+    Auto,
 }
 
-/// The fit alone: values, summary, RMS at the solution and the scaled covariance, without
-/// the per-vertex residuals, the RMS at the start, the identifiability report and the
-/// sandwich (see [`add_statistics`]).
-/// Intermediate fits and bootstrap refits need no more.
-pub fn optimise(problem: &Problem, backend: &dyn Backend) -> Result<Solution, SolveError> {
-    optimise_with(problem, backend, true)
+/// How [`calibrate`] arrives at the model and the reported uncertainty.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UncertaintyOptions {
+    /// Whiten each capture with the pixel + joint noise model (docs/MODEL.md). When off,
+    /// the plain `σ̂²(JᵀJ)⁻¹` is reported, which is over-confident under joint noise.
+    pub noise_model: bool,
+    /// Given noise levels; missing ones are estimated from the residuals.
+    pub noise: noise::NoiseOptions,
+    /// Capture-bootstrap refits (0: none).
+    pub bootstrap: usize,
+    /// Seed of the bootstrap's resampling.
+    pub seed: u64,
+    /// Which families are fitted.
+    pub model: ModelChoice,
 }
 
-/// [`optimise`], with the covariance only if `covariance` (else zero `std`).
-fn optimise_with(
-    problem: &Problem,
-    backend: &dyn Backend,
-    covariance: bool,
-) -> Result<Solution, SolveError> {
-    let start = Instant::now();
+impl Default for UncertaintyOptions {
+    fn default() -> Self {
+        UncertaintyOptions {
+            noise_model: true,
+            noise: noise::NoiseOptions::default(),
+            bootstrap: 0,
+            seed: 1,
+            model: ModelChoice::Given,
+        }
+    }
+}
+
+impl UncertaintyOptions {
+    /// One plain least-squares fit with the textbook `σ̂²(JᵀJ)⁻¹` (`--plain-std`).
+    pub fn plain() -> Self {
+        UncertaintyOptions {
+            noise_model: false,
+            ..Default::default()
+        }
+    }
+}
+
+/// One optimiser run, as the pipeline's steps pass it on.
+#[derive(Debug, Clone)]
+struct Fit {
+    /// All parameter values, internal units.
+    values: [f64; PARAMETER_COUNT],
+    /// `(JᵀJ)⁺` of the fitted (weighted) problem over its free parameters, unscaled.
+    covariance: Option<DMatrix<f64>>,
+    /// The backend's summary.
+    summary: Summary,
+    /// `σ̂² = 2·cost/(m − n)` of the fitted residuals.
+    residual_variance: f64,
+}
+
+/// Runs `backend` on `problem`, with the covariance if `covariance`.
+fn fit(problem: &Problem, backend: &dyn Backend, covariance: bool) -> Result<Fit, SolveError> {
     validate(problem)?;
     let result = if covariance {
         backend.solve(problem)?
@@ -315,139 +395,101 @@ fn optimise_with(
         });
     }
     let values = problem.expand(&result.free_values);
-    let rms_px = problem.rms(&values).ok_or_else(|| SolveError::Backend {
-        solver: backend.name().into(),
-        message: "the solution puts a vertex behind the camera".into(),
-    })?;
+    let mut summary = result.summary;
+    // A NaN gradient can end a search "converged" at non-finite values.
+    summary.converged &= values.iter().all(|v| v.is_finite()) && summary.final_cost.is_finite();
     let dof = problem.residual_count().saturating_sub(free.len()).max(1);
-    let residual_variance = 2.0 * result.summary.final_cost / dof as f64;
-    let covariance = covariance::embed(
-        &free,
-        &result
-            .covariance
-            .clone()
-            .unwrap_or_else(|| DMatrix::zeros(free.len(), free.len())),
-        residual_variance,
-    );
-    let std = std::array::from_fn(|i| covariance[(i, i)].max(0.0).sqrt());
-    Ok(Solution {
-        summary: result.summary,
+    Ok(Fit {
         values,
-        std,
-        covariance,
-        fixed: problem.fixed.clone(),
-        rms_px,
-        initial_rms_px: [f64::NAN; 2],
-        observations: problem.observation_count(),
-        captures: problem.captures.len(),
-        residual_variance,
-        seconds: start.elapsed().as_secs_f64(),
-        residuals: Vec::new(),
-        noise: None,
-        sandwich_std: None,
-        bootstrap: None,
-        identifiability: uncertainty::Identifiability::default(),
-        outliers: Vec::new(),
+        covariance: result.covariance,
+        residual_variance: 2.0 * summary.final_cost / dof as f64,
+        summary,
     })
 }
 
-/// Adds to a fit of `fitted` (the problem as solved, perhaps whitened) the statistics that
-/// do not depend on the backend: the identifiability report and the sandwich covariance
-/// (from one Jacobian of `fitted`), and every vertex's residual before (at `original`'s
-/// start values) and after.
-pub fn add_statistics(fitted: &Problem, original: &Problem, solution: &mut Solution) {
-    let start = Instant::now();
-    let free_values: Vec<f64> = fitted
-        .free()
-        .iter()
-        .map(|p| solution.values[p.index()])
-        .collect();
-    let (identifiability, sandwich) =
-        uncertainty::statistics(fitted, &free_values, &solution.covariance);
-    solution.identifiability = identifiability;
-    solution.sandwich_std = sandwich.map(|c| std::array::from_fn(|i| c[(i, i)].max(0.0).sqrt()));
-    solution.residuals = vertex_residuals(original, &solution.values);
-    solution.initial_rms_px = initial_rms(&solution.residuals);
-    solution.seconds += start.elapsed().as_secs_f64();
+/// `fit` again from `values` with the covariance: for a fit whose covariance was skipped.
+fn refit_with_covariance(
+    problem: &Problem,
+    values: &[f64; PARAMETER_COUNT],
+    backend: &dyn Backend,
+) -> Result<Fit, SolveError> {
+    let mut at = problem.clone();
+    at.initial = *values;
+    fit(&at, backend, true)
 }
 
-/// Rounds of (estimate the noise, whitened refit) after the first fit.
-const NOISE_ROUNDS: usize = 2;
-
-/// How [`calibrate`] arrives at the reported uncertainty.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct UncertaintyOptions {
-    /// Whiten each capture with the pixel + joint noise model (SPEC section 8). When off,
-    /// the plain `σ̂²(JᵀJ)⁻¹` is reported, which is over-confident under joint noise.
-    pub noise_model: bool,
-    /// Given noise levels; missing ones are estimated from the residuals.
-    pub noise: noise::NoiseOptions,
-    /// Capture-bootstrap refits (0: none).
-    pub bootstrap: usize,
-    /// Seed of the bootstrap's resampling.
-    pub seed: u64,
-}
-
-impl Default for UncertaintyOptions {
-    fn default() -> Self {
-        UncertaintyOptions {
-            noise_model: true,
-            noise: noise::NoiseOptions::default(),
-            bootstrap: 0,
-            seed: 1,
-        }
-    }
-}
-
-/// The whole identification phase: a first least-squares fit from the start values, then
-/// (with the noise model) the noise levels from its residuals, and a second fit whitened
-/// by each capture's residual covariance, whose covariance is the reported uncertainty.
+/// The whole identification phase (the one public entry point): see the module docs.
 pub fn calibrate(
     problem: &Problem,
     backend: &dyn Backend,
     options: &UncertaintyOptions,
 ) -> Result<Solution, SolveError> {
-    if problem.loss != Loss::Squared {
-        return calibrate_robust(problem, backend, options);
+    match options.model {
+        ModelChoice::Given => calibrate_given(problem, backend, options),
+        ModelChoice::Auto => select_model(problem, backend, options),
     }
-    let (mut solution, last) = fit(problem, backend, options)?;
-    if options.bootstrap > 0 {
-        let (std, failed) = uncertainty::bootstrap(
-            last.as_ref().unwrap_or(problem),
-            &solution,
-            backend,
-            options.bootstrap,
-            options.seed,
-        )?;
-        solution.bootstrap = Some(BootstrapStd {
-            std,
-            replicates: options.bootstrap,
-            failed,
-        });
-    }
-    Ok(solution)
 }
 
-/// With a robust loss: a robust fit, then the vertices far beyond the robust residual scale
-/// are flagged as outliers and left out, and the rest is calibrated as usual (noise model,
-/// whitening), so the reported uncertainty stays that of a least-squares fit to inliers.
-fn calibrate_robust(
+/// [`ModelChoice::Auto`]: frees the most significant family while the misfit test finds
+/// one, then reports the last calibration with the families chosen and why.
+fn select_model(
     problem: &Problem,
     backend: &dyn Backend,
     options: &UncertaintyOptions,
 ) -> Result<Solution, SolveError> {
-    let mut robust = optimise(problem, backend)?;
-    robust.residuals = vertex_residuals(problem, &robust.values);
-    let mut coords: Vec<f64> = robust
-        .residuals
+    let start = Instant::now();
+    let mut current = problem.clone();
+    let mut chosen = Vec::new();
+    let mut iterations = 0;
+    loop {
+        let solution = calibrate_given(&current, backend, options)?;
+        iterations += solution.summary.iterations;
+        let next = solution
+            .misfit
+            .tests
+            .iter()
+            .filter(|t| t.significant && !chosen.iter().any(|c: &FamilyTest| c.family == t.family))
+            .max_by(|a, b| a.explained_px2.total_cmp(&b.explained_px2))
+            .cloned();
+        match next {
+            Some(test) if chosen.len() < Family::ALL.len() => {
+                for p in test.family.params() {
+                    current.fixed.set(p, false);
+                }
+                chosen.push(test);
+            }
+            _ => {
+                return Ok(Solution {
+                    chosen,
+                    summary: Summary {
+                        iterations,
+                        ..solution.summary
+                    },
+                    seconds: start.elapsed().as_secs_f64(),
+                    ..solution
+                });
+            }
+        }
+    }
+}
+
+/// The robust first fit (with `--loss`): flags vertices beyond [`OUTLIER_SIGMAS`] robust
+/// standard deviations and returns the problem without them, plain least squares, started
+/// at the robust solution.
+fn robust_stage(
+    problem: &Problem,
+    backend: &dyn Backend,
+) -> Result<(Problem, Vec<Outlier>, Fit), SolveError> {
+    let robust = fit(problem, backend, false)?;
+    let residuals = vertex_residuals(problem, &robust.values);
+    let mut coords: Vec<f64> = residuals
         .iter()
         .flat_map(|r| r.solved.map(f64::abs))
         .collect();
     coords.sort_by(f64::total_cmp);
     let sigma = 1.4826 * coords.get(coords.len() / 2).copied().unwrap_or(0.0);
     let limit = OUTLIER_SIGMAS * sigma;
-    let outliers: Vec<Outlier> = robust
-        .residuals
+    let outliers: Vec<Outlier> = residuals
         .iter()
         .filter(|r| r.solved[0].hypot(r.solved[1]) > limit)
         .map(|r| Outlier {
@@ -468,92 +510,228 @@ fn calibrate_robust(
         });
     }
     inliers.captures.retain(|t| !t.observations.is_empty());
-    let mut solution = calibrate(&inliers, backend, options)?;
-    solution.initial_rms_px = initial_rms(&robust.residuals);
-    solution.summary.iterations += robust.summary.iterations;
-    solution.summary.seconds += robust.summary.seconds;
-    solution.outliers = outliers;
-    Ok(solution)
+    Ok((inliers, outliers, robust))
 }
 
-/// The fits of [`calibrate`]; also returns the last whitened problem, if any.
-fn fit(
+/// `problem` whitened by the noise model estimated from its residuals at `values`, started
+/// there, with the levels; `None` when the residuals are zero (a noise-free fit has
+/// nothing to weight by).
+fn whiten(
+    problem: &Problem,
+    values: &[f64; PARAMETER_COUNT],
+    options: &UncertaintyOptions,
+) -> Result<Option<(Problem, noise::NoiseLevels)>, SolveError> {
+    let fitted = problem.free().len();
+    let (levels, captures) = noise::estimate(problem, values, fitted, options.noise)
+        .ok_or_else(|| SolveError::Invalid("a fit puts a vertex behind the camera".into()))?;
+    if !(levels.px > 0.0 && levels.px.is_finite()) {
+        return Ok(None);
+    }
+    let mut weighted = problem.clone();
+    weighted.initial = *values;
+    for (term, cn) in weighted.captures.iter_mut().zip(&captures) {
+        term.whitening = Some(cn.whitening(levels));
+    }
+    Ok(Some((weighted, levels)))
+}
+
+/// The noise-model rounds from the first whitening (estimated at the plain fit): fit it,
+/// estimate the levels again at that better fit, and fit once more with the covariance.
+/// Returns the final fit, its whitened problem, the levels and the iterations.
+fn noise_rounds(
+    problem: &Problem,
+    first: (Problem, noise::NoiseLevels),
+    backend: &dyn Backend,
+    options: &UncertaintyOptions,
+) -> Result<(Fit, Problem, noise::NoiseLevels, usize), SolveError> {
+    let (mut weighted, mut levels) = first;
+    let mut iterations = 0;
+    for round in 1..=NOISE_ROUNDS {
+        let last = round == NOISE_ROUNDS;
+        let f = fit(&weighted, backend, last)?;
+        iterations += f.summary.iterations;
+        if last {
+            return Ok((f, weighted, levels, iterations));
+        }
+        match whiten(problem, &f.values, options)? {
+            Some(next) => (weighted, levels) = next,
+            None => {
+                // The better fit leaves no residual: keep the weights, refit there.
+                weighted.initial = f.values;
+            }
+        }
+    }
+    unreachable!("the last round returns")
+}
+
+/// [`ModelChoice::Given`]: the calibration of the problem's free parameters.
+fn calibrate_given(
     problem: &Problem,
     backend: &dyn Backend,
     options: &UncertaintyOptions,
-) -> Result<(Solution, Option<Problem>), SolveError> {
+) -> Result<Solution, SolveError> {
     let start = Instant::now();
-    let plain = !options.noise_model || problem.loss != Loss::Squared;
-    let mut first = optimise_with(problem, backend, plain)?;
-    if plain {
-        add_statistics(problem, problem, &mut first);
-        return Ok((first, None));
-    }
-    // The first (unweighted) fit is inefficient under joint noise, and its error looks like
-    // joint noise in every capture; so estimate, refit whitened, and estimate once more at
-    // the better fit before the final whitened fit.
-    let fitted = problem.free().len();
-    let mut current = first.clone();
+    validate(problem)?;
+    let undetermined = identify::undetermined(problem)?;
+    let held = identify::mask(&undetermined);
+    let posed = identify::hold(problem, &undetermined);
+    let mut iterations = 0;
+    let mut optimiser_seconds = 0.0;
+    let (posed, outliers, robust) = if posed.loss != Loss::Squared {
+        let (inliers, outliers, robust) = robust_stage(&posed, backend)?;
+        iterations += robust.summary.iterations;
+        optimiser_seconds += robust.summary.seconds;
+        (inliers, outliers, Some(robust))
+    } else {
+        (posed, Vec::new(), None)
+    };
+    let initial_cost = robust.as_ref().map(|r| r.summary.initial_cost);
+
+    // The plain least-squares fit, and whether its residuals are noise.
+    let first = fit(&posed, backend, !options.noise_model)?;
+    iterations += first.summary.iterations;
+    optimiser_seconds += first.summary.seconds;
+    let plain_rms = posed
+        .rms(&first.values)
+        .ok_or_else(|| SolveError::Backend {
+            solver: backend.name().into(),
+            message: "the solution puts a vertex behind the camera".into(),
+        })?;
+    // The tests run on the residuals whitened by the noise model estimated at the plain
+    // fit, so that their power does not drown in joint noise (their variance estimate holds
+    // whatever the weights).
+    let whitened = if options.noise_model {
+        whiten(&posed, &first.values, options)?
+    } else {
+        None
+    };
+    let tested = whitened.as_ref().map_or(&posed, |(w, _)| w);
+    let tests = misfit::family_tests(tested, &first.values, &held);
+    let joint_deg = whitened
+        .as_ref()
+        .filter(|_| options.noise.joint.is_none())
+        .map(|(_, l)| l.joint.to_degrees());
+    let mut verdict = misfit::verdict(tests, plain_rms, joint_deg);
+
+    // The final fit: whitened by the noise model when the residuals are noise.
+    let mut weighted: Option<Problem> = None;
     let mut levels = None;
-    let mut last: Option<Problem> = None;
-    let mut iterations = first.summary.iterations;
-    let mut seconds = first.summary.seconds;
-    for round in 0..NOISE_ROUNDS {
-        let (estimate, captures) = noise::estimate(problem, &current.values, fitted, options.noise)
-            .ok_or_else(|| SolveError::Backend {
-                solver: backend.name().into(),
-                message: "a fit puts a vertex behind the camera".into(),
-            })?;
-        if estimate.px <= 0.0 || !estimate.px.is_finite() {
-            // A perfect fit (noise-free data): nothing to weight by. Its covariance was
-            // skipped; a refit from the solution gives it in an iteration or two.
-            let fitted = last.as_ref().unwrap_or(problem);
-            let mut at = fitted.clone();
-            at.initial = current.values;
-            let refit = optimise(&at, backend)?;
-            current.covariance = refit.covariance;
-            current.std = refit.std;
-            current.residual_variance = refit.residual_variance;
-            add_statistics(fitted, problem, &mut current);
-            return Ok((
-                Solution {
-                    noise: Some(estimate),
-                    ..current
-                },
-                None,
-            ));
+    let mut last = first.clone();
+    match whitened {
+        Some(start) if !verdict.detected => {
+            let (f, w, l, its) = noise_rounds(&posed, start, backend, options)?;
+            iterations += its;
+            optimiser_seconds += f.summary.seconds;
+            let rms = posed.rms(&f.values).unwrap_or([f64::INFINITY; 2]);
+            let both = |r: [f64; 2]| ((r[0] * r[0] + r[1] * r[1]) / 2.0).sqrt();
+            if both(rms) > WHITENED_RMS_LIMIT * both(plain_rms) {
+                verdict.detected = true;
+                verdict.message = format!(
+                    "misfit: weighting by the noise model moves the fit to {:.2} px RMS, \
+                     beyond {WHITENED_RMS_LIMIT}× the plain fit's {:.2} px: the residuals \
+                     are not joint noise",
+                    both(rms),
+                    both(plain_rms)
+                );
+                verdict.noise_model_set_aside = true;
+            } else {
+                last = f;
+                weighted = Some(w);
+                levels = Some(l);
+            }
         }
-        let mut weighted = problem.clone();
-        weighted.initial = current.values;
-        for (term, cn) in weighted.captures.iter_mut().zip(&captures) {
-            term.whitening = Some(cn.whitening(estimate));
-        }
-        current = optimise_with(&weighted, backend, round + 1 == NOISE_ROUNDS)?;
-        last = Some(weighted);
-        iterations += current.summary.iterations;
-        seconds += current.summary.seconds;
-        levels = Some(estimate);
+        Some(_) => verdict.noise_model_set_aside = true,
+        None => {}
     }
-    let mut second = current;
-    add_statistics(last.as_ref().unwrap_or(problem), problem, &mut second);
-    let estimated = options.noise.px.is_none() || options.noise.joint.is_none();
-    if !estimated {
-        // Both noise levels given: trust them, do not rescale by the residuals.
-        let scale = 1.0 / second.residual_variance;
-        second.covariance *= scale;
-        second.std = std::array::from_fn(|i| second.covariance[(i, i)].max(0.0).sqrt());
+    if last.covariance.is_none() {
+        // The plain fit's covariance was skipped (noise model expected, or a noise-free
+        // fit): a refit from its solution gives it in an iteration or two.
+        let refit = refit_with_covariance(&posed, &last.values, backend)?;
+        iterations += refit.summary.iterations;
+        optimiser_seconds += refit.summary.seconds;
+        last = Fit {
+            values: last.values,
+            ..refit
+        };
     }
-    second.summary.iterations = iterations;
-    // Costs as plain least squares (unweighted), like the RMS.
-    second.summary.initial_cost = first.summary.initial_cost;
-    second.summary.final_cost = 0.5
-        * problem
-            .residuals(&second.values)
+
+    // Statistics from one Jacobian of the problem as fitted.
+    let fitted = weighted.as_ref().unwrap_or(&posed);
+    let free = fitted.free();
+    let free_values: Vec<f64> = free.iter().map(|p| last.values[p.index()]).collect();
+    let unscaled = last
+        .covariance
+        .clone()
+        .unwrap_or_else(|| DMatrix::zeros(free.len(), free.len()));
+    let both_given = options.noise.px.is_some() && options.noise.joint.is_some();
+    let variance = if levels.is_some() && both_given {
+        1.0 // both noise levels given: trust them, do not rescale by the residuals
+    } else {
+        last.residual_variance
+    };
+    let mut covariance = covariance::embed(&free, &unscaled, variance);
+    let (identifiability, sandwich) = uncertainty::statistics(fitted, &free_values, &covariance);
+    if verdict.noise_model_set_aside
+        && let Some(s) = &sandwich
+    {
+        // Residuals that are not noise: the capture-clustered sandwich holds whatever
+        // their correlation within a capture.
+        covariance = s.clone();
+    }
+    let std = std::array::from_fn(|i| covariance[(i, i)].max(0.0).sqrt());
+    let residuals = vertex_residuals(problem, &last.values);
+    let initial_rms_px = initial_rms(&residuals);
+    let rms_px = posed.rms(&last.values).unwrap_or([f64::NAN; 2]);
+    let final_cost = 0.5
+        * posed
+            .residuals(&last.values)
             .map_or(f64::NAN, |r| r.iter().map(|x| x * x).sum::<f64>());
-    second.summary.seconds = seconds;
-    second.noise = levels;
-    second.seconds = start.elapsed().as_secs_f64();
-    Ok((second, last))
+    let summary = Summary {
+        iterations,
+        initial_cost: initial_cost.unwrap_or(first.summary.initial_cost),
+        final_cost,
+        seconds: optimiser_seconds,
+        ..last.summary.clone()
+    };
+    let mut solution = Solution {
+        summary,
+        values: last.values,
+        std,
+        covariance,
+        fixed: problem.fixed.clone(),
+        rms_px,
+        initial_rms_px,
+        observations: posed.observation_count(),
+        captures: posed.captures.len(),
+        residual_variance: last.residual_variance,
+        seconds: 0.0,
+        residuals,
+        noise: levels,
+        sandwich_std: sandwich.map(|c| std::array::from_fn(|i| c[(i, i)].max(0.0).sqrt())),
+        bootstrap: None,
+        identifiability,
+        outliers,
+        families: posed.fixed.families(),
+        undetermined,
+        misfit: verdict,
+        chosen: Vec::new(),
+    };
+    if options.bootstrap > 0 {
+        let (std, failed) = uncertainty::bootstrap(
+            fitted,
+            &solution.values,
+            backend,
+            options.bootstrap,
+            options.seed,
+        )?;
+        solution.bootstrap = Some(BootstrapStd {
+            std,
+            replicates: options.bootstrap,
+            failed,
+        });
+    }
+    solution.seconds = start.elapsed().as_secs_f64();
+    Ok(solution)
 }
 
 /// RMS in u and v of the residuals at the start values [px] (NaN where undefined).

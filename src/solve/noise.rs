@@ -43,13 +43,9 @@ pub struct CaptureNoise {
     s2: DVector<f64>,
 }
 
-/// `J_θ,c`: derivatives of a capture's unweighted residuals with respect to the joint angles
-/// of the joints its chains use (equal to the derivatives with respect to their offsets).
-pub fn joint_jacobian(term: &CaptureTerm, camera: &Camera, params: &[f64]) -> Option<DMatrix<f64>> {
-    residuals_and_joint_jacobian(term, camera, params).map(|(_, jac)| jac)
-}
-
-/// The capture's unweighted residuals and [`joint_jacobian`], from one evaluation.
+/// A capture's unweighted residuals and `J_θ,c`, their derivatives with respect to the
+/// joint angles of the joints its chains use (equal to those with respect to their
+/// offsets), from one evaluation.
 fn residuals_and_joint_jacobian(
     term: &CaptureTerm,
     camera: &Camera,
@@ -83,12 +79,8 @@ fn residuals_and_joint_jacobian(
 }
 
 impl CaptureNoise {
-    /// Decomposes `J_θ,c` for a capture at parameters `params`.
-    pub fn new(term: &CaptureTerm, camera: &Camera, params: &[f64]) -> Option<CaptureNoise> {
-        Self::with_residuals(term, camera, params).map(|(cn, _)| cn)
-    }
-
-    /// [`CaptureNoise::new`] and the capture's unweighted residuals, from one evaluation.
+    /// Decomposes `J_θ,c` for a capture at parameters `params`; also returns the capture's
+    /// unweighted residuals, from one evaluation.
     fn with_residuals(
         term: &CaptureTerm,
         camera: &Camera,

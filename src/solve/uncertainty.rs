@@ -7,7 +7,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::jacobian::Evaluator;
-use super::{Backend, Problem, Solution, SolveError, covariance};
+use super::{Backend, Problem, SolveError, covariance};
 use crate::model::{PARAMETER_COUNT, Param};
 
 /// Relative singular value (column-scaled Jacobian) below which a direction counts as not
@@ -29,10 +29,12 @@ pub struct Direction {
 }
 
 impl Direction {
-    /// "0.71·LHipPitch − 0.70·LKneePitch".
+    /// "0.71·LHipPitch − 0.70·LKneePitch" (terms below 0.05 of the largest left out).
     pub fn describe(&self) -> String {
         let mut out = String::new();
-        for (k, (p, c)) in self.terms.iter().enumerate() {
+        let max = self.terms.iter().map(|t| t.1.abs()).fold(0.0, f64::max);
+        let shown = self.terms.iter().filter(|t| t.1.abs() >= 0.05 * max);
+        for (k, (p, c)) in shown.enumerate() {
             let sign = if *c < 0.0 {
                 "−"
             } else if k > 0 {
@@ -91,16 +93,6 @@ pub fn correlation(cov: &DMatrix<f64>) -> DMatrix<f64> {
             0.0
         }
     })
-}
-
-/// Analyses the (weighted) Jacobian of `problem` at the free values `x` together with the
-/// solution's covariance.
-pub fn identifiability(problem: &Problem, x: &[f64], cov: &DMatrix<f64>) -> Identifiability {
-    let eval = Evaluator::new(problem);
-    match eval.residuals_and_jacobian(x) {
-        Some((_, jac)) => identifiability_of(eval.free(), &jac, cov),
-        None => unanalysed(eval.free()),
-    }
 }
 
 /// The identifiability report and the sandwich covariance of `problem` at the free values
@@ -230,18 +222,11 @@ pub fn identifiability_of(
 }
 
 /// The capture-clustered sandwich covariance `H⁺ (Σ_c g_c g_cᵀ) H⁺` of the (weighted)
-/// problem at the free values `x`, with `H = JᵀJ` and `g_c = J_cᵀ (I − H_cc)^{-1/2} r_c`
-/// (the "CR2" leverage correction, `H_cc = J_c H⁺ J_cᵀ`, since a fitted capture's residuals
-/// are smaller than its errors): robust to any correlation of the residuals within a
-/// capture. Full PARAMETER_COUNT² matrix.
-pub fn sandwich(problem: &Problem, x: &[f64]) -> Option<DMatrix<f64>> {
-    let eval = Evaluator::new(problem);
-    let (r, jac) = eval.residuals_and_jacobian(x)?;
-    Some(sandwich_of(problem, eval.free(), &r, &jac))
-}
-
-/// [`sandwich`] from the (weighted) residuals `r` and Jacobian `jac` over the `free`
-/// parameters.
+/// problem from its residuals `r` and Jacobian `jac` over the `free` parameters, with
+/// `H = JᵀJ` and `g_c = J_cᵀ (I − H_cc)^{-1/2} r_c` (the "CR2" leverage correction,
+/// `H_cc = J_c H⁺ J_cᵀ`, since a fitted capture's residuals are smaller than its errors):
+/// robust to any correlation of the residuals within a capture. Full PARAMETER_COUNT²
+/// matrix.
 pub fn sandwich_of(
     problem: &Problem,
     free: &[Param],
@@ -308,7 +293,7 @@ fn leverage_corrected(b: &DMatrix<f64>, p: &DMatrix<f64>, r_c: &DVector<f64>) ->
 /// (internal units) and how many refits failed.
 pub fn bootstrap(
     problem: &Problem,
-    solution: &Solution,
+    values: &[f64; PARAMETER_COUNT],
     backend: &dyn Backend,
     n: usize,
     seed: u64,
@@ -321,11 +306,11 @@ pub fn bootstrap(
     let count = problem.captures.len();
     for _ in 0..n {
         let mut sample = problem.clone();
-        sample.initial = solution.values;
+        sample.initial = *values;
         sample.captures = (0..count)
             .map(|_| problem.captures[rng.random_range(0..count)].clone())
             .collect();
-        match super::optimise_with(&sample, backend, false) {
+        match super::fit(&sample, backend, false) {
             Ok(s) if s.summary.converged => {
                 ok += 1;
                 for i in 0..PARAMETER_COUNT {

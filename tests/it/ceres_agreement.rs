@@ -6,15 +6,14 @@
 //! nothing but `model` and `solve`.
 
 use crate::util::brute_force_jacobian as rust_jacobian;
+use crate::util::solve;
 use nalgebra::{DMatrix, DVector, Dyn, U1};
 use naocalib::model::{
     Camera, FixedSet, JOINT_COUNT, JointAngles, Model, PAPER_PARAMETERS, PARAMETER_COUNT, Param,
     Side, Vertex,
 };
 use naocalib::solve::ceres::{Ceres, evaluate};
-use naocalib::solve::{
-    CaptureTerm, Loss, Observation, Problem, SolveError, Tolerances, Whitening, solve,
-};
+use naocalib::solve::{CaptureTerm, Loss, Observation, Problem, SolveError, Tolerances, Whitening};
 use num_dual::{Derivative, DualDVec64};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -41,7 +40,7 @@ fn random_parameters(rng: &mut ChaCha8Rng, deg: f64, mm: f64) -> [f64; PARAMETER
     for (i, param) in Param::ALL.iter().take(PAPER_PARAMETERS).enumerate() {
         let limit = match param.unit() {
             naocalib::model::Unit::Deg => deg.to_radians(),
-            naocalib::model::Unit::Mm => mm,
+            _ => mm,
         };
         p[i] = rng.random_range(-limit..=limit);
     }

@@ -7,7 +7,6 @@ use crate::util::{assert_clean_failure, naocalib, run, stderr};
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
-use assert_cmd::Command;
 use naocalib::dataset::{Dataset, read_truth};
 use naocalib::detect::{self, DetectOptions, Outcome};
 use naocalib::model::{Joint, Model, Param, Unit};

@@ -5,7 +5,6 @@ use crate::util::{assert_clean_failure, naocalib, simulate_small, stderr};
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
-use assert_cmd::Command;
 use serde_json::Value;
 
 fn solve(dir: &Path, extra: &[&str]) -> Output {

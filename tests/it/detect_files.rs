@@ -4,9 +4,7 @@
 
 use crate::util::{naocalib, stderr};
 use std::path::{Path, PathBuf};
-use std::process::Output;
 
-use assert_cmd::Command;
 use naocalib::dataset::Dataset;
 use naocalib::sim::render::GreyImage;
 use opencv::core::{Point2f, Size, TermCriteria, Vector};

@@ -5,13 +5,14 @@
 use std::collections::HashSet;
 use std::path::Path;
 
+use crate::util::solve;
 use naocalib::dataset::Dataset;
 use naocalib::detect::assign::Order;
 use naocalib::detect::{self, DetectOptions, Outcome, Summary};
 use naocalib::model::{FixedSet, Model, Param, Vertex};
 use naocalib::sim::render::{ImageOutput, RenderOptions};
 use naocalib::sim::{SimOptions, simulate};
-use naocalib::solve::{Problem, backend, solve};
+use naocalib::solve::{Problem, backend};
 
 /// Simulates `stances × heads × 2` captures with images (blur σ 0.8 px, grey noise σ 2)
 /// into `dir` and returns the dataset as written.
@@ -152,7 +153,7 @@ fn end_to_end_recovers_the_truth() {
     dataset.write(dir, true).unwrap();
     let dataset = Dataset::load(dir).unwrap();
     let problem = Problem::from_dataset(&dataset, FixedSet::default()).unwrap();
-    let solver = backend(naocalib::cli::DEFAULT_SOLVER, false).unwrap();
+    let solver = backend(naocalib::solve::backend_names()[0], false).unwrap();
     let solution = solve(&problem, solver.as_ref()).unwrap();
     for p in Param::ALL.iter().take(21) {
         let est = p.unit().to_report(solution.values[p.index()]);

@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use crate::util::solve;
 use assert_cmd::Command;
 use naocalib::model::{FixedSet, Model, Param};
 use naocalib::report::export::{
@@ -10,7 +11,7 @@ use naocalib::report::export::{
     read_bhuman_joint_cfg, read_calibration,
 };
 use naocalib::sim::{SimOptions, simulate};
-use naocalib::solve::{Problem, Solution, backend, solve};
+use naocalib::solve::{Problem, Solution, backend};
 
 fn solution() -> Solution {
     let options = SimOptions {

@@ -19,6 +19,7 @@ mod detect_render;
 #[cfg(feature = "detect")]
 mod detect_robust;
 mod export_roundtrip;
+mod extended;
 mod plot_files;
 mod pure_rust_agreement;
 mod pure_rust_cli;

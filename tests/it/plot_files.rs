@@ -2,11 +2,12 @@
 
 use std::path::Path;
 
+use crate::util::solve;
 use naocalib::model::{FixedSet, Model};
 use naocalib::report::export::WriteOptions;
 use naocalib::report::plot;
 use naocalib::sim::{SimOptions, simulate};
-use naocalib::solve::{Problem, backend, solve};
+use naocalib::solve::{Problem, backend};
 
 fn check_png(path: &Path, min: (u32, u32)) {
     let bytes = std::fs::read(path).unwrap();

@@ -3,13 +3,12 @@
 //! the same robust fit; and `compare` reporting solvers that fail or stop early.
 
 use crate::util::brute_force_jacobian as brute_force;
-use nalgebra::{DMatrix, Dyn, U1};
+use nalgebra::DMatrix;
 use naocalib::model::{FixedSet, Model, PARAMETER_COUNT, Side};
 use naocalib::sim::{SimOptions, simulate};
 use naocalib::solve::covariance::{from_jacobian, rank_of_covariance};
-use naocalib::solve::jacobian::{Evaluator, robust_weight};
+use naocalib::solve::jacobian::Evaluator;
 use naocalib::solve::{Loss, Problem, Whitening, backend_names, compare::compare};
-use num_dual::{Derivative, DualDVec64};
 
 /// A small simulated problem: `stances` stances × `heads` head postures per leg.
 fn simulated(seed: u64, stances: usize, heads: usize) -> (Problem, [f64; PARAMETER_COUNT]) {
@@ -121,8 +120,9 @@ fn compare_reports_solvers_that_stop_early() {
 #[cfg(feature = "ceres")]
 mod with_ceres {
     use super::*;
+    use crate::util::solve;
     use naocalib::model::Param;
-    use naocalib::solve::{Backend, backend, solve};
+    use naocalib::solve::{Backend, backend};
 
     /// The pure-Rust backends of this build.
     fn rust_backends() -> Vec<Box<dyn Backend>> {

@@ -2,9 +2,7 @@
 //! the JSON, and the reference named.
 
 use crate::util::{naocalib, simulate_small};
-use std::path::Path;
 
-use assert_cmd::Command;
 use naocalib::solve::backend_names;
 
 #[test]

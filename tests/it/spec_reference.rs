@@ -60,11 +60,17 @@ fn pose_a_transforms_match_urdf() {
             assert_close(*g, *w, 1e-4, "T_OC rotation");
         }
     }
-    let left = model.robot.sole_chain(Side::Left, &joints, &[0.0; 6]).eval(&zero);
+    let left = model
+        .robot
+        .sole_chain(Side::Left, &joints, &[0.0; 6])
+        .eval(&zero);
     for (i, want) in [40.6731, 74.8950, -227.0421].iter().enumerate() {
         assert_close(left.translation[i], *want, 1e-3, "T_OS left");
     }
-    let right = model.robot.sole_chain(Side::Right, &joints, &[0.0; 6]).eval(&zero);
+    let right = model
+        .robot
+        .sole_chain(Side::Right, &joints, &[0.0; 6])
+        .eval(&zero);
     for (i, want) in [50.8203, -75.8509, -220.5209].iter().enumerate() {
         assert_close(right.translation[i], *want, 1e-3, "T_OS right");
     }
@@ -126,7 +132,8 @@ fn pose_c_right_board_projections() {
 fn pose_a_gravity_torques() {
     let model = Model::default();
     let joints = angles(POSE_A);
-    let left = naocalib::model::gravity::leg_torques(&model.robot, &model.board, Side::Left, &joints);
+    let left =
+        naocalib::model::gravity::leg_torques(&model.robot, &model.board, Side::Left, &joints);
     let right =
         naocalib::model::gravity::leg_torques(&model.robot, &model.board, Side::Right, &joints);
     let want_left = [0.7861, 0.3455, 1.3550, 0.6162, 0.0647, 0.0247];

@@ -86,3 +86,15 @@ pub fn brute_force_jacobian(problem: &Problem, x: &[f64]) -> (Vec<f64>, DMatrix<
     }
     (values, DMatrix::from_rows(&rows))
 }
+
+/// One plain least-squares calibration (no noise model): what most backend tests compare.
+pub fn solve(
+    problem: &Problem,
+    backend: &dyn naocalib::solve::Backend,
+) -> Result<naocalib::solve::Solution, naocalib::solve::SolveError> {
+    naocalib::solve::calibrate(
+        problem,
+        backend,
+        &naocalib::solve::UncertaintyOptions::plain(),
+    )
+}

@@ -1,0 +1,127 @@
+//! Undetermined parameters: free parameters whose effect on the residuals the other free
+//! parameters already produce (CamPitch, HeadPitch, CamX and CamZ, for one, trade against
+//! each other). They are held at their nominal value instead of being fitted, and the
+//! combination they form is named (docs/MODEL.md, "Undetermined directions").
+//!
+//! The test is a Gram–Schmidt pass over the column-scaled Jacobian in registry order (the
+//! paper's parameters first): a parameter whose column keeps less than
+//! [`UNDETERMINED_RATIO`] of its length once the columns before it are projected out adds
+//! nothing the data can tell apart, and is held.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::jacobian::Evaluator;
+use super::uncertainty::Direction;
+use super::{Problem, SolveError};
+use crate::model::{PARAMETER_COUNT, Param};
+
+/// A free parameter is undetermined when less than this fraction of its (column-scaled)
+/// Jacobian column lies outside the span of the parameters before it: its σ would be
+/// inflated more than 50-fold by the trade-off.
+pub const UNDETERMINED_RATIO: f64 = 0.02;
+
+/// A parameter the data cannot tell apart from others, and the combination it forms.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Undetermined {
+    /// The parameter, held at its nominal value.
+    pub param: Param,
+    /// What is left of its column after the others are projected out (relative).
+    pub ratio: f64,
+    /// The direction in parameter space (report units, largest coefficient 1) along which
+    /// the residuals do not change: the parameter with the ones it trades against.
+    pub direction: Direction,
+}
+
+/// Finds the undetermined free parameters of `problem` at its start values.
+pub fn undetermined(problem: &Problem) -> Result<Vec<Undetermined>, SolveError> {
+    let eval = Evaluator::new(problem);
+    let x: Vec<f64> = problem
+        .free()
+        .iter()
+        .map(|p| problem.initial[p.index()])
+        .collect();
+    let (_, jac) = eval.residuals_and_jacobian(&x).ok_or_else(|| {
+        SolveError::Invalid("a vertex lies behind the camera at the start values".into())
+    })?;
+    Ok(undetermined_of(eval.free(), &jac))
+}
+
+/// [`undetermined`] from the Jacobian `jac` over the `free` parameters.
+pub fn undetermined_of(free: &[Param], jac: &DMatrix<f64>) -> Vec<Undetermined> {
+    let m = jac.nrows();
+    let mut basis: Vec<DVector<f64>> = Vec::new();
+    // The kept columns (unit length) and their indices, for naming combinations.
+    let mut kept: Vec<usize> = Vec::new();
+    let mut out = Vec::new();
+    for (j, &p) in free.iter().enumerate() {
+        let norm = jac.column(j).norm();
+        if norm == 0.0 {
+            continue; // unobserved: the identifiability report names it
+        }
+        let column: DVector<f64> = jac.column(j) / norm;
+        let mut v = column.clone();
+        for q in &basis {
+            let d = q.dot(&v);
+            v.axpy(-d, q, 1.0);
+        }
+        let ratio = v.norm();
+        if ratio >= UNDETERMINED_RATIO {
+            basis.push(v / ratio);
+            kept.push(j);
+            continue;
+        }
+        // column ≈ Σ c_k · (kept column k, scaled): least squares on the kept columns.
+        let mut a = DMatrix::zeros(m, kept.len());
+        for (k, &i) in kept.iter().enumerate() {
+            let n = jac.column(i).norm();
+            a.set_column(k, &(jac.column(i) / n));
+        }
+        let c = a
+            .clone()
+            .svd(true, true)
+            .solve(&column, 1e-12)
+            .unwrap_or_else(|_| DVector::zeros(kept.len()));
+        // Moving p by δ (scaled units) and each kept k by −c_k·δ leaves the residuals
+        // (nearly) unchanged. In internal units: δp = 1/‖J_p‖, δk = −c_k/‖J_k‖.
+        let mut terms: Vec<(Param, f64)> = vec![(p, p.unit().to_report(1.0 / norm))];
+        for (k, &i) in kept.iter().enumerate() {
+            let n = jac.column(i).norm();
+            let q = free[i];
+            terms.push((q, q.unit().to_report(-c[k] / n)));
+        }
+        let max = terms.iter().map(|t| t.1.abs()).fold(0.0, f64::max);
+        terms.iter_mut().for_each(|t| t.1 /= max);
+        terms.retain(|t| t.1.abs() >= 1e-9);
+        terms.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+        if terms.first().is_some_and(|t| t.1 < 0.0) {
+            terms.iter_mut().for_each(|t| t.1 = -t.1);
+        }
+        out.push(Undetermined {
+            param: p,
+            ratio,
+            direction: Direction {
+                relative_singular_value: ratio,
+                terms,
+            },
+        });
+    }
+    out
+}
+
+/// `problem` with the `undetermined` parameters held at their start values.
+pub fn hold(problem: &Problem, undetermined: &[Undetermined]) -> Problem {
+    let mut held = problem.clone();
+    for u in undetermined {
+        held.fixed.set(u.param, true);
+    }
+    held
+}
+
+/// A mask of the undetermined parameters, indexed by [`Param::index`].
+pub fn mask(undetermined: &[Undetermined]) -> [bool; PARAMETER_COUNT] {
+    let mut m = [false; PARAMETER_COUNT];
+    for u in undetermined {
+        m[u.param.index()] = true;
+    }
+    m
+}

@@ -1,0 +1,247 @@
+//! Does the fitted model explain the data? A cluster-robust score (Lagrange-multiplier)
+//! test of every family that was not fitted, at the least-squares solution, with no refit
+//! (docs/MODEL.md, "Misfit").
+//!
+//! For a family `F` held at zero, the score is `g = J̃_Fᵀ r`, with `J̃_F` the family's
+//! Jacobian columns with the fitted parameters' columns projected out and `r` the residuals.
+//! Each capture contributes `s_c = J̃_F,cᵀ r_c`; since a capture's residuals share its joint
+//! noise, the captures, not the vertices, are the independent units: Hotelling's
+//! `T² = C·s̄ᵀ S⁺ s̄` over the `C` capture scores (mean `s̄`, sample covariance `S`), which
+//! holds for any correlation within a capture, is referred to `F(q, C − q)` as
+//! `(C − q)/(q (C − 1)) · T²` with `q` directions tested. A family is significant when its p-value is below
+//! [`FAMILY_ALPHA`] divided by the number of families tested (Bonferroni), so a dataset
+//! that the model fits is flagged in about [`FAMILY_ALPHA`] of the cases or fewer.
+//!
+//! Beside the families, the residuals themselves are checked for plausibility: an RMS
+//! beyond [`IMPLAUSIBLE_RMS_PX`] is not a calibration, and a joint noise that the noise
+//! model would need beyond [`IMPLAUSIBLE_JOINT_NOISE_DEG`] is structure, not noise.
+
+use nalgebra::{DMatrix, DVector};
+use statrs::distribution::{ContinuousCDF, FisherSnedecor};
+
+use super::identify::UNDETERMINED_RATIO;
+use super::jacobian::Evaluator;
+use super::problem::Problem;
+use crate::model::{Family, FixedSet, PARAMETER_COUNT, Param};
+
+/// Family-wise false-alarm rate of the score tests (nominal; the tests are conservative at
+/// a fitted solution: on clean simulated data far fewer datasets are flagged, see the
+/// README's measured rate).
+pub const FAMILY_ALPHA: f64 = 0.05;
+/// A residual RMS (either coordinate) beyond this is not a calibration [px].
+pub const IMPLAUSIBLE_RMS_PX: f64 = 10.0;
+/// Joint noise beyond this per joint and capture is not what a NAO's encoders give [deg].
+pub const IMPLAUSIBLE_JOINT_NOISE_DEG: f64 = 0.5;
+
+/// The score test of one family.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FamilyTest {
+    /// The family tested.
+    pub family: Family,
+    /// Its parameters that entered the test (those the fitted ones do not already
+    /// produce).
+    pub params: Vec<Param>,
+    /// Directions tested (`q`).
+    pub df: usize,
+    /// The F statistic `(C − q)/(q (C − 1)) · T`.
+    pub statistic: f64,
+    /// Its p-value under "the family is not needed".
+    pub p_value: f64,
+    /// Whether it is significant at the Bonferroni level.
+    pub significant: bool,
+    /// How much of the residual sum of squares freeing the family would explain, to first
+    /// order (`gᵀ (J̃_Fᵀ J̃_F)⁺ g`) [px²]: what ranks the suggestions.
+    pub explained_px2: f64,
+}
+
+/// The verdict on a fit.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Misfit {
+    /// Whether the residuals hold more than the measurement noise explains.
+    pub detected: bool,
+    /// Families the data support freeing, the one explaining most of the residuals first.
+    pub suggest: Vec<Family>,
+    /// One plain sentence: what is wrong and what to try (or that nothing is).
+    pub message: String,
+    /// Every family's test.
+    pub tests: Vec<FamilyTest>,
+    /// Whether the noise model was set aside because of the misfit (the reported σ is then
+    /// the capture-clustered sandwich).
+    pub noise_model_set_aside: bool,
+}
+
+/// Score tests of every family not (fully) free in `problem`, at the full parameter vector
+/// `values`, on the residuals as `problem` weighs them (whitened where a capture has a
+/// whitening). `held` marks parameters held because they are undetermined (never tested).
+pub fn family_tests(
+    problem: &Problem,
+    values: &[f64; PARAMETER_COUNT],
+    held: &[bool; PARAMETER_COUNT],
+) -> Vec<FamilyTest> {
+    let fitted = problem.free();
+    let candidates: Vec<(Family, Vec<Param>)> = Family::ALL
+        .into_iter()
+        .map(|f| {
+            let params: Vec<Param> = f
+                .params()
+                .filter(|p| problem.fixed.is_fixed(*p) && !held[p.index()])
+                .collect();
+            (f, params)
+        })
+        .filter(|(_, params)| !params.is_empty())
+        .collect();
+    if candidates.is_empty() {
+        return Vec::new();
+    }
+    // One Jacobian over the fitted parameters and every candidate.
+    let mut all = problem.clone();
+    all.loss = super::Loss::Squared;
+    all.initial = *values;
+    let mut fixed = FixedSet::default();
+    for p in Param::ALL {
+        let tested = candidates.iter().any(|(_, ps)| ps.contains(&p));
+        fixed.set(p, !(fitted.contains(&p) || tested));
+    }
+    all.fixed = fixed;
+    let eval = Evaluator::new(&all);
+    let x: Vec<f64> = all.free().iter().map(|p| values[p.index()]).collect();
+    let Some((r, jac)) = eval.residuals_and_jacobian(&x) else {
+        return Vec::new();
+    };
+    let free = eval.free().to_vec();
+    let column = |p: Param| free.iter().position(|q| *q == p).expect("free");
+    // Orthonormal basis of the fitted columns.
+    let fitted_cols: Vec<usize> = fitted.iter().map(|p| column(*p)).collect();
+    let mut a = DMatrix::zeros(jac.nrows(), fitted_cols.len());
+    for (k, &c) in fitted_cols.iter().enumerate() {
+        a.set_column(k, &jac.column(c));
+    }
+    let q = a.qr().q();
+    // Capture row ranges.
+    let mut ranges = Vec::with_capacity(all.captures.len());
+    let mut row = 0;
+    for term in &all.captures {
+        ranges.push(row..row + term.residual_count());
+        row += term.residual_count();
+    }
+    let captures = ranges.len();
+    let tests = candidates.len().max(1) as f64;
+    candidates
+        .into_iter()
+        .filter_map(|(family, params)| {
+            let mut kept = Vec::new();
+            let mut cols: Vec<DVector<f64>> = Vec::new();
+            for p in params {
+                let j = jac.column(column(p)).into_owned();
+                let norm = j.norm();
+                if norm == 0.0 {
+                    continue;
+                }
+                let projected = &j - &q * (q.transpose() * &j);
+                if projected.norm() / norm >= UNDETERMINED_RATIO {
+                    kept.push(p);
+                    cols.push(projected / norm);
+                }
+            }
+            let k = cols.len();
+            if k == 0 || captures <= k + 1 {
+                return None;
+            }
+            let mut g = DVector::zeros(k);
+            let mut v = DMatrix::zeros(k, k);
+            for range in &ranges {
+                let rc = r.rows(range.start, range.len());
+                let s = DVector::from_fn(k, |i, _| cols[i].rows(range.start, range.len()).dot(&rc));
+                g += &s;
+                v += &s * s.transpose();
+            }
+            // Hotelling's T² of the capture scores: the sample covariance is centred.
+            let captures_f = captures as f64;
+            let v = v - &g * g.transpose() / captures_f;
+            let eigen = v.symmetric_eigen();
+            let max = eigen.eigenvalues.max();
+            if max <= 0.0 {
+                return None;
+            }
+            let mut t = 0.0;
+            let mut df = 0;
+            for (i, &l) in eigen.eigenvalues.iter().enumerate() {
+                if l > 1e-10 * max {
+                    let z = eigen.eigenvectors.column(i).dot(&g);
+                    t += z * z / l;
+                    df += 1;
+                }
+            }
+            t *= (captures_f - 1.0) / captures_f;
+            let mut gram = DMatrix::zeros(k, k);
+            for a in 0..k {
+                for b in a..k {
+                    let d = cols[a].dot(&cols[b]);
+                    gram[(a, b)] = d;
+                    gram[(b, a)] = d;
+                }
+            }
+            let explained_px2 = gram
+                .pseudo_inverse(1e-10)
+                .map(|p| g.dot(&(p * &g)))
+                .unwrap_or(f64::NAN);
+            let c = captures as f64;
+            let dfq = df as f64;
+            let statistic = (c - dfq) / (dfq * (c - 1.0)) * t;
+            let p_value = FisherSnedecor::new(dfq, c - dfq)
+                .map(|f| f.sf(statistic))
+                .unwrap_or(f64::NAN);
+            Some(FamilyTest {
+                family,
+                params: kept,
+                df,
+                statistic,
+                p_value,
+                significant: p_value < FAMILY_ALPHA / tests,
+                explained_px2,
+            })
+        })
+        .collect()
+}
+
+/// The verdict from the family tests, the RMS and (if estimated) the joint noise level.
+pub fn verdict(tests: Vec<FamilyTest>, rms_px: [f64; 2], joint_noise_deg: Option<f64>) -> Misfit {
+    let mut significant: Vec<&FamilyTest> = tests.iter().filter(|t| t.significant).collect();
+    significant.sort_by(|a, b| b.explained_px2.total_cmp(&a.explained_px2));
+    let suggest: Vec<Family> = significant.iter().map(|t| t.family).collect();
+    let rms = rms_px[0].max(rms_px[1]);
+    let implausible = !(rms <= IMPLAUSIBLE_RMS_PX);
+    let noisy = joint_noise_deg.is_some_and(|j| j > IMPLAUSIBLE_JOINT_NOISE_DEG);
+    let detected = !suggest.is_empty() || implausible || noisy;
+    let names: Vec<&str> = suggest.iter().map(|f| f.name()).collect();
+    let message = if implausible {
+        format!(
+            "not a calibration: the residuals are {rms:.1} px RMS, beyond any plausible noise \
+             ({IMPLAUSIBLE_RMS_PX} px); check the corners, the board column and the joint \
+             angles"
+        )
+    } else if !suggest.is_empty() {
+        format!(
+            "misfit: the residuals hold structure the fitted model cannot produce; the data \
+             point to {} — try --free {} (or --model auto)",
+            names.join(", "),
+            names.join(",")
+        )
+    } else if noisy {
+        format!(
+            "misfit: the residuals look like {:.2}° of joint noise per capture, more than a \
+             NAO's encoders give ({IMPLAUSIBLE_JOINT_NOISE_DEG}°); no family of the extended \
+             model explains it — check the joint angles' timing and the images",
+            joint_noise_deg.unwrap_or(f64::NAN)
+        )
+    } else {
+        "the model explains the data: no family's test is significant".to_string()
+    };
+    Misfit {
+        detected,
+        suggest,
+        message,
+        tests,
+        noise_model_set_aside: false,
+    }
+}

@@ -1,0 +1,276 @@
+//! The extended model (docs/MODEL.md): each family's effect is recovered exactly from
+//! noise-free data when that family is freed, several at once too; the backends agree on
+//! extended problems; families that trade against each other are held and named, never
+//! printed as numbers; bad family names are refused.
+
+use naocalib::model::{Family, FixedSet, Model, PARAMETER_COUNT, Param};
+use naocalib::sim::{SimOptions, simulate};
+use naocalib::solve::{Problem, Solution, UncertaintyOptions, backend, backend_names, calibrate};
+
+use crate::util::{assert_clean_failure, naocalib, stderr};
+
+/// A noise-free dataset of `stances` stances × 2 head postures per leg whose robot has the
+/// effects of `effects`, and its truth.
+fn noise_free(
+    effects: &[Family],
+    seed: u64,
+    stances: usize,
+) -> (naocalib::dataset::Dataset, [f64; PARAMETER_COUNT]) {
+    let options = SimOptions {
+        seed,
+        stances,
+        heads: 2,
+        px_noise: 0.0,
+        effects: effects.to_vec(),
+        ..SimOptions::default()
+    };
+    let dataset = simulate(&Model::default(), &options).expect("simulated");
+    let truth = dataset.truth.as_ref().expect("truth").values;
+    (dataset, truth)
+}
+
+fn free(families: &[Family]) -> FixedSet {
+    let mut fixed = FixedSet::default();
+    for f in families {
+        for p in f.params() {
+            fixed.set(p, false);
+        }
+    }
+    fixed
+}
+
+/// The truth moved along the undetermined directions to where the solution holds them
+/// (each undetermined parameter at its start value 0): what the data determine.
+fn determined_truth(solution: &Solution, truth: &[f64; PARAMETER_COUNT]) -> [f64; PARAMETER_COUNT] {
+    let mut t = *truth;
+    for u in &solution.undetermined {
+        // The direction is in report units with the held parameter's coefficient first.
+        let lead = u
+            .direction
+            .terms
+            .iter()
+            .find(|(p, _)| *p == u.param)
+            .expect("own term");
+        let step = u.param.unit().to_report(t[u.param.index()]) / lead.1;
+        for (p, c) in &u.direction.terms {
+            let moved = p.unit().to_report(t[p.index()]) - step * c;
+            t[p.index()] = p.unit().from_report(moved);
+        }
+    }
+    t
+}
+
+/// Largest |estimate − truth| in report units over the free parameters.
+fn worst_error(solution: &Solution, truth: &[f64; PARAMETER_COUNT]) -> (f64, Param) {
+    solution
+        .fixed
+        .free()
+        .into_iter()
+        .map(|p| {
+            let e = p
+                .unit()
+                .to_report(solution.values[p.index()] - truth[p.index()])
+                .abs();
+            (e, p)
+        })
+        .fold((0.0, Param::CamYaw), |a, b| if b.0 > a.0 { b } else { a })
+}
+
+fn solve_free(families: &[Family], seed: u64) -> (Solution, [f64; PARAMETER_COUNT]) {
+    let (dataset, truth) = noise_free(families, seed, 12);
+    let problem = Problem::from_dataset(&dataset, free(families)).expect("problem");
+    let solver = backend(backend_names()[0], false).expect("backend");
+    let solution =
+        calibrate(&problem, solver.as_ref(), &UncertaintyOptions::default()).expect("solved");
+    (solution, truth)
+}
+
+#[test]
+fn each_family_is_recovered_from_noise_free_data() {
+    for family in [
+        Family::Head,
+        Family::Intrinsics,
+        Family::Distortion,
+        Family::Links,
+        Family::Compliance,
+        Family::Play,
+    ] {
+        let (solution, truth) = solve_free(&[family], 11);
+        assert!(
+            solution.summary.converged,
+            "{family}: {:?}",
+            solution.summary
+        );
+        assert!(solution.values.iter().all(|v| v.is_finite()));
+        let truth = determined_truth(&solution, &truth);
+        let (err, p) = worst_error(&solution, &truth);
+        assert!(err < 1e-6, "{family}: {p} off by {err:e}");
+        assert!(
+            !solution.misfit.detected,
+            "{family}: {}",
+            solution.misfit.message
+        );
+        // Every parameter of the family is fitted or named as undetermined.
+        for p in family.params() {
+            assert!(!solution.fixed.is_fixed(p), "{family}: {p} should be free");
+        }
+    }
+}
+
+#[test]
+fn several_families_at_once_are_recovered() {
+    let families = [
+        Family::Intrinsics,
+        Family::Links,
+        Family::Compliance,
+        Family::Play,
+    ];
+    let (solution, truth) = solve_free(&families, 12);
+    assert!(solution.summary.converged);
+    let truth = determined_truth(&solution, &truth);
+    let (err, p) = worst_error(&solution, &truth);
+    assert!(err < 1e-6, "{p} off by {err:e}");
+    assert_eq!(solution.families[0], Family::Paper);
+    for f in families {
+        assert!(solution.families.contains(&f), "{f} not reported free");
+    }
+}
+
+/// The misfit test does not see the play of a joint whose gravity torque keeps one sign:
+/// the play is then held and named with the offset it trades against, and that offset
+/// carries half the play (what a lying robot's offset is).
+#[test]
+fn play_of_a_one_signed_joint_is_named_not_printed() {
+    let (solution, truth) = solve_free(&[Family::Play], 11);
+    for u in &solution.undetermined {
+        assert_eq!(u.param.family(), Family::Play);
+        assert!(
+            u.direction.terms.len() >= 2,
+            "{} is named with what it trades against: {:?}",
+            u.param,
+            u.direction
+        );
+        assert_eq!(solution.values[u.param.index()], 0.0, "held at nominal");
+        assert_eq!(solution.std[u.param.index()], 0.0);
+        assert!(!solution.is_determined(u.param));
+    }
+    let determined = determined_truth(&solution, &truth);
+    let (err, p) = worst_error(&solution, &determined);
+    assert!(err < 1e-6, "{p} off by {err:e}");
+}
+
+/// Freeing families that trade against each other (the head and the camera position, with
+/// the paper's camera rotation) exits 0, marks the right parameters undetermined in the
+/// JSON with no number for their σ, recovers the others and prints no NaN.
+#[test]
+fn non_identifiable_families_exit_cleanly_with_named_directions() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let dir = tmp.path().join("ds");
+    let out = naocalib()
+        .args([
+            "simulate",
+            "--stances",
+            "8",
+            "--heads",
+            "2",
+            "--seed",
+            "4",
+            "--px-noise",
+            "0.05",
+        ])
+        .arg(&dir)
+        .output()
+        .expect("ran");
+    assert!(out.status.success(), "{}", stderr(&out));
+    let out = naocalib()
+        .args([
+            "solve",
+            "--json",
+            "--free",
+            "head,links,intrinsics,distortion,compliance,play",
+        ])
+        .arg(&dir)
+        .output()
+        .expect("ran");
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(!text.contains("NaN") && !text.contains("nan"), "{text}");
+    let json: serde_json::Value = serde_json::from_str(&text).expect("json");
+    let params = json["parameters"].as_object().expect("parameters");
+    let undetermined: Vec<&String> = params
+        .iter()
+        .filter(|(_, v)| v["undetermined"] == serde_json::Value::Bool(true))
+        .map(|(k, _)| k)
+        .collect();
+    assert!(!undetermined.is_empty(), "something must be undetermined");
+    for name in &undetermined {
+        let p = &params[name.as_str()];
+        assert!(p["std"].is_null(), "{name}: {p}");
+        assert_eq!(p["value"].as_f64(), Some(0.0), "{name} held at nominal");
+    }
+    let named = json["undetermined"].as_array().expect("named combinations");
+    assert_eq!(named.len(), undetermined.len());
+    // The paper's parameters are all determined and close to the truth (noise 0.05 px).
+    for p in &Param::ALL[..naocalib::model::PAPER_PARAMETERS] {
+        let e = &params[p.name()];
+        assert!(
+            e["std"].as_f64().is_some_and(|s| s.is_finite() && s > 0.0),
+            "{p}: {e}"
+        );
+    }
+    let table = naocalib()
+        .args(["solve", "--free", "head,links"])
+        .arg(&dir)
+        .output()
+        .expect("ran");
+    assert!(table.status.success(), "{}", stderr(&table));
+    let text = String::from_utf8_lossy(&table.stdout);
+    assert!(text.contains("undetermined, held at nominal"), "{text}");
+    assert!(!text.contains("NaN"), "{text}");
+}
+
+#[test]
+fn backends_agree_on_an_extended_problem() {
+    let families = [Family::Intrinsics, Family::Links, Family::Compliance];
+    let options = SimOptions {
+        seed: 21,
+        stances: 8,
+        heads: 2,
+        px_noise: 0.1,
+        effects: families.to_vec(),
+        ..SimOptions::default()
+    };
+    let dataset = simulate(&Model::default(), &options).expect("simulated");
+    let problem = Problem::from_dataset(&dataset, free(&families)).expect("problem");
+    let comparison = naocalib::solve::compare::compare(&problem, &[]).expect("compared");
+    assert_eq!(comparison.runs.len(), backend_names().len());
+    for run in &comparison.runs {
+        assert!(
+            run.converged(),
+            "{}: {:?}",
+            run.solver,
+            run.outcome.as_ref().err()
+        );
+        let (diff, p) = run.max_sigma.expect("compared with the reference");
+        assert!(diff < 0.01, "{} differs by {diff} σ in {p}", run.solver);
+    }
+}
+
+#[test]
+fn unknown_family_is_refused_by_name() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let dir = tmp.path().join("ds");
+    crate::util::simulate_small(&dir, 2);
+    let out = naocalib()
+        .args(["solve", "--free", "elasticity"])
+        .arg(&dir)
+        .output()
+        .expect("ran");
+    assert_clean_failure(&out, &["elasticity", "families"]);
+    let out = naocalib()
+        .args(["simulate", "--effects", "paper"])
+        .arg(tmp.path().join("x"))
+        .output()
+        .expect("ran");
+    assert_clean_failure(&out, &["paper"]);
+}
