@@ -8,11 +8,12 @@
 //!    the model.
 //! 2. **Alignment.** The model's error moves the whole board by up to about a square.
 //!    The shift of the predicted pattern that best matches the image is searched (a
-//!    saddle with the predicted colours scores, at most 1 per vertex). A shift by one
-//!    square turns every saddle's colours round, and one by two squares leaves a row or
-//!    column of the pattern on the plain plate, so the true alignment stands out; when
-//!    another alignment a square or more away scores nearly as well, the image is given
-//!    up (nothing is numbered by guesswork).
+//!    saddle with the predicted colours scores up to ½, a vertex predicted in the image
+//!    without one costs ½). A shift by one square turns every saddle's colours round, and
+//!    one by two squares puts a row or column of the pattern on the plain plate or the
+//!    background, so the true alignment stands out, also for a board cut by the image
+//!    border; when another alignment a square or more away scores nearly as well, the
+//!    image is given up (nothing is numbered by guesswork).
 //! 3. **Refinement and checks.** Each vertex with a clear saddle is refined with
 //!    `cornerSubPix` in a window that stays inside the image; it must stay near its
 //!    start, still show its saddle, and fit one homography with the others (after the
@@ -39,6 +40,8 @@ pub const MIN_HALF_WINDOW: i32 = 2;
 pub const MIN_VERTICES: usize = 6;
 /// Where the colour samples lie: this fraction of a square along both board axes.
 const SAMPLE: f64 = 0.3;
+/// Where the inner colour samples lie (they show the saddle only near its centre).
+const INNER: f64 = 0.12;
 /// Saddle contrast (white minus black) that counts fully [grey levels].
 const FULL_CONTRAST: f64 = 24.0;
 /// Saddle score (of 1) a vertex needs to be taken.
@@ -101,9 +104,12 @@ struct Predicted {
     board: [f64; 2],
     /// Predicted pixel.
     pixel: [f64; 2],
-    /// Offsets of the two black and two white samples from the vertex [px].
+    /// Offsets of the two black and two white samples from the vertex [px]: at
+    /// [`SAMPLE`] of a square, and (`inner_*`) at [`INNER`].
     black: [[f64; 2]; 2],
     white: [[f64; 2]; 2],
+    inner_black: [[f64; 2]; 2],
+    inner_white: [[f64; 2]; 2],
     /// Local size of a square [px].
     square: f64,
 }
@@ -117,11 +123,53 @@ impl Predicted {
     /// Saddle score at `p` (0 … 1): how much both white samples are brighter than both
     /// black ones, or `None` when a sample leaves the image.
     fn score(&self, img: &Integral, p: [f64; 2]) -> Option<f64> {
-        let h = self.patch();
+        Some((self.contrast(img, p, false)? / FULL_CONTRAST).clamp(0.0, 1.0))
+    }
+
+    /// White minus black of the samples around `p` (the inner ones with `inner`)
+    /// [grey levels].
+    fn contrast(&self, img: &Integral, p: [f64; 2], inner: bool) -> Option<f64> {
+        let (black, white, h) = if inner {
+            (&self.inner_black, &self.inner_white, 1)
+        } else {
+            (&self.black, &self.white, self.patch())
+        };
         let at = |d: [f64; 2]| img.mean(p[0] + d[0], p[1] + d[1], h);
-        let b = at(self.black[0])?.max(at(self.black[1])?);
-        let w = at(self.white[0])?.min(at(self.white[1])?);
-        Some(((w - b) / FULL_CONTRAST).clamp(0.0, 1.0))
+        let b = at(black[0])?.max(at(black[1])?);
+        let w = at(white[0])?.min(at(white[1])?);
+        Some(w - b)
+    }
+
+    /// Score of a vertex exactly at `p` (0 … 1): both rings of samples must show the
+    /// saddle; the inner one only does within a few pixels of its centre.
+    fn centred(&self, img: &Integral, p: [f64; 2]) -> Option<f64> {
+        let c = self
+            .contrast(img, p, false)?
+            .min(self.contrast(img, p, true)?);
+        Some((c / FULL_CONTRAST).clamp(0.0, 1.0))
+    }
+
+    /// The pixel within a third of a square of `start` where both rings show the saddle
+    /// most strongly, or `None` when none shows it.
+    fn peak(&self, img: &Integral, start: [f64; 2]) -> Option<[f64; 2]> {
+        let r = (self.square / 3.0).round() as i64;
+        let mut best: Option<(f64, [f64; 2])> = None;
+        for dy in -r..=r {
+            for dx in -r..=r {
+                let p = [start[0].round() + dx as f64, start[1].round() + dy as f64];
+                let Some(outer) = self.contrast(img, p, false) else {
+                    continue;
+                };
+                let Some(inner) = self.contrast(img, p, true) else {
+                    continue;
+                };
+                let c = outer.min(inner);
+                if c >= MIN_SCORE * FULL_CONTRAST && best.is_none_or(|(b, _)| c + inner > b) {
+                    best = Some((c + inner, p));
+                }
+            }
+        }
+        best.map(|(_, p)| p)
     }
 }
 
@@ -145,14 +193,21 @@ fn predict(model: &Model, camera: &Camera, pose: &Pose<f64>) -> Vec<Predicted> {
             let pixel = project(x, y)?;
             let mut black = Vec::new();
             let mut white = Vec::new();
+            let mut inner_black = Vec::new();
+            let mut inner_white = Vec::new();
             for (sx, sy) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)] {
-                let (qx, qy) = (x + sx * SAMPLE * sq, y + sy * SAMPLE * sq);
-                let q = project(qx, qy)?;
-                let d = [q[0] - pixel[0], q[1] - pixel[1]];
-                if is_black(model, qx, qy) {
-                    black.push(d);
-                } else {
-                    white.push(d);
+                for (at, b, w) in [
+                    (SAMPLE, &mut black, &mut white),
+                    (INNER, &mut inner_black, &mut inner_white),
+                ] {
+                    let (qx, qy) = (x + sx * at * sq, y + sy * at * sq);
+                    let q = project(qx, qy)?;
+                    let d = [q[0] - pixel[0], q[1] - pixel[1]];
+                    if is_black(model, qx, qy) {
+                        b.push(d);
+                    } else {
+                        w.push(d);
+                    }
                 }
             }
             let ax = project(x + sq, y)?;
@@ -164,17 +219,23 @@ fn predict(model: &Model, camera: &Camera, pose: &Pose<f64>) -> Vec<Predicted> {
                 pixel,
                 black: [black[0], black[1]],
                 white: [white[0], white[1]],
+                inner_black: [inner_black[0], inner_black[1]],
+                inner_white: [inner_white[0], inner_white[1]],
                 square: len(ax).min(len(ay)),
             })
         })
         .collect()
 }
 
-/// Total saddle score of the prediction shifted by `t`, and how many vertices count.
+/// How well the prediction shifted by `t` matches the image: every vertex in the image
+/// adds its saddle score less one half, so that a vertex predicted in the image where
+/// there is no saddle of its colours counts against the shift (a vertex predicted outside
+/// the image counts for nothing).
 fn total(img: &Integral, predicted: &[Predicted], t: [f64; 2]) -> f64 {
     predicted
         .iter()
         .filter_map(|p| p.score(img, [p.pixel[0] + t[0], p.pixel[1] + t[1]]))
+        .map(|s| s - 0.5)
         .sum()
 }
 
@@ -204,7 +265,7 @@ fn align(img: &Integral, predicted: &[Predicted], reach: f64) -> Result<[f64; 2]
             }
         }
     }
-    if best < MIN_VERTICES as f64 * MIN_SCORE {
+    if best < MIN_VERTICES as f64 * 0.5 {
         return Err(format!(
             "no board pattern near where the model predicts it (best match {best:.1} vertices)"
         ));
@@ -226,9 +287,9 @@ fn align(img: &Integral, predicted: &[Predicted], reach: f64) -> Result<[f64; 2]
     Ok(at)
 }
 
-/// Refines the vertex started at `start` with `cornerSubPix` in a half-window of about
-/// `factor` squares that stays inside the image; `None` when it is too near the border
-/// or leaves its start by more than a third of a square.
+/// Refines the vertex started at `start` (the pixel where its saddle peaks) with
+/// `cornerSubPix` in a half-window of about `factor` squares that stays inside the image;
+/// `None` when it is too near the border, or leaves its start by 3 px or more.
 fn refine(
     image: &Mat,
     p: &Predicted,
@@ -260,13 +321,33 @@ fn refine(
         criteria,
     )?;
     let q = pts.get(0)?;
+    if q.x == start[0] as f32 && q.y == start[1] as f32 {
+        // cornerSubPix leaves a point where its window holds no usable gradients.
+        return Ok(None);
+    }
     let q = [q.x as f64, q.y as f64];
     let moved = ((q[0] - start[0]).powi(2) + (q[1] - start[1]).powi(2)).sqrt();
     let inside = q[0] - half as f64 - 1.0 >= 0.0
         && q[1] - half as f64 - 1.0 >= 0.0
         && q[0] + half as f64 + 1.0 <= w - 1.0
         && q[1] + half as f64 + 1.0 <= h - 1.0;
-    Ok((moved < p.square / 3.0 && inside).then_some(q))
+    Ok((moved < 3.0 && inside).then_some(q))
+}
+
+/// Finds the vertex `p` near `guess`: where its saddle peaks, refined with
+/// `cornerSubPix`, and still a saddle there.
+fn locate(
+    image: &Mat,
+    integral: &Integral,
+    p: &Predicted,
+    guess: [f64; 2],
+    factor: f64,
+) -> opencv::Result<Option<[f64; 2]>> {
+    let Some(start) = p.peak(integral, guess) else {
+        return Ok(None);
+    };
+    Ok(refine(image, p, start, factor)?
+        .filter(|q| p.centred(integral, *q).unwrap_or(0.0) >= MIN_SCORE))
 }
 
 /// The undistorted pixel of `p` (the pinhole image of the same ray).
@@ -342,15 +423,16 @@ pub fn detect(
         Err(reason) => return Ok(Err(reason)),
     };
     let tolerance = (0.04 * square).max(0.75);
+    if std::env::var_os("NAOCALIB_DEBUG").is_some() {
+        eprintln!("square {square:.1} reach {reach:.1} shift {shift:?}");
+        for p in &predicted {
+            eprintln!("  {:?} pred {:?}", p.vertex, p.pixel);
+        }
+    }
     let mut found: Vec<(usize, [f64; 2])> = Vec::new();
     for (k, p) in predicted.iter().enumerate() {
-        let start = [p.pixel[0] + shift[0], p.pixel[1] + shift[1]];
-        if p.score(integral, start).unwrap_or(0.0) < MIN_SCORE {
-            continue;
-        }
-        if let Some(q) = refine(image, p, start, factor)?
-            && p.score(integral, q).unwrap_or(0.0) >= MIN_SCORE
-        {
+        let guess = [p.pixel[0] + shift[0], p.pixel[1] + shift[1]];
+        if let Some(q) = locate(image, integral, p, guess, factor)? {
             found.push((k, q));
         }
     }
@@ -366,15 +448,10 @@ pub fn detect(
         if kept.iter().any(|(j, _)| *j == k) {
             continue;
         }
-        let Some(start) = distorted(camera, assign::apply(&h, p.board)) else {
+        let Some(guess) = distorted(camera, assign::apply(&h, p.board)) else {
             continue;
         };
-        if p.score(integral, start).unwrap_or(0.0) < MIN_SCORE {
-            continue;
-        }
-        if let Some(q) = refine(image, p, start, factor)?
-            && p.score(integral, q).unwrap_or(0.0) >= MIN_SCORE
-        {
+        if let Some(q) = locate(image, integral, p, guess, factor)? {
             kept.push((k, q));
             added = true;
         }

@@ -132,8 +132,8 @@ pub fn write(
 ) -> Option<Result<PathBuf, DetectError>> {
     let capture = dataset.capture(result.capture)?;
     let image = capture.image.as_ref()?;
-    let path = super::resolve_image(&dataset.dir, image).ok()?;
-    let grey = super::read_grey(&path).ok()?;
+    let image_path = super::resolve_image(&dataset.dir, image).ok()?;
+    let grey = super::read_grey(&image_path).ok()?;
     let detected: Vec<[f64; 2]> = match &result.outcome {
         Outcome::Found { corners, .. } => corners.iter().map(|c: &Corner| c.pixel).collect(),
         _ => Vec::new(),

@@ -11,7 +11,8 @@ use naocalib::detect::{self, DetectOptions, Outcome};
 use naocalib::model::{FixedSet, Model, Param};
 use naocalib::sim::render::{ImageOutput, RenderOptions};
 use naocalib::sim::{SimOptions, simulate};
-use naocalib::solve::{Problem, backend, solve};
+use crate::util::solve;
+use naocalib::solve::{Problem, backend};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 
