@@ -143,10 +143,17 @@ impl Predicted {
     /// Score of a vertex exactly at `p` (0 … 1): both rings of samples must show the
     /// saddle; the inner one only does within a few pixels of its centre.
     fn centred(&self, img: &Integral, p: [f64; 2]) -> Option<f64> {
-        let c = self
-            .contrast(img, p, false)?
-            .min(self.contrast(img, p, true)?);
-        Some((c / FULL_CONTRAST).clamp(0.0, 1.0))
+        Some((self.both(img, p)? / FULL_CONTRAST).clamp(0.0, 1.0))
+    }
+
+    /// The smaller contrast of the two rings at `p`; the inner ring's alone near the image
+    /// border, where the outer ring leaves the image.
+    fn both(&self, img: &Integral, p: [f64; 2]) -> Option<f64> {
+        let inner = self.contrast(img, p, true)?;
+        Some(match self.contrast(img, p, false) {
+            Some(outer) => outer.min(inner),
+            None => inner,
+        })
     }
 
     /// The pixel within a third of a square of `start` where both rings show the saddle
@@ -157,13 +164,12 @@ impl Predicted {
         for dy in -r..=r {
             for dx in -r..=r {
                 let p = [start[0].round() + dx as f64, start[1].round() + dy as f64];
-                let Some(outer) = self.contrast(img, p, false) else {
-                    continue;
-                };
                 let Some(inner) = self.contrast(img, p, true) else {
                     continue;
                 };
-                let c = outer.min(inner);
+                let Some(c) = self.both(img, p) else {
+                    continue;
+                };
                 if c >= MIN_SCORE * FULL_CONTRAST && best.is_none_or(|(b, _)| c + inner > b) {
                     best = Some((c + inner, p));
                 }
@@ -289,7 +295,8 @@ fn align(img: &Integral, predicted: &[Predicted], reach: f64) -> Result<[f64; 2]
 
 /// Refines the vertex started at `start` (the pixel where its saddle peaks) with
 /// `cornerSubPix` in a half-window of about `factor` squares that stays inside the image;
-/// `None` when it is too near the border, or leaves its start by 3 px or more.
+/// `None` when it is too near the border, or leaves its start by a quarter of a square
+/// (at least 3 px) or more.
 fn refine(
     image: &Mat,
     p: &Predicted,
@@ -331,7 +338,7 @@ fn refine(
         && q[1] - half as f64 - 1.0 >= 0.0
         && q[0] + half as f64 + 1.0 <= w - 1.0
         && q[1] + half as f64 + 1.0 <= h - 1.0;
-    Ok((moved < 3.0 && inside).then_some(q))
+    Ok((moved < (p.square / 4.0).max(3.0) && inside).then_some(q))
 }
 
 /// Finds the vertex `p` near `guess`: where its saddle peaks, refined with
@@ -343,11 +350,18 @@ fn locate(
     guess: [f64; 2],
     factor: f64,
 ) -> opencv::Result<Option<[f64; 2]>> {
+    let debug = std::env::var_os("NAOCALIB_DEBUG").is_some();
     let Some(start) = p.peak(integral, guess) else {
+        if debug {
+            eprintln!("{:?} guess {guess:?}: no peak; contrast {:?} {:?}", p.vertex, p.contrast(integral, guess, false), p.contrast(integral, guess, true));
+        }
         return Ok(None);
     };
-    Ok(refine(image, p, start, factor)?
-        .filter(|q| p.centred(integral, *q).unwrap_or(0.0) >= MIN_SCORE))
+    let r = refine(image, p, start, factor)?;
+    if debug {
+        eprintln!("{:?} guess {guess:?} peak {start:?} refined {r:?} centred {:?}", p.vertex, r.map(|q| p.centred(integral, q)));
+    }
+    Ok(r.filter(|q| p.centred(integral, *q).unwrap_or(0.0) >= MIN_SCORE))
 }
 
 /// The undistorted pixel of `p` (the pinhole image of the same ray).

@@ -81,6 +81,14 @@ fn score(dataset: &Dataset, corners: &[Corner], results: &[detect::ImageResult])
             .iter()
             .filter(|t| got.iter().any(|c| c.vertex == t.vertex))
             .count();
+        if std::env::var_os("NAOCALIB_DEBUG").is_some() {
+            for t in inside.iter().filter(|t| !got.iter().any(|c| c.vertex == t.vertex)) {
+                let w = model.camera.width as f64 - 1.0;
+                let h = model.camera.height as f64 - 1.0;
+                let d = t.pixel[0].min(t.pixel[1]).min(w - t.pixel[0]).min(h - t.pixel[1]);
+                eprintln!("missed {} {:?} {:.1} px from the border ({} found)", r.capture, t.vertex, d, got.len());
+            }
+        }
         for c in got {
             let t = expected
                 .iter()
