@@ -245,9 +245,10 @@ fn total(img: &Integral, predicted: &[Predicted], t: [f64; 2]) -> f64 {
         .sum()
 }
 
-/// The shift of the prediction that matches the image best, searched within `reach`
-/// pixels; `Err` when another shift about a square away or more matches nearly as well.
-fn align(img: &Integral, predicted: &[Predicted], reach: f64) -> Result<[f64; 2], String> {
+/// The shifts of the prediction that match the image best, searched within `reach`
+/// pixels: the best, and any other a square or more away that matches nearly as well
+/// (see [`AMBIGUOUS`]); `Err` when nothing matches.
+fn align(img: &Integral, predicted: &[Predicted], reach: f64) -> Result<Vec<[f64; 2]>, String> {
     let r = reach.ceil() as i64;
     let mut scores = Vec::new();
     for dy in (-r..=r).step_by(2) {
@@ -256,21 +257,11 @@ fn align(img: &Integral, predicted: &[Predicted], reach: f64) -> Result<[f64; 2]
             scores.push((total(img, predicted, t), t));
         }
     }
-    let (mut best, mut at) = scores
+    let (best, at) = scores
         .iter()
         .copied()
         .max_by(|a, b| a.0.total_cmp(&b.0))
         .unwrap_or((0.0, [0.0, 0.0]));
-    let coarse = at;
-    for dy in -1..=1 {
-        for dx in -1..=1 {
-            let t = [coarse[0] + dx as f64, coarse[1] + dy as f64];
-            let s = total(img, predicted, t);
-            if s > best {
-                (best, at) = (s, t);
-            }
-        }
-    }
     if best < MIN_VERTICES as f64 * 0.5 {
         return Err(format!(
             "no board pattern near where the model predicts it (best match {best:.1} vertices)"
@@ -279,18 +270,20 @@ fn align(img: &Integral, predicted: &[Predicted], reach: f64) -> Result<[f64; 2]
     let mut squares: Vec<f64> = predicted.iter().map(|p| p.square).collect();
     squares.sort_by(f64::total_cmp);
     let square = squares[squares.len() / 2];
-    let rival = scores
+    let far = |t: &[f64; 2], u: &[f64; 2]| (t[0] - u[0]).hypot(t[1] - u[1]) > 0.7 * square;
+    let mut candidates = vec![at];
+    let mut rivals: Vec<(f64, [f64; 2])> = scores
         .iter()
-        .filter(|(_, t)| ((t[0] - at[0]).powi(2) + (t[1] - at[1]).powi(2)).sqrt() > 0.7 * square)
-        .map(|s| s.0)
-        .fold(0.0, f64::max);
-    if rival > AMBIGUOUS * best {
-        return Err(format!(
-            "ambiguous: the pattern matches {best:.1} vertices where best, and {rival:.1} a \
-             square or more away"
-        ));
+        .copied()
+        .filter(|(s, t)| *s > AMBIGUOUS * best && far(t, &at))
+        .collect();
+    rivals.sort_by(|a, b| b.0.total_cmp(&a.0));
+    for (_, t) in rivals {
+        if candidates.len() < 4 && candidates.iter().all(|c| far(c, &t)) {
+            candidates.push(t);
+        }
     }
-    Ok(at)
+    Ok(candidates)
 }
 
 /// Refines the vertex started at `start` (the pixel where its saddle peaks) with
@@ -432,17 +425,86 @@ pub fn detect(
     // The model's error (a few degrees of camera and joint offsets) moves the board by up
     // to about a square; the search reaches a little further.
     let reach = (1.25 * square).max(24.0);
-    let shift = match align(integral, &predicted, reach) {
-        Ok(t) => t,
+    let candidates = match align(integral, &predicted, reach) {
+        Ok(c) => c,
         Err(reason) => return Ok(Err(reason)),
     };
     let tolerance = (0.04 * square).max(0.75);
-    if std::env::var_os("NAOCALIB_DEBUG").is_some() {
-        eprintln!("square {square:.1} reach {reach:.1} shift {shift:?}");
-        for p in &predicted {
-            eprintln!("  {:?} pred {:?}", p.vertex, p.pixel);
+    let mut outcomes = Vec::new();
+    for shift in &candidates {
+        if let Some(found) = search(image, integral, camera, &predicted, *shift, factor, tolerance)? {
+            outcomes.push(found);
         }
     }
+    // Alignments that end in the same vertices at the same pixels are one; of different
+    // numberings, one must be clearly better supported, else nothing is numbered.
+    outcomes.sort_by_key(|f| std::cmp::Reverse(f.support()));
+    let Some(best) = outcomes.first() else {
+        return Ok(Err(
+            "too few vertices found where the model predicts the board".into(),
+        ));
+    };
+    for other in &outcomes[1..] {
+        if !best.agrees(other) && other.support() + CLEARLY > best.support() {
+            return Ok(Err(format!(
+                "ambiguous: the pattern fits {} vertices (and misses {}) in one place and {} \
+                 (missing {}) a square or more away",
+                best.kept.len(),
+                best.missing,
+                other.kept.len(),
+                other.missing
+            )));
+        }
+    }
+    let mut kept = best.kept.clone();
+    kept.sort_by_key(|(k, _)| predicted[*k].vertex);
+    Ok(Ok(kept
+        .into_iter()
+        .map(|(k, q)| (predicted[k].vertex, q))
+        .collect()))
+}
+
+/// The vertices one alignment leads to.
+struct Found {
+    /// Index into the prediction and pixel of each vertex found.
+    kept: Vec<(usize, [f64; 2])>,
+    /// Vertices the final homography puts well inside the image where no saddle of their
+    /// colours is.
+    missing: usize,
+}
+
+/// How much more support one alignment needs than another that numbers differently.
+const CLEARLY: i64 = 4;
+
+impl Found {
+    /// Vertices found less twice the vertices missing.
+    fn support(&self) -> i64 {
+        self.kept.len() as i64 - 2 * self.missing as i64
+    }
+
+    /// Whether both give the same vertex at the same pixel wherever they share a pixel.
+    fn agrees(&self, other: &Found) -> bool {
+        self.kept.iter().all(|(k, q)| {
+            other.kept.iter().all(|(j, r)| {
+                let same_place = (q[0] - r[0]).hypot(q[1] - r[1]) < 1.0;
+                same_place == (k == j)
+            })
+        })
+    }
+}
+
+/// Finds the vertices starting from the prediction shifted by `shift`: each where its
+/// saddle peaks, refined and checked, those fitting one homography kept; then the
+/// vertices that homography predicts, likewise. `None` when too few are found.
+fn search(
+    image: &Mat,
+    integral: &Integral,
+    camera: &Camera,
+    predicted: &[Predicted],
+    shift: [f64; 2],
+    factor: f64,
+    tolerance: f64,
+) -> opencv::Result<Option<Found>> {
     let mut found: Vec<(usize, [f64; 2])> = Vec::new();
     for (k, p) in predicted.iter().enumerate() {
         let guess = [p.pixel[0] + shift[0], p.pixel[1] + shift[1]];
@@ -450,14 +512,11 @@ pub fn detect(
             found.push((k, q));
         }
     }
-    let Some((mut h, mut kept)) = consistent(camera, &predicted, &found, tolerance) else {
-        return Ok(Err(format!(
-            "only {} vertices found where the model predicts the board",
-            found.len()
-        )));
+    let Some((h, mut kept)) = consistent(camera, predicted, &found, tolerance) else {
+        return Ok(None);
     };
     // The homography of the vertices found predicts the others.
-    let mut added = false;
+    let mut missing = 0;
     for (k, p) in predicted.iter().enumerate() {
         if kept.iter().any(|(j, _)| *j == k) {
             continue;
@@ -467,19 +526,9 @@ pub fn detect(
         };
         if let Some(q) = locate(image, integral, p, guess, factor)? {
             kept.push((k, q));
-            added = true;
+        } else if p.score(integral, guess).is_some_and(|s| s == 0.0) {
+            missing += 1;
         }
     }
-    if added {
-        match consistent(camera, &predicted, &kept, tolerance) {
-            Some((h2, k2)) => (h, kept) = (h2, k2),
-            None => return Ok(Err("the vertices found do not fit one homography".into())),
-        }
-    }
-    let _ = h;
-    kept.sort_by_key(|(k, _)| predicted[*k].vertex);
-    Ok(Ok(kept
-        .into_iter()
-        .map(|(k, q)| (predicted[k].vertex, q))
-        .collect()))
+    Ok(consistent(camera, predicted, &kept, tolerance).map(|(_, kept)| Found { kept, missing }))
 }
