@@ -110,6 +110,13 @@ struct Predicted {
     white: [[f64; 2]; 2],
     inner_black: [[f64; 2]; 2],
     inner_white: [[f64; 2]; 2],
+    /// The same samples' offsets on the board plane [mm].
+    board_black: [[f64; 2]; 2],
+    board_white: [[f64; 2]; 2],
+    board_inner_black: [[f64; 2]; 2],
+    board_inner_white: [[f64; 2]; 2],
+    /// Edge of a square on the board [mm].
+    board_step: f64,
     /// Local size of a square [px].
     square: f64,
 }
@@ -201,18 +208,21 @@ fn predict(model: &Model, camera: &Camera, pose: &Pose<f64>) -> Vec<Predicted> {
             let mut white = Vec::new();
             let mut inner_black = Vec::new();
             let mut inner_white = Vec::new();
+            let mut board = [Vec::new(), Vec::new(), Vec::new(), Vec::new()];
             for (sx, sy) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)] {
-                for (at, b, w) in [
-                    (SAMPLE, &mut black, &mut white),
-                    (INNER, &mut inner_black, &mut inner_white),
+                for (ring, at, b, w) in [
+                    (0, SAMPLE, &mut black, &mut white),
+                    (2, INNER, &mut inner_black, &mut inner_white),
                 ] {
-                    let (qx, qy) = (x + sx * at * sq, y + sy * at * sq);
-                    let q = project(qx, qy)?;
+                    let (dx, dy) = (sx * at * sq, sy * at * sq);
+                    let q = project(x + dx, y + dy)?;
                     let d = [q[0] - pixel[0], q[1] - pixel[1]];
-                    if is_black(model, qx, qy) {
+                    if is_black(model, x + dx, y + dy) {
                         b.push(d);
+                        board[ring].push([dx, dy]);
                     } else {
                         w.push(d);
+                        board[ring + 1].push([dx, dy]);
                     }
                 }
             }
@@ -227,6 +237,11 @@ fn predict(model: &Model, camera: &Camera, pose: &Pose<f64>) -> Vec<Predicted> {
                 white: [white[0], white[1]],
                 inner_black: [inner_black[0], inner_black[1]],
                 inner_white: [inner_white[0], inner_white[1]],
+                board_black: [board[0][0], board[0][1]],
+                board_white: [board[1][0], board[1][1]],
+                board_inner_black: [board[2][0], board[2][1]],
+                board_inner_white: [board[3][0], board[3][1]],
+                board_step: sq,
                 square: len(ax).min(len(ay)),
             })
         })
@@ -512,23 +527,68 @@ fn search(
             found.push((k, q));
         }
     }
-    let Some((h, mut kept)) = consistent(camera, predicted, &found, tolerance) else {
+    let Some((mut h, mut kept)) = consistent(camera, predicted, &found, tolerance) else {
         return Ok(None);
     };
-    // The homography of the vertices found predicts the others.
+    // The homography of the vertices found predicts the others, and how each looks (the
+    // model's prediction may be turned against the image).
     let mut missing = 0;
-    for (k, p) in predicted.iter().enumerate() {
-        if kept.iter().any(|(j, _)| *j == k) {
-            continue;
-        }
-        let Some(guess) = distorted(camera, assign::apply(&h, p.board)) else {
-            continue;
+    for round in 0..2 {
+        let Some(seen) = reshape(predicted, &h, camera) else {
+            return Ok(None);
         };
-        if let Some(q) = locate(image, integral, p, guess, factor)? {
-            kept.push((k, q));
-        } else if p.score(integral, guess).is_some_and(|s| s == 0.0) {
-            missing += 1;
+        missing = 0;
+        let before = kept.len();
+        for (k, p) in seen.iter().enumerate() {
+            if kept.iter().any(|(j, _)| *j == k) {
+                continue;
+            }
+            if let Some(q) = locate(image, integral, p, p.pixel, factor)? {
+                kept.push((k, q));
+            } else if p.score(integral, p.pixel).is_some_and(|s| s == 0.0) {
+                missing += 1;
+            }
+        }
+        match consistent(camera, predicted, &kept, tolerance) {
+            Some((h2, k2)) => (h, kept) = (h2, k2),
+            None => return Ok(None),
+        }
+        if round == 1 || kept.len() == before {
+            break;
         }
     }
-    Ok(consistent(camera, predicted, &kept, tolerance).map(|(_, kept)| Found { kept, missing }))
+    Ok(Some(Found { kept, missing }))
+}
+
+/// The prediction redone with the homography `h` (board plane to undistorted pixels) of
+/// the vertices found: where each vertex is and how its squares lie in the image.
+fn reshape(predicted: &[Predicted], h: &Matrix3<f64>, camera: &Camera) -> Option<Vec<Predicted>> {
+    let at = |x: f64, y: f64| distorted(camera, assign::apply(h, [x, y]));
+    predicted
+        .iter()
+        .map(|p| {
+            let [x, y] = p.board;
+            let pixel = at(x, y)?;
+            let to = |ring: &[[f64; 2]; 2]| -> Option<[[f64; 2]; 2]> {
+                let mut out = [[0.0; 2]; 2];
+                for (o, d) in out.iter_mut().zip(ring) {
+                    let q = at(x + d[0], y + d[1])?;
+                    *o = [q[0] - pixel[0], q[1] - pixel[1]];
+                }
+                Some(out)
+            };
+            let ax = at(x + p.board_step, y)?;
+            let ay = at(x, y + p.board_step)?;
+            let len = |q: [f64; 2]| (q[0] - pixel[0]).hypot(q[1] - pixel[1]);
+            Some(Predicted {
+                pixel,
+                black: to(&p.board_black)?,
+                white: to(&p.board_white)?,
+                inner_black: to(&p.board_inner_black)?,
+                inner_white: to(&p.board_inner_white)?,
+                square: len(ax).min(len(ay)),
+                ..p.clone()
+            })
+        })
+        .collect()
 }

@@ -480,8 +480,16 @@ pub fn header_size(path: &Path, bytes: &[u8]) -> Result<[u32; 2], DetectError> {
     Ok([w, h])
 }
 
-/// Refuses an image whose header claims more than [`MAX_SIDE`] or [`MAX_PIXELS`].
+/// Refuses an image whose header claims more than [`MAX_SIDE`] or [`MAX_PIXELS`] (and one
+/// that is no PNG, JPEG, BMP or PGM).
 fn check_header(path: &Path, bytes: &[u8]) -> Result<[u32; 2], DetectError> {
+    const KNOWN: [&[u8]; 5] = [b"\x89PNG", b"\xff\xd8\xff", b"BM", b"P5", b"P2"];
+    if !KNOWN.iter().any(|m| bytes.starts_with(m)) {
+        return Err(DetectError::Decode {
+            path: path.to_path_buf(),
+            message: "not a PNG, JPEG, BMP or PGM file (unknown signature)".into(),
+        });
+    }
     let size = header_size(path, bytes)?;
     if size[0] > MAX_SIDE || size[1] > MAX_SIDE || size[0] as u64 * size[1] as u64 > MAX_PIXELS {
         return Err(DetectError::TooLarge {
@@ -507,12 +515,6 @@ pub fn decode_grey(path: &Path, bytes: &[u8]) -> Result<Mat, DetectError> {
         return Err(DetectError::Empty {
             path: path.to_path_buf(),
         });
-    }
-    const KNOWN: [&[u8]; 5] = [b"\x89PNG", b"\xff\xd8\xff", b"BM", b"P5", b"P2"];
-    if !KNOWN.iter().any(|m| bytes.starts_with(m)) {
-        return Err(decode(
-            "not a PNG, JPEG, BMP or PGM file (unknown signature)".into(),
-        ));
     }
     check_header(path, bytes)?;
     if bytes.starts_with(b"\x89PNG") {
