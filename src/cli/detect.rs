@@ -86,9 +86,12 @@ fn read_solution(path: &Path) -> Result<[f64; PARAMETER_COUNT]> {
 /// overlays only with `--force`.
 fn overlay_write_options(dataset: &Dataset, args: &DetectArgs) -> WriteOptions {
     let mut options = WriteOptions::protecting_dataset(&args.dataset, args.force);
-    options
-        .inputs
-        .extend(dataset.captures.iter().filter_map(|c| dataset.image_path(c)));
+    options.inputs.extend(
+        dataset
+            .captures
+            .iter()
+            .filter_map(|c| dataset.image_path(c)),
+    );
     if let Some(after) = &args.after {
         options.inputs.push(after.clone());
     }
@@ -155,7 +158,10 @@ pub fn run(args: &DetectArgs) -> Result<ExitCode> {
     let overlay_options = overlay_write_options(&dataset, args);
     if let Some(dir) = &args.overlay {
         for capture in dataset.captures.iter().filter(|c| c.image.is_some()) {
-            detect::overlay::check_writable(&detect::overlay::path(dir, capture.id), &overlay_options)?;
+            detect::overlay::check_writable(
+                &detect::overlay::path(dir, capture.id),
+                &overlay_options,
+            )?;
         }
     }
     let mut options = DetectOptions {

@@ -361,13 +361,22 @@ fn locate(
     let debug = std::env::var_os("NAOCALIB_DEBUG").is_some();
     let Some(start) = p.peak(integral, guess) else {
         if debug {
-            eprintln!("{:?} guess {guess:?}: no peak; contrast {:?} {:?}", p.vertex, p.contrast(integral, guess, false), p.contrast(integral, guess, true));
+            eprintln!(
+                "{:?} guess {guess:?}: no peak; contrast {:?} {:?}",
+                p.vertex,
+                p.contrast(integral, guess, false),
+                p.contrast(integral, guess, true)
+            );
         }
         return Ok(None);
     };
     let r = refine(image, p, start, factor)?;
     if debug {
-        eprintln!("{:?} guess {guess:?} peak {start:?} refined {r:?} centred {:?}", p.vertex, r.map(|q| p.centred(integral, q)));
+        eprintln!(
+            "{:?} guess {guess:?} peak {start:?} refined {r:?} centred {:?}",
+            p.vertex,
+            r.map(|q| p.centred(integral, q))
+        );
     }
     Ok(r.filter(|q| p.centred(integral, *q).unwrap_or(0.0) >= MIN_SCORE))
 }
@@ -447,7 +456,9 @@ pub fn detect(
     let tolerance = (0.04 * square).max(0.75);
     let mut outcomes = Vec::new();
     for shift in &candidates {
-        if let Some(found) = search(image, integral, camera, &predicted, *shift, factor, tolerance)? {
+        if let Some(found) = search(
+            image, integral, camera, &predicted, *shift, factor, tolerance,
+        )? {
             outcomes.push(found);
         }
     }

@@ -476,7 +476,9 @@ pub fn header_size(path: &Path, bytes: &[u8]) -> Result<[u32; 2], DetectError> {
     let reader = image::io::Reader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| decode(e.to_string()))?;
-    let (w, h) = reader.into_dimensions().map_err(|e| decode(e.to_string()))?;
+    let (w, h) = reader
+        .into_dimensions()
+        .map_err(|e| decode(e.to_string()))?;
     Ok([w, h])
 }
 
@@ -618,6 +620,7 @@ fn detect_image(
         return Err(DetectError::Size { path, size, camera });
     }
     let grid = options.pattern.unwrap_or_else(|| board_grid(model));
+    let mut guided_partial = None;
     if options.use_model && options.guided && grid == board_grid(model) {
         let params = [0.0; PARAMETER_COUNT];
         let pose = model
@@ -635,7 +638,7 @@ fn detect_image(
         )
         .map_err(cv)?;
         if let Ok(vertices) = found {
-            let corners = vertices
+            let corners: Vec<Corner> = vertices
                 .into_iter()
                 .map(|(vertex, pixel)| Corner {
                     capture: capture.id,
@@ -644,13 +647,49 @@ fn detect_image(
                     line: 0,
                 })
                 .collect();
-            return Ok(Outcome::Found {
+            let found = Outcome::Found {
                 corners,
                 order: None,
                 whole_image: false,
-            });
+            };
+            if matches!(&found, Outcome::Found { corners, .. } if corners.len() == grid.len()) {
+                return Ok(found);
+            }
+            // Part of the board: OpenCV's chessboard finder may still see all of it.
+            guided_partial = Some(found);
         }
     }
+    let outcome = chessboard(dataset, capture, &grey, grid, options).map_err(cv)?;
+    Ok(match (outcome, guided_partial) {
+        (
+            Outcome::Found {
+                corners,
+                order,
+                whole_image,
+            },
+            _,
+        ) => Outcome::Found {
+            corners,
+            order,
+            whole_image,
+        },
+        (_, Some(partial)) => partial,
+        (other, None) => other,
+    })
+}
+
+/// OpenCV's chessboard finder in the predicted region, then the whole image; numbered by
+/// the model's orientation (or OpenCV's order without the model).
+fn chessboard(
+    dataset: &Dataset,
+    capture: &Capture,
+    grey: &Mat,
+    grid: Grid,
+    options: &DetectOptions,
+) -> opencv::Result<Outcome> {
+    let model = &dataset.model;
+    let camera = [model.camera.width, model.camera.height];
+    let cv = |e: opencv::Error| e;
     let roi = if options.use_model {
         predicted_roi(model, capture)
     } else {

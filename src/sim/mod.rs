@@ -179,7 +179,12 @@ fn board_in_view(
         .into_iter()
         .collect::<Option<_>>()?;
     if partial {
-        if uv.iter().filter(|p| model.camera.contains(**p, 3.0)).count() < MIN_VISIBLE {
+        if uv
+            .iter()
+            .filter(|p| model.camera.contains(**p, 3.0))
+            .count()
+            < MIN_VISIBLE
+        {
             return None;
         }
     } else if !uv.iter().all(|p| model.camera.contains(*p, MARGIN)) {
@@ -297,7 +302,10 @@ pub fn choose_stances(
             let target = if k == 0 {
                 [w / 2.0, h / 2.0]
             } else if near_border {
-                [w * rng.random_range(0.0..1.0), h * rng.random_range(0.0..1.0)]
+                [
+                    w * rng.random_range(0.0..1.0),
+                    h * rng.random_range(0.0..1.0),
+                ]
             } else {
                 [
                     w * rng.random_range(0.3..0.7),

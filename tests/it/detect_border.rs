@@ -6,12 +6,12 @@
 
 use std::path::Path;
 
+use crate::util::solve;
 use naocalib::dataset::{Corner, Dataset};
 use naocalib::detect::{self, DetectOptions, Outcome};
 use naocalib::model::{FixedSet, Model, Param};
 use naocalib::sim::render::{ImageOutput, RenderOptions};
 use naocalib::sim::{SimOptions, simulate};
-use crate::util::solve;
 use naocalib::solve::{Problem, backend};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -82,11 +82,23 @@ fn score(dataset: &Dataset, corners: &[Corner], results: &[detect::ImageResult])
             .filter(|t| got.iter().any(|c| c.vertex == t.vertex))
             .count();
         if std::env::var_os("NAOCALIB_DEBUG").is_some() {
-            for t in inside.iter().filter(|t| !got.iter().any(|c| c.vertex == t.vertex)) {
+            for t in inside
+                .iter()
+                .filter(|t| !got.iter().any(|c| c.vertex == t.vertex))
+            {
                 let w = model.camera.width as f64 - 1.0;
                 let h = model.camera.height as f64 - 1.0;
-                let d = t.pixel[0].min(t.pixel[1]).min(w - t.pixel[0]).min(h - t.pixel[1]);
-                eprintln!("missed {} {:?} {:.1} px from the border ({} found)", r.capture, t.vertex, d, got.len());
+                let d = t.pixel[0]
+                    .min(t.pixel[1])
+                    .min(w - t.pixel[0])
+                    .min(h - t.pixel[1]);
+                eprintln!(
+                    "missed {} {:?} {:.1} px from the border ({} found)",
+                    r.capture,
+                    t.vertex,
+                    d,
+                    got.len()
+                );
             }
         }
         for c in got {
@@ -216,5 +228,8 @@ fn calibration_from_hard_images_matches_true_corners_with_small_noise() {
          0.05 px {z_truth:.2}",
         from_images.observations
     );
-    assert!(z_images <= 2.0 && z_images <= 1.5 * z_truth.max(1.0), "{z_images} vs {z_truth}");
+    assert!(
+        z_images <= 2.0 && z_images <= 1.5 * z_truth.max(1.0),
+        "{z_images} vs {z_truth}"
+    );
 }

@@ -186,6 +186,9 @@ fn force_without_any_board_keeps_corners_csv() {
         .arg(&dir)
         .output()
         .unwrap();
-    assert_clean_failure(&out, &["no vertex found in any of 4 images", "left as they were"]);
+    assert_clean_failure(
+        &out,
+        &["no vertex found in any of 4 images", "left as they were"],
+    );
     assert_eq!(std::fs::read(dir.join("corners.csv")).unwrap(), good);
 }
