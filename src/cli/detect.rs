@@ -13,12 +13,13 @@ use naocalib::dataset::{CORNERS_CSV, Dataset};
 use naocalib::detect::assign::Grid;
 use naocalib::detect::{self, DetectOptions, ImageResult, Summary};
 use naocalib::model::{PARAMETER_COUNT, Param};
+use naocalib::report::export::WriteOptions;
 
 #[derive(Debug, Args)]
 pub struct DetectArgs {
     /// Dataset directory (dataset.toml, captures.csv naming the images).
     dataset: PathBuf,
-    /// Replace an existing corners.csv that holds vertices.
+    /// Replace an existing corners.csv that holds vertices, and existing overlays.
     #[arg(long)]
     force: bool,
     /// Inner vertices per row and rows, e.g. 9x6 (default: the board in dataset.toml).
@@ -81,6 +82,22 @@ fn read_solution(path: &Path) -> Result<[f64; PARAMETER_COUNT]> {
     Ok(values)
 }
 
+/// What overlays must not replace: every image and file of the dataset; existing
+/// overlays only with `--force`.
+fn overlay_write_options(dataset: &Dataset, args: &DetectArgs) -> WriteOptions {
+    let mut options = WriteOptions::protecting_dataset(&args.dataset, args.force);
+    options.inputs.extend(
+        dataset
+            .captures
+            .iter()
+            .filter_map(|c| dataset.image_path(c)),
+    );
+    if let Some(after) = &args.after {
+        options.inputs.push(after.clone());
+    }
+    options
+}
+
 /// A progress bar over `images` images on stderr, when stderr is a terminal.
 fn progress_bar(images: usize) -> Option<indicatif::ProgressBar> {
     std::io::stderr()
@@ -136,8 +153,16 @@ pub fn run(args: &DetectArgs) -> Result<ExitCode> {
         );
     }
     let after = args.after.as_deref().map(read_solution).transpose()?;
+    // Overlays never replace an input (an image, a dataset file) and replace an existing
+    // overlay only with --force; all of them are checked before any image is read.
+    let overlay_options = overlay_write_options(&dataset, args);
     if let Some(dir) = &args.overlay {
-        std::fs::create_dir_all(dir).with_context(|| format!("{}", dir.display()))?;
+        for capture in dataset.captures.iter().filter(|c| c.image.is_some()) {
+            detect::overlay::check_writable(
+                &detect::overlay::path(dir, capture.id),
+                &overlay_options,
+            )?;
+        }
     }
     let mut options = DetectOptions {
         pattern: args.pattern,
@@ -148,7 +173,11 @@ pub fn run(args: &DetectArgs) -> Result<ExitCode> {
         if jobs == 0 {
             bail!("--jobs must be at least 1");
         }
-        options.jobs = jobs;
+        let cap = detect::max_jobs();
+        if jobs > cap {
+            eprintln!("naocalib: note: --jobs {jobs} capped at {cap} (4 per core, at most 64)");
+        }
+        options.jobs = jobs.min(cap);
     }
     if let Some(p) = args.pattern {
         let board = detect::board_grid(&dataset.model);
@@ -198,6 +227,16 @@ pub fn run(args: &DetectArgs) -> Result<ExitCode> {
     }
     let summary = Summary::of(&results);
     let corners = detect::corners(&results);
+    if corners.is_empty() && !dataset.corners.is_empty() {
+        bail!(
+            "{}: no vertex found in any of {} images ({summary}); {} and its {} vertices \
+             left as they were",
+            args.dataset.display(),
+            results.len(),
+            corners_path.display(),
+            dataset.corners.len()
+        );
+    }
     naocalib::dataset::write_corners(&args.dataset, &corners, replace)?;
     eprintln!(
         "{}: {} images: {summary}; wrote {} vertices to {}",

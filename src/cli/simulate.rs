@@ -62,6 +62,10 @@ pub struct SimulateArgs {
     /// image are left out, as a camera would.
     #[arg(long, value_name = "PLAN.csv", conflicts_with_all = ["stances", "heads"])]
     stance_file: Option<PathBuf>,
+    /// Let boards come near and across the image border (to test detection): later head
+    /// postures aim anywhere in the image, and a board is kept with 8 vertices in view.
+    #[arg(long)]
+    near_border: bool,
     /// Lens distortion k1,k2,p1,p2,k3 (OpenCV order) of the simulated camera.
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     distortion: Option<Vec<f64>>,
@@ -150,6 +154,7 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
         truth,
         effects: args.effects.clone().map(|e| e.0).unwrap_or_default(),
         noise_seed: None,
+        near_border: args.near_border,
         images: args.images.then(|| naocalib::sim::render::ImageOutput {
             dir: args.out.clone(),
             options: naocalib::sim::render::RenderOptions {

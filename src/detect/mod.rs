@@ -13,6 +13,7 @@
 
 pub mod assign;
 pub mod find;
+pub mod guided;
 pub mod overlay;
 
 use std::fmt;
@@ -34,6 +35,10 @@ pub struct DetectOptions {
     /// Use the nominal model and logged joints to predict the board (ROI, row/col
     /// assignment); without it, (row, col) follow OpenCV's order.
     pub use_model: bool,
+    /// With the model: search the predicted pattern of saddles first ([`guided`]), and
+    /// OpenCV's chessboard finder only when that finds too little; without it, only the
+    /// chessboard finder (numbered by the model's orientation).
+    pub guided: bool,
     /// Half-window of `cornerSubPix` in squares (of the local square size in pixels).
     pub subpix_factor: f64,
     /// Images processed at once.
@@ -46,6 +51,7 @@ impl Default for DetectOptions {
         DetectOptions {
             pattern: None,
             use_model: true,
+            guided: true,
             subpix_factor: 0.3,
             jobs: std::thread::available_parallelism()
                 .map(|n| n.get())
@@ -107,9 +113,26 @@ pub enum DetectError {
         /// The camera's resolution.
         camera: [u32; 2],
     },
-    /// An output file could not be written.
-    #[error(transparent)]
-    Write(#[from] crate::output::WriteError),
+    /// The image header claims a size beyond what detection reads (refused before decoding).
+    #[error(
+        "{}: the image header claims {}×{} pixels, more than the {} × {} pixels (and {} \
+         megapixels) detection reads; refused before decoding",
+        path.display(), size[0], size[1], MAX_SIDE, MAX_SIDE, MAX_PIXELS / 1_000_000
+    )]
+    TooLarge {
+        /// The image.
+        path: PathBuf,
+        /// The size its header claims.
+        size: [u32; 2],
+    },
+    /// An output (an overlay) could not be written.
+    #[error("{message}")]
+    Write {
+        /// The output file.
+        path: PathBuf,
+        /// Why (names the file).
+        message: String,
+    },
     /// OpenCV failed.
     #[error("{}: OpenCV: {message}", path.display())]
     OpenCv {
@@ -127,8 +150,9 @@ pub enum Outcome {
     Found {
         /// The vertices, in row-major order of the board.
         corners: Vec<Corner>,
-        /// How OpenCV's order relates to the board's.
-        order: assign::Order,
+        /// How OpenCV's order relates to the board's; `None` when the vertices were found
+        /// and numbered by the model-guided search ([`guided`]).
+        order: Option<assign::Order>,
         /// Whether the board was found only in the whole image, not where predicted.
         whole_image: bool,
     },
@@ -169,8 +193,10 @@ impl fmt::Display for ImageResult {
                 whole_image,
             } => {
                 write!(f, ": found {} vertices", corners.len())?;
-                if *order != assign::Order::Same {
-                    write!(f, " ({order})")?;
+                match order {
+                    None => write!(f, " (model-guided)")?,
+                    Some(assign::Order::Same) => {}
+                    Some(order) => write!(f, " ({order})")?,
                 }
                 if *whole_image {
                     write!(f, " (not where predicted; found in the whole image)")?;
@@ -404,24 +430,80 @@ pub fn resolve_image(dir: &Path, image: &Path) -> Result<PathBuf, DetectError> {
 
 /// Reads an image file as 8-bit greyscale.
 pub fn read_grey(path: &Path) -> Result<Mat, DetectError> {
-    let bytes = match std::fs::read(path) {
-        Ok(b) => b,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            return Err(DetectError::Missing {
-                path: path.to_path_buf(),
-            });
-        }
-        Err(source) => {
-            return Err(DetectError::Io {
-                path: path.to_path_buf(),
-                source,
-            });
-        }
-    };
-    decode_grey(path, &bytes)
+    decode_grey(path, &read_bytes(path)?)
 }
 
-/// Decodes image bytes (PNG, JPEG, BMP or PGM) as 8-bit greyscale.
+/// Reads an image file's bytes.
+fn read_bytes(path: &Path) -> Result<Vec<u8>, DetectError> {
+    match std::fs::read(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(DetectError::Missing {
+            path: path.to_path_buf(),
+        }),
+        Err(source) => Err(DetectError::Io {
+            path: path.to_path_buf(),
+            source,
+        }),
+        Ok(b) => Ok(b),
+    }
+}
+
+/// Largest image side detection reads [px].
+pub const MAX_SIDE: u32 = 16_384;
+/// Largest image detection reads [pixels]: 64 megapixels (64 MB of grey levels).
+pub const MAX_PIXELS: u64 = 64_000_000;
+
+/// Most images processed at once: `-j` beyond this is capped (4 per core, at most 64).
+pub fn max_jobs() -> usize {
+    let cores = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
+    (4 * cores).min(64)
+}
+
+/// The width and height an image file's header claims (PNG, JPEG, BMP or PGM), read
+/// without decoding the pixels.
+pub fn header_size(path: &Path, bytes: &[u8]) -> Result<[u32; 2], DetectError> {
+    let decode = |message: String| DetectError::Decode {
+        path: path.to_path_buf(),
+        message,
+    };
+    if bytes.starts_with(b"\x89PNG") {
+        let decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+        let reader = decoder.read_info().map_err(|e| decode(e.to_string()))?;
+        let info = reader.info();
+        return Ok([info.width, info.height]);
+    }
+    let reader = image::io::Reader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| decode(e.to_string()))?;
+    let (w, h) = reader
+        .into_dimensions()
+        .map_err(|e| decode(e.to_string()))?;
+    Ok([w, h])
+}
+
+/// Refuses an image whose header claims more than [`MAX_SIDE`] or [`MAX_PIXELS`] (and one
+/// that is no PNG, JPEG, BMP or PGM).
+fn check_header(path: &Path, bytes: &[u8]) -> Result<[u32; 2], DetectError> {
+    const KNOWN: [&[u8]; 5] = [b"\x89PNG", b"\xff\xd8\xff", b"BM", b"P5", b"P2"];
+    if !KNOWN.iter().any(|m| bytes.starts_with(m)) {
+        return Err(DetectError::Decode {
+            path: path.to_path_buf(),
+            message: "not a PNG, JPEG, BMP or PGM file (unknown signature)".into(),
+        });
+    }
+    let size = header_size(path, bytes)?;
+    if size[0] > MAX_SIDE || size[1] > MAX_SIDE || size[0] as u64 * size[1] as u64 > MAX_PIXELS {
+        return Err(DetectError::TooLarge {
+            path: path.to_path_buf(),
+            size,
+        });
+    }
+    Ok(size)
+}
+
+/// Decodes image bytes (PNG, JPEG, BMP or PGM) as 8-bit greyscale. The size in the header
+/// is checked against [`MAX_SIDE`] and [`MAX_PIXELS`] before anything is decoded.
 pub fn decode_grey(path: &Path, bytes: &[u8]) -> Result<Mat, DetectError> {
     let decode = |message: String| DetectError::Decode {
         path: path.to_path_buf(),
@@ -436,16 +518,11 @@ pub fn decode_grey(path: &Path, bytes: &[u8]) -> Result<Mat, DetectError> {
             path: path.to_path_buf(),
         });
     }
+    check_header(path, bytes)?;
     if bytes.starts_with(b"\x89PNG") {
         let (grey, width, height) = decode_png(bytes).map_err(decode)?;
         let mat = Mat::new_rows_cols_with_data(height as i32, width as i32, &grey).map_err(cv)?;
         return mat.try_clone().map_err(cv);
-    }
-    const KNOWN: [&[u8]; 4] = [b"\xff\xd8\xff", b"BM", b"P5", b"P2"];
-    if !KNOWN.iter().any(|m| bytes.starts_with(m)) {
-        return Err(decode(
-            "not a PNG, JPEG, BMP or PGM file (unknown signature)".into(),
-        ));
     }
     let (grey, width, height) = decode_other(bytes).map_err(decode)?;
     let mat = Mat::new_rows_cols_with_data(height as i32, width as i32, &grey).map_err(cv)?;
@@ -523,17 +600,96 @@ fn detect_image(
 ) -> Result<Outcome, DetectError> {
     let model = &dataset.model;
     let path = resolve_image(&dataset.dir, image)?;
-    let grey = read_grey(&path)?;
+    let bytes = read_bytes(&path)?;
+    // The size is checked from the header, before any pixel is decoded.
+    let camera = [model.camera.width, model.camera.height];
+    if !bytes.is_empty() {
+        let size = check_header(&path, &bytes)?;
+        if size != camera {
+            return Err(DetectError::Size { path, size, camera });
+        }
+    }
+    let grey = decode_grey(&path, &bytes)?;
+    drop(bytes);
     let cv = |e: opencv::Error| DetectError::OpenCv {
         path: path.clone(),
         message: e.message,
     };
     let size = [grey.cols() as u32, grey.rows() as u32];
-    let camera = [model.camera.width, model.camera.height];
     if size != camera {
         return Err(DetectError::Size { path, size, camera });
     }
     let grid = options.pattern.unwrap_or_else(|| board_grid(model));
+    let mut guided_partial = None;
+    if options.use_model && options.guided && grid == board_grid(model) {
+        let params = [0.0; PARAMETER_COUNT];
+        let pose = model
+            .chains(capture.side, &capture.joints)
+            .camera_to_board(&params);
+        let integral = guided::Integral::new(&grey).map_err(cv)?;
+        let camera = model.camera_at(&params);
+        let found = guided::detect(
+            &grey,
+            &integral,
+            model,
+            &camera,
+            &pose,
+            options.subpix_factor,
+        )
+        .map_err(cv)?;
+        if let Ok(vertices) = found {
+            let corners: Vec<Corner> = vertices
+                .into_iter()
+                .map(|(vertex, pixel)| Corner {
+                    capture: capture.id,
+                    vertex,
+                    pixel,
+                    line: 0,
+                })
+                .collect();
+            let found = Outcome::Found {
+                corners,
+                order: None,
+                whole_image: false,
+            };
+            if matches!(&found, Outcome::Found { corners, .. } if corners.len() == grid.len()) {
+                return Ok(found);
+            }
+            // Part of the board: OpenCV's chessboard finder may still see all of it.
+            guided_partial = Some(found);
+        }
+    }
+    let outcome = chessboard(dataset, capture, &grey, grid, options).map_err(cv)?;
+    Ok(match (outcome, guided_partial) {
+        (
+            Outcome::Found {
+                corners,
+                order,
+                whole_image,
+            },
+            _,
+        ) => Outcome::Found {
+            corners,
+            order,
+            whole_image,
+        },
+        (_, Some(partial)) => partial,
+        (other, None) => other,
+    })
+}
+
+/// OpenCV's chessboard finder in the predicted region, then the whole image; numbered by
+/// the model's orientation (or OpenCV's order without the model).
+fn chessboard(
+    dataset: &Dataset,
+    capture: &Capture,
+    grey: &Mat,
+    grid: Grid,
+    options: &DetectOptions,
+) -> opencv::Result<Outcome> {
+    let model = &dataset.model;
+    let camera = [model.camera.width, model.camera.height];
+    let cv = |e: opencv::Error| e;
     let roi = if options.use_model {
         predicted_roi(model, capture)
     } else {
@@ -623,6 +779,7 @@ fn detect_image(
             .collect();
         (order, assign::Order::Same)
     };
+    let order = Some(order);
     let mut corners: Vec<Corner> = vertices
         .iter()
         .zip(&points)
@@ -665,7 +822,7 @@ pub fn detect_dataset(
             .collect()
     };
     match rayon::ThreadPoolBuilder::new()
-        .num_threads(options.jobs.max(1))
+        .num_threads(options.jobs.clamp(1, max_jobs()))
         .build()
     {
         Ok(pool) => pool.install(run),

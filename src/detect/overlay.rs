@@ -9,6 +9,7 @@ use opencv::prelude::*;
 
 use crate::dataset::{Corner, Dataset};
 use crate::model::PARAMETER_COUNT;
+use crate::report::export::{ExportError, WriteOptions, write_atomic};
 
 use super::{DetectError, ImageResult, Outcome};
 
@@ -88,21 +89,32 @@ fn encode_png(bgr: &Mat) -> opencv::Result<Vec<u8>> {
     Ok(out)
 }
 
-/// Writes the overlay of one result into `dir` as `capture_NNNN.png` and returns its path:
-/// detected vertices, the nominal model's projection and, with `after`, the projection
-/// with those parameters. `None` for a capture without a readable image. Written with
-/// [`crate::output::write_atomic`] under `options`.
+/// The overlay file of capture `id` in `dir`: `capture_NNNN.png`.
+pub fn path(dir: &Path, id: u64) -> PathBuf {
+    dir.join(format!("capture_{id:04}.png"))
+}
+
+/// Checks that an overlay could be written to `path` with `options`: not an input, and
+/// not an existing file unless `options.force`.
+pub fn check_writable(path: &Path, options: &WriteOptions) -> Result<(), ExportError> {
+    crate::report::export::check_writable(path, options)
+}
+
+/// Writes the overlay of one result into `dir` as `capture_NNNN.png`, atomically and
+/// as `options` allow (never an input, an existing file only with `force`), and returns
+/// its path: detected vertices, the nominal model's projection and, with `after`, the
+/// projection with those parameters. `None` for a capture without a readable image.
 pub fn write(
     dataset: &Dataset,
     result: &ImageResult,
     dir: &Path,
     after: Option<&[f64; PARAMETER_COUNT]>,
-    options: &crate::output::WriteOptions,
+    options: &WriteOptions,
 ) -> Option<Result<PathBuf, DetectError>> {
     let capture = dataset.capture(result.capture)?;
     let image = capture.image.as_ref()?;
-    let path = super::resolve_image(&dataset.dir, image).ok()?;
-    let grey = super::read_grey(&path).ok()?;
+    let image_path = super::resolve_image(&dataset.dir, image).ok()?;
+    let grey = super::read_grey(&image_path).ok()?;
     let detected: Vec<[f64; 2]> = match &result.outcome {
         Outcome::Found { corners, .. } => corners.iter().map(|c: &Corner| c.pixel).collect(),
         _ => Vec::new(),
@@ -110,7 +122,7 @@ pub fn write(
     let model = &dataset.model;
     let before = super::predict(model, capture, &[0.0; PARAMETER_COUNT]);
     let after = after.and_then(|p| super::predict(model, capture, p));
-    let out = dir.join(format!("capture_{:04}.png", capture.id));
+    let out = path(dir, capture.id);
     let cv = |e: opencv::Error| DetectError::OpenCv {
         path: out.clone(),
         message: e.message,
@@ -118,7 +130,12 @@ pub fn write(
     Some(
         draw(&grey, &detected, before.as_deref(), after.as_deref())
             .map_err(cv)
-            .and_then(|png| Ok(crate::output::write_atomic(&out, &png, options)?))
+            .and_then(|png| {
+                write_atomic(&out, &png, options).map_err(|e| DetectError::Write {
+                    path: out.clone(),
+                    message: e.to_string(),
+                })
+            })
             .map(|()| out.clone()),
     )
 }

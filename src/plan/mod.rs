@@ -264,8 +264,15 @@ pub fn random_stances(
     let mut out = Vec::with_capacity(count);
     for (k, side) in Side::BOTH.into_iter().enumerate() {
         let share = if k == 0 { count / 2 } else { count - count / 2 };
-        let stances =
-            crate::sim::choose_stances(model, side, &zero, share.div_ceil(heads), heads, &mut rng)?;
+        let stances = crate::sim::choose_stances(
+            model,
+            side,
+            &zero,
+            share.div_ceil(heads),
+            heads,
+            false,
+            &mut rng,
+        )?;
         out.extend(
             stances
                 .iter()

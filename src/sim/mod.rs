@@ -40,6 +40,11 @@ pub struct SimOptions {
     /// Stances to photograph instead of drawing them (a plan's schedule); `stances` and
     /// `heads` are then ignored.
     pub schedule: Option<Vec<Stance>>,
+    /// Let boards come near and across the image border (to test detection): head
+    /// postures after a stance's first aim the board centre anywhere in the image, and a
+    /// board partly outside is kept when [`MIN_VISIBLE`] vertices are in view. Only
+    /// vertices in the image become corners.
+    pub near_border: bool,
 }
 
 impl Default for SimOptions {
@@ -55,6 +60,7 @@ impl Default for SimOptions {
             noise_seed: None,
             images: None,
             schedule: None,
+            near_border: false,
         }
     }
 }
@@ -149,9 +155,18 @@ const MIN_SQUARE_PX: f64 = 14.0;
 /// Largest angle between the board normal and the line of sight.
 const MAX_VIEW_ANGLE_DEG: f64 = 60.0;
 
-/// The projected vertices of the board on `side`, if the whole board is in view, facing the
-/// camera, and not too small.
-fn board_in_view(model: &Model, chains: &StanceChains, params: &[f64]) -> Option<Vec<[f64; 2]>> {
+/// Fewest vertices in view (3 px inside the image) of a board partly outside the image
+/// ([`SimOptions::near_border`]).
+pub const MIN_VISIBLE: usize = 8;
+
+/// The projected vertices of the board on `side`, if the whole board is in view (with
+/// `partial`, at least [`MIN_VISIBLE`] vertices), facing the camera, and not too small.
+fn board_in_view(
+    model: &Model,
+    chains: &StanceChains,
+    params: &[f64],
+    partial: bool,
+) -> Option<Vec<[f64; 2]>> {
     let pose = chains.camera_to_board(params);
     // Line of sight from the board centre to the camera, in the board frame: −Rᵀ·t.
     let to_camera: [f64; 3] = std::array::from_fn(|j| {
@@ -168,7 +183,16 @@ fn board_in_view(model: &Model, chains: &StanceChains, params: &[f64]) -> Option
         .project(chains, params, &vertices)
         .into_iter()
         .collect::<Option<_>>()?;
-    if !uv.iter().all(|p| model.camera.contains(*p, MARGIN)) {
+    if partial {
+        if uv
+            .iter()
+            .filter(|p| model.camera.contains(**p, 3.0))
+            .count()
+            < MIN_VISIBLE
+        {
+            return None;
+        }
+    } else if !uv.iter().all(|p| model.camera.contains(*p, MARGIN)) {
         return None;
     }
     let cols = model.board.cols() as usize;
@@ -244,14 +268,16 @@ fn random_leg(rng: &mut impl Rng, side: Side, joints: &mut JointAngles) {
 }
 
 /// Chooses `count` stances for `side`, each with `heads` head postures that keep the whole
-/// board in view, facing the camera. The other leg rests in a random relaxed posture; both
-/// HipYawPitch angles are equal (one motor).
+/// board in view, facing the camera (with `near_border`, see [`SimOptions::near_border`]).
+/// The other leg rests in a random relaxed posture; both HipYawPitch angles are equal (one
+/// motor).
 pub fn choose_stances(
     model: &Model,
     side: Side,
     params: &[f64],
     count: usize,
     heads: usize,
+    near_border: bool,
     rng: &mut impl Rng,
 ) -> Result<Vec<Stance>, SimError> {
     let mut stances = Vec::with_capacity(count);
@@ -280,6 +306,11 @@ pub fn choose_stances(
             }
             let target = if k == 0 {
                 [w / 2.0, h / 2.0]
+            } else if near_border {
+                [
+                    w * rng.random_range(0.0..1.0),
+                    h * rng.random_range(0.0..1.0),
+                ]
             } else {
                 [
                     w * rng.random_range(0.3..0.7),
@@ -292,7 +323,8 @@ pub fn choose_stances(
                 }
                 continue;
             };
-            if board_in_view(model, &model.chains(side, &aimed), params).is_some() {
+            let partial = near_border && k > 0;
+            if board_in_view(model, &model.chains(side, &aimed), params, partial).is_some() {
                 postures.push(aimed);
             } else if k == 0 {
                 break;
@@ -354,6 +386,7 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
             &truth,
             options.stances,
             options.heads,
+            options.near_border,
             &mut rng,
         )?);
     }
@@ -378,6 +411,9 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
             let projected = model.project(&model.chains(stance.side, &actual), &truth, &vertices);
             for (v, uv) in vertices.iter().zip(projected) {
                 let Some(uv) = uv else { continue };
+                if options.near_border && !model.camera.contains(uv, 0.0) {
+                    continue;
+                }
                 let pixel = [
                     uv[0] + px.sample(&mut noise_rng),
                     uv[1] + px.sample(&mut noise_rng),
@@ -428,6 +464,9 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
         "head_postures".into(),
         toml::Value::Integer(options.heads as i64),
     );
+    if options.near_border {
+        simulation.insert("near_border".into(), toml::Value::Boolean(true));
+    }
     if options.images.is_none() {
         simulation.insert("px_noise".into(), toml::Value::Float(options.px_noise));
     }

@@ -40,10 +40,15 @@ fn rendered(dir: &Path, model: &Model, seed: u64, stances: usize, heads: usize) 
     dataset
 }
 
-/// Detects every image and compares each vertex with the truth (the simulated, noise-free
-/// corners). Returns (RMS error, largest error, OpenCV's orders seen, summary).
-fn detect_and_compare(dataset: &Dataset) -> (f64, f64, HashSet<Order>, Summary) {
-    let results = detect::detect_dataset(dataset, &DetectOptions::default(), &|_| {});
+/// Detects every image (model-guided, or with `chessboard` by OpenCV's chessboard finder
+/// and the model's orientation) and compares each vertex with the truth (the simulated,
+/// noise-free corners). Returns (RMS error, largest error, OpenCV's orders seen, summary).
+fn detect_and_compare(dataset: &Dataset, chessboard: bool) -> (f64, f64, HashSet<Order>, Summary) {
+    let options = DetectOptions {
+        guided: !chessboard,
+        ..DetectOptions::default()
+    };
+    let results = detect::detect_dataset(dataset, &options, &|_| {});
     let summary = Summary::of(&results);
     let truth = dataset.corners_by_capture();
     let (mut sum2, mut worst, mut n, mut orders) = (0.0, 0.0f64, 0, HashSet::new());
@@ -51,7 +56,8 @@ fn detect_and_compare(dataset: &Dataset) -> (f64, f64, HashSet<Order>, Summary) 
         let Outcome::Found { corners, order, .. } = &r.outcome else {
             continue;
         };
-        orders.insert(*order);
+        assert_eq!(order.is_none(), !chessboard, "{r}");
+        orders.extend(*order);
         let expected = &truth[&r.capture];
         assert_eq!(corners.len(), expected.len());
         for c in corners {
@@ -82,7 +88,11 @@ fn subpixel_accuracy_and_assignment_both_ways() {
     // The default board: OpenCV's order comes out turned against the board's.
     let model = Model::default();
     let dataset = rendered(&tmp.path().join("a"), &model, 7, 4, 2);
-    let (rms, worst, orders, summary) = detect_and_compare(&dataset);
+    let (rms, worst, _, summary) = detect_and_compare(&dataset, false);
+    eprintln!("default board, model-guided: rms {rms:.4} px, worst {worst:.4} px, {summary}");
+    assert_eq!(summary.found, dataset.captures.len(), "{summary}");
+    assert!(rms < 0.05, "rms {rms} px");
+    let (rms, worst, orders, summary) = detect_and_compare(&dataset, true);
     eprintln!("default board: rms {rms:.4} px, worst {worst:.4} px, {orders:?}, {summary}");
     assert_eq!(summary.found, dataset.captures.len(), "{summary}");
     assert!(rms < 0.05, "rms {rms} px");
@@ -91,7 +101,11 @@ fn subpixel_accuracy_and_assignment_both_ways() {
     let mut turned = Model::default();
     turned.board.mount_rpy[2] = std::f64::consts::PI;
     let dataset = rendered(&tmp.path().join("b"), &turned, 8, 4, 2);
-    let (rms_b, _, orders_b, summary_b) = detect_and_compare(&dataset);
+    let (rms_g, _, _, summary_g) = detect_and_compare(&dataset, false);
+    eprintln!("turned board, model-guided: rms {rms_g:.4} px, {summary_g}");
+    assert_eq!(summary_g.found, dataset.captures.len(), "{summary_g}");
+    assert!(rms_g < 0.05, "rms {rms_g} px");
+    let (rms_b, _, orders_b, summary_b) = detect_and_compare(&dataset, true);
     eprintln!("turned board: rms {rms_b:.4} px, {orders_b:?}, {summary_b}");
     assert_eq!(summary_b.found, dataset.captures.len(), "{summary_b}");
     assert!(rms_b < 0.05, "rms {rms_b} px");
@@ -163,7 +177,7 @@ fn lens_distortion_is_rendered_and_handled() {
     let mut model = Model::default();
     model.camera.distortion = [-0.15, 0.05, 0.001, -0.001, 0.0];
     let dataset = rendered(tmp.path(), &model, 21, 3, 2);
-    let (rms, worst, _, summary) = detect_and_compare(&dataset);
+    let (rms, worst, _, summary) = detect_and_compare(&dataset, false);
     eprintln!("distorted: rms {rms:.4} px, worst {worst:.4} px, {summary}");
     assert_eq!(summary.found, dataset.captures.len(), "{summary}");
     assert!(rms < 0.05, "rms {rms} px");

@@ -11,9 +11,13 @@ mod cli_detect_solve;
 mod cli_solve;
 mod dataset_io;
 #[cfg(feature = "detect")]
+mod detect_border;
+#[cfg(feature = "detect")]
 mod detect_files;
 #[cfg(feature = "detect")]
 mod detect_render;
+#[cfg(feature = "detect")]
+mod detect_robust;
 mod export_robustness;
 mod export_roundtrip;
 mod export_teams;

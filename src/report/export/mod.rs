@@ -58,7 +58,7 @@ pub use bhuman::{
     read_bhuman_joint_cfg,
 };
 pub use calibration::{COMPENSATION, Calibration, Entry, FORMAT, VERSION, read_calibration};
-pub use io::{WriteOptions, dataset_files, write_atomic, write_atomic_with};
+pub use io::{WriteOptions, check_writable, dataset_files, write_atomic, write_atomic_with};
 
 /// Everything that can go wrong exporting or reading an export.
 #[derive(Debug, thiserror::Error)]
