@@ -2,7 +2,7 @@
 //! legs = 144 captures, 3456 vertices, 0.1 px noise each), simulated once in memory, on
 //! all cores, each solved as `naocalib solve` does (Ceres, noise model).
 //!
-//! Target (issue 6): ≤ 1.5 s wall for the batch on the 2-core machine.
+//! Target: ≤ 1.5 s wall for the batch on the 2-core machine.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use naocalib::batch::{BatchOptions, solve_datasets};

@@ -1,6 +1,6 @@
 //! Is the reported one-sigma honest? Repeats a paper-sized simulated calibration with the
 //! same stances and truth but new noise, and compares each parameter's mean reported
-//! one-sigma with the scatter of its estimates (issue 5: the ratio must lie in 0.7–1.4).
+//! one-sigma with the scatter of its estimates (the ratio must lie in 0.7–1.4).
 //!
 //! `cargo run --release --example uncertainty_calibration -- [REPETITIONS] [SOLVER]`
 

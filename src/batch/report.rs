@@ -223,7 +223,7 @@ impl Batch {
         out
     }
 
-    /// One run's result JSON: SPEC section 7 ([`crate::report::json`]) with its `dataset`.
+    /// One run's result JSON: docs/MODEL.md §8 ([`crate::report::json`]) with its `dataset`.
     pub fn run_json(run: &Run) -> Value {
         let mut value = crate::report::json(&run.solution, run.truth.as_ref().map(|t| &t[..]));
         value["dataset"] = Value::String(run.dataset.display().to_string());
@@ -279,7 +279,7 @@ impl Batch {
         })
     }
 
-    /// The whole batch as JSON: `{"runs": [SPEC 7 result + dataset, …], "summary": …}`.
+    /// The whole batch as JSON: `{"runs": [docs/MODEL.md 7 result + dataset, …], "summary": …}`.
     pub fn json(&self, drift: &DriftOptions) -> Value {
         json!({
             "runs": self.runs.iter().map(Batch::run_json).collect::<Vec<_>>(),

@@ -39,7 +39,7 @@ pub struct BatchArgs {
     /// Dataset directories, or directories holding dataset directories.
     #[arg(required = true, value_name = "DATASET")]
     datasets: Vec<PathBuf>,
-    /// Print every run (SPEC section 7 form, with its dataset) and the summary as JSON.
+    /// Print every run (docs/MODEL.md §8 form, with its dataset) and the summary as JSON.
     #[arg(long)]
     json: bool,
     /// Write each run's result JSON and summary.json into this directory.

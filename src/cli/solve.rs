@@ -19,7 +19,7 @@ pub struct SolveArgs {
     /// and solve with them instead of corners.csv, which is neither needed nor written.
     #[arg(long)]
     detect: bool,
-    /// Print the result as JSON (SPEC section 7).
+    /// Print the result as JSON (docs/MODEL.md §8).
     #[arg(long)]
     json: bool,
     #[command(flatten)]

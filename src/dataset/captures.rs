@@ -1,4 +1,4 @@
-//! `captures.csv`: one row per captured image (SPEC section 6).
+//! `captures.csv`: one row per captured image (docs/MODEL.md §7).
 
 use std::collections::HashMap;
 use std::path::{Component, Path, PathBuf};

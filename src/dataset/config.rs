@@ -1,4 +1,4 @@
-//! `dataset.toml`: camera intrinsics, board and robot geometry (SPEC section 6).
+//! `dataset.toml`: camera intrinsics, board and robot geometry (docs/MODEL.md §7).
 //!
 //! The file is a [`DatasetToml`], read and written with serde; every key is named once, in
 //! that struct. [`validate`] is the one check of a model's values (finite, and within the

@@ -1,4 +1,4 @@
-//! `corners.csv`: one row per detected vertex (SPEC section 6).
+//! `corners.csv`: one row per detected vertex (docs/MODEL.md §7).
 
 use std::collections::HashMap;
 use std::path::Path;

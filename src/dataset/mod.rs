@@ -1,4 +1,4 @@
-//! Datasets on disk (SPEC section 6): `dataset.toml`, `captures.csv`, `corners.csv`,
+//! Datasets on disk (docs/MODEL.md §7): `dataset.toml`, `captures.csv`, `corners.csv`,
 //! `truth.toml`, and an optional `images/` folder.
 //!
 //! [`Dataset::load`] reads and validates a dataset directory; every error is a

@@ -1,4 +1,4 @@
-//! `truth.toml`: the true parameters of a simulated dataset (SPEC section 6), read with
+//! `truth.toml`: the true parameters of a simulated dataset (docs/MODEL.md §7), read with
 //! serde ([`TruthToml`]).
 
 use std::collections::BTreeMap;

@@ -1,4 +1,4 @@
-//! The checkerboard sandal: pattern geometry and its mount on the sole (SPEC section 4).
+//! The checkerboard sandal: pattern geometry and its mount on the sole (docs/MODEL.md §4).
 
 use super::pose::{Axis, Pose};
 

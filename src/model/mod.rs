@@ -37,9 +37,9 @@ pub struct Model {
 /// The two chains of one capture: origin → camera and origin → board of the leg in view.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StanceChains {
-    /// `T_OC` (SPEC eq. 3).
+    /// `T_OC` (docs/MODEL.md §2.2).
     pub camera: Chain,
-    /// `T_OS · Rz(α_RotZ) · T(α_TransX, α_TransY, 0) · T_SB` (SPEC section 4).
+    /// `T_OS · Rz(α_RotZ) · T(α_TransX, α_TransY, 0) · T_SB` (docs/MODEL.md §4).
     pub board: Chain,
 }
 
@@ -90,7 +90,7 @@ impl Model {
         }
     }
 
-    /// Projects every vertex in `vertices` for parameters `params` (SPEC eq. 5); `None` for
+    /// Projects every vertex in `vertices` for parameters `params` (docs/MODEL.md §2.5); `None` for
     /// a vertex behind the camera.
     pub fn project<T: Scalar>(
         &self,

@@ -1,5 +1,5 @@
 //! The NAO's geometry, its measured joints, and the head→camera and hip→sole chains
-//! (SPEC section 2).
+//! (docs/MODEL.md §2).
 
 use std::f64::consts::FRAC_PI_4;
 
@@ -21,7 +21,7 @@ impl Side {
     /// Both sides, left first.
     pub const BOTH: [Side; 2] = [Side::Left, Side::Right];
 
-    /// The mirror sign `s` of SPEC section 2.
+    /// The mirror sign `s` of docs/MODEL.md §2.
     pub fn sign(self) -> f64 {
         match self {
             Side::Left => 1.0,
@@ -183,7 +183,7 @@ impl JointAngles {
     }
 }
 
-/// The link lengths and fixed angles of the head and leg chains (SPEC section 2).
+/// The link lengths and fixed angles of the head and leg chains (docs/MODEL.md §2).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RobotGeometry {
     /// Lateral distance of each hip joint from the origin [mm].

@@ -1,4 +1,4 @@
-//! Reports of a [`Solution`]: the paper's Table 2 as text, and the result JSON of SPEC
+//! Reports of a [`Solution`]: the paper's Table 2 as text, and the result JSON of docs/MODEL.md
 //! section 7. A report sees a solution (and optionally the truth), never a solver.
 
 pub mod export;
@@ -198,7 +198,7 @@ pub fn diagnosis(solution: &Solution) -> Vec<String> {
     lines
 }
 
-/// The result JSON of SPEC section 7 (plus a few extra keys).
+/// The result JSON of docs/MODEL.md §8 (plus a few extra keys).
 pub fn json(solution: &Solution, truth: Option<&[f64]>) -> Value {
     let mut params = Map::new();
     for p in Param::ALL {

@@ -1,7 +1,7 @@
 //! Rendering camera images of the sandal with known truth.
 //!
 //! The renderer is an exact backward map: every pixel is traced back through the camera
-//! model (SPEC section 3, lens distortion inverted numerically) onto the board plane in its
+//! model (docs/MODEL.md §3, lens distortion inverted numerically) onto the board plane in its
 //! true pose `T_CB`, and shaded from the pattern there. Pixels whose footprint crosses an
 //! edge of the pattern or of the plate are supersampled on an `n × n` grid, so the
 //! projective mapping (and with it every vertex position) is rendered without bias; the

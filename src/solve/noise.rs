@@ -1,5 +1,5 @@
 //! The measurement noise model: pixel noise on every vertex plus joint-angle noise shared by
-//! all vertices of a capture (SPEC section 8).
+//! all vertices of a capture (docs/MODEL.md §9).
 //!
 //! A capture's residuals `r_c` then have the covariance
 //! `Σ_c = σ_px² I + J_θ,c diag(σ_θ²) J_θ,cᵀ`, where `J_θ,c = ∂r_c/∂θ` is the Jacobian with

@@ -1,7 +1,7 @@
 //! The least-squares problem a backend solves: captures, their chains and observed vertices.
 //!
 //! A backend sees a [`Problem`], never files. The residual of a vertex is the model's
-//! projection minus the observed pixel position, `u` then `v` (SPEC eq. 8).
+//! projection minus the observed pixel position, `u` then `v` (docs/MODEL.md §2.5).
 
 use nalgebra::{DMatrix, DVector};
 
@@ -206,7 +206,7 @@ impl Default for Tolerances {
     }
 }
 
-/// The calibration as a non-linear least-squares problem (SPEC eq. 9).
+/// The calibration as a non-linear least-squares problem (docs/MODEL.md §2.5).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Problem {
     /// Camera intrinsics (the projection `P`).
@@ -284,7 +284,7 @@ impl Problem {
 
 impl Problem {
     /// Turns a dataset's measurements into the least-squares problem: one term per capture
-    /// with at least one corner, all parameters starting at zero (SPEC section 5), and the
+    /// with at least one corner, all parameters starting at zero (docs/MODEL.md §5), and the
     /// parameters in `fixed` held at zero (or at `initial` values set afterwards).
     ///
     /// Fails, naming the file and line, when a vertex lies behind the camera at the start

@@ -1,7 +1,7 @@
 //! The Ceres backend against the Rust model: residuals, Jacobians, recovery of the truth,
 //! held parameters and a rank-deficient problem.
 //!
-//! Problems are built directly from the model (random stances around SPEC section 9 poses
+//! Problems are built directly from the model (random stances around docs/MODEL.md §12 poses
 //! B and C, random true parameters, noise-free observations), so these tests depend on
 //! nothing but `model` and `solve`.
 
@@ -18,12 +18,12 @@ use num_dual::{Derivative, DualDVec64};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-/// SPEC section 9 pose B (left board in view), in `Joint::ALL` order.
+/// docs/MODEL.md §12 pose B (left board in view), in `Joint::ALL` order.
 const POSE_B: [f64; JOINT_COUNT] = [
     0.58, 0.422, 0.119, 0.761, -0.503, 1.694, -0.893, 0.647, 0.119, 0.235, -0.888, 1.285, 0.607,
     0.061,
 ];
-/// SPEC section 9 pose C (right board in view).
+/// docs/MODEL.md §12 pose C (right board in view).
 const POSE_C: [f64; JOINT_COUNT] = [
     -0.582, 0.222, -0.287, -0.046, -0.457, 1.241, -0.873, 0.292, -0.287, 0.342, -0.462, 0.354,
     -1.096, -0.519,

@@ -1,4 +1,4 @@
-//! Issue 5: the reported one-sigma is honest by default, the empirical checks agree, gross
+//! The reported one-sigma is honest by default, the empirical checks agree, gross
 //! outliers are survived and listed, and rank-deficient datasets are diagnosed by name.
 
 use naocalib::model::{FixedSet, Model, PAPER_PARAMETERS, Param};
