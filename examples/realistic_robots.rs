@@ -23,28 +23,9 @@ const EFFECTS: [Family; 5] = [
     Family::Play,
 ];
 
-/// The truth moved along the undetermined directions to where the solution holds them.
-fn determined_truth(s: &Solution, truth: &[f64; PARAMETER_COUNT]) -> [f64; PARAMETER_COUNT] {
-    let mut t = *truth;
-    for u in &s.undetermined {
-        let lead = u
-            .direction
-            .terms
-            .iter()
-            .find(|(p, _)| *p == u.param)
-            .expect("own term");
-        let step = u.param.unit().to_report(t[u.param.index()]) / lead.1;
-        for (p, c) in &u.direction.terms {
-            let moved = p.unit().to_report(t[p.index()]) - step * c;
-            t[p.index()] = p.unit().from_report(moved);
-        }
-    }
-    t
-}
-
 /// err/σ of the paper's determined parameters.
 fn z_scores(s: &Solution, truth: &[f64; PARAMETER_COUNT]) -> Vec<(Param, f64)> {
-    let truth = determined_truth(s, truth);
+    let truth = naocalib::solve::identify::determined_truth(&s.undetermined, truth);
     Param::ALL[..PAPER_PARAMETERS]
         .iter()
         .filter(|p| s.is_determined(**p) && s.std[p.index()] > 0.0)

@@ -33,6 +33,11 @@ use crate::model::{Camera, Model, Pose, Vertex};
 
 use super::assign;
 
+/// Vertices by index, with their pixels.
+type Indexed = Vec<(usize, [f64; 2])>;
+/// Vertices with their pixels.
+type Placed = Vec<(Vertex, [f64; 2])>;
+
 /// Smallest half-window of `cornerSubPix` [px]; a vertex nearer the border than this
 /// window (plus the pixel its gradients need) is not refined, but dropped.
 pub const MIN_HALF_WINDOW: i32 = 2;
@@ -386,7 +391,7 @@ fn consistent(
     predicted: &[Predicted],
     found: &[(usize, [f64; 2])],
     tolerance: f64,
-) -> Option<(Matrix3<f64>, Vec<(usize, [f64; 2])>)> {
+) -> Option<(Matrix3<f64>, Indexed)> {
     let mut kept: Vec<(usize, [f64; 2])> = found.to_vec();
     loop {
         if kept.len() < MIN_VERTICES {
@@ -422,7 +427,7 @@ pub fn detect(
     camera: &Camera,
     pose: &Pose<f64>,
     factor: f64,
-) -> opencv::Result<Result<Vec<(Vertex, [f64; 2])>, String>> {
+) -> opencv::Result<Result<Placed, String>> {
     let predicted = predict(model, camera, pose);
     if predicted.len() < MIN_VERTICES {
         return Ok(Err("the model puts the board behind the camera".into()));

@@ -697,17 +697,17 @@ fn chessboard(
     };
     let mut whole_image = false;
     let mut points = match roi {
-        Some(rect) => find::find_board(&grey, grid, Some(rect)).map_err(cv)?,
+        Some(rect) => find::find_board(grey, grid, Some(rect)).map_err(cv)?,
         None => None,
     };
     if points.is_none() {
         whole_image = roi.is_some();
-        points = find::find_board(&grey, grid, None).map_err(cv)?;
+        points = find::find_board(grey, grid, None).map_err(cv)?;
     }
     let Some(mut points) = points else {
         return Ok(Outcome::NotFound);
     };
-    find::refine(&grey, &mut points, grid, options.subpix_factor).map_err(cv)?;
+    find::refine(grey, &mut points, grid, options.subpix_factor).map_err(cv)?;
 
     // One homography must explain every point (after removing the lens distortion).
     let board_xy: Vec<[f64; 2]> = (0..grid.len())

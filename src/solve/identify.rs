@@ -159,3 +159,24 @@ pub fn mask(undetermined: &[Undetermined]) -> [bool; PARAMETER_COUNT] {
     }
     m
 }
+
+/// `truth` moved along the `undetermined` directions to where a solution holds them (each
+/// undetermined parameter at zero): what the data determine, and what a solution's
+/// estimates are to be compared with (to first order).
+pub fn determined_truth(
+    undetermined: &[Undetermined],
+    truth: &[f64; PARAMETER_COUNT],
+) -> [f64; PARAMETER_COUNT] {
+    let mut t = *truth;
+    for u in undetermined {
+        let Some(lead) = u.direction.terms.iter().find(|(p, _)| *p == u.param) else {
+            continue;
+        };
+        let step = u.param.unit().to_report(t[u.param.index()]) / lead.1;
+        for (p, c) in &u.direction.terms {
+            let moved = p.unit().to_report(t[p.index()]) - step * c;
+            t[p.index()] = p.unit().from_report(moved);
+        }
+    }
+    t
+}

@@ -99,26 +99,11 @@ pub fn solve(
     )
 }
 
-/// The truth moved along the undetermined directions to where the solution holds them
-/// (each undetermined parameter at its start value 0): what the data determine.
+/// The truth moved along the solution's undetermined directions (see
+/// [`naocalib::solve::identify::determined_truth`]).
 pub fn determined_truth(
     solution: &naocalib::solve::Solution,
     truth: &[f64; naocalib::model::PARAMETER_COUNT],
 ) -> [f64; naocalib::model::PARAMETER_COUNT] {
-    let mut t = *truth;
-    for u in &solution.undetermined {
-        // The direction is in report units with the held parameter's coefficient first.
-        let lead = u
-            .direction
-            .terms
-            .iter()
-            .find(|(p, _)| *p == u.param)
-            .expect("own term");
-        let step = u.param.unit().to_report(t[u.param.index()]) / lead.1;
-        for (p, c) in &u.direction.terms {
-            let moved = p.unit().to_report(t[p.index()]) - step * c;
-            t[p.index()] = p.unit().from_report(moved);
-        }
-    }
-    t
+    naocalib::solve::identify::determined_truth(&solution.undetermined, truth)
 }
