@@ -8,7 +8,7 @@
 //!   all cores, each exactly as `naocalib solve` does ([`solve_one`]); a broken dataset
 //!   becomes a [`Failure`] with its reason and never stops the batch.
 //! - [`Batch::summary`] gives mean ± std across runs and the mean reported one-sigma
-//!   ([`stats`]); [`Batch::drift`] the z-scores of the changes between runs ([`drift`]).
+//!   ([`stats`]); [`Batch::drift`] the z-scores of the changes between runs ([`mod@drift`]).
 //! - [`Batch::table`] and [`Batch::json`] are the reports; [`Batch::write`] writes every
 //!   run's result JSON and the summary into a directory, atomically.
 //!

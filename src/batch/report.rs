@@ -73,7 +73,7 @@ fn fmt_or_dash(x: f64, decimals: usize) -> String {
 
 impl Batch {
     /// The human-readable report: the runs, one column each (up to
-    /// [`MAX_RUN_COLUMNS`]), then mean ± std across runs and the mean reported one-sigma
+    /// `MAX_RUN_COLUMNS`), then mean ± std across runs and the mean reported one-sigma
     /// per parameter, iterations, RMS and time; then the failures and the drift.
     pub fn table(&self, drift: &DriftOptions) -> String {
         let mut out = String::new();

@@ -36,9 +36,9 @@ pub struct Summary {
     pub parameters: Vec<ParamStats>,
     /// Mean iterations.
     pub iterations: f64,
-    /// Mean RMS in u and v at the solutions [px].
+    /// Mean RMS in u and v at the solutions (px).
     pub rms_px: [f64; 2],
-    /// Mean wall time of a solve [s].
+    /// Mean wall time of a solve (s).
     pub seconds: f64,
 }
 

@@ -82,10 +82,10 @@ pub struct UncertaintyArgs {
     /// families the misfit tests point to, one at a time, until none is significant).
     #[arg(long, value_enum, default_value = "paper")]
     pub model: ModelArg,
-    /// Pixel noise σ [px] for the noise model; estimated from the residuals if not given.
+    /// Pixel noise σ (px) for the noise model; estimated from the residuals if not given.
     #[arg(long, value_name = "PX", value_parser = positive)]
     pub px_noise: Option<f64>,
-    /// Joint-angle noise σ per joint and capture [deg]; estimated if not given.
+    /// Joint-angle noise σ per joint and capture (deg); estimated if not given.
     #[arg(long, value_name = "DEG", value_parser = positive)]
     pub joint_noise_deg: Option<f64>,
     /// Report the plain σ̂²(JᵀJ)⁻¹ instead of the noise model (over-confident under joint

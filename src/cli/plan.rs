@@ -25,10 +25,10 @@ pub struct PlanArgs {
     /// links, compliance, play), comma-separated; the plan is made for them.
     #[arg(long, value_name = "FAMILIES", default_value = "paper", value_parser = parse_families)]
     families: Families,
-    /// Pixel noise σ per coordinate the prediction assumes [px].
+    /// Pixel noise σ per coordinate the prediction assumes (px).
     #[arg(long, default_value_t = 0.1, value_parser = positive)]
     px_noise: f64,
-    /// Joint-angle noise σ per joint and capture the prediction assumes [deg].
+    /// Joint-angle noise σ per joint and capture the prediction assumes (deg).
     #[arg(long, default_value_t = 0.1, value_parser = not_negative)]
     joint_noise_deg: f64,
     /// Seed of the random candidate pool.
@@ -38,7 +38,7 @@ pub struct PlanArgs {
     /// when not given.
     #[arg(long, value_name = "DATASET_TOML")]
     camera: Option<PathBuf>,
-    /// The board must stay in view for every angle offset within ± this [deg] (and sandal
+    /// The board must stay in view for every angle offset within ± this (deg) (and sandal
     /// translations within ± this in mm).
     #[arg(long, default_value_t = 3.0, value_parser = not_negative)]
     offset_deg: f64,

@@ -23,10 +23,10 @@ pub struct SimulateArgs {
     /// Head postures per stance.
     #[arg(long, default_value_t = 3)]
     heads: usize,
-    /// Pixel noise σ per coordinate [px].
+    /// Pixel noise σ per coordinate (px).
     #[arg(long, default_value_t = 0.1)]
     px_noise: f64,
-    /// Joint-angle noise σ per joint and capture [deg].
+    /// Joint-angle noise σ per joint and capture (deg).
     #[arg(long, default_value_t = 0.0)]
     joint_noise_deg: f64,
     /// Take the true parameters from this truth.toml instead of drawing them.
@@ -44,7 +44,7 @@ pub struct SimulateArgs {
     /// empty, for `naocalib detect`).
     #[arg(long)]
     images: bool,
-    /// Image blur σ [px] (with --images).
+    /// Image blur σ (px) (with --images).
     #[arg(long, default_value_t = 0.8, requires = "images")]
     blur: f64,
     /// Image grey-level noise σ (with --images).

@@ -13,7 +13,7 @@ use super::units::csv_float;
 /// The most captures a dataset may have (the paper's datasets have a few hundred).
 pub(crate) const MAX_CAPTURES: usize = 100_000;
 
-/// The largest magnitude of a logged joint angle [rad] (a NAO's joints turn less than
+/// The largest magnitude of a logged joint angle (rad) (a NAO's joints turn less than
 /// ±2.1 rad; more than a full turn is a unit or logging error).
 pub(crate) const MAX_ANGLE_RAD: f64 = std::f64::consts::TAU;
 

@@ -17,21 +17,21 @@ use super::error::{DatasetError, Location};
 use super::toml_doc::TomlDoc;
 use super::units::degrees_for;
 
-/// Image width and height [px].
+/// Image width and height (px).
 pub(crate) const IMAGE_SIZE: (u32, u32) = (16, 8192);
-/// Focal lengths fx, fy [px].
+/// Focal lengths fx, fy (px).
 pub(crate) const FOCAL: (f64, f64) = (50.0, 20000.0);
 /// Squares of the board along either side.
 pub(crate) const SQUARES: (u32, u32) = (3, 64);
-/// Edge length of one square [mm].
+/// Edge length of one square (mm).
 pub(crate) const SQUARE_MM: (f64, f64) = (1.0, 500.0);
-/// Link lengths [mm].
+/// Link lengths (mm).
 pub(crate) const LINK_MM: (f64, f64) = (1.0, 1000.0);
-/// Largest magnitude of a position (board mount, centre of mass, camera offset) [mm].
+/// Largest magnitude of a position (board mount, centre of mass, camera offset) (mm).
 pub(crate) const POSITION_MM: f64 = 1000.0;
-/// Largest magnitude of a fixed angle (board mount, camera tilt) [deg].
+/// Largest magnitude of a fixed angle (board mount, camera tilt) (deg).
 pub(crate) const ANGLE_DEG: f64 = 360.0;
-/// Largest sandal mass [g].
+/// Largest sandal mass (g).
 pub(crate) const MASS_G: f64 = 10_000.0;
 
 /// The content of `dataset.toml`.

@@ -91,7 +91,7 @@ pub struct Assignment {
     pub vertices: Vec<(u32, u32)>,
     /// How OpenCV's order relates to the board's.
     pub order: Order,
-    /// In-image rotation of the detected board against the prediction [deg].
+    /// In-image rotation of the detected board against the prediction (deg).
     pub rotation_deg: f64,
 }
 
@@ -248,7 +248,7 @@ pub fn apply(h: &Matrix3<f64>, p: [f64; 2]) -> [f64; 2] {
     [q[0] / q[2], q[1] / q[2]]
 }
 
-/// The largest distance of `dst` from the homography fitted to `src → dst` [px], or
+/// The largest distance of `dst` from the homography fitted to `src → dst` (px), or
 /// `None` when no homography can be fitted.
 pub fn homography_residual(src: &[[f64; 2]], dst: &[[f64; 2]]) -> Option<f64> {
     let h = homography(src, dst)?;

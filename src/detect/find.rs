@@ -45,7 +45,7 @@ pub fn find_board(
     ))
 }
 
-/// The distance from each point to its nearest neighbour in the grid [px]: the local
+/// The distance from each point to its nearest neighbour in the grid (px): the local
 /// size of a square.
 pub fn local_square(points: &[[f64; 2]], grid: Grid) -> Vec<f64> {
     let (rows, cols) = (grid.rows as i64, grid.cols as i64);

@@ -38,7 +38,7 @@ type Indexed = Vec<(usize, [f64; 2])>;
 /// Vertices with their pixels.
 type Placed = Vec<(Vertex, [f64; 2])>;
 
-/// Smallest half-window of `cornerSubPix` [px]; a vertex nearer the border than this
+/// Smallest half-window of `cornerSubPix` (px); a vertex nearer the border than this
 /// window (plus the pixel its gradients need) is not refined, but dropped.
 pub const MIN_HALF_WINDOW: i32 = 2;
 /// Fewest vertices of a board worth keeping.
@@ -105,29 +105,29 @@ impl Integral {
 #[derive(Debug, Clone)]
 struct Predicted {
     vertex: Vertex,
-    /// Position on the board plane [mm] (x, y).
+    /// Position on the board plane (mm) (x, y).
     board: [f64; 2],
     /// Predicted pixel.
     pixel: [f64; 2],
-    /// Offsets of the two black and two white samples from the vertex [px]: at
+    /// Offsets of the two black and two white samples from the vertex (px): at
     /// [`SAMPLE`] of a square, and (`inner_*`) at [`INNER`].
     black: [[f64; 2]; 2],
     white: [[f64; 2]; 2],
     inner_black: [[f64; 2]; 2],
     inner_white: [[f64; 2]; 2],
-    /// The same samples' offsets on the board plane [mm].
+    /// The same samples' offsets on the board plane (mm).
     board_black: [[f64; 2]; 2],
     board_white: [[f64; 2]; 2],
     board_inner_black: [[f64; 2]; 2],
     board_inner_white: [[f64; 2]; 2],
-    /// Edge of a square on the board [mm].
+    /// Edge of a square on the board (mm).
     board_step: f64,
-    /// Local size of a square [px].
+    /// Local size of a square (px).
     square: f64,
 }
 
 impl Predicted {
-    /// Patch half-size of the colour samples [px].
+    /// Patch half-size of the colour samples (px).
     fn patch(&self) -> i64 {
         ((0.1 * self.square).round() as i64).clamp(1, 6)
     }
@@ -191,7 +191,7 @@ impl Predicted {
     }
 }
 
-/// Whether the square at board position `(x, y)` [mm] is black (the four corner squares
+/// Whether the square at board position `(x, y)` (mm) is black (the four corner squares
 /// are; squares alternate).
 fn is_black(model: &Model, x: f64, y: f64) -> bool {
     let b = &model.board;

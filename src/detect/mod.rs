@@ -447,9 +447,9 @@ fn read_bytes(path: &Path) -> Result<Vec<u8>, DetectError> {
     }
 }
 
-/// Largest image side detection reads [px].
+/// Largest image side detection reads (px).
 pub const MAX_SIDE: u32 = 16_384;
-/// Largest image detection reads [pixels]: 64 megapixels (64 MB of grey levels).
+/// Largest image detection reads (pixels): 64 megapixels (64 MB of grey levels).
 pub const MAX_PIXELS: u64 = 64_000_000;
 
 /// Most images processed at once: `-j` beyond this is capped (4 per core, at most 64).

@@ -9,15 +9,15 @@ pub struct Board {
     pub squares_x: u32,
     /// Squares along the board's y axis (rows of squares).
     pub squares_y: u32,
-    /// Edge length of one square [mm].
+    /// Edge length of one square (mm).
     pub square: f64,
-    /// Pattern centre in the sole frame [mm].
+    /// Pattern centre in the sole frame (mm).
     pub mount_origin: [f64; 3],
-    /// Mount angles roll, pitch, yaw [rad].
+    /// Mount angles roll, pitch, yaw (rad).
     pub mount_rpy: [f64; 3],
-    /// Mass of the sandal [g] (for the gravity torques of compliance and play).
+    /// Mass of the sandal (g) (for the gravity torques of compliance and play).
     pub mass_g: f64,
-    /// The sandal's centre of mass in the sole frame [mm].
+    /// The sandal's centre of mass in the sole frame (mm).
     pub com_mm: [f64; 3],
 }
 
@@ -66,7 +66,7 @@ impl Board {
         v.row < self.rows() && v.col < self.cols()
     }
 
-    /// Position of a vertex in the board frame `B` [mm].
+    /// Position of a vertex in the board frame `B` (mm).
     pub fn vertex_position(&self, v: Vertex) -> [f64; 3] {
         [
             (v.col as f64 - (self.squares_x as f64 - 2.0) / 2.0) * self.square,

@@ -13,13 +13,13 @@ pub struct Camera {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
-    /// Focal length in x [px].
+    /// Focal length in x (px).
     pub fx: f64,
-    /// Focal length in y [px].
+    /// Focal length in y (px).
     pub fy: f64,
-    /// Optical centre, x [px].
+    /// Optical centre, x (px).
     pub cx: f64,
-    /// Optical centre, y [px].
+    /// Optical centre, y (px).
     pub cy: f64,
     /// OpenCV distortion `[k1, k2, p1, p2, k3]`.
     pub distortion: [f64; 5],
@@ -143,13 +143,13 @@ impl Camera {
 /// evaluate the same description.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Projection {
-    /// Focal length in x [px].
+    /// Focal length in x (px).
     pub fx: Affine,
-    /// Focal length in y [px].
+    /// Focal length in y (px).
     pub fy: Affine,
-    /// Optical centre x [px].
+    /// Optical centre x (px).
     pub cx: Affine,
-    /// Optical centre y [px].
+    /// Optical centre y (px).
     pub cy: Affine,
     /// Radial distortion k1.
     pub k1: Affine,

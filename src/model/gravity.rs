@@ -8,18 +8,18 @@ use super::board::Board;
 use super::pose::{Axis, Pose};
 use super::robot::{JointAngles, RobotGeometry, Side};
 
-/// Standard gravity [m/s²].
+/// Standard gravity (m/s²).
 pub const G: f64 = 9.81;
 
-/// One link of a leg: its mass [g] and centre of mass [mm] in the frame after its joint
+/// One link of a leg: its mass (g) and centre of mass (mm) in the frame after its joint
 /// (left leg; the right leg mirrors y).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Link {
     /// Link name.
     pub name: &'static str,
-    /// Mass [g].
+    /// Mass (g).
     pub mass_g: f64,
-    /// Centre of mass in the frame `F_i` after joint `i` [mm].
+    /// Centre of mass in the frame `F_i` after joint `i` (mm).
     pub com_mm: [f64; 3],
 }
 
@@ -78,7 +78,7 @@ fn column(pose: &Pose<f64>, k: usize) -> [f64; 3] {
     ]
 }
 
-/// The gravity torque [N·m] about each joint of one leg (HipYawPitch, HipRoll, HipPitch,
+/// The gravity torque (N·m) about each joint of one leg (HipYawPitch, HipRoll, HipPitch,
 /// KneePitch, AnklePitch, AnkleRoll) at the logged angles, offsets left out:
 /// `τ_j = u_j · Σ_{i ≥ j} (c_i − o_j) × (m_i·g·d)` with `u_j` the axis about which a growing
 /// angle turns, `o_j` a point on it and `d` the unit gravity direction of `robot`.

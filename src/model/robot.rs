@@ -186,19 +186,19 @@ impl JointAngles {
 /// The link lengths and fixed angles of the head and leg chains (docs/MODEL.md §2).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RobotGeometry {
-    /// Lateral distance of each hip joint from the origin [mm].
+    /// Lateral distance of each hip joint from the origin (mm).
     pub hip_offset_y: f64,
-    /// Height of the HeadYaw joint above the origin [mm].
+    /// Height of the HeadYaw joint above the origin (mm).
     pub hip_to_neck_z: f64,
-    /// Hip to knee [mm].
+    /// Hip to knee (mm).
     pub thigh: f64,
-    /// Knee to ankle [mm].
+    /// Knee to ankle (mm).
     pub tibia: f64,
-    /// Ankle to sole [mm].
+    /// Ankle to sole (mm).
     pub foot_height: f64,
-    /// Lower camera position in the HeadPitch frame [mm].
+    /// Lower camera position in the HeadPitch frame (mm).
     pub lower_camera_offset: [f64; 3],
-    /// Lower camera tilt about y, looking down [rad].
+    /// Lower camera tilt about y, looking down (rad).
     pub lower_camera_tilt: f64,
     /// Direction of gravity in the origin frame `O`, a unit vector (lying on its back:
     /// `(−1, 0, 0)`); it sets the gravity torques of compliance and play.

@@ -25,7 +25,7 @@ pub struct OrientedBox {
     pub centre: [f64; 3],
     /// Columns: the box axes in `O`.
     pub axes: [[f64; 3]; 3],
-    /// Half the edge lengths along the box axes [mm].
+    /// Half the edge lengths along the box axes (mm).
     pub half: [f64; 3],
 }
 
@@ -95,7 +95,7 @@ pub struct Capsule {
     pub a: [f64; 3],
     /// The other end.
     pub b: [f64; 3],
-    /// Radius [mm].
+    /// Radius (mm).
     pub radius: f64,
 }
 
@@ -120,7 +120,7 @@ impl Capsule {
     }
 }
 
-/// Sizes of the collision model [mm].
+/// Sizes of the collision model (mm).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BodyModel {
     /// Radius of the thigh capsules.

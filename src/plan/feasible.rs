@@ -13,21 +13,21 @@ use crate::model::{
 /// How far the planned captures must stay from the limits of what can be seen and reached.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Feasibility {
-    /// Distance of every planned angle from its joint's mechanical limit [rad].
+    /// Distance of every planned angle from its joint's mechanical limit (rad).
     pub joint_margin: f64,
     /// The board must stay in view for every angle offset (camera rotation, head and leg
-    /// joints, sandal rotation) within ± this [rad] …
+    /// joints, sandal rotation) within ± this (rad) …
     pub offset_angle: f64,
-    /// … and every sandal mounting translation within ± this [mm] …
+    /// … and every sandal mounting translation within ± this (mm) …
     pub offset_length: f64,
     /// … and the head joint offsets (not part of the paper's model, held at zero by
-    /// default) within ± this [rad].
+    /// default) within ± this (rad).
     pub head_offset: f64,
-    /// Smallest distance of a vertex from the image border [px].
+    /// Smallest distance of a vertex from the image border (px).
     pub margin_px: f64,
-    /// Smallest projected square edge at the nominal model [px].
+    /// Smallest projected square edge at the nominal model (px).
     pub min_square_px: f64,
-    /// Largest angle between the board normal and the line of sight [rad].
+    /// Largest angle between the board normal and the line of sight (rad).
     pub max_view_angle: f64,
     /// The collision model.
     pub body: BodyModel,
@@ -227,8 +227,8 @@ pub fn board_in_view_for_all_offsets(
     inside(&corner(&|k| d_angle[k].signum()))
 }
 
-/// The NAO documentation's head anti-collision limits: HeadPitch range [deg] by HeadYaw
-/// [deg] (the head must not hit the shoulders), interpolated linearly between rows.
+/// The NAO documentation's head anti-collision limits: HeadPitch range (deg) by HeadYaw
+/// (deg) (the head must not hit the shoulders), interpolated linearly between rows.
 const HEAD_PITCH_BY_YAW: [(f64, f64, f64); 13] = [
     (-119.52, -25.73, 18.91),
     (-87.49, -18.91, 11.46),
@@ -245,7 +245,7 @@ const HEAD_PITCH_BY_YAW: [(f64, f64, f64); 13] = [
     (119.52, -25.73, 18.91),
 ];
 
-/// The HeadPitch range [rad] allowed at HeadYaw `yaw` [rad].
+/// The HeadPitch range (rad) allowed at HeadYaw `yaw` (rad).
 pub fn head_pitch_limits(yaw: f64) -> (f64, f64) {
     let y = yaw.to_degrees().clamp(-119.52, 119.52);
     let k = HEAD_PITCH_BY_YAW

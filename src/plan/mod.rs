@@ -44,7 +44,7 @@ pub struct PlanOptions {
     pub captures: usize,
     /// Which parameters the calibration will free (the others are held).
     pub fixed: FixedSet,
-    /// The noise the prediction assumes: pixel σ [px] and joint σ [rad] per capture.
+    /// The noise the prediction assumes: pixel σ (px) and joint σ (rad) per capture.
     pub levels: NoiseLevels,
     /// Seed of the random candidate pool (and of the random stances compared against).
     pub seed: u64,
@@ -98,9 +98,9 @@ pub struct Plan {
     pub prediction: Prediction,
     /// The same for the simulator's random stances at equal capture count.
     pub baseline: Prediction,
-    /// Predicted duration of the measurement phase [s].
+    /// Predicted duration of the measurement phase (s).
     pub duration: f64,
-    /// Predicted duration of the random stances in the simulator's order [s].
+    /// Predicted duration of the random stances in the simulator's order (s).
     pub baseline_duration: f64,
     /// Number of feasible captures in the pool.
     pub pool: usize,

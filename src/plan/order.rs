@@ -16,11 +16,11 @@ pub struct Timing {
     pub leg_speed: f64,
     /// Head joint speed [rad/s].
     pub head_speed: f64,
-    /// Wait after a move of any leg joint [s].
+    /// Wait after a move of any leg joint (s).
     pub leg_settle: f64,
-    /// Wait after a head-only move [s].
+    /// Wait after a head-only move (s).
     pub head_settle: f64,
-    /// Taking the picture and logging the joints [s].
+    /// Taking the picture and logging the joints (s).
     pub capture: f64,
 }
 
@@ -39,7 +39,7 @@ impl Default for Timing {
 }
 
 impl Timing {
-    /// Time of the move from `a` to `b` [s], without settling.
+    /// Time of the move from `a` to `b` (s), without settling.
     pub fn motion(&self, a: &JointAngles, b: &JointAngles) -> f64 {
         Joint::ALL
             .iter()
@@ -54,7 +54,7 @@ impl Timing {
             .fold(0.0, f64::max)
     }
 
-    /// Time from `a` to the picture at `b` [s]: motion, settling and the capture.
+    /// Time from `a` to the picture at `b` (s): motion, settling and the capture.
     pub fn step(&self, a: &JointAngles, b: &JointAngles) -> f64 {
         let legs_move = Joint::ALL
             .iter()
@@ -68,7 +68,7 @@ impl Timing {
     }
 
     /// Duration of executing `captures` in order, starting from and returning to `home`
-    /// (lying straight, all angles zero) [s].
+    /// (lying straight, all angles zero) (s).
     pub fn duration(&self, captures: &[JointAngles]) -> f64 {
         let home = JointAngles::default();
         let mut at = home;

@@ -23,9 +23,9 @@ pub struct SimOptions {
     pub stances: usize,
     /// Head postures per stance.
     pub heads: usize,
-    /// Pixel noise σ per coordinate [px].
+    /// Pixel noise σ per coordinate (px).
     pub px_noise: f64,
-    /// Joint-angle noise σ per joint and capture [rad].
+    /// Joint-angle noise σ per joint and capture (rad).
     pub joint_noise: f64,
     /// True parameters (internal units); drawn at random when `None`.
     pub truth: Option<[f64; PARAMETER_COUNT]>,
@@ -148,9 +148,9 @@ pub struct Stance {
     pub postures: Vec<JointAngles>,
 }
 
-/// Smallest distance of a vertex from the image border [px].
+/// Smallest distance of a vertex from the image border (px).
 const MARGIN: f64 = 12.0;
-/// Smallest projected square edge [px], so that detection is realistic.
+/// Smallest projected square edge (px), so that detection is realistic.
 const MIN_SQUARE_PX: f64 = 14.0;
 /// Largest angle between the board normal and the line of sight.
 const MAX_VIEW_ANGLE_DEG: f64 = 60.0;

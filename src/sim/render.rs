@@ -23,7 +23,7 @@ use crate::model::{JointAngles, Model, Pose, Side};
 /// How to render images.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RenderOptions {
-    /// Gaussian blur σ [px] (0 for none).
+    /// Gaussian blur σ (px) (0 for none).
     pub blur: f64,
     /// Grey-level noise σ [grey levels of 255] (0 for none).
     pub noise: f64,

@@ -12,9 +12,9 @@ pub mod ffi {
     enum StepKind {
         /// A constant transform (`rotation`, `translation`).
         Fixed,
-        /// A rotation about `axis` by `amount` [rad].
+        /// A rotation about `axis` by `amount` (rad).
         Rotate,
-        /// A translation along `axis` by `amount` [mm].
+        /// A translation along `axis` by `amount` (mm).
         Translate,
     }
 
@@ -34,9 +34,9 @@ pub mod ffi {
     enum LossKind {
         /// Plain least squares.
         Squared,
-        /// Huber with `loss_scale` [px].
+        /// Huber with `loss_scale` (px).
         Huber,
-        /// Cauchy with `loss_scale` [px].
+        /// Cauchy with `loss_scale` (px).
         Cauchy,
     }
 
@@ -102,7 +102,7 @@ pub mod ffi {
         param_block: Vec<u32>,
         steps: Vec<FfiStep>,
         captures: Vec<FfiCapture>,
-        /// Board-frame vertex positions, 3 per vertex [mm].
+        /// Board-frame vertex positions, 3 per vertex (mm).
         points: Vec<f64>,
         /// Observed pixels, 2 per vertex.
         pixels: Vec<f64>,

@@ -1,6 +1,6 @@
 //! Every backend on the same [`Problem`], side by side (`naocalib compare`).
 //!
-//! Each backend runs through [`solve`](super::solve) from the same start values. The
+//! Each backend runs through [`calibrate`](super::calibrate) (plain) from the same start values. The
 //! reference is Ceres when it is among the backends (the default build), otherwise the
 //! first backend; every other run is measured by its largest parameter difference from the
 //! reference in units of the reference's one-sigma. A backend that fails or does not
@@ -35,7 +35,7 @@ pub struct Run {
     pub solver: String,
     /// The solution, or why the backend failed.
     pub outcome: Result<Box<Solution>, String>,
-    /// Wall time of the whole [`solve`](super::solve) call, statistics included [s].
+    /// Wall time of the whole [`calibrate`](super::calibrate) (plain) call, statistics included (s).
     pub wall_seconds: f64,
     /// Numerical rank of the run's covariance ([`rank_of_covariance`]); `None` on failure.
     pub rank: Option<usize>,

@@ -28,9 +28,9 @@ use crate::model::{Family, FixedSet, PARAMETER_COUNT, Param};
 /// a fitted solution: on clean simulated data far fewer datasets are flagged, see the
 /// README's measured rate).
 pub const FAMILY_ALPHA: f64 = 0.05;
-/// A residual RMS (either coordinate) beyond this is not a calibration [px].
+/// A residual RMS (either coordinate) beyond this is not a calibration (px).
 pub const IMPLAUSIBLE_RMS_PX: f64 = 10.0;
-/// Joint noise beyond this per joint and capture is not what a NAO's encoders give [deg].
+/// Joint noise beyond this per joint and capture is not what a NAO's encoders give (deg).
 pub const IMPLAUSIBLE_JOINT_NOISE_DEG: f64 = 0.5;
 
 /// The score test of one family.
@@ -50,7 +50,7 @@ pub struct FamilyTest {
     /// Whether it is significant at the Bonferroni level.
     pub significant: bool,
     /// How much of the residual sum of squares freeing the family would explain, to first
-    /// order (`gᵀ (J̃_Fᵀ J̃_F)⁺ g`) [px²]: what ranks the suggestions.
+    /// order (`gᵀ (J̃_Fᵀ J̃_F)⁺ g`) (px²): what ranks the suggestions.
     pub explained_px2: f64,
 }
 

@@ -60,7 +60,7 @@ pub struct Summary {
     pub final_cost: f64,
     /// The backend's termination reason, in its words.
     pub termination: String,
-    /// Wall time of the optimisation and covariance [s].
+    /// Wall time of the optimisation and covariance (s).
     pub seconds: f64,
 }
 
@@ -125,9 +125,9 @@ pub struct Solution {
     pub covariance: DMatrix<f64>,
     /// Which parameters were held fixed.
     pub fixed: FixedSet,
-    /// RMS of the unweighted residuals in u and v [px] at the solution.
+    /// RMS of the unweighted residuals in u and v (px) at the solution.
     pub rms_px: [f64; 2],
-    /// RMS in u and v at the start values [px].
+    /// RMS in u and v at the start values (px).
     pub initial_rms_px: [f64; 2],
     /// Number of observed vertices.
     pub observations: usize,
@@ -135,7 +135,7 @@ pub struct Solution {
     pub captures: usize,
     /// Estimated residual variance `σ̂² = 2·cost / (m − n)` of the weighted residuals.
     pub residual_variance: f64,
-    /// Wall time of the whole solve including the statistics [s].
+    /// Wall time of the whole solve including the statistics (s).
     pub seconds: f64,
     /// Every observed vertex's residual (projection − observation) before and after.
     pub residuals: Vec<VertexResidual>,
@@ -169,7 +169,7 @@ pub struct Outlier {
     pub capture: u64,
     /// Which vertex.
     pub vertex: crate::model::Vertex,
-    /// Its `(u, v)` residual at the robust fit [px].
+    /// Its `(u, v)` residual at the robust fit (px).
     pub residual: [f64; 2],
 }
 
@@ -209,7 +209,7 @@ impl Solution {
     }
 }
 
-/// The residual of one observed vertex at the start values and at the solution [px].
+/// The residual of one observed vertex at the start values and at the solution (px).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VertexResidual {
     /// The capture id.
@@ -775,7 +775,7 @@ fn calibrate_given(
     Ok(solution)
 }
 
-/// RMS in u and v of the residuals at the start values [px] (NaN where undefined).
+/// RMS in u and v of the residuals at the start values (px) (NaN where undefined).
 fn initial_rms(residuals: &[VertexResidual]) -> [f64; 2] {
     let n = residuals.len().max(1) as f64;
     std::array::from_fn(|k| {

@@ -19,18 +19,18 @@ type Dual = DualSVec64<JOINTS_PER_CAPTURE>;
 /// Noise levels: given on the command line, or estimated from the residuals.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NoiseLevels {
-    /// Pixel noise σ per coordinate [px].
+    /// Pixel noise σ per coordinate (px).
     pub px: f64,
-    /// Joint-angle noise σ per joint and capture [rad].
+    /// Joint-angle noise σ per joint and capture (rad).
     pub joint: f64,
 }
 
 /// How the noise levels are chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct NoiseOptions {
-    /// Pixel noise σ [px]; estimated from the residuals when `None`.
+    /// Pixel noise σ (px); estimated from the residuals when `None`.
     pub px: Option<f64>,
-    /// Joint-angle noise σ [rad]; estimated from the residuals when `None`.
+    /// Joint-angle noise σ (rad); estimated from the residuals when `None`.
     pub joint: Option<f64>,
 }
 

@@ -12,9 +12,9 @@ use crate::model::{FixedSet, PARAMETER_COUNT, Param, Scalar, StanceChains, Verte
 pub struct Observation {
     /// Which vertex of the pattern.
     pub vertex: Vertex,
-    /// Its position in the board frame [mm].
+    /// Its position in the board frame (mm).
     pub point: [f64; 3],
-    /// Where it was seen in the image [px].
+    /// Where it was seen in the image (px).
     pub pixel: [f64; 2],
 }
 
@@ -176,9 +176,9 @@ pub enum Loss {
     /// Plain least squares.
     #[default]
     Squared,
-    /// Huber loss with the given scale [px].
+    /// Huber loss with the given scale (px).
     Huber(f64),
-    /// Cauchy loss with the given scale [px].
+    /// Cauchy loss with the given scale (px).
     Cauchy(f64),
 }
 
@@ -273,7 +273,7 @@ impl Problem {
         Some(out)
     }
 
-    /// Root mean square of the unweighted residuals in u and in v [px].
+    /// Root mean square of the unweighted residuals in u and in v (px).
     pub fn rms(&self, params: &[f64]) -> Option<[f64; 2]> {
         let r = self.residuals(params)?;
         let n = (r.len() / 2).max(1) as f64;

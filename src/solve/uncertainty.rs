@@ -96,7 +96,7 @@ pub fn correlation(cov: &DMatrix<f64>) -> DMatrix<f64> {
 }
 
 /// The identifiability report and the sandwich covariance of `problem` at the free values
-/// `x` from one evaluation of the Jacobian (what [`super::solve`] reports beside the fit).
+/// `x` from one evaluation of the Jacobian (what [`super::calibrate`] reports beside the fit).
 pub fn statistics(
     problem: &Problem,
     x: &[f64],
@@ -121,7 +121,7 @@ fn unanalysed(free: &[Param]) -> Identifiability {
     }
 }
 
-/// [`identifiability`] from the (weighted) Jacobian `jac` over the `free` parameters.
+/// The identifiability report from the (weighted) Jacobian `jac` over the `free` parameters.
 pub fn identifiability_of(
     free: &[Param],
     jac: &DMatrix<f64>,
