@@ -276,8 +276,10 @@ fn an_overlay_never_replaces_an_input_image() {
         image,
         "the input image is untouched"
     );
+    // The outputs are checked before any image is read: nothing else is written either.
     assert!(
-        dir.join("images/capture_0001.png").exists(),
-        "other overlays written"
+        !dir.join("images/capture_0001.png").exists(),
+        "no overlay written once one is refused"
     );
+    assert_ne!(out.status.code(), Some(0));
 }
