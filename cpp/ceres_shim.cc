@@ -259,7 +259,11 @@ class CaptureFunctor {
         first_(first),
         count_(count),
         slot_(std::move(slot)),
-        offset_(std::move(offset)) {}
+        offset_(std::move(offset)) {
+    const FfiProjection& c = problem.projection;
+    for (const FfiAmount* a : {&c.fx, &c.fy, &c.cx, &c.cy, &c.k1, &c.k2})
+      projection_free_ = projection_free_ || a->params[0] >= 0;
+  }
 
   template <typename T>
   bool operator()(T const* const* parameters, T* residuals) const {
@@ -300,8 +304,9 @@ class CaptureFunctor {
   // `constant + Σ scale · α` (Affine::eval, same order of operations).
   template <typename T>
   T amount(const FfiAmount& a, T const* const* parameters) const {
-    T value = T(a.constant);
-    for (int k = 0; k < kTerms; ++k)
+    if (a.params[0] < 0) return T(a.constant);
+    T value = parameters[slot_[a.params[0]]][offset_[a.params[0]]] * a.scales[0] + a.constant;
+    for (int k = 1; k < kTerms; ++k)
       if (a.params[k] >= 0)
         value += parameters[slot_[a.params[k]]][offset_[a.params[k]]] * a.scales[k];
     return value;
@@ -344,6 +349,22 @@ class CaptureFunctor {
     const T inv = T(1.0) / p[0];
     T a = -(p[1] * inv);
     T b = -(p[2] * inv);
+    if (!projection_free_) {
+      // Constant intrinsics (the usual case): double coefficients, cheaper on Jets.
+      if (c.distorted) {
+        const double k1 = c.k1.constant, k2 = c.k2.constant;
+        const T r2 = a * a + b * b;
+        const T radial = T(1.0) + r2 * (k1 + r2 * (k2 + r2 * c.k3));
+        const T ab = a * b;
+        const T da = ab * c.p1 * 2.0 + (r2 + a * a * 2.0) * c.p2;
+        const T db = (r2 + b * b * 2.0) * c.p1 + ab * c.p2 * 2.0;
+        a = a * radial + da;
+        b = b * radial + db;
+      }
+      uv[0] = a * c.fx.constant + c.cx.constant;
+      uv[1] = b * c.fy.constant + c.cy.constant;
+      return true;
+    }
     if (c.distorted) {
       const T k1 = amount(c.k1, parameters), k2 = amount(c.k2, parameters);
       const T p1 = T(c.p1), p2 = T(c.p2), k3 = T(c.k3);
@@ -365,6 +386,7 @@ class CaptureFunctor {
   std::uint32_t first_, count_;
   std::vector<int> slot_;    // per free parameter: its block's position in this block list
   std::vector<int> offset_;  // per free parameter: its position in the block
+  bool projection_free_ = false;  // whether an intrinsic depends on a free parameter
 };
 
 using CaptureCost = ceres::DynamicAutoDiffCostFunction<CaptureFunctor, kStride>;
