@@ -27,9 +27,8 @@ fn paper_sized() -> Problem {
     Problem::from_dataset(&dataset, FixedSet::default()).expect("problem")
 }
 
-/// The realistic robot with every family free and the undetermined parameters held.
-fn extended() -> Problem {
-    naocalib::solve::retain_freed_memory();
+/// A paper-sized dataset of a robot with realistic effects (0.1° joint noise).
+fn realistic() -> naocalib::dataset::Dataset {
     let options = SimOptions {
         effects: vec![
             Family::Head,
@@ -41,7 +40,13 @@ fn extended() -> Problem {
         joint_noise: 0.1f64.to_radians(),
         ..SimOptions::default()
     };
-    let dataset = simulate(&Model::default(), &options).expect("simulated");
+    simulate(&Model::default(), &options).expect("simulated")
+}
+
+/// The realistic robot with every family free and the undetermined parameters held.
+fn extended() -> Problem {
+    naocalib::solve::retain_freed_memory();
+    let dataset = realistic();
     let all = FixedSet::from_lists("head,intrinsics,distortion,links,compliance,play", "")
         .expect("families");
     let problem = Problem::from_dataset(&dataset, all).expect("problem");
@@ -64,18 +69,7 @@ fn bench_extended(c: &mut Criterion) {
 
 fn bench_auto(c: &mut Criterion) {
     naocalib::solve::retain_freed_memory();
-    let options = SimOptions {
-        effects: vec![
-            Family::Head,
-            Family::Intrinsics,
-            Family::Links,
-            Family::Compliance,
-            Family::Play,
-        ],
-        joint_noise: 0.1f64.to_radians(),
-        ..SimOptions::default()
-    };
-    let dataset = simulate(&Model::default(), &options).expect("simulated");
+    let dataset = realistic();
     let problem = Problem::from_dataset(&dataset, FixedSet::default()).expect("problem");
     let auto = UncertaintyOptions {
         model: naocalib::solve::ModelChoice::Auto,

@@ -305,46 +305,15 @@ pub fn aim_head(
         let pose = model.chains(side, j).camera_to_board(&zero);
         model.camera.project(&pose.translation)
     };
-    let mut j = *joints;
+    let mut start = *joints;
     let sole = model
         .robot
         .sole_chain(side, joints, &[0.0; 6])
         .eval(&zero)
         .translation;
-    j.set(Joint::HeadYaw, sole[1].atan2(sole[0]));
-    j.set(Joint::HeadPitch, 0.2);
-    let mut reached = false;
-    for _ in 0..15 {
-        let c = centre(&j)?;
-        let e = [c[0] - target[0], c[1] - target[1]];
-        if e[0].abs() < 0.5 && e[1].abs() < 0.5 {
-            reached = true;
-            break;
-        }
-        let h = 1e-6;
-        let mut jac = [[0.0; 2]; 2];
-        for (k, joint) in [Joint::HeadYaw, Joint::HeadPitch].into_iter().enumerate() {
-            let mut jp = j;
-            jp.set(joint, j.get(joint) + h);
-            let cp = centre(&jp)?;
-            jac[0][k] = (cp[0] - c[0]) / h;
-            jac[1][k] = (cp[1] - c[1]) / h;
-        }
-        let det = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
-        if det.abs() < 1e-9 {
-            return None;
-        }
-        let d_yaw = (jac[1][1] * e[0] - jac[0][1] * e[1]) / det;
-        let d_pitch = (-jac[1][0] * e[0] + jac[0][0] * e[1]) / det;
-        j.set(
-            Joint::HeadYaw,
-            j.get(Joint::HeadYaw) - d_yaw.clamp(-0.3, 0.3),
-        );
-        j.set(
-            Joint::HeadPitch,
-            j.get(Joint::HeadPitch) - d_pitch.clamp(-0.3, 0.3),
-        );
-    }
+    start.set(Joint::HeadYaw, sole[1].atan2(sole[0]));
+    start.set(Joint::HeadPitch, 0.2);
+    let (j, reached) = crate::sim::steer_head(centre, start, target, 0.5, 15)?;
     let within = |joint: Joint| {
         let (lo, hi) = joint.limits();
         (lo + joint_margin..=hi - joint_margin).contains(&j.get(joint))

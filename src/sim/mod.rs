@@ -203,29 +203,24 @@ fn board_in_view(
     (min_edge >= MIN_SQUARE_PX).then_some(uv)
 }
 
-/// Turns the head so that the board centre appears at `target` (pixels). Gauss–Newton on
-/// (HeadYaw, HeadPitch) with a numerical Jacobian; `None` if it leaves the joint limits.
-fn aim_head(
-    model: &Model,
-    side: Side,
-    joints: &JointAngles,
-    params: &[f64],
+/// Gauss–Newton on (HeadYaw, HeadPitch) with a numerical Jacobian from `start`, so that
+/// `centre` (where the board centre appears for given joint angles) comes within
+/// `tolerance` pixels of `target`, in at most `iterations` steps of at most 0.3 rad each.
+/// Returns the angles and whether the target was reached; `None` when a projection fails or
+/// the Jacobian is singular. Shared by the simulator and the stance planner.
+pub fn steer_head(
+    centre: impl Fn(&JointAngles) -> Option<[f64; 2]>,
+    start: JointAngles,
     target: [f64; 2],
-) -> Option<JointAngles> {
-    let centre = |j: &JointAngles| -> Option<[f64; 2]> {
-        let chains = model.chains(side, j);
-        let pose = chains.camera_to_board(params);
-        model.camera.project(&pose.translation)
-    };
-    let mut j = *joints;
-    let sole = model.chains(side, joints).board.eval(params).translation;
-    j.set(Joint::HeadYaw, sole[1].atan2(sole[0]));
-    j.set(Joint::HeadPitch, 0.3);
-    for _ in 0..20 {
+    tolerance: f64,
+    iterations: usize,
+) -> Option<(JointAngles, bool)> {
+    let mut j = start;
+    for _ in 0..iterations {
         let c = centre(&j)?;
         let e = [c[0] - target[0], c[1] - target[1]];
-        if e[0].abs() < 0.01 && e[1].abs() < 0.01 {
-            break;
+        if e[0].abs() < tolerance && e[1].abs() < tolerance {
+            return Some((j, true));
         }
         let h = 1e-6;
         let mut jac = [[0.0; 2]; 2];
@@ -251,6 +246,28 @@ fn aim_head(
             j.get(Joint::HeadPitch) - d_pitch.clamp(-0.3, 0.3),
         );
     }
+    Some((j, false))
+}
+
+/// Turns the head so that the board centre appears at `target` (pixels) with
+/// [`steer_head`]; `None` if it leaves the joint limits.
+fn aim_head(
+    model: &Model,
+    side: Side,
+    joints: &JointAngles,
+    params: &[f64],
+    target: [f64; 2],
+) -> Option<JointAngles> {
+    let centre = |j: &JointAngles| -> Option<[f64; 2]> {
+        let chains = model.chains(side, j);
+        let pose = chains.camera_to_board(params);
+        model.camera.project(&pose.translation)
+    };
+    let mut start = *joints;
+    let sole = model.chains(side, joints).board.eval(params).translation;
+    start.set(Joint::HeadYaw, sole[1].atan2(sole[0]));
+    start.set(Joint::HeadPitch, 0.3);
+    let (j, _) = steer_head(centre, start, target, 0.01, 20)?;
     let within = |joint: Joint| {
         let (lo, hi) = joint.limits();
         (lo..=hi).contains(&j.get(joint))
