@@ -13,31 +13,28 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
 
-#include <ceres/covariance.h>
 #include <ceres/crs_matrix.h>
-#include <ceres/dynamic_autodiff_cost_function.h>
+#include <ceres/cost_function.h>
 #include <ceres/jet.h>
 #include <ceres/loss_function.h>
 #include <ceres/problem.h>
 #include <ceres/solver.h>
 #include <ceres/types.h>
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
 #include <glog/logging.h>
 
 #include "naocalib/src/solve/ceres.rs.h"
 
 namespace naocalib {
 namespace {
-
-// Jet width of the autodiff passes: a capture of the paper's model references at most
-// camera (3) + leg (6) + board (3) = 12 free parameters, one pass; the extended model takes
-// a few more passes.
-constexpr int kStride = 12;
 
 // Most parameters one amount depends on (chain::MAX_TERMS in Rust).
 constexpr int kTerms = 3;
@@ -160,6 +157,11 @@ void validate(const FfiProblem& p, const FfiOptions& o) {
                                o.parameter_tolerance};
   for (double t : tolerances)
     if (!(finite(t) && t >= 0.0)) fail("tolerances must be finite and non-negative");
+  if (o.linear_solver != LinearSolver::DenseQr &&
+      o.linear_solver != LinearSolver::DenseNormalCholesky)
+    fail("unknown linear solver");
+  if (!(finite(o.rank_threshold) && o.rank_threshold > 0.0 && o.rank_threshold < 1.0))
+    fail("rank threshold must lie in (0, 1)");
 }
 
 // ---------------------------------------------------------------------------------------
@@ -249,28 +251,50 @@ void translate(Frame<T>& f, int axis, const T& distance) {
   for (int i = 0; i < 3; ++i) f.t[i] += f.R[i][axis] * distance;
 }
 
-// One residual block: the vertices [first, first + count) of one capture.
+// One residual block: the vertices [first, first + count) of one capture, as a function
+// of its free *amounts* — the angles and lengths of its chain steps and the intrinsics that
+// depend on free parameters, one direction each. A leg joint's angle depends on three
+// parameters (offset, compliance, play) but is one amount, so the Jets are as wide as the
+// capture's free amounts, not its free parameters; CaptureCost applies the chain rule
+// through the affine amounts (∂r/∂α = Σ scale · ∂r/∂amount) in double.
 class CaptureFunctor {
  public:
   CaptureFunctor(const FfiProblem& problem, const FfiCapture& capture, std::uint32_t first,
-                 std::uint32_t count, std::vector<int> slot, std::vector<int> offset)
-      : problem_(problem),
-        capture_(capture),
-        first_(first),
-        count_(count),
-        slot_(std::move(slot)),
-        offset_(std::move(offset)) {
+                 std::uint32_t count)
+      : problem_(problem), capture_(capture), first_(first), count_(count) {
+    const std::uint32_t steps = capture.camera_steps + capture.board_steps;
+    step_direction_.assign(steps, -1);
+    for (std::uint32_t k = 0; k < steps; ++k) {
+      const FfiStep& s = problem.steps[capture.first_step + k];
+      if (s.kind != StepKind::Fixed && s.amount.params[0] >= 0) {
+        step_direction_[k] = static_cast<int>(amounts_.size());
+        amounts_.push_back(&s.amount);
+      }
+    }
     const FfiProjection& c = problem.projection;
-    for (const FfiAmount* a : {&c.fx, &c.fy, &c.cx, &c.cy, &c.k1, &c.k2})
-      projection_free_ = projection_free_ || a->params[0] >= 0;
+    const FfiAmount* intrinsics[6] = {&c.fx, &c.fy, &c.cx, &c.cy, &c.k1, &c.k2};
+    for (int i = 0; i < 6; ++i) {
+      projection_direction_[i] = -1;
+      if (intrinsics[i]->params[0] >= 0) {
+        projection_direction_[i] = static_cast<int>(amounts_.size());
+        amounts_.push_back(intrinsics[i]);
+        projection_free_ = true;
+      }
+    }
   }
 
+  // The free amounts, one per direction.
+  const std::vector<const FfiAmount*>& amounts() const { return amounts_; }
+  int residual_count() const { return static_cast<int>(2 * count_); }
+
+  // The residuals at the given free amounts (`amounts[d]` for direction d).
   template <typename T>
-  bool operator()(T const* const* parameters, T* residuals) const {
+  bool operator()(const T* amounts, T* residuals) const {
     Frame<T> camera, board;
     const FfiStep* steps = problem_.steps.data() + capture_.first_step;
-    chain(steps, capture_.camera_steps, parameters, camera);
-    chain(steps + capture_.camera_steps, capture_.board_steps, parameters, board);
+    chain(steps, 0, capture_.camera_steps, amounts, camera);
+    chain(steps + capture_.camera_steps, capture_.camera_steps, capture_.board_steps, amounts,
+          board);
 
     // T_CB = T_OC⁻¹ · T_OB (Pose::inverse_then).
     Frame<T> cb;
@@ -293,7 +317,7 @@ class CaptureFunctor {
       for (int i = 0; i < 3; ++i)
         pc[i] = cb.R[i][0] * pb[0] + cb.R[i][1] * pb[1] + cb.R[i][2] * pb[2] + cb.t[i];
       T uv[2];
-      if (!project(pc, uv, parameters)) return false;
+      if (!project(pc, uv, amounts)) return false;
       out[2 * k] = uv[0] - pixels[2 * k];
       out[2 * k + 1] = uv[1] - pixels[2 * k + 1];
     }
@@ -301,20 +325,9 @@ class CaptureFunctor {
   }
 
  private:
-  // `constant + Σ scale · α` (Affine::eval, same order of operations).
+  // Chain::eval over steps [first, first + count) of the capture.
   template <typename T>
-  T amount(const FfiAmount& a, T const* const* parameters) const {
-    if (a.params[0] < 0) return T(a.constant);
-    T value = parameters[slot_[a.params[0]]][offset_[a.params[0]]] * a.scales[0] + a.constant;
-    for (int k = 1; k < kTerms; ++k)
-      if (a.params[k] >= 0)
-        value += parameters[slot_[a.params[k]]][offset_[a.params[k]]] * a.scales[k];
-    return value;
-  }
-
-  // Chain::eval.
-  template <typename T>
-  void chain(const FfiStep* steps, std::uint32_t count, T const* const* parameters,
+  void chain(const FfiStep* steps, std::uint32_t first, std::uint32_t count, const T* amounts,
              Frame<T>& f) const {
     for (int i = 0; i < 3; ++i) {
       for (int j = 0; j < 3; ++j) f.R[i][j] = T(i == j ? 1.0 : 0.0);
@@ -323,27 +336,32 @@ class CaptureFunctor {
     for (std::uint32_t k = 0; k < count; ++k) {
       const FfiStep& s = steps[k];
       const int axis = static_cast<int>(s.axis);
-      switch (s.kind) {
-        case StepKind::Fixed:
-          if (k == 0)
-            set_fixed(f, s);
-          else
-            then_fixed(f, s);
-          break;
-        case StepKind::Rotate:
-          rotate(f, axis, amount(s.amount, parameters));
-          break;
-        default:
-          translate(f, axis, amount(s.amount, parameters));
-          break;
+      if (s.kind == StepKind::Fixed) {
+        if (k == 0)
+          set_fixed(f, s);
+        else
+          then_fixed(f, s);
+        continue;
       }
+      const int direction = step_direction_[first + k];
+      const T amount = direction >= 0 ? amounts[direction] : T(s.amount.constant);
+      if (s.kind == StepKind::Rotate)
+        rotate(f, axis, amount);
+      else
+        translate(f, axis, amount);
     }
+  }
+
+  // Intrinsic i (fx, fy, cx, cy, k1, k2) at the given amounts.
+  template <typename T>
+  T intrinsic(int i, const FfiAmount& a, const T* amounts) const {
+    return projection_direction_[i] >= 0 ? amounts[projection_direction_[i]] : T(a.constant);
   }
 
   // Projection::project_with: pinhole with optional OpenCV distortion (camera::distort);
   // false behind the camera.
   template <typename T>
-  bool project(const T (&p)[3], T (&uv)[2], T const* const* parameters) const {
+  bool project(const T (&p)[3], T (&uv)[2], const T* amounts) const {
     if (value_of(p[0]) <= 0.0) return false;
     const FfiProjection& c = problem_.projection;
     const T inv = T(1.0) / p[0];
@@ -366,7 +384,7 @@ class CaptureFunctor {
       return true;
     }
     if (c.distorted) {
-      const T k1 = amount(c.k1, parameters), k2 = amount(c.k2, parameters);
+      const T k1 = intrinsic(4, c.k1, amounts), k2 = intrinsic(5, c.k2, amounts);
       const T p1 = T(c.p1), p2 = T(c.p2), k3 = T(c.k3);
       const T r2 = a * a + b * b;
       const T radial = T(1.0) + r2 * (k1 + r2 * (k2 + r2 * k3));
@@ -376,20 +394,120 @@ class CaptureFunctor {
       a = a * radial + da;
       b = b * radial + db;
     }
-    uv[0] = a * amount(c.fx, parameters) + amount(c.cx, parameters);
-    uv[1] = b * amount(c.fy, parameters) + amount(c.cy, parameters);
+    uv[0] = a * intrinsic(0, c.fx, amounts) + intrinsic(2, c.cx, amounts);
+    uv[1] = b * intrinsic(1, c.fy, amounts) + intrinsic(3, c.cy, amounts);
     return true;
   }
 
   const FfiProblem& problem_;
   const FfiCapture& capture_;
   std::uint32_t first_, count_;
-  std::vector<int> slot_;    // per free parameter: its block's position in this block list
-  std::vector<int> offset_;  // per free parameter: its position in the block
+  std::vector<int> step_direction_;  // per chain step: its direction, or −1 if constant
+  int projection_direction_[6];      // per intrinsic: its direction, or −1 if constant
+  std::vector<const FfiAmount*> amounts_;
   bool projection_free_ = false;  // whether an intrinsic depends on a free parameter
 };
 
-using CaptureCost = ceres::DynamicAutoDiffCostFunction<CaptureFunctor, kStride>;
+// Jet widths of the autodiff passes. A capture of the paper's model has at most camera (3)
+// + leg (6) + board (3) = 12 free amounts; one of the extended model about 30. Each block
+// gets the narrower width that covers its amounts in one pass (a pass re-evaluates the whole
+// chain), several passes of the wider one beyond.
+constexpr int kNarrow = 12;
+constexpr int kWide = 28;
+
+// The autodiff cost of one residual block over its parameter blocks: Jets over the free
+// amounts, then the chain rule through `constant + Σ scale · α` in double.
+class CaptureCost : public ceres::CostFunction {
+ public:
+  // `slot`/`offset`: per free parameter, its block's position in this block list and its
+  // position in the block (−1 where not referenced).
+  CaptureCost(std::unique_ptr<CaptureFunctor> functor, const std::vector<int>& sizes,
+              const std::vector<int>& slot, const std::vector<int>& offset)
+      : functor_(std::move(functor)) {
+    *mutable_parameter_block_sizes() = sizes;
+    set_num_residuals(functor_->residual_count());
+    for (const FfiAmount* a : functor_->amounts()) {
+      std::vector<Term> terms;
+      for (int k = 0; k < kTerms; ++k)
+        if (a->params[k] >= 0)
+          terms.push_back({a->params[k], slot[a->params[k]], offset[a->params[k]], a->scales[k]});
+      terms_.push_back(std::move(terms));
+    }
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    // `constant + Σ scale · α` (Affine::eval, same order of operations).
+    const std::size_t directions = terms_.size();
+    std::vector<double> values(directions);
+    for (std::size_t d = 0; d < directions; ++d) {
+      const std::vector<Term>& t = terms_[d];
+      double value = parameters[t[0].slot][t[0].offset] * t[0].scale +
+                     functor_->amounts()[d]->constant;
+      for (std::size_t k = 1; k < t.size(); ++k)
+        value += parameters[t[k].slot][t[k].offset] * t[k].scale;
+      values[d] = value;
+    }
+    if (jacobians == nullptr) return (*functor_)(values.data(), residuals);
+
+    // ∂r/∂amount, row major (m × directions).
+    const int m = num_residuals();
+    std::vector<double> gradient(static_cast<std::size_t>(m) * directions, 0.0);
+    if (directions <= static_cast<std::size_t>(kNarrow)) {
+      if (!pass<kNarrow>(values, 0, residuals, gradient)) return false;
+    } else {
+      for (std::size_t first = 0; first < directions; first += kWide)
+        if (!pass<kWide>(values, first, residuals, gradient)) return false;
+    }
+    if (directions == 0 && !(*functor_)(values.data(), residuals)) return false;
+
+    const std::vector<std::int32_t>& sizes = parameter_block_sizes();
+    for (std::size_t b = 0; b < sizes.size(); ++b)
+      if (jacobians[b] != nullptr)
+        std::fill(jacobians[b], jacobians[b] + static_cast<std::size_t>(m) * sizes[b], 0.0);
+    for (std::size_t d = 0; d < directions; ++d)
+      for (const Term& t : terms_[d]) {
+        double* jac = jacobians[t.slot];
+        if (jac == nullptr) continue;
+        const int size = sizes[t.slot];
+        for (int r = 0; r < m; ++r)
+          jac[r * size + t.offset] += gradient[r * directions + d] * t.scale;
+      }
+    return true;
+  }
+
+ private:
+  struct Term {
+    int param, slot, offset;
+    double scale;
+  };
+
+  // One Jet pass over directions [first, first + N): residuals and their columns of ∂r/∂amount.
+  template <int N>
+  bool pass(const std::vector<double>& values, std::size_t first, double* residuals,
+            std::vector<double>& gradient) const {
+    using J = ceres::Jet<double, N>;
+    const std::size_t directions = values.size();
+    std::vector<J> amounts(directions);
+    for (std::size_t d = 0; d < directions; ++d) {
+      amounts[d] = J(values[d]);
+      if (d >= first && d < first + N) amounts[d].v[d - first] = 1.0;
+    }
+    const int m = num_residuals();
+    std::vector<J> out(m);
+    if (!(*functor_)(amounts.data(), out.data())) return false;
+    const std::size_t last = std::min(directions, first + N);
+    for (int r = 0; r < m; ++r) {
+      residuals[r] = out[r].a;
+      for (std::size_t d = first; d < last; ++d)
+        gradient[r * directions + d] = out[r].v[d - first];
+    }
+    return true;
+  }
+
+  std::unique_ptr<CaptureFunctor> functor_;
+  std::vector<std::vector<Term>> terms_;  // per direction: the parameters it depends on
+};
 
 // A capture's whitened residuals `W r` (W from Rust, see FfiCapture): the autodiff cost
 // gives r and ∂r/∂θ, and W is applied to both in double afterwards, which costs a small
@@ -397,7 +515,7 @@ using CaptureCost = ceres::DynamicAutoDiffCostFunction<CaptureFunctor, kStride>;
 // `scale·(I − U·diag(shrink)·Uᵀ)` costs O(m·q) per column instead of O(m²).
 class WhitenedCost : public ceres::CostFunction {
  public:
-  WhitenedCost(CaptureCost* raw, const double* w, int rank)
+  WhitenedCost(ceres::CostFunction* raw, const double* w, int rank)
       : raw_(raw), w_(w), rank_(rank) {
     *mutable_parameter_block_sizes() = raw_->parameter_block_sizes();
     set_num_residuals(raw_->num_residuals());
@@ -447,7 +565,7 @@ class WhitenedCost : public ceres::CostFunction {
     y.noalias() = scale * (x - u * z);
   }
 
-  std::unique_ptr<CaptureCost> raw_;
+  std::unique_ptr<ceres::CostFunction> raw_;
   const double* w_;
   int rank_;
 };
@@ -506,13 +624,11 @@ class Built {
       const std::uint32_t groups = per_vertex ? cap.vertex_count : 1;
       const std::uint32_t count = per_vertex ? 1 : cap.vertex_count;
       for (std::uint32_t g = 0; g < groups; ++g) {
-        auto* raw = new CaptureCost(new CaptureFunctor(p, cap, g * count, count, slot, offset));
-        for (int size : sizes) raw->AddParameterBlock(size);
-        raw->SetNumResiduals(static_cast<int>(2 * count));
-        ceres::CostFunction* cost = raw;
+        ceres::CostFunction* cost = new CaptureCost(
+            std::make_unique<CaptureFunctor>(p, cap, g * count, count), sizes, slot, offset);
         // validate() rules out whitening together with a robust loss (per-vertex blocks).
         if (cap.first_weight >= 0)
-          cost = new WhitenedCost(raw, p.weights.data() + cap.first_weight, cap.whitening_rank);
+          cost = new WhitenedCost(cost, p.weights.data() + cap.first_weight, cap.whitening_rank);
         ceres::LossFunction* loss_function = nullptr;
         if (loss == LossKind::Huber) loss_function = new ceres::HuberLoss(loss_scale);
         if (loss == LossKind::Cauchy) loss_function = new ceres::CauchyLoss(loss_scale);
@@ -561,37 +677,67 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// (JᵀJ)⁺ over all free parameters, row-major; zero rows/columns for parameters no
-// residual depends on. Empty when Ceres cannot compute it.
-bool covariance(Built& built, std::size_t n, rust::Vec<double>& out) {
-  std::vector<const double*> blocks;
-  for (int b : built.used()) blocks.push_back(built.block(b));
-  // Sparse QR is fast but refuses a rank-deficient Jacobian; the dense SVD then gives the
-  // pseudo-inverse, dropping directions with σ²_min/σ²_max below 1e-14.
-  auto compute = [&](ceres::CovarianceAlgorithmType algorithm) {
-    ceres::Covariance::Options options;
-    options.algorithm_type = algorithm;
-    options.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;
-    options.null_space_rank = -1;
-    options.min_reciprocal_condition_number = 1e-14;
-    options.num_threads = 1;
-    auto cov = std::make_unique<ceres::Covariance>(options);
-    if (!cov->Compute(blocks, &built.problem())) cov.reset();
-    return cov;
-  };
-  std::unique_ptr<ceres::Covariance> cov = compute(ceres::SPARSE_QR);
-  if (!cov) cov = compute(ceres::DENSE_SVD);
-  if (!cov) return false;
+// The Jacobian of the used blocks at the current values (weighted, robust loss applied),
+// dense, one column per used free parameter (Built::used_columns); false when a vertex lies
+// behind the camera.
+bool dense_jacobian(Built& built, std::vector<double>* residuals, Eigen::MatrixXd& jacobian) {
+  ceres::Problem::EvaluateOptions eo;
+  for (int b : built.used()) eo.parameter_blocks.push_back(built.block(b));
+  eo.num_threads = 1;
+  double cost = 0.0;
+  ceres::CRSMatrix crs;
+  if (!built.problem().Evaluate(eo, &cost, residuals, nullptr, &crs)) return false;
+  if (crs.num_cols != static_cast<int>(built.used_columns().size()))
+    throw std::runtime_error("unexpected Jacobian shape from Ceres");
+  jacobian.setZero(crs.num_rows, crs.num_cols);
+  for (int r = 0; r < crs.num_rows; ++r)
+    for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) jacobian(r, crs.cols[k]) = crs.values[k];
+  return true;
+}
+
+// (JᵀJ)⁺ over all free parameters, row-major; zero rows/columns for parameters no residual
+// depends on. The algorithm of covariance::from_jacobian in Rust: columns scaled to unit
+// norm, the eigen-decomposition of the scaled JᵀJ, directions with a relative singular value
+// below `threshold` left out; where one lies within a factor 10 of that cut (its squared
+// value within 100), the SVD of the scaled J decides instead. False when not computable.
+bool covariance(Built& built, std::size_t n, double threshold, rust::Vec<double>& out) {
+  Eigen::MatrixXd j;
+  if (!dense_jacobian(built, nullptr, j)) return false;
+  const Eigen::Index d = j.cols();
+  Eigen::VectorXd scale(d);
+  for (Eigen::Index c = 0; c < d; ++c) {
+    const double norm = j.col(c).norm();
+    scale(c) = norm > 0.0 ? 1.0 / norm : 1.0;
+    j.col(c) *= scale(c);
+  }
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(d, d);
+  normal.selfadjointView<Eigen::Lower>().rankUpdate(j.transpose());
+  normal.triangularView<Eigen::StrictlyUpper>() = normal.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normal);
+  if (eigen.info() != Eigen::Success) return false;
+  Eigen::VectorXd squared = eigen.eigenvalues();  // squared singular values
+  Eigen::MatrixXd vectors = eigen.eigenvectors();
+  const double cut = squared.maxCoeff() * threshold * threshold;
+  const bool near_cut = ((squared.array() > cut * 1e-2) && (squared.array() < cut * 1e2)).any();
+  if (near_cut) {
+    const Eigen::BDCSVD<Eigen::MatrixXd> svd(j, Eigen::ComputeThinV);
+    squared = svd.singularValues().array().square();
+    vectors = svd.matrixV();
+  }
+  const double max = squared.maxCoeff();
+  Eigen::MatrixXd inverse = Eigen::MatrixXd::Zero(d, d);
+  for (Eigen::Index k = 0; k < squared.size(); ++k)
+    if (squared(k) > max * threshold * threshold && squared(k) > 0.0)
+      inverse.noalias() += vectors.col(k) * (vectors.col(k).transpose() / squared(k));
+  inverse = scale.asDiagonal() * inverse * scale.asDiagonal();
+
   const std::vector<int> columns = built.used_columns();
-  const std::size_t d = columns.size();
-  std::vector<double> dense(d * d);
-  if (!cov->GetCovarianceMatrix(blocks, dense.data())) return false;
   std::vector<double> full(n * n, 0.0);
-  for (std::size_t i = 0; i < d; ++i)
-    for (std::size_t j = 0; j < d; ++j) {
-      const double x = dense[i * d + j];
+  for (Eigen::Index r = 0; r < d; ++r)
+    for (Eigen::Index c = 0; c < d; ++c) {
+      const double x = inverse(r, c);
       if (!finite(x)) return false;
-      full[columns[i] * n + columns[j]] = x;
+      full[columns[r] * n + columns[c]] = x;
     }
   out.reserve(n * n);
   for (double x : full) out.push_back(x);
@@ -611,7 +757,9 @@ FfiSolution solve(const FfiProblem& problem, const FfiOptions& options) {
     ceres::Solver::Options so;
     so.minimizer_type = ceres::TRUST_REGION;
     so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-    so.linear_solver_type = ceres::DENSE_QR;
+    so.linear_solver_type = options.linear_solver == LinearSolver::DenseQr
+                                ? ceres::DENSE_QR
+                                : ceres::DENSE_NORMAL_CHOLESKY;
     so.max_num_iterations = static_cast<int>(std::min<std::uint32_t>(options.max_iterations,
                                                                      INT_MAX));
     so.function_tolerance = options.function_tolerance;
@@ -634,7 +782,7 @@ FfiSolution solve(const FfiProblem& problem, const FfiOptions& options) {
     out.covariance_ok = false;
     if (options.covariance) {
       rust::Vec<double> cov;
-      if (covariance(built, problem.params.size(), cov)) {
+      if (covariance(built, problem.params.size(), options.rank_threshold, cov)) {
         out.covariance = std::move(cov);
         out.covariance_ok = true;
       }
@@ -670,24 +818,19 @@ FfiEvaluation evaluate(const FfiProblem& problem, rust::Slice<const double> para
       if (!finite(x)) fail("a parameter value is not finite");
     Built built(problem, params.data(), LossKind::Squared, 0.0);
 
-    ceres::Problem::EvaluateOptions eo;
-    for (int b : built.used()) eo.parameter_blocks.push_back(built.block(b));
-    eo.num_threads = 1;
-    double cost = 0.0;
     std::vector<double> residuals;
-    ceres::CRSMatrix jacobian;
-    if (!built.problem().Evaluate(eo, &cost, &residuals, nullptr, &jacobian))
+    Eigen::MatrixXd jacobian;
+    if (!dense_jacobian(built, &residuals, jacobian))
       fail("evaluation failed: a vertex lies behind the camera (x <= 0) at these values");
-
     const std::vector<int> columns = built.used_columns();
-    if (jacobian.num_cols != static_cast<int>(columns.size()) ||
-        jacobian.num_rows != static_cast<int>(residuals.size()))
-      throw std::runtime_error("unexpected Jacobian shape from Ceres");
     const std::size_t m = residuals.size();
     std::vector<double> dense(m * n, 0.0);
     for (std::size_t r = 0; r < m; ++r)
-      for (int k = jacobian.rows[r]; k < jacobian.rows[r + 1]; ++k)
-        dense[r * n + columns[jacobian.cols[k]]] = jacobian.values[k];
+      for (std::size_t c = 0; c < columns.size(); ++c)
+        dense[r * n + columns[c]] = jacobian(static_cast<Eigen::Index>(r),
+                                             static_cast<Eigen::Index>(c));
+    double cost = 0.0;
+    for (double x : residuals) cost += 0.5 * x * x;
 
     FfiEvaluation out;
     out.cost = cost;

@@ -20,8 +20,9 @@ struct FfiOptions;
 struct FfiSolution;
 struct FfiEvaluation;
 
-// Runs Levenberg–Marquardt (dense QR) from `problem.params`; optionally the covariance
-// (JᵀJ)⁺ over the free parameters (dense SVD, rank-deficiency tolerant).
+// Runs Levenberg–Marquardt (dense QR or normal equations, as `options` says) from
+// `problem.params`; optionally the covariance (JᵀJ)⁺ over the free parameters (the
+// rank-deficiency tolerant pseudo-inverse of Rust's covariance::from_jacobian).
 FfiSolution solve(const FfiProblem& problem, const FfiOptions& options);
 
 // Evaluates the cost, the (weighted) residuals and the dense row-major Jacobian over the

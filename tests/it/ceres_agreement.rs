@@ -170,9 +170,13 @@ fn add_low_rank_whitening(problem: &mut Problem, seed: u64) {
     }
 }
 
-/// Random free-parameter values (a few degrees / mm).
+/// Random free-parameter values: a few degrees / mm for the paper's parameters, ±0.01 (in
+/// internal units) for the extended ones.
 fn random_free(problem: &Problem, rng: &mut ChaCha8Rng) -> Vec<f64> {
-    let all = random_parameters(rng, 4.0, 4.0);
+    let mut all = random_parameters(rng, 4.0, 4.0);
+    for x in all.iter_mut().skip(PAPER_PARAMETERS) {
+        *x = rng.random_range(-0.01..=0.01);
+    }
     problem.free().iter().map(|p| all[p.index()]).collect()
 }
 
@@ -260,6 +264,19 @@ fn residuals_and_jacobians_agree_with_whitening_and_distortion() {
     let (mut problem, _) = make_problem(6, Camera::default(), &Side::BOTH, 4);
     add_low_rank_whitening(&mut problem, 61);
     check_agreement(&problem, 62, "low-rank whitened");
+}
+
+/// Every family free: joint angles of three terms (offset, compliance, play), free
+/// intrinsics and distortion, link lengths; whitened.
+#[test]
+fn residuals_and_jacobians_agree_on_the_extended_model() {
+    let (mut problem, _) = make_problem(8, distorted_camera(), &Side::BOTH, 4);
+    problem.fixed = FixedSet::from_lists("head,intrinsics,distortion,links,compliance,play", "")
+        .expect("families");
+    assert_eq!(problem.free().len(), PARAMETER_COUNT);
+    check_agreement(&problem, 81, "extended");
+    add_low_rank_whitening(&mut problem, 82);
+    check_agreement(&problem, 83, "extended + low-rank whitened");
 }
 
 #[test]
