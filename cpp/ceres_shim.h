@@ -2,7 +2,8 @@
 //
 // Rust ships the calibration problem as data (each capture's camera and board chains as
 // lists of elementary transforms over the free parameters, plus the observed vertices);
-// this shim evaluates those lists on Jets inside a DynamicAutoDiffCostFunction and runs
+// this shim evaluates those lists on Jets inside an autodiff cost function (Jets over each
+// capture's free amounts, chained through the affine amounts to the parameters) and runs
 // Levenberg–Marquardt. The shared structs (FfiProblem, ...) are defined by the header that
 // cxx generates from the bridge; only their names are needed here.
 //
