@@ -10,7 +10,9 @@
 //! `backend_extended` times the backends on the extended model: a paper-sized dataset of a
 //! robot with realistic effects (head, intrinsics, links, compliance, play), every family
 //! free, the undetermined parameters held as `calibrate` holds them (docs/MODEL.md).
-//! `calibrate_auto` is `naocalib solve --model auto` on that dataset.
+//! `calibrate_auto` is `naocalib solve --model auto` on that dataset. `misfit_paper_sized`
+//! times the misfit diagnosis (score tests of every unfitted family) that every calibration
+//! runs.
 //!
 //! Targets: Ceres median ≤ 10 ms; fastest pure-Rust backend within 1.5× of Ceres; the
 //! extended Ceres backend within 3× of the paper's.
@@ -128,11 +130,28 @@ fn bench_calibrate(c: &mut Criterion) {
     group.finish();
 }
 
+/// The misfit diagnosis inside that: the score tests of every family not fitted, at the
+/// calibrated values (target: at most 20 % of `calibrate_paper_sized`).
+fn bench_misfit(c: &mut Criterion) {
+    let problem = paper_sized();
+    let backend = backend(backend_names()[0], false).expect("listed backend");
+    let solution =
+        calibrate(&problem, backend.as_ref(), &UncertaintyOptions::default()).expect("calibrated");
+    let held = [false; naocalib::model::PARAMETER_COUNT];
+    let mut group = c.benchmark_group("misfit_paper_sized");
+    group.sample_size(20);
+    group.bench_function("family_tests", |b| {
+        b.iter(|| naocalib::solve::misfit::family_tests(&problem, &solution.values, &held))
+    });
+    group.finish();
+}
+
 criterion_group!(
     benches,
     bench_backend,
     bench_solve,
     bench_calibrate,
+    bench_misfit,
     bench_extended,
     bench_auto
 );

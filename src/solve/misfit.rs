@@ -54,6 +54,32 @@ pub struct FamilyTest {
     pub explained_px2: f64,
 }
 
+/// The columns `targets` of `jac` with the span of the columns `basis` projected out
+/// (`J_t − A·(AᵀA)⁺·AᵀJ_t`, `A` scaled to unit-norm columns; directions of `A` below 1e-10
+/// of its largest squared singular value are left out): one matrix product each way
+/// instead of one per column.
+fn project_out(jac: &DMatrix<f64>, basis: &[usize], targets: &[usize]) -> DMatrix<f64> {
+    let targets = jac.select_columns(targets);
+    if basis.is_empty() {
+        return targets;
+    }
+    let mut a = jac.select_columns(basis);
+    for mut c in a.column_iter_mut() {
+        let norm = c.norm();
+        if norm > 0.0 {
+            c /= norm;
+        }
+    }
+    // An explicit transpose lets the products run as blocked GEMMs (tr_mul takes dots).
+    let a_t = a.transpose();
+    let gram = &a_t * &a;
+    let Ok(inverse) = gram.pseudo_inverse(1e-10) else {
+        return targets;
+    };
+    let coefficients = inverse * (&a_t * &targets);
+    targets - a * coefficients
+}
+
 /// The verdict on a fit.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Misfit {
@@ -110,13 +136,27 @@ pub fn family_tests(
     };
     let free = eval.free().to_vec();
     let column = |p: Param| free.iter().position(|q| *q == p).expect("free");
-    // Orthonormal basis of the fitted columns.
-    let fitted_cols: Vec<usize> = fitted.iter().map(|p| column(*p)).collect();
-    let mut a = DMatrix::zeros(jac.nrows(), fitted_cols.len());
-    for (k, &c) in fitted_cols.iter().enumerate() {
-        a.set_column(k, &jac.column(c));
-    }
-    let q = a.qr().q();
+    // Every candidate column with the fitted columns projected out, in one blocked pass:
+    // `P = J_c − A·(AᵀA)⁺·AᵀJ_c` with the fitted columns `A` scaled to unit norm.
+    let candidate_params: Vec<Param> = candidates
+        .iter()
+        .flat_map(|(_, ps)| ps.iter().copied())
+        .collect();
+    let projected = project_out(
+        &jac,
+        &fitted.iter().map(|p| column(*p)).collect::<Vec<_>>(),
+        &candidate_params
+            .iter()
+            .map(|p| column(*p))
+            .collect::<Vec<_>>(),
+    );
+    let projected_column = |p: Param| {
+        let k = candidate_params
+            .iter()
+            .position(|q| *q == p)
+            .expect("candidate");
+        projected.column(k)
+    };
     // Capture row ranges.
     let mut ranges = Vec::with_capacity(all.captures.len());
     let mut row = 0;
@@ -132,12 +172,11 @@ pub fn family_tests(
             let mut kept = Vec::new();
             let mut cols: Vec<DVector<f64>> = Vec::new();
             for p in params {
-                let j = jac.column(column(p)).into_owned();
-                let norm = j.norm();
+                let norm = jac.column(column(p)).norm();
                 if norm == 0.0 {
                     continue;
                 }
-                let projected = &j - &q * (q.transpose() * &j);
+                let projected = projected_column(p);
                 if projected.norm() / norm >= threshold(p) {
                     kept.push(p);
                     cols.push(projected / norm);
