@@ -131,17 +131,28 @@ fn bench_calibrate(c: &mut Criterion) {
 }
 
 /// The misfit diagnosis inside that: the score tests of every family not fitted, at the
-/// calibrated values (target: at most 20 % of `calibrate_paper_sized`).
+/// calibrated values, on the plain and on the noise-whitened residuals (one Jacobian), as
+/// every calibration runs them (target: at most 20 % of `calibrate_paper_sized`).
 fn bench_misfit(c: &mut Criterion) {
     let problem = paper_sized();
     let backend = backend(backend_names()[0], false).expect("listed backend");
     let solution =
         calibrate(&problem, backend.as_ref(), &UncertaintyOptions::default()).expect("calibrated");
+    let fitted = problem.free().len();
+    let (levels, captures) =
+        naocalib::solve::noise::estimate(&problem, &solution.values, fitted, Default::default())
+            .expect("estimated");
+    let mut whitened = problem.clone();
+    for (term, noise) in whitened.captures.iter_mut().zip(&captures) {
+        term.whitening = Some(noise.whitening(levels));
+    }
     let held = [false; naocalib::model::PARAMETER_COUNT];
     let mut group = c.benchmark_group("misfit_paper_sized");
     group.sample_size(20);
-    group.bench_function("family_tests", |b| {
-        b.iter(|| naocalib::solve::misfit::family_tests(&problem, &solution.values, &held))
+    group.bench_function("family_tests_both", |b| {
+        b.iter(|| {
+            naocalib::solve::misfit::family_tests_both(&problem, &whitened, &solution.values, &held)
+        })
     });
     group.finish();
 }

@@ -19,7 +19,7 @@ use nalgebra::{Const, DMatrix, DVector, U1};
 use num_dual::{Derivative, Dual64, DualSVec64};
 
 use super::problem::{Loss, Problem, Whitening};
-use crate::model::{PARAMETER_COUNT, Param, Projection, Scalar, StanceChains};
+use crate::model::{PARAMETER_COUNT, Param, Projection, Scalar, StanceChains, Step};
 
 /// Parameters differentiated at once per pass (the Jet width of the Ceres shim, too).
 const WIDTH: usize = 12;
@@ -82,6 +82,11 @@ struct Term {
     used: Vec<Param>,
     /// How many of `used` are the chains'.
     chain_count: usize,
+    /// Per chain parameter of `used`: `Some((leader, ratio))` when it enters the chains in
+    /// one step only, beside its leader (another of `used`, in that step only, too): its
+    /// derivative is then `ratio ×` the leader's, no dual lane needed. A leg joint's
+    /// compliance and play follow its offset this way.
+    follows: Vec<Option<(usize, f64)>>,
     /// Their Jacobian columns.
     columns: Vec<usize>,
     /// First residual row of this capture.
@@ -165,6 +170,7 @@ impl<'a> Evaluator<'a> {
                 }
                 used.retain(|p| column[p.index()].is_some());
                 let chain_count = used.len();
+                let follows = followers(&chains, &used);
                 used.extend(projection_scales.iter().map(|(p, _)| *p));
                 let columns = used
                     .iter()
@@ -174,6 +180,7 @@ impl<'a> Evaluator<'a> {
                     chains,
                     used,
                     chain_count,
+                    follows,
                     columns,
                     row,
                     points: term.observations.iter().map(|o| o.point).collect(),
@@ -322,7 +329,7 @@ impl<'a> Evaluator<'a> {
     ) -> Option<CaptureJacobian> {
         let k = term.used.len();
         let kc = term.chain_count;
-        let (pose, dpose) = pose_derivatives(&term.chains, params, &term.used[..kc]);
+        let (pose, dpose) = pose_derivatives(&term.chains, params, &term.used[..kc], &term.follows);
         let rows = term.residual_count();
         let mut residuals = vec![0.0; rows];
         let mut jacobian = vec![0.0; rows * k];
@@ -423,21 +430,64 @@ impl<'a> Evaluator<'a> {
     }
 }
 
+/// For each of the chain parameters `used`, whether its derivative is a multiple of
+/// another's (see `Term::follows`): both enter the chains in one and the same step only.
+fn followers(chains: &StanceChains, used: &[Param]) -> Vec<Option<(usize, f64)>> {
+    let amounts: Vec<&crate::model::Affine> = chains
+        .camera
+        .steps()
+        .iter()
+        .chain(chains.board.steps())
+        .filter_map(|s| match s {
+            Step::Rotate(_, a) | Step::Translate(_, a) => Some(a),
+            Step::Fixed(_) => None,
+        })
+        .collect();
+    let steps_of = |p: Param| {
+        amounts
+            .iter()
+            .filter(|a| a.terms().any(|(q, _)| q == p))
+            .count()
+    };
+    used.iter()
+        .map(|&p| {
+            let amount = amounts.iter().find(|a| a.terms().any(|(q, _)| q == p))?;
+            let (leader, leader_scale) = amount.terms().next()?;
+            if leader == p || steps_of(p) != 1 || steps_of(leader) != 1 {
+                return None;
+            }
+            let scale: f64 = amount
+                .terms()
+                .filter(|(q, _)| *q == p)
+                .map(|(_, s)| s)
+                .sum();
+            let index = used.iter().position(|q| *q == leader)?;
+            (leader_scale.abs() > 1e-9).then(|| (index, scale / leader_scale))
+        })
+        .collect()
+}
+
 /// `T_CB` at `params` and its derivatives with respect to each parameter of `used`, each as
-/// 12 numbers: the row-major rotation, then the translation.
+/// 12 numbers: the row-major rotation, then the translation. Parameters that follow another
+/// (`follows`) take a multiple of its derivative instead of a dual lane.
 fn pose_derivatives(
     chains: &StanceChains,
     params: &[f64; PARAMETER_COUNT],
     used: &[Param],
+    follows: &[Option<(usize, f64)>],
 ) -> (crate::model::Pose<f64>, Vec<[f64; 12]>) {
-    if used.is_empty() {
-        return (chains.camera_to_board::<f64>(params), Vec::new());
+    let lanes: Vec<usize> = (0..used.len()).filter(|&i| follows[i].is_none()).collect();
+    if lanes.is_empty() {
+        return (
+            chains.camera_to_board::<f64>(params),
+            vec![[0.0; 12]; used.len()],
+        );
     }
-    let mut derivatives = Vec::with_capacity(used.len());
+    let mut derivatives = vec![[0.0; 12]; used.len()];
     let mut value = None;
-    for chunk in used.chunks(WIDTH) {
+    for chunk in lanes.chunks(WIDTH) {
         let mut x: [Dual; PARAMETER_COUNT] = std::array::from_fn(|i| Dual::from(params[i]));
-        for (k, p) in chunk.iter().enumerate() {
+        for (k, p) in chunk.iter().map(|&i| used[i]).enumerate() {
             x[p.index()] = Dual::new(
                 params[p.index()],
                 Derivative::derivative_generic(Const::<WIDTH>, U1, k),
@@ -453,7 +503,9 @@ fn pose_derivatives(
         });
         let eps: [_; 12] =
             std::array::from_fn(|e| entries[e].eps.unwrap_generic(Const::<WIDTH>, U1));
-        derivatives.extend((0..chunk.len()).map(|c| std::array::from_fn(|e| eps[e][c])));
+        for (c, &i) in chunk.iter().enumerate() {
+            derivatives[i] = std::array::from_fn(|e| eps[e][c]);
+        }
         value.get_or_insert_with(|| crate::model::Pose {
             rotation: pose
                 .rotation
@@ -461,6 +513,11 @@ fn pose_derivatives(
                 .map(|row| row.each_ref().map(|d| d.re)),
             translation: pose.translation.each_ref().map(|d| d.re),
         });
+    }
+    for (i, follow) in follows.iter().enumerate() {
+        if let Some((leader, ratio)) = follow {
+            derivatives[i] = derivatives[*leader].map(|d| d * ratio);
+        }
     }
     (value.expect("at least one chunk"), derivatives)
 }

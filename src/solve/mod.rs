@@ -443,8 +443,9 @@ pub fn calibrate(
     }
 }
 
-/// [`ModelChoice::Auto`]: frees the most significant family while the misfit test finds
-/// one, then reports the last calibration with the families chosen and why.
+/// [`ModelChoice::Auto`]: frees the family explaining most of the residuals while one's
+/// test is significant at [`misfit::AUTO_ALPHA`], then reports the last calibration with
+/// the families chosen and why.
 fn select_model(
     problem: &Problem,
     backend: &dyn Backend,
@@ -457,10 +458,11 @@ fn select_model(
     // Screening: a plain fit (warm-started at the last one) and the tests, per step.
     while chosen.len() < AUTO_FAMILIES.len() {
         let (tests, values) = screen(&current, &warm, backend, options)?;
+        let level = misfit::AUTO_ALPHA / tests.len().max(1) as f64;
         let next = tests
             .into_iter()
             .filter(|t| {
-                t.significant
+                t.p_value < level
                     && AUTO_FAMILIES.contains(&t.family)
                     && !chosen.iter().any(|c| c.family == t.family)
             })
@@ -505,11 +507,29 @@ fn screen(
     } else {
         None
     };
-    let tested = whitened.as_ref().map_or(&posed, |(w, _)| w);
     Ok((
-        misfit::family_tests(tested, &first.values, &held),
+        tests_at(
+            &posed,
+            whitened.as_ref().map(|(w, _)| w),
+            &first.values,
+            &held,
+        ),
         first.values,
     ))
+}
+
+/// The misfit tests at `values`: on the plain residuals, and also on the whitened ones
+/// when the noise model is on (see [`misfit::combined_tests`]).
+fn tests_at(
+    posed: &Problem,
+    whitened: Option<&Problem>,
+    values: &[f64; PARAMETER_COUNT],
+    held: &[bool; PARAMETER_COUNT],
+) -> Vec<FamilyTest> {
+    match whitened {
+        Some(w) => misfit::family_tests_both(posed, w, values, held),
+        None => misfit::family_tests(posed, values, held),
+    }
 }
 
 /// The robust first fit (with `--loss`): flags vertices beyond [`OUTLIER_SIGMAS`] robust
@@ -644,8 +664,12 @@ fn calibrate_given(
     } else {
         None
     };
-    let tested = whitened.as_ref().map_or(&posed, |(w, _)| w);
-    let tests = misfit::family_tests(tested, &first.values, &held);
+    let tests = tests_at(
+        &posed,
+        whitened.as_ref().map(|(w, _)| w),
+        &first.values,
+        &held,
+    );
     let mut verdict = misfit::verdict(tests.clone(), plain_rms, None);
 
     // The final fit: whitened by the noise model when the residuals are noise.

@@ -109,20 +109,24 @@ impl Whitening {
         }
     }
 
-    /// `W·M` in place for a row-major `M` with `cols` columns (`cols = 1`: a vector).
-    pub fn apply_in_place(&self, m: &mut [f64], cols: usize) {
-        let rows = self.size();
-        let plain = DMatrix::from_row_slice(rows, cols, m);
-        let weighted = match self {
+    /// `W·M` for a matrix `M` with [`Whitening::size`] rows.
+    pub fn apply_matrix(&self, plain: &DMatrix<f64>) -> DMatrix<f64> {
+        match self {
             Whitening::Dense(w) => w * plain,
             Whitening::LowRank { u, shrink, scale } => {
-                let mut z = u.tr_mul(&plain);
+                let mut z = u.tr_mul(plain);
                 for (c, mut row) in z.row_iter_mut().enumerate() {
                     row *= shrink[c];
                 }
                 (plain - u * z) * *scale
             }
-        };
+        }
+    }
+
+    /// `W·M` in place for a row-major `M` with `cols` columns (`cols = 1`: a vector).
+    pub fn apply_in_place(&self, m: &mut [f64], cols: usize) {
+        let rows = self.size();
+        let weighted = self.apply_matrix(&DMatrix::from_row_slice(rows, cols, m));
         for i in 0..rows {
             for c in 0..cols {
                 m[i * cols + c] = weighted[(i, c)];

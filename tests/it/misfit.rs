@@ -100,8 +100,10 @@ fn each_unmodelled_effect_is_flagged_and_named() {
 }
 
 /// Robots with every effect at once: `--model auto` recovers the paper's 21 parameters
-/// (against the truth moved along the named undetermined directions) with rms(err/σ) ≤ 2,
-/// and its residual RMS is within 1.25× of a fit told the true families.
+/// (against the truth moved along the named undetermined directions) with rms(err/σ) ≤ 2
+/// over six robots and ≤ 3 on each, and its residual RMS is within 1.25× of a fit told the
+/// true families. (With the tests on whitened residuals alone, robot 75 stopped after
+/// intrinsics, compliance and play with rms(err/σ) 7.6, and nothing flagged.)
 #[test]
 fn auto_model_on_realistic_robots_gives_honest_sigma() {
     let effects = [
@@ -116,7 +118,8 @@ fn auto_model_on_realistic_robots_gives_honest_sigma() {
         ..Default::default()
     };
     let mut z2 = Vec::new();
-    for seed in [71, 72] {
+    for seed in [71, 72, 73, 74, 75, 76] {
+        let before = z2.len();
         let (problem, truth) = dataset(&effects, seed, 24, 3);
         let s = run(&problem, &auto);
         assert!(s.summary.converged);
@@ -130,6 +133,18 @@ fn auto_model_on_realistic_robots_gives_honest_sigma() {
                 z2.push(((s.values[p.index()] - truth[p.index()]) / s.std[p.index()]).powi(2));
             }
         }
+        let robot = &z2[before..];
+        let robot_z = (robot.iter().sum::<f64>() / robot.len() as f64).sqrt();
+        println!(
+            "robot {seed}: rms(err/σ) {robot_z:.2}, rms {:?} px",
+            s.rms_px
+        );
+        assert!(
+            robot_z <= 3.0,
+            "robot {seed}: rms(err/σ) = {robot_z:.2}, chosen {:?}, {}",
+            s.chosen.iter().map(|t| t.family).collect::<Vec<_>>(),
+            s.misfit.message
+        );
         let mut told = problem.clone();
         for f in effects {
             for p in f.params() {
