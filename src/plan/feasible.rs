@@ -350,10 +350,69 @@ fn park(side: Side, joints: &mut JointAngles) {
     joints.set(ankle_pitch, 0.0);
 }
 
-/// Draws up to `stances` feasible leg stances for `side`, each with up to `heads` head
-/// postures (the board aimed at the image centre and at points around it), all passing
-/// [`check`], within `tries` random leg postures; then up to `tries` more draws look only
-/// for stances that load a joint with a sign of gravity torque the pool lacks.
+/// The image points the head aims the board centre at, in order of preference: the
+/// centre, then points around it.
+fn aim_targets(model: &Model) -> Vec<[f64; 2]> {
+    let (w, h) = (model.camera.width as f64, model.camera.height as f64);
+    [
+        (0.0, 0.0),
+        (-0.12, -0.1),
+        (0.12, 0.1),
+        (0.12, -0.1),
+        (-0.12, 0.1),
+        (0.0, -0.15),
+        (0.0, 0.15),
+        (-0.18, 0.0),
+        (0.18, 0.0),
+    ]
+    .iter()
+    .map(|(du, dv)| [w * (0.5 + du), h * (0.5 + dv)])
+    .collect()
+}
+
+/// Up to `heads` feasible captures of the leg stance `joints` of `side` (the head aimed at
+/// the [`aim_targets`] in turn, each posture passing [`check`]); empty when the stance
+/// collides or no posture keeps the board in view.
+fn postures(
+    model: &Model,
+    side: Side,
+    joints: &JointAngles,
+    heads: usize,
+    targets: &[[f64; 2]],
+    f: &Feasibility,
+) -> Vec<JointAngles> {
+    if collision::collision(&model.robot, &f.body, joints).is_some() {
+        return Vec::new();
+    }
+    let mut out: Vec<JointAngles> = Vec::new();
+    for target in targets {
+        if out.len() == heads {
+            break;
+        }
+        let Some(aimed) = aim_head(model, side, joints, *target, f.joint_margin) else {
+            continue;
+        };
+        if check(model, side, &aimed, f).is_ok() {
+            out.push(aimed);
+        }
+    }
+    out
+}
+
+/// A leg angle drawn within `[lo, hi]` from the arcsine distribution (density
+/// `1/(π·sqrt((x − lo)(hi − x)))`, applied twice): most draws lie near the limits, where the
+/// stances are most informative (the design picks from a pool drawn so about twice as
+/// well as from a uniform one), while every angle in between stays possible.
+fn towards_limits(lo: f64, hi: f64, rng: &mut impl Rng) -> f64 {
+    let arcsine = |x: f64| 0.5 - 0.5 * (std::f64::consts::PI * x).cos();
+    lo + (hi - lo) * arcsine(arcsine(rng.random_range(0.0..1.0)))
+}
+
+/// Draws up to `stances` feasible leg stances for `side` (each leg angle within the limits
+/// less the margin, [`towards_limits`]), each with up to `heads` head postures (the board
+/// aimed at the image centre and at points around it), all passing [`check`], within
+/// `tries` random leg postures; then up to `tries` more draws look only for stances that
+/// load a joint with a sign of gravity torque the pool lacks.
 #[allow(clippy::too_many_arguments)] // each is one plain setting of the pool
 pub fn candidates(
     model: &Model,
@@ -369,21 +428,7 @@ pub fn candidates(
         Side::Left => Side::Right,
         Side::Right => Side::Left,
     };
-    let (w, h) = (model.camera.width as f64, model.camera.height as f64);
-    let targets: Vec<[f64; 2]> = [
-        (0.0, 0.0),
-        (-0.12, -0.1),
-        (0.12, 0.1),
-        (0.12, -0.1),
-        (-0.12, 0.1),
-        (0.0, -0.15),
-        (0.0, 0.15),
-        (-0.18, 0.0),
-        (0.18, 0.0),
-    ]
-    .iter()
-    .map(|(du, dv)| [w * (0.5 + du), h * (0.5 + dv)])
-    .collect();
+    let targets = aim_targets(model);
     let mut out = Vec::new();
     let mut found = 0;
     // Which signs of each joint's gravity torque the pool has: compliance and play can only
@@ -396,14 +441,12 @@ pub fn candidates(
         if found >= stances && signs.iter().all(|s| s[0] && s[1]) {
             break;
         }
-        // Uniform within the limits less the margin (drawing near stances found before
-        // was tried: it gives a larger but less varied pool and worse plans).
         let mut joints = JointAngles::default();
         for j in side.leg_joints() {
             let (lo, hi) = j.limits();
             joints.set(
                 j,
-                rng.random_range(lo + f.joint_margin..hi - f.joint_margin),
+                towards_limits(lo + f.joint_margin, hi - f.joint_margin, rng),
             );
         }
         park(other, &mut joints);
@@ -413,21 +456,7 @@ pub fn candidates(
         if found >= stances && !new_sign {
             continue;
         }
-        if collision::collision(&model.robot, &f.body, &joints).is_some() {
-            continue;
-        }
-        let mut postures: Vec<JointAngles> = Vec::new();
-        for target in &targets {
-            if postures.len() == heads {
-                break;
-            }
-            let Some(aimed) = aim_head(model, side, &joints, *target, f.joint_margin) else {
-                continue;
-            };
-            if check(model, side, &aimed, f).is_ok() {
-                postures.push(aimed);
-            }
-        }
+        let postures = postures(model, side, &joints, heads, &targets, f);
         if postures.is_empty() {
             continue;
         }
@@ -443,6 +472,50 @@ pub fn candidates(
             joints,
             stance,
         }));
+    }
+    out
+}
+
+/// Up to `count` feasible variants of the capture `base` (one head posture each): its
+/// measured leg's angles moved by up to ± `spread` (rad) each, kept within the limits less
+/// the margin, the other leg parked with the same HipYawPitch. Numbered as stances from
+/// `first_stance`. Used to refine a design around the stances it picked.
+#[allow(clippy::too_many_arguments)] // each is one plain setting of the refinement
+pub fn variants(
+    model: &Model,
+    base: &Candidate,
+    count: usize,
+    tries: usize,
+    spread: f64,
+    f: &Feasibility,
+    first_stance: usize,
+    rng: &mut impl Rng,
+) -> Vec<Candidate> {
+    let side = base.side;
+    let other = match side {
+        Side::Left => Side::Right,
+        Side::Right => Side::Left,
+    };
+    let targets = aim_targets(model);
+    let mut out = Vec::new();
+    for _ in 0..tries {
+        if out.len() == count {
+            break;
+        }
+        let mut joints = base.joints;
+        for j in side.leg_joints() {
+            let (lo, hi) = j.limits();
+            let q = joints.get(j) + rng.random_range(-spread..=spread);
+            joints.set(j, q.clamp(lo + f.joint_margin, hi - f.joint_margin));
+        }
+        park(other, &mut joints);
+        if let Some(aimed) = postures(model, side, &joints, 1, &targets, f).pop() {
+            out.push(Candidate {
+                side,
+                joints: aimed,
+                stance: first_stance + out.len(),
+            });
+        }
     }
     out
 }
