@@ -1,13 +1,15 @@
 //! The optimal choice of captures: the Fisher information each candidate capture adds
 //! under the per-capture noise model, and a greedy selection refined by exchange passes.
 //!
-//! Criterion: the sum of the column-scaled variances of the free parameters,
-//! `Φ = Σ_i w_i·var_i` with `var = diag(M⁻¹)`, `M = Σ_c J_cᵀ Σ_c⁻¹ J_c` and `w_i` the
-//! average information one pool capture carries about parameter `i` (so `w_i·var_i` is the
-//! parameter's variance in units of what one typical capture alone would give: unit-free,
-//! comparable across degrees, millimetres and compliances). This is A-optimality of the
-//! column-scaled information; optionally raised to a power `q > 1` per parameter, which
-//! leans towards the worst-determined parameter (`q → ∞` is minimax).
+//! Criterion: `Φ = Σ_i (w_i·var_i)^q` over the free parameters, with `var = diag(M⁻¹)`,
+//! `M = Σ_c J_cᵀ Σ_c⁻¹ J_c` (the Fisher information under the per-capture noise model) and
+//! `q = 16`, so that the worst weighted variance decides (`q → ∞` is minimax). The weights
+//! `w_i` are the average information one pool capture carries about parameter `i`
+//! (column scaling: unit-free, comparable across degrees, millimetres and compliances),
+//! except that the 15 angle offsets (camera rotation and leg joints), the parameters the
+//! calibration is judged by, share one weight: for them the criterion is the worst
+//! predicted σ itself. The greedy start is A-optimal (`q = 1`), since a high power only
+//! sees the worst parameter while most are still undetermined.
 
 use nalgebra::{DMatrix, DVector};
 

@@ -4,17 +4,23 @@
 //!
 //! How a plan is made ([`plan`]):
 //! 1. **Pool** ([`feasible::candidates`]): random leg stances within the joint limits less
-//!    a margin, the other leg resting straight with the same HipYawPitch (one motor), free of
-//!    self-collision ([`collision`]), each with several head postures that aim the board at
-//!    points around the image centre; a capture enters the pool only if its board stays fully
-//!    in the image and facing the camera for every offset within ±3° (and ±3 mm of the
-//!    sandal mounting).
+//!    a margin, drawn mostly near the limits (the informative stances), the other leg
+//!    resting straight with the same HipYawPitch (one motor), free of self-collision
+//!    ([`collision`]), each with the head aiming the board at the image centre (or points
+//!    around it); a capture enters the pool only if its board stays fully in the image and
+//!    facing the camera for every offset within ±3° (and ±3 mm of the sandal mounting).
 //! 2. **Design** ([`design::select`]): each candidate's Fisher information under the
 //!    per-capture noise model (pixel noise plus joint noise shared by a capture's vertices);
-//!    a greedy selection of the captures that most reduce the criterion (A-optimality of the
-//!    column-scaled information), then exchange passes.
-//! 3. **Order** ([`order::order`]): a short tour through the captures (nearest neighbour and
+//!    a greedy selection, then exchange passes that minimise the worst predicted σ of the
+//!    15 angle offsets (with the other free parameters column-scaled beside them).
+//! 3. **Refinement**: variants of the picked captures (leg angles moved by up to 0.15 rad,
+//!    then 0.075, 0.0375) join the pool and the exchange continues from the design.
+//! 4. **Order** ([`order::order`]): a short tour through the captures (nearest neighbour and
 //!    2-opt on the time of each move) and its predicted duration.
+//!
+//! One head posture per leg stance: each capture draws its own joint noise, so a new leg
+//! stance tells more than the same stance with the head turned (with up to four postures
+//! per pool stance the design took one per stance all the same and ended no better).
 //!
 //! The same prediction is made for the simulator's random stances at equal capture count,
 //! so that the gain is visible before the robot moves.
