@@ -228,7 +228,6 @@ fn table(plan: &Prediction, random: &Prediction) -> String {
     out
 }
 
-
 fn report_rank(what: &str, p: &Prediction) {
     if p.undetermined.is_empty() {
         println!(

@@ -62,6 +62,8 @@ pub enum Infeasible {
     Collision(String),
     /// The board leaves the image, turns away or is too small for some offsets in the box.
     View,
+    /// The resting leg stands between the camera and the board (named).
+    Occluded(String),
 }
 
 impl std::fmt::Display for Infeasible {
@@ -70,6 +72,7 @@ impl std::fmt::Display for Infeasible {
             Infeasible::Limits(j) => write!(f, "{} outside its limits less the margin", j.name()),
             Infeasible::HipYawPitch => f.write_str("LHipYawPitch and RHipYawPitch differ"),
             Infeasible::Collision(what) => write!(f, "collision: {what}"),
+            Infeasible::Occluded(what) => write!(f, "the {what} hides the board"),
             Infeasible::View => f.write_str(
                 "the board does not stay fully in view, facing the camera, for every offset \
                  within the bounds",
@@ -287,6 +290,25 @@ pub fn check(
     if !board_in_view_for_all_offsets(model, side, joints, f) {
         return Err(Infeasible::View);
     }
+    // Every vertex in plain sight of the camera past the resting leg (at the nominal model).
+    let chains = model.chains(side, joints);
+    let zero = [0.0; PARAMETER_COUNT];
+    let eye = chains.camera.eval(&zero).translation;
+    let board = chains.board.eval(&zero);
+    let vertices: Vec<[f64; 3]> = model
+        .board
+        .vertices()
+        .map(|v| board.apply(&model.board.vertex_position(v)))
+        .collect();
+    let resting = match side {
+        Side::Left => Side::Right,
+        Side::Right => Side::Left,
+    };
+    if let Some(what) =
+        collision::sight_blocked(&model.robot, &f.body, joints, resting, eye, &vertices)
+    {
+        return Err(Infeasible::Occluded(what));
+    }
     Ok(())
 }
 
@@ -333,21 +355,31 @@ pub struct Candidate {
     pub stance: usize,
 }
 
-/// The resting leg's posture while the other leg is measured: straight and slightly spread,
-/// its HipYawPitch equal to the measured leg's (one motor).
-fn park(side: Side, joints: &mut JointAngles) {
+/// The resting leg's postures, tried in turn: `(HipRoll outward, HipPitch, KneePitch,
+/// AnklePitch)` (rad). Straight and slightly spread first; flexed (thigh raised, knee bent)
+/// when the straight leg would hit the floor, as it does whenever the shared HipYawPitch
+/// is positive, the stances that load a HipRoll the other way.
+const RESTING: [(f64, f64, f64, f64); 3] = [
+    (0.15, 0.0, 0.1, 0.0),
+    (0.15, -0.5, 1.0, -0.5),
+    (0.3, -0.9, 1.6, -0.7),
+];
+
+/// Puts the resting leg `side` into its `k`-th posture of [`RESTING`], its HipYawPitch
+/// equal to the measured leg's (one motor).
+fn park(side: Side, joints: &mut JointAngles, k: usize) {
     let [hyp, roll, pitch, knee, ankle_pitch, ankle_roll] = side.leg_joints();
     let shared = match side {
         Side::Left => Joint::RHipYawPitch,
         Side::Right => Joint::LHipYawPitch,
     };
+    let (r, p, q, a) = RESTING[k];
     joints.set(hyp, joints.get(shared));
-    joints.set(roll, side.sign() * 0.15);
-    for j in [pitch, ankle_roll] {
-        joints.set(j, 0.0);
-    }
-    joints.set(knee, 0.1);
-    joints.set(ankle_pitch, 0.0);
+    joints.set(roll, side.sign() * r);
+    joints.set(pitch, p);
+    joints.set(knee, q);
+    joints.set(ankle_pitch, a);
+    joints.set(ankle_roll, 0.0);
 }
 
 /// The image points the head aims the board centre at, in order of preference: the
@@ -370,9 +402,10 @@ fn aim_targets(model: &Model) -> Vec<[f64; 2]> {
     .collect()
 }
 
-/// Up to `heads` feasible captures of the leg stance `joints` of `side` (the head aimed at
-/// the [`aim_targets`] in turn, each posture passing [`check`]); empty when the stance
-/// collides or no posture keeps the board in view.
+/// Up to `heads` feasible captures of the stance `joints` of the measured leg `side` (the
+/// other leg put into the first of its [`RESTING`] postures that collides with nothing,
+/// the head aimed at the [`aim_targets`] in turn, each posture passing [`check`]); empty
+/// when every resting posture collides or no head posture keeps the board in view.
 fn postures(
     model: &Model,
     side: Side,
@@ -381,15 +414,26 @@ fn postures(
     targets: &[[f64; 2]],
     f: &Feasibility,
 ) -> Vec<JointAngles> {
-    if collision::collision(&model.robot, &f.body, joints).is_some() {
+    let other = match side {
+        Side::Left => Side::Right,
+        Side::Right => Side::Left,
+    };
+    let Some(joints) = (0..RESTING.len())
+        .map(|k| {
+            let mut parked = *joints;
+            park(other, &mut parked, k);
+            parked
+        })
+        .find(|parked| collision::collision(&model.robot, &f.body, parked).is_none())
+    else {
         return Vec::new();
-    }
+    };
     let mut out: Vec<JointAngles> = Vec::new();
     for target in targets {
         if out.len() == heads {
             break;
         }
-        let Some(aimed) = aim_head(model, side, joints, *target, f.joint_margin) else {
+        let Some(aimed) = aim_head(model, side, &joints, *target, f.joint_margin) else {
             continue;
         };
         if check(model, side, &aimed, f).is_ok() {
@@ -424,10 +468,6 @@ pub fn candidates(
     first_stance: usize,
     rng: &mut impl Rng,
 ) -> Vec<Candidate> {
-    let other = match side {
-        Side::Left => Side::Right,
-        Side::Right => Side::Left,
-    };
     let targets = aim_targets(model);
     let mut out = Vec::new();
     let mut found = 0;
@@ -449,7 +489,6 @@ pub fn candidates(
                 towards_limits(lo + f.joint_margin, hi - f.joint_margin, rng),
             );
         }
-        park(other, &mut joints);
         let these = torque_signs(&joints);
         // Once the pool is full, only stances that load a joint in a way it lacks.
         let new_sign = (0..6).any(|k| (0..2).any(|s| these[k][s] && !signs[k][s]));
@@ -492,10 +531,6 @@ pub fn variants(
     rng: &mut impl Rng,
 ) -> Vec<Candidate> {
     let side = base.side;
-    let other = match side {
-        Side::Left => Side::Right,
-        Side::Right => Side::Left,
-    };
     let targets = aim_targets(model);
     let mut out = Vec::new();
     for _ in 0..tries {
@@ -508,7 +543,6 @@ pub fn variants(
             let q = joints.get(j) + rng.random_range(-spread..=spread);
             joints.set(j, q.clamp(lo + f.joint_margin, hi - f.joint_margin));
         }
-        park(other, &mut joints);
         if let Some(aimed) = postures(model, side, &joints, 1, &targets, f).pop() {
             out.push(Candidate {
                 side,

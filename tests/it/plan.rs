@@ -288,13 +288,13 @@ fn compliance_and_play_are_determined_with_144_planned_captures() {
             fixed.set(p, false);
         }
     }
-    // After a first calibration of the paper's offsets, whose errors are then far below 1°:
-    // with a bound of ±3° no stance that keeps the board in view loads a HipRoll both ways.
-    let mut options = PlanOptions {
+    // With the default bounds of ±3°: the stances that load a HipRoll the other way need a
+    // positive HipYawPitch, with the resting leg flexed off the floor.
+    let options = PlanOptions {
         fixed,
         ..PlanOptions::default()
     };
-    options.feasibility.offset_angle = 1f64.to_radians();
+    assert_eq!(options.feasibility.offset_angle, 3f64.to_radians());
     let plan = plan::plan(&Model::default(), &options).expect("plan");
     assert_eq!(plan.captures.len(), 144);
     let p = &plan.prediction;
