@@ -453,7 +453,7 @@ fn towards_limits(lo: f64, hi: f64, rng: &mut impl Rng) -> f64 {
 }
 
 /// Draws up to `stances` feasible leg stances for `side` (each leg angle within the limits
-/// less the margin, [`towards_limits`]), each with up to `heads` head postures (the board
+/// less the margin, drawn mostly near the limits), each with up to `heads` head postures (the board
 /// aimed at the image centre and at points around it), all passing [`check`], within
 /// `tries` random leg postures; then up to `tries` more draws look only for stances that
 /// load a joint with a sign of gravity torque the pool lacks.
