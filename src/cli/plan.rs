@@ -149,8 +149,9 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
     println!(
         "feasible: every angle at least {:.0}° inside its limits, LHipYawPitch = RHipYawPitch, \
          no collision (capsules for thighs and tibias; boxes for feet, sandals and torso; the \
-         floor), every vertex in plain sight past the resting leg, the whole board at least {} px inside the image and at most {:.0}° off \
-         facing the camera for any offsets within ±{}° (sandal translations ±{} mm)",
+         floor), every vertex in plain sight past the resting leg, the whole board at least \
+         {} px inside the image and at most {:.0}° off facing the camera for any offsets \
+         within ±{}° (sandal translations ±{} mm)",
         f.joint_margin.to_degrees(),
         f.margin_px,
         f.max_view_angle.to_degrees(),
