@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 
 use naocalib::model::{Family, FixedSet, Model, Param, Unit};
-use naocalib::plan::{PlanOptions, Prediction};
+use naocalib::plan::{PlanOptions, Prediction, is_angle_offset};
 use naocalib::solve::noise::NoiseLevels;
 
 use super::options::positive;
@@ -43,7 +43,7 @@ pub struct PlanArgs {
     #[arg(long, default_value_t = 3.0, value_parser = not_negative)]
     offset_deg: f64,
     /// Leg stances drawn into the candidate pool per leg.
-    #[arg(long, default_value_t = 200,
+    #[arg(long, default_value_t = 300,
           value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=100_000))]
     pool: usize,
     /// Replace an existing OUT.
@@ -149,8 +149,9 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
     println!(
         "feasible: every angle at least {:.0}° inside its limits, LHipYawPitch = RHipYawPitch, \
          no collision (capsules for thighs and tibias; boxes for feet, sandals and torso; the \
-         floor), the whole board at least {} px inside the image and at most {:.0}° off \
-         facing the camera for any offsets within ±{}° (sandal translations ±{} mm)",
+         floor), every vertex in plain sight past the resting leg, the whole board at least \
+         {} px inside the image and at most {:.0}° off facing the camera for any offsets \
+         within ±{}° (sandal translations ±{} mm)",
         f.joint_margin.to_degrees(),
         f.margin_px,
         f.max_view_angle.to_degrees(),
@@ -158,8 +159,9 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
         args.offset_deg
     );
     println!(
-        "criterion: A-optimal column-scaled variance of the free parameters (families {}), \
-         greedy selection and exchange",
+        "criterion: the worst σ of the 15 camera and leg joint offsets, with every other free \
+         parameter (families {}) weighed by its column-scaled variance (Σ (w·var)^16); greedy \
+         selection, exchange, and refinement around the picked stances",
         args.families
             .0
             .iter()
@@ -225,11 +227,6 @@ fn table(plan: &Prediction, random: &Prediction) -> String {
         ));
     }
     out
-}
-
-/// The paper's 15 angle offsets: camera rotation and the 12 leg joints.
-pub fn is_angle_offset(p: Param) -> bool {
-    p.family() == Family::Paper && p.unit() == Unit::Deg && !p.name().contains("Board")
 }
 
 fn report_rank(what: &str, p: &Prediction) {

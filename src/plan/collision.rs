@@ -284,6 +284,40 @@ pub fn collision(robot: &RobotGeometry, body: &BodyModel, joints: &JointAngles) 
     None
 }
 
+/// The first part of the leg on `side` that blocks the line of sight from `eye` to one of
+/// `targets` (points in `O`, mm), named (`"right thigh"`), or `None` when every target is
+/// in plain sight of it. Thighs and tibias are tested exactly, the foot and sandal boxes at
+/// points 5 mm apart along each line.
+pub fn sight_blocked(
+    robot: &RobotGeometry,
+    body: &BodyModel,
+    joints: &JointAngles,
+    side: Side,
+    eye: [f64; 3],
+    targets: &[[f64; 3]],
+) -> Option<String> {
+    let leg = leg_shapes(robot, body, side, joints);
+    let name = side.name();
+    for &t in targets {
+        for (part, c) in [("thigh", &leg.thigh), ("tibia", &leg.tibia)] {
+            if segment_distance(eye, t, c.a, c.b) < c.radius {
+                return Some(format!("{name} {part}"));
+            }
+        }
+        let line = Capsule {
+            a: eye,
+            b: t,
+            radius: 0.0,
+        };
+        for (part, b) in [("foot", &leg.foot), ("sandal", &leg.sandal)] {
+            if line.samples(5.0).any(|p| b.distance(p) <= 0.0) {
+                return Some(format!("{name} {part}"));
+            }
+        }
+    }
+    None
+}
+
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
@@ -353,6 +387,46 @@ mod tests {
             j.set(*joint, *v);
         }
         j
+    }
+
+    #[test]
+    fn a_sight_line_through_a_thigh_or_sandal_is_blocked_and_one_beside_it_is_not() {
+        let robot = RobotGeometry::default();
+        let body = BodyModel::default();
+        let joints = pose(&[(Joint::RHipPitch, -0.5), (Joint::RKneePitch, 1.0)]);
+        let leg = leg_shapes(&robot, &body, Side::Right, &joints);
+        let mid: [f64; 3] = std::array::from_fn(|i| 0.5 * (leg.thigh.a[i] + leg.thigh.b[i]));
+        // A line across the thigh's middle, perpendicular to it in the y direction.
+        let across = |dy: f64| {
+            (
+                [mid[0], mid[1] - 300.0 + dy, mid[2]],
+                [mid[0], mid[1] + 300.0 + dy, mid[2]],
+            )
+        };
+        let (eye, target) = across(0.0);
+        assert_eq!(
+            sight_blocked(&robot, &body, &joints, Side::Right, eye, &[target]).as_deref(),
+            Some("right thigh")
+        );
+        // Well above the leg (towards the ceiling, +x when lying on the back).
+        let (eye, target) = across(0.0);
+        let lift = |p: [f64; 3]| [p[0] + 400.0, p[1], p[2]];
+        assert_eq!(
+            sight_blocked(
+                &robot,
+                &body,
+                &joints,
+                Side::Right,
+                lift(eye),
+                &[lift(target)]
+            ),
+            None
+        );
+        // Straight through the sandal's centre.
+        let c = leg.sandal.centre;
+        let through = [c[0] - 1.0, c[1], c[2] + 1.0];
+        let far = [c[0] + 1.0, c[1], c[2] - 1.0];
+        assert!(sight_blocked(&robot, &body, &joints, Side::Right, far, &[through]).is_some());
     }
 
     #[test]

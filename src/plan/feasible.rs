@@ -62,6 +62,8 @@ pub enum Infeasible {
     Collision(String),
     /// The board leaves the image, turns away or is too small for some offsets in the box.
     View,
+    /// The resting leg stands between the camera and the board (named).
+    Occluded(String),
 }
 
 impl std::fmt::Display for Infeasible {
@@ -70,6 +72,7 @@ impl std::fmt::Display for Infeasible {
             Infeasible::Limits(j) => write!(f, "{} outside its limits less the margin", j.name()),
             Infeasible::HipYawPitch => f.write_str("LHipYawPitch and RHipYawPitch differ"),
             Infeasible::Collision(what) => write!(f, "collision: {what}"),
+            Infeasible::Occluded(what) => write!(f, "the {what} hides the board"),
             Infeasible::View => f.write_str(
                 "the board does not stay fully in view, facing the camera, for every offset \
                  within the bounds",
@@ -287,6 +290,25 @@ pub fn check(
     if !board_in_view_for_all_offsets(model, side, joints, f) {
         return Err(Infeasible::View);
     }
+    // Every vertex in plain sight of the camera past the resting leg (at the nominal model).
+    let chains = model.chains(side, joints);
+    let zero = [0.0; PARAMETER_COUNT];
+    let eye = chains.camera.eval(&zero).translation;
+    let board = chains.board.eval(&zero);
+    let vertices: Vec<[f64; 3]> = model
+        .board
+        .vertices()
+        .map(|v| board.apply(&model.board.vertex_position(v)))
+        .collect();
+    let resting = match side {
+        Side::Left => Side::Right,
+        Side::Right => Side::Left,
+    };
+    if let Some(what) =
+        collision::sight_blocked(&model.robot, &f.body, joints, resting, eye, &vertices)
+    {
+        return Err(Infeasible::Occluded(what));
+    }
     Ok(())
 }
 
@@ -333,44 +355,38 @@ pub struct Candidate {
     pub stance: usize,
 }
 
-/// The resting leg's posture while the other leg is measured: straight and slightly spread,
-/// its HipYawPitch equal to the measured leg's (one motor).
-fn park(side: Side, joints: &mut JointAngles) {
+/// The resting leg's postures, tried in turn: `(HipRoll outward, HipPitch, KneePitch,
+/// AnklePitch)` (rad). Straight and slightly spread first; flexed (thigh raised, knee bent)
+/// when the straight leg would hit the floor, as it does whenever the shared HipYawPitch
+/// is positive, the stances that load a HipRoll the other way.
+const RESTING: [(f64, f64, f64, f64); 3] = [
+    (0.15, 0.0, 0.1, 0.0),
+    (0.15, -0.5, 1.0, -0.5),
+    (0.3, -0.9, 1.6, -0.7),
+];
+
+/// Puts the resting leg `side` into its `k`-th posture of [`RESTING`], its HipYawPitch
+/// equal to the measured leg's (one motor).
+fn park(side: Side, joints: &mut JointAngles, k: usize) {
     let [hyp, roll, pitch, knee, ankle_pitch, ankle_roll] = side.leg_joints();
     let shared = match side {
         Side::Left => Joint::RHipYawPitch,
         Side::Right => Joint::LHipYawPitch,
     };
+    let (r, p, q, a) = RESTING[k];
     joints.set(hyp, joints.get(shared));
-    joints.set(roll, side.sign() * 0.15);
-    for j in [pitch, ankle_roll] {
-        joints.set(j, 0.0);
-    }
-    joints.set(knee, 0.1);
-    joints.set(ankle_pitch, 0.0);
+    joints.set(roll, side.sign() * r);
+    joints.set(pitch, p);
+    joints.set(knee, q);
+    joints.set(ankle_pitch, a);
+    joints.set(ankle_roll, 0.0);
 }
 
-/// Draws up to `stances` feasible leg stances for `side`, each with up to `heads` head
-/// postures (the board aimed at the image centre and at points around it), all passing
-/// [`check`], within `tries` random leg postures; then up to `tries` more draws look only
-/// for stances that load a joint with a sign of gravity torque the pool lacks.
-#[allow(clippy::too_many_arguments)] // each is one plain setting of the pool
-pub fn candidates(
-    model: &Model,
-    side: Side,
-    stances: usize,
-    heads: usize,
-    tries: usize,
-    f: &Feasibility,
-    first_stance: usize,
-    rng: &mut impl Rng,
-) -> Vec<Candidate> {
-    let other = match side {
-        Side::Left => Side::Right,
-        Side::Right => Side::Left,
-    };
+/// The image points the head aims the board centre at, in order of preference: the
+/// centre, then points around it.
+fn aim_targets(model: &Model) -> Vec<[f64; 2]> {
     let (w, h) = (model.camera.width as f64, model.camera.height as f64);
-    let targets: Vec<[f64; 2]> = [
+    [
         (0.0, 0.0),
         (-0.12, -0.1),
         (0.12, 0.1),
@@ -383,7 +399,76 @@ pub fn candidates(
     ]
     .iter()
     .map(|(du, dv)| [w * (0.5 + du), h * (0.5 + dv)])
-    .collect();
+    .collect()
+}
+
+/// Up to `heads` feasible captures of the stance `joints` of the measured leg `side` (the
+/// other leg put into the first of its [`RESTING`] postures that collides with nothing,
+/// the head aimed at the [`aim_targets`] in turn, each posture passing [`check`]); empty
+/// when every resting posture collides or no head posture keeps the board in view.
+fn postures(
+    model: &Model,
+    side: Side,
+    joints: &JointAngles,
+    heads: usize,
+    targets: &[[f64; 2]],
+    f: &Feasibility,
+) -> Vec<JointAngles> {
+    let other = match side {
+        Side::Left => Side::Right,
+        Side::Right => Side::Left,
+    };
+    let Some(joints) = (0..RESTING.len())
+        .map(|k| {
+            let mut parked = *joints;
+            park(other, &mut parked, k);
+            parked
+        })
+        .find(|parked| collision::collision(&model.robot, &f.body, parked).is_none())
+    else {
+        return Vec::new();
+    };
+    let mut out: Vec<JointAngles> = Vec::new();
+    for target in targets {
+        if out.len() == heads {
+            break;
+        }
+        let Some(aimed) = aim_head(model, side, &joints, *target, f.joint_margin) else {
+            continue;
+        };
+        if check(model, side, &aimed, f).is_ok() {
+            out.push(aimed);
+        }
+    }
+    out
+}
+
+/// A leg angle drawn within `[lo, hi]` from the arcsine distribution (density
+/// `1/(π·sqrt((x − lo)(hi − x)))`, applied twice): most draws lie near the limits, where the
+/// stances are most informative (the design picks from a pool drawn so about twice as
+/// well as from a uniform one), while every angle in between stays possible.
+fn towards_limits(lo: f64, hi: f64, rng: &mut impl Rng) -> f64 {
+    let arcsine = |x: f64| 0.5 - 0.5 * (std::f64::consts::PI * x).cos();
+    lo + (hi - lo) * arcsine(arcsine(rng.random_range(0.0..1.0)))
+}
+
+/// Draws up to `stances` feasible leg stances for `side` (each leg angle within the limits
+/// less the margin, drawn mostly near the limits), each with up to `heads` head postures (the board
+/// aimed at the image centre and at points around it), all passing [`check`], within
+/// `tries` random leg postures; then up to `tries` more draws look only for stances that
+/// load a joint with a sign of gravity torque the pool lacks.
+#[allow(clippy::too_many_arguments)] // each is one plain setting of the pool
+pub fn candidates(
+    model: &Model,
+    side: Side,
+    stances: usize,
+    heads: usize,
+    tries: usize,
+    f: &Feasibility,
+    first_stance: usize,
+    rng: &mut impl Rng,
+) -> Vec<Candidate> {
+    let targets = aim_targets(model);
     let mut out = Vec::new();
     let mut found = 0;
     // Which signs of each joint's gravity torque the pool has: compliance and play can only
@@ -396,38 +481,21 @@ pub fn candidates(
         if found >= stances && signs.iter().all(|s| s[0] && s[1]) {
             break;
         }
-        // Uniform within the limits less the margin (drawing near stances found before
-        // was tried: it gives a larger but less varied pool and worse plans).
         let mut joints = JointAngles::default();
         for j in side.leg_joints() {
             let (lo, hi) = j.limits();
             joints.set(
                 j,
-                rng.random_range(lo + f.joint_margin..hi - f.joint_margin),
+                towards_limits(lo + f.joint_margin, hi - f.joint_margin, rng),
             );
         }
-        park(other, &mut joints);
         let these = torque_signs(&joints);
         // Once the pool is full, only stances that load a joint in a way it lacks.
         let new_sign = (0..6).any(|k| (0..2).any(|s| these[k][s] && !signs[k][s]));
         if found >= stances && !new_sign {
             continue;
         }
-        if collision::collision(&model.robot, &f.body, &joints).is_some() {
-            continue;
-        }
-        let mut postures: Vec<JointAngles> = Vec::new();
-        for target in &targets {
-            if postures.len() == heads {
-                break;
-            }
-            let Some(aimed) = aim_head(model, side, &joints, *target, f.joint_margin) else {
-                continue;
-            };
-            if check(model, side, &aimed, f).is_ok() {
-                postures.push(aimed);
-            }
-        }
+        let postures = postures(model, side, &joints, heads, &targets, f);
         if postures.is_empty() {
             continue;
         }
@@ -443,6 +511,45 @@ pub fn candidates(
             joints,
             stance,
         }));
+    }
+    out
+}
+
+/// Up to `count` feasible variants of the capture `base` (one head posture each): its
+/// measured leg's angles moved by up to ± `spread` (rad) each, kept within the limits less
+/// the margin, the other leg parked with the same HipYawPitch. Numbered as stances from
+/// `first_stance`. Used to refine a design around the stances it picked.
+#[allow(clippy::too_many_arguments)] // each is one plain setting of the refinement
+pub fn variants(
+    model: &Model,
+    base: &Candidate,
+    count: usize,
+    tries: usize,
+    spread: f64,
+    f: &Feasibility,
+    first_stance: usize,
+    rng: &mut impl Rng,
+) -> Vec<Candidate> {
+    let side = base.side;
+    let targets = aim_targets(model);
+    let mut out = Vec::new();
+    for _ in 0..tries {
+        if out.len() == count {
+            break;
+        }
+        let mut joints = base.joints;
+        for j in side.leg_joints() {
+            let (lo, hi) = j.limits();
+            let q = joints.get(j) + rng.random_range(-spread..=spread);
+            joints.set(j, q.clamp(lo + f.joint_margin, hi - f.joint_margin));
+        }
+        if let Some(aimed) = postures(model, side, &joints, 1, &targets, f).pop() {
+            out.push(Candidate {
+                side,
+                joints: aimed,
+                stance: first_stance + out.len(),
+            });
+        }
     }
     out
 }

@@ -4,17 +4,23 @@
 //!
 //! How a plan is made ([`plan`]):
 //! 1. **Pool** ([`feasible::candidates`]): random leg stances within the joint limits less
-//!    a margin, the other leg resting straight with the same HipYawPitch (one motor), free of
-//!    self-collision ([`collision`]), each with several head postures that aim the board at
-//!    points around the image centre; a capture enters the pool only if its board stays fully
-//!    in the image and facing the camera for every offset within ±3° (and ±3 mm of the
-//!    sandal mounting).
+//!    a margin, drawn mostly near the limits (the informative stances), the other leg
+//!    resting straight with the same HipYawPitch (one motor), free of self-collision
+//!    ([`collision`]), each with the head aiming the board at the image centre (or points
+//!    around it); a capture enters the pool only if its board stays fully in the image and
+//!    facing the camera for every offset within ±3° (and ±3 mm of the sandal mounting).
 //! 2. **Design** ([`design::select`]): each candidate's Fisher information under the
 //!    per-capture noise model (pixel noise plus joint noise shared by a capture's vertices);
-//!    a greedy selection of the captures that most reduce the criterion (A-optimality of the
-//!    column-scaled information), then exchange passes.
-//! 3. **Order** ([`order::order`]): a short tour through the captures (nearest neighbour and
+//!    a greedy selection, then exchange passes that minimise the worst predicted σ of the
+//!    15 angle offsets (with the other free parameters column-scaled beside them).
+//! 3. **Refinement**: variants of the picked captures (leg angles moved by up to 0.15 rad,
+//!    then 0.075, 0.0375) join the pool and the exchange continues from the design.
+//! 4. **Order** ([`order::order`]): a short tour through the captures (nearest neighbour and
 //!    2-opt on the time of each move) and its predicted duration.
+//!
+//! One head posture per leg stance: each capture draws its own joint noise, so a new leg
+//! stance tells more than the same stance with the head turned (with up to four postures
+//! per pool stance the design took one per stance all the same and ended no better).
 //!
 //! The same prediction is made for the simulator's random stances at equal capture count,
 //! so that the gain is visible before the robot moves.
@@ -29,7 +35,7 @@ use std::path::Path;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use crate::model::{FixedSet, Joint, JointAngles, Model, PARAMETER_COUNT, Side};
+use crate::model::{FixedSet, Joint, JointAngles, Model, PARAMETER_COUNT, Param, Side};
 use crate::sim::Stance;
 use crate::solve::noise::NoiseLevels;
 
@@ -52,6 +58,14 @@ pub struct PlanOptions {
     pub pool_stances: usize,
     /// Head postures tried per pool stance.
     pub heads: usize,
+    /// Refinement rounds: variants of every picked capture (its leg angles moved a little)
+    /// join the pool and the selection is improved from the design it has.
+    pub refine_rounds: usize,
+    /// Variants per picked capture and refinement round.
+    pub variants: usize,
+    /// Largest move of each leg angle in a variant of the first round (rad); halved in
+    /// each further round.
+    pub spread: f64,
     /// What a capture must satisfy.
     pub feasibility: Feasibility,
     /// The selection.
@@ -71,8 +85,11 @@ impl Default for PlanOptions {
                 joint: 0.1f64.to_radians(),
             },
             seed: 1,
-            pool_stances: 200,
-            heads: 4,
+            pool_stances: 300,
+            heads: 1,
+            refine_rounds: 3,
+            variants: 2,
+            spread: 0.15,
             feasibility: Feasibility::default(),
             design: DesignOptions::default(),
             timing: Timing::default(),
@@ -180,27 +197,96 @@ pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
             });
         }
     }
-    let pool: Vec<feasible::Candidate> = pools.into_iter().flatten().collect();
+    let mut pool: Vec<feasible::Candidate> = Vec::new();
+    let mut infos: Vec<design::CaptureInformation> = Vec::new();
     let free = options.fixed.free();
-    let as_pairs: Vec<(Side, JointAngles)> = pool.iter().map(|c| (c.side, c.joints)).collect();
-    let infos = information_parallel(model, &as_pairs, &options.fixed, options.levels);
-    let usable: Vec<usize> = (0..pool.len()).filter(|&k| infos[k].is_some()).collect();
-    let refs: Vec<&design::CaptureInformation> = usable
-        .iter()
-        .map(|&k| infos[k].as_ref().expect("usable"))
-        .collect();
+    let admit = |candidates: Vec<feasible::Candidate>,
+                 pool: &mut Vec<feasible::Candidate>,
+                 infos: &mut Vec<design::CaptureInformation>| {
+        let pairs: Vec<(Side, JointAngles)> =
+            candidates.iter().map(|c| (c.side, c.joints)).collect();
+        let new = information_parallel(model, &pairs, &options.fixed, options.levels);
+        for (c, info) in candidates.into_iter().zip(new) {
+            if let Some(info) = info {
+                pool.push(c);
+                infos.push(info);
+            }
+        }
+    };
+    admit(pools.into_iter().flatten().collect(), &mut pool, &mut infos);
     let random = random_stances(model, options.captures, 3, options.seed)?;
     let random_infos = information_parallel(model, &random, &options.fixed, options.levels);
     let random_refs: Vec<&design::CaptureInformation> = random_infos.iter().flatten().collect();
     let baseline = design::predict(&free, &random_refs);
-    let picked = design::select(&refs, free.len(), options.captures, &options.design);
-    let chosen: Vec<usize> = picked.iter().map(|&k| usable[k]).collect();
+    // The parameters whose worst σ the design minimises: the 15 angle offsets (camera
+    // rotation and leg joints) when free, otherwise every free parameter.
+    let mut focus: Vec<bool> = free.iter().map(|p| is_angle_offset(*p)).collect();
+    if !focus.contains(&true) {
+        focus.fill(true);
+    }
+    let mut chosen = design::select(
+        &infos.iter().collect::<Vec<_>>(),
+        free.len(),
+        &focus,
+        options.captures,
+        &[],
+        &options.design,
+    );
+    // Refinement: variants of the picked captures join the pool, and the design is
+    // improved from where it is.
+    let mut next_stance = 2 * options.pool_stances;
+    let mut spread = options.spread;
+    for round in 0..options.refine_rounds {
+        let bases: Vec<feasible::Candidate> = chosen.iter().map(|&k| pool[k].clone()).collect();
+        let half = bases.len() / 2;
+        let per = options.variants;
+        let found: Vec<feasible::Candidate> = std::thread::scope(|scope| {
+            let handles: Vec<_> = [&bases[..half], &bases[half..]]
+                .into_iter()
+                .enumerate()
+                .map(|(k, part)| {
+                    let first = next_stance + k * half * per;
+                    scope.spawn(move || {
+                        let mut rng = ChaCha8Rng::seed_from_u64(
+                            options.seed ^ (0x5eed_0000 + 2 * round as u64 + k as u64),
+                        );
+                        let mut out = Vec::new();
+                        for (i, base) in part.iter().enumerate() {
+                            out.extend(feasible::variants(
+                                model,
+                                base,
+                                per,
+                                4 * per,
+                                spread,
+                                &options.feasibility,
+                                first + i * per,
+                                &mut rng,
+                            ));
+                        }
+                        out
+                    })
+                })
+                .collect();
+            handles
+                .into_iter()
+                .flat_map(|h| h.join().expect("refinement thread"))
+                .collect()
+        });
+        next_stance += bases.len() * per;
+        admit(found, &mut pool, &mut infos);
+        chosen = design::select(
+            &infos.iter().collect::<Vec<_>>(),
+            free.len(),
+            &focus,
+            options.captures,
+            &chosen,
+            &options.design,
+        );
+        spread /= 2.0;
+    }
     let prediction = design::predict(
         &free,
-        &chosen
-            .iter()
-            .map(|&k| infos[k].as_ref().expect("usable"))
-            .collect::<Vec<_>>(),
+        &chosen.iter().map(|&k| &infos[k]).collect::<Vec<_>>(),
     );
 
     let angles: Vec<JointAngles> = chosen.iter().map(|&k| pool[k].joints).collect();
@@ -228,9 +314,16 @@ pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
         baseline,
         duration,
         baseline_duration,
-        pool: usable.len(),
+        pool: pool.len(),
         stances: stances.len(),
     })
+}
+
+/// Whether `p` is one of the paper's 15 angle offsets: the camera rotation and the 12 leg
+/// joints.
+pub fn is_angle_offset(p: Param) -> bool {
+    use crate::model::{Family, Unit};
+    p.family() == Family::Paper && p.unit() == Unit::Deg && !p.name().contains("Board")
 }
 
 /// [`design::capture_information`] on two threads.

@@ -112,42 +112,6 @@ pub fn family_tests(
     Scores::at(problem, values, held).map_or_else(Vec::new, |s| s.tests(&s.r, &s.jac))
 }
 
-/// The family tests on the residuals of `plain` in pixels and on the same residuals
-/// whitened as `whitened` weighs its captures (the noise model), combined by
-/// [`combined_tests`]; one Jacobian serves both.
-pub fn family_tests_both(
-    plain: &Problem,
-    whitened: &Problem,
-    values: &[f64; PARAMETER_COUNT],
-    held: &[bool; PARAMETER_COUNT],
-) -> Vec<FamilyTest> {
-    let Some(s) = Scores::at(plain, values, held) else {
-        return Vec::new();
-    };
-    let tests = s.tests(&s.r, &s.jac);
-    let same_layout = whitened.captures.len() == s.ranges.len()
-        && whitened
-            .captures
-            .iter()
-            .zip(&s.ranges)
-            .all(|(c, range)| c.residual_count() == range.len());
-    if !same_layout {
-        return combined_tests(tests, family_tests(whitened, values, held));
-    }
-    let mut r = s.r.clone();
-    let mut jac = s.jac.clone();
-    for (c, range) in whitened.captures.iter().zip(&s.ranges) {
-        let Some(w) = &c.whitening else { continue };
-        let rows = range.len();
-        let plain_r = DMatrix::from_column_slice(rows, 1, s.r.rows(range.start, rows).as_slice());
-        let wr = w.apply_matrix(&plain_r);
-        r.rows_mut(range.start, rows).copy_from(&wr.column(0));
-        let wj = w.apply_matrix(&s.jac.rows(range.start, rows).into_owned());
-        jac.rows_mut(range.start, rows).copy_from(&wj);
-    }
-    combined_tests(tests, s.tests(&r, &jac))
-}
-
 /// What the score tests need: the candidates, and one Jacobian over the fitted parameters
 /// and every candidate with its residuals, per capture row range.
 struct Scores {

@@ -110,7 +110,7 @@ impl Whitening {
     }
 
     /// `W·M` for a matrix `M` with [`Whitening::size`] rows.
-    pub fn apply_matrix(&self, plain: &DMatrix<f64>) -> DMatrix<f64> {
+    fn apply_matrix(&self, plain: &DMatrix<f64>) -> DMatrix<f64> {
         match self {
             Whitening::Dense(w) => w * plain,
             Whitening::LowRank { u, shrink, scale } => {

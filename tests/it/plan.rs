@@ -171,9 +171,9 @@ fn known_colliding_and_unseen_stances_are_refused() {
     );
 }
 
-/// The worst scatter (std across runs) of the 15 angle offsets over `runs` calibrations of
-/// datasets simulated with `options` and new noise each time.
-fn worst_scatter(options: &SimOptions, runs: u64) -> f64 {
+/// The scatter (robust std across runs, degrees) of each of the 15 angle offsets over
+/// `runs` calibrations of datasets simulated with `options` and new noise each time.
+fn scatter(options: &SimOptions, runs: u64) -> Vec<f64> {
     let model = Model::default();
     let solver = backend(backend_names()[0], false).expect("a backend");
     let offsets = angle_offsets();
@@ -194,8 +194,11 @@ fn worst_scatter(options: &SimOptions, runs: u64) -> f64 {
             estimates[k].push(solution.report_value(*p));
         }
     }
-    // A robust scale (1.4826 × the median absolute deviation): a rare run far off (seen
-    // with the planned stances: one run in a dozen 7σ away on a knee) does not decide it.
+    // A robust scale (1.4826 × the median absolute deviation): in about one run in 20 the
+    // misfit tests flag clean data (their family-wise level is 5 %), the noise model is
+    // then set aside and that run's plain least-squares fit, several times less efficient
+    // under joint noise, lands a knee or hip pitch several σ away; such a run does not
+    // decide the scale.
     let median = |xs: &mut Vec<f64>| {
         xs.sort_by(f64::total_cmp);
         xs[xs.len() / 2]
@@ -206,7 +209,7 @@ fn worst_scatter(options: &SimOptions, runs: u64) -> f64 {
             let m = median(&mut xs.clone());
             1.4826 * median(&mut xs.iter().map(|x| (x - m).abs()).collect())
         })
-        .fold(0.0, f64::max)
+        .collect()
 }
 
 #[test]
@@ -222,31 +225,60 @@ fn plan_lowers_the_worst_scatter_of_the_angle_offsets() {
         ..SimOptions::default()
     };
     let runs = 40;
-    let planned = worst_scatter(
+    let planned = scatter(
         &SimOptions {
             schedule: Some(plan::to_stances(&plan.captures)),
             ..common.clone()
         },
         runs,
     );
-    let random = worst_scatter(&common, runs);
+    let random = scatter(&common, runs);
+    // The prediction agrees with the scatter, parameter by parameter: on average over the
+    // 15 (each robust scale from 40 runs is off by about 15 %).
+    let mean_ratio = |measured: &[f64], p: &plan::Prediction| {
+        angle_offsets()
+            .iter()
+            .zip(measured)
+            .map(|(q, m)| m / p.std_of(*q).expect("free").to_degrees())
+            .sum::<f64>()
+            / 15.0
+    };
+    let (agree_plan, agree_random) = (
+        mean_ratio(&planned, &plan.prediction),
+        mean_ratio(&random, &plan.baseline),
+    );
+    eprintln!("measured/predicted σ, mean of 15: plan {agree_plan:.2}, random {agree_random:.2}");
+    assert!((agree_plan - 1.0).abs() < 0.2, "plan: {agree_plan}");
+    assert!((agree_random - 1.0).abs() < 0.2, "random: {agree_random}");
+    let (planned, random) = (
+        planned.iter().copied().fold(0.0, f64::max),
+        random.iter().copied().fold(0.0, f64::max),
+    );
     eprintln!(
         "worst scatter of the 15 angle offsets over {runs} runs: plan {planned:.4}°, random \
          {random:.4}°, ratio {:.2}",
         random / planned
     );
-    // The prediction agrees with the scatter (within the sampling error of 40 runs).
-    let predicted = angle_offsets()
-        .iter()
-        .map(|p| plan.prediction.std_of(*p).expect("free").to_degrees())
-        .fold(0.0, f64::max);
-    assert!(
-        (planned / predicted - 1.0).abs() < 0.35,
-        "scatter {planned} vs predicted {predicted}"
+    let worst = |p: &plan::Prediction| {
+        angle_offsets()
+            .iter()
+            .map(|q| p.std_of(*q).expect("free").to_degrees())
+            .fold(0.0, f64::max)
+    };
+    let (predicted, predicted_random) = (worst(&plan.prediction), worst(&plan.baseline));
+    eprintln!(
+        "predicted worst σ: plan {predicted:.4}°, random {predicted_random:.4}°, ratio {:.2}",
+        predicted_random / predicted
     );
-    // The target was half; the plan predicts 1.36× less and reaches about that (see the
-    // README's planning section).
-    assert!(random >= 1.2 * planned, "plan {planned}°, random {random}°");
+    // The design's promise: half the random stances' worst σ.
+    assert!(
+        predicted_random >= 2.0 * predicted,
+        "predicted: plan {predicted}°, random {predicted_random}°"
+    );
+    // Measured: 1.76× with these seeds (README, planning section); the bound leaves room for
+    // the sampling error of 40 runs (about 15 % on each robust scale). Random stances
+    // against themselves give 1.0.
+    assert!(random >= 1.6 * planned, "plan {planned}°, random {random}°");
 }
 
 #[test]
@@ -257,13 +289,13 @@ fn compliance_and_play_are_determined_with_144_planned_captures() {
             fixed.set(p, false);
         }
     }
-    // After a first calibration of the paper's offsets, whose errors are then far below 1°:
-    // with a bound of ±3° no stance that keeps the board in view loads a HipRoll both ways.
-    let mut options = PlanOptions {
+    // With the default bounds of ±3°: the stances that load a HipRoll the other way need a
+    // positive HipYawPitch, with the resting leg flexed off the floor.
+    let options = PlanOptions {
         fixed,
         ..PlanOptions::default()
     };
-    options.feasibility.offset_angle = 1f64.to_radians();
+    assert_eq!(options.feasibility.offset_angle, 3f64.to_radians());
     let plan = plan::plan(&Model::default(), &options).expect("plan");
     assert_eq!(plan.captures.len(), 144);
     let p = &plan.prediction;
