@@ -182,6 +182,7 @@ fn detect_image(
         return Err(DetectError::Size { path, size, camera });
     }
     let grid = options.pattern.unwrap_or_else(|| board_grid(model));
+    let mut search = chessboard::Search::Predicted;
     let mut guided_partial = None;
     if options.use_model && options.guided && grid == board_grid(model) {
         let params = [0.0; PARAMETER_COUNT];
@@ -199,10 +200,12 @@ fn detect_image(
             options.subpix_factor,
         )
         .map_err(cv)?;
-        if let Ok(vertices) = found {
-            let corners: Vec<Corner> = vertices
-                .into_iter()
-                .map(|(vertex, pixel)| Corner {
+        if let Ok(board) = found {
+            let complete = board.vertices.len() == grid.len();
+            let corners: Vec<Corner> = board
+                .vertices
+                .iter()
+                .map(|&(vertex, pixel)| Corner {
                     capture: capture.id,
                     vertex,
                     pixel,
@@ -214,27 +217,22 @@ fn detect_image(
                 order: None,
                 whole_image: false,
             };
-            if matches!(&found, Outcome::Found { corners, .. } if corners.len() == grid.len()) {
+            if complete {
                 return Ok(found);
             }
-            // Part of the board: OpenCV's chessboard finder may still see all of it.
+            // Part of the board: OpenCV's chessboard finder may still find all of it, but
+            // only where every vertex is in view, and it gives up slowly where one is not.
+            if !chessboard::worth_trying(&board, &model.camera, options.subpix_factor) {
+                return Ok(found);
+            }
+            search = chessboard::Search::Whole;
             guided_partial = Some(found);
         }
     }
-    let outcome = chessboard::chessboard(dataset, capture, &grey, grid, options).map_err(cv)?;
+    let outcome =
+        chessboard::chessboard(dataset, capture, &grey, grid, options, search).map_err(cv)?;
     Ok(match (outcome, guided_partial) {
-        (
-            Outcome::Found {
-                corners,
-                order,
-                whole_image,
-            },
-            _,
-        ) => Outcome::Found {
-            corners,
-            order,
-            whole_image,
-        },
+        (found @ Outcome::Found { .. }, _) => found,
         (_, Some(partial)) => partial,
         (other, None) => other,
     })
