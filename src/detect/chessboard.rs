@@ -212,3 +212,52 @@ pub(super) fn chessboard(
         whole_image,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Model;
+
+    /// A 6 × 4 board of 30 px squares with its top-left vertex at `origin`, found except
+    /// for the vertices in `missed`.
+    fn board(origin: [f64; 2], missed: &[(u32, u32)]) -> Board {
+        let fitted: Vec<(Vertex, Option<[f64; 2]>)> = (0..4)
+            .flat_map(|row| (0..6).map(move |col| Vertex { row, col }))
+            .map(|v| {
+                let p = [
+                    origin[0] + 30.0 * v.col as f64,
+                    origin[1] + 30.0 * v.row as f64,
+                ];
+                (v, Some(p))
+            })
+            .collect();
+        let vertices = fitted
+            .iter()
+            .filter(|(v, _)| !missed.contains(&(v.row, v.col)))
+            .map(|(v, p)| (*v, p.unwrap()))
+            .collect();
+        Board { vertices, fitted }
+    }
+
+    #[test]
+    fn the_finder_is_tried_only_for_a_vertex_missed_well_inside_a_board_in_view() {
+        let camera = Model::default().camera;
+        // Wholly in view, a vertex missed in the middle: worth trying.
+        assert!(worth_trying(
+            &board([200.0, 200.0], &[(1, 2)]),
+            &camera,
+            0.3
+        ));
+        // Cut by the left border: OpenCV's finder cannot find the whole board.
+        assert!(!worth_trying(
+            &board([-10.0, 200.0], &[(0, 0)]),
+            &camera,
+            0.3
+        ));
+        // In view, but the only vertex missed is 3 px from the border, where the guided
+        // search leaves it out on purpose (no unbiased 9 px window fits).
+        assert!(!worth_trying(&board([3.0, 200.0], &[(2, 0)]), &camera, 0.3));
+        // Nothing missed.
+        assert!(!worth_trying(&board([200.0, 200.0], &[]), &camera, 0.3));
+    }
+}

@@ -1,15 +1,18 @@
-//! Finding the sandal's vertices in camera images with OpenCV (the paper's measurement
-//! phase).
+//! Finding the sandal's vertices in camera images (the paper's measurement phase).
 //!
-//! For each capture with an image: the image is read (PNG with the `png` crate, anything
-//! else with OpenCV), the board is looked for with `findChessboardCorners` first in the
-//! region where the nominal model (all offsets zero) and the logged joint angles predict
-//! it, then in the whole image; the vertices are refined with `cornerSubPix` in a window
-//! of about 0.3 squares; and each gets its (row, col) by comparing OpenCV's order with the
-//! prediction ([`assign::assign`]): a 7 × 5 board looks the same turned by 180°, so
-//! OpenCV's order flips between images. Images whose order is ambiguous or whose points
-//! do not fit one homography are rejected with the reason. Nothing here stops a run:
-//! every image gets an [`Outcome`].
+//! For each capture with an image: the image is read as grey levels (`image.rs`: the
+//! header checked before any pixel is decoded), and with the model the board is first
+//! looked for where the nominal model (all offsets zero) and the logged joint angles
+//! predict it, by its pattern of saddles ([`guided`]); its vertices are refined with
+//! `cornerSubPix` and numbered by the prediction. OpenCV's chessboard finder
+//! (`chessboard.rs`, [`find`]) is the fallback: when the guided search finds nothing, in
+//! the predicted region (`predict.rs`) and then the whole image at half resolution
+//! (refined at full); when it finds part of a board, only if the board is wholly in view
+//! and a vertex was missed well inside the image (the finder needs the whole board, and
+//! gives up slowly where it is cut by the border). Its points are numbered by comparing
+//! OpenCV's order with the prediction ([`assign::assign`]). Images whose order is
+//! ambiguous or whose points do not fit one homography are rejected with the reason.
+//! Nothing here stops a run: every image gets an [`Outcome`] (`outcome.rs`).
 
 pub mod assign;
 mod chessboard;

@@ -98,7 +98,7 @@ pub enum Outcome {
         /// The vertices, in row-major order of the board.
         corners: Vec<Corner>,
         /// How OpenCV's order relates to the board's; `None` when the vertices were found
-        /// and numbered by the model-guided search ([`guided`]).
+        /// and numbered by the model-guided search ([`super::guided`]).
         order: Option<assign::Order>,
         /// Whether the board was found only in the whole image, not where predicted.
         whole_image: bool,
