@@ -2,7 +2,9 @@
 //! legs = 144 captures, 3456 vertices, 0.1 px noise each), simulated once in memory, on
 //! all cores, each solved as `naocalib solve` does (Ceres, noise model).
 //!
-//! Target: ≤ 1.5 s wall for the batch on the 2-core machine.
+//! This is the solving alone, in memory. `naocalib batch` as a whole process adds loading
+//! and validating the datasets (about 6 ms CPU each) and the summary; the README quotes
+//! both beside one Python scipy solve (`scripts/solve_scipy.py`).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use naocalib::batch::{BatchOptions, solve_datasets};

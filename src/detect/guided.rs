@@ -83,10 +83,12 @@ impl Integral {
         })
     }
 
-    /// The mean grey level of the square of half-size `h` around pixel `(x, y)`
+    /// The mean grey level of the square of half-size `h` ≥ 1 around pixel `(x, y)`
     /// (rounded), or `None` when it is not wholly in the image.
     fn mean(&self, x: f64, y: f64, h: i64) -> Option<f64> {
-        let (x, y) = (x.round() as i64, y.round() as i64);
+        // Rounded as `round` does for x, y ≥ -0.5 (below, a square of half-size h ≥ 1
+        // leaves the image either way), without a call into libm.
+        let (x, y) = ((x + 0.5) as i64, (y + 0.5) as i64);
         if x - h < 0 || y - h < 0 || x + h >= self.width as i64 || y + h >= self.height as i64 {
             return None;
         }
@@ -172,14 +174,36 @@ impl Predicted {
     /// most strongly, or `None` when none shows it.
     fn peak(&self, img: &Integral, start: [f64; 2]) -> Option<[f64; 2]> {
         let r = (self.square / 3.0).round() as i64;
+        let centre = [start[0].round(), start[1].round()];
+        // Both rings' contrast and the inner ring's at `centre` moved by (dx, dy).
+        let at = |dx: i64, dy: i64| {
+            let p = [centre[0] + dx as f64, centre[1] + dy as f64];
+            Some((self.both(img, p)?, self.contrast(img, p, true)?, p))
+        };
+        // Coarse to fine: every twelfth of a square (the inner ring, 0.12 squares out, still
+        // shows the saddle half a step away), then every pixel around the coarse best.
+        let step = ((self.square / 12.0).floor() as i64).max(1);
+        let (cx, cy) = if step == 1 {
+            (0, 0)
+        } else {
+            let mut best: Option<(f64, i64, i64)> = None;
+            for dy in (-r..=r).step_by(step as usize) {
+                for dx in (-r..=r).step_by(step as usize) {
+                    if let Some((c, inner, _)) = at(dx, dy)
+                        && best.is_none_or(|(b, _, _)| c + inner > b)
+                    {
+                        best = Some((c + inner, dx, dy));
+                    }
+                }
+            }
+            let (_, cx, cy) = best?;
+            (cx, cy)
+        };
+        let reach = if step == 1 { r } else { step };
         let mut best: Option<(f64, [f64; 2])> = None;
-        for dy in -r..=r {
-            for dx in -r..=r {
-                let p = [start[0].round() + dx as f64, start[1].round() + dy as f64];
-                let Some(inner) = self.contrast(img, p, true) else {
-                    continue;
-                };
-                let Some(c) = self.both(img, p) else {
+        for dy in (cy - reach).max(-r)..=(cy + reach).min(r) {
+            for dx in (cx - reach).max(-r)..=(cx + reach).min(r) {
+                let Some((c, inner, p)) = at(dx, dy) else {
                     continue;
                 };
                 if c >= MIN_SCORE * FULL_CONTRAST && best.is_none_or(|(b, _)| c + inner > b) {
@@ -270,13 +294,45 @@ fn total(img: &Integral, predicted: &[Predicted], t: [f64; 2]) -> f64 {
 /// (see [`AMBIGUOUS`]); `Err` when nothing matches.
 fn align(img: &Integral, predicted: &[Predicted], reach: f64) -> Result<Vec<[f64; 2]>, String> {
     let r = reach.ceil() as i64;
-    let mut scores = Vec::new();
-    for dy in (-r..=r).step_by(2) {
-        for dx in (-r..=r).step_by(2) {
-            let t = [dx as f64, dy as f64];
-            scores.push((total(img, predicted, t), t));
+    let mut squares: Vec<f64> = predicted.iter().map(|p| p.square).collect();
+    squares.sort_by(f64::total_cmp);
+    let square = squares[squares.len() / 2];
+    let score = |dx: i64, dy: i64| total(img, predicted, [dx as f64, dy as f64]);
+    // Coarse to fine: first every sixth of a square (a sample 0.3 squares from its vertex
+    // then stays on its square), then every 2 px around every coarse shift that scores at
+    // least half the best: where the best alignment and any rival of it can lie.
+    let coarse = ((square / 6.0).floor() as i64).max(2) / 2 * 2;
+    let steps: Vec<i64> = (-r..=r).step_by(coarse as usize).collect();
+    let grid: Vec<Vec<f64>> = steps
+        .iter()
+        .map(|&dy| steps.iter().map(|&dx| score(dx, dy)).collect())
+        .collect();
+    let top = grid
+        .iter()
+        .flatten()
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max);
+    let mut seeds: Vec<(f64, i64, i64)> = Vec::new();
+    for (row, &dy) in grid.iter().zip(&steps) {
+        for (&v, &dx) in row.iter().zip(&steps) {
+            if v == top || v >= 0.5 * top {
+                seeds.push((v, dx, dy));
+            }
         }
     }
+    let mut fine = std::collections::BTreeMap::new();
+    for &(_, sx, sy) in &seeds {
+        let (lo_x, lo_y) = ((sx - coarse).max(-r), (sy - coarse).max(-r));
+        for dy in (lo_y..=(sy + coarse).min(r)).filter(|d| (d + r) % 2 == 0) {
+            for dx in (lo_x..=(sx + coarse).min(r)).filter(|d| (d + r) % 2 == 0) {
+                fine.entry((dy, dx)).or_insert_with(|| score(dx, dy));
+            }
+        }
+    }
+    let scores: Vec<(f64, [f64; 2])> = fine
+        .into_iter()
+        .map(|((dy, dx), v)| (v, [dx as f64, dy as f64]))
+        .collect();
     let (best, at) = scores
         .iter()
         .copied()
@@ -287,9 +343,6 @@ fn align(img: &Integral, predicted: &[Predicted], reach: f64) -> Result<Vec<[f64
             "no board pattern near where the model predicts it (best match {best:.1} vertices)"
         ));
     }
-    let mut squares: Vec<f64> = predicted.iter().map(|p| p.square).collect();
-    squares.sort_by(f64::total_cmp);
-    let square = squares[squares.len() / 2];
     let far = |t: &[f64; 2], u: &[f64; 2]| (t[0] - u[0]).hypot(t[1] - u[1]) > 0.7 * square;
     let mut candidates = vec![at];
     let mut rivals: Vec<(f64, [f64; 2])> = scores
@@ -416,6 +469,43 @@ fn consistent(
     }
 }
 
+/// What the model-guided search found of one board.
+#[derive(Debug, Clone)]
+pub struct Board {
+    /// The vertices found, in row-major order, with their pixels.
+    pub vertices: Placed,
+    /// Where the homography of the vertices found puts every vertex of the board (row-major;
+    /// `None` for one it cannot place in the image plane): which of them are in view.
+    pub fitted: Vec<(Vertex, Option<[f64; 2]>)>,
+}
+
+impl Board {
+    /// The board's side in pixels, from neighbouring vertices where the homography puts
+    /// them (the median over the board), or `None` when no two neighbours are placed.
+    pub fn square(&self) -> Option<f64> {
+        let at = |v: Vertex| {
+            self.fitted
+                .iter()
+                .find(|(w, _)| *w == v)
+                .and_then(|(_, p)| *p)
+        };
+        let mut sides: Vec<f64> = self
+            .fitted
+            .iter()
+            .filter_map(|(v, p)| {
+                let p = (*p)?;
+                let q = at(Vertex {
+                    row: v.row,
+                    col: v.col + 1,
+                })?;
+                Some((p[0] - q[0]).hypot(p[1] - q[1]))
+            })
+            .collect();
+        sides.sort_by(f64::total_cmp);
+        sides.get(sides.len() / 2).copied()
+    }
+}
+
 /// The vertices of the board found by the model-guided search in `image` (8-bit grey),
 /// with the board predicted in pose `pose` (`T_CB`) for camera `camera`; `Err` with the
 /// reason when fewer than [`MIN_VERTICES`] are found or the alignment is ambiguous.
@@ -427,7 +517,7 @@ pub fn detect(
     camera: &Camera,
     pose: &Pose<f64>,
     factor: f64,
-) -> opencv::Result<Result<Placed, String>> {
+) -> opencv::Result<Result<Board, String>> {
     let predicted = predict(model, camera, pose);
     if predicted.len() < MIN_VERTICES {
         return Ok(Err("the model puts the board behind the camera".into()));
@@ -473,10 +563,22 @@ pub fn detect(
     }
     let mut kept = best.kept.clone();
     kept.sort_by_key(|(k, _)| predicted[*k].vertex);
-    Ok(Ok(kept
-        .into_iter()
-        .map(|(k, q)| (predicted[k].vertex, q))
-        .collect()))
+    let fitted = model
+        .board
+        .vertices()
+        .map(|v| {
+            let [x, y, _] = model.board.vertex_position(v);
+            let pixel = distorted(camera, assign::apply(&best.homography, [x, y]));
+            (v, pixel.filter(|p| p[0].is_finite() && p[1].is_finite()))
+        })
+        .collect();
+    Ok(Ok(Board {
+        vertices: kept
+            .into_iter()
+            .map(|(k, q)| (predicted[k].vertex, q))
+            .collect(),
+        fitted,
+    }))
 }
 
 /// The vertices one alignment leads to.
@@ -486,6 +588,8 @@ struct Found {
     /// Vertices the final homography puts well inside the image where no saddle of their
     /// colours is.
     missing: usize,
+    /// That homography: board plane (mm) to undistorted pixels.
+    homography: Matrix3<f64>,
 }
 
 /// How much more support one alignment needs than another that numbers differently.
@@ -557,7 +661,11 @@ fn search(
             break;
         }
     }
-    Ok(Some(Found { kept, missing }))
+    Ok(Some(Found {
+        kept,
+        missing,
+        homography: h,
+    }))
 }
 
 /// The prediction redone with the homography `h` (board plane to undistorted pixels) of

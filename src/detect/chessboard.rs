@@ -1,0 +1,263 @@
+//! The fallback to OpenCV's chessboard finder: the board looked for in a region of the
+//! image, refined with `cornerSubPix`, checked against one homography and numbered by the
+//! model's orientation (or in OpenCV's order without the model).
+
+use opencv::core::Mat;
+
+use super::assign::{self, Grid};
+use super::guided::Board;
+use super::predict::{predict, predicted_roi};
+use super::{DetectOptions, Outcome, board_grid, find};
+use crate::dataset::{Capture, Corner, Dataset};
+use crate::model::{Camera, PARAMETER_COUNT, Vertex};
+
+/// Where the chessboard finder looks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Search {
+    /// In the whole image at full resolution: the model-guided search found part of the
+    /// board and says where ([`worth_trying`]). OpenCV's finder misses boards in small
+    /// regions (its adaptive threshold's block is a fraction of the region's size).
+    Whole,
+    /// Where the nominal model predicts the board, then in the whole image (at half
+    /// resolution when the predicted squares are large enough; at full resolution without
+    /// the model).
+    Predicted,
+}
+
+/// Smallest side of a square (px) the chessboard finder is given: the whole image is
+/// searched at half resolution only when the model predicts squares of twice this.
+const MIN_SQUARE: f64 = 8.0;
+
+/// Whether OpenCV's chessboard finder may add to a board the model-guided search found in
+/// part: only when the homography of the vertices found puts every vertex of the board in
+/// the image (the finder needs all of them), and one it missed far enough inside for an
+/// unbiased `cornerSubPix` window of `factor` squares (nearer the border, the guided
+/// search leaves vertices out on purpose). The finder gives up slowly where no whole board
+/// is, trying tens of thresholds, so this spares it most boards cut by the border.
+pub(super) fn worth_trying(board: &Board, camera: &Camera, factor: f64) -> bool {
+    let Some(square) = board.square() else {
+        return false;
+    };
+    let half = (factor * square).round().clamp(2.0, 30.0);
+    let (w, h) = (camera.width as f64 - 1.0, camera.height as f64 - 1.0);
+    let mut missed_inside = false;
+    for (vertex, p) in &board.fitted {
+        let Some(p) = *p else {
+            return false;
+        };
+        if !camera.contains(p, 0.0) {
+            return false;
+        }
+        let room = p[0].min(p[1]).min(w - p[0]).min(h - p[1]);
+        if room >= half + 2.0 && !board.vertices.iter().any(|(v, _)| v == vertex) {
+            missed_inside = true;
+        }
+    }
+    missed_inside
+}
+
+/// The median side of a square (px) where the nominal model puts the board, or `None`
+/// when it cannot.
+fn predicted_square(dataset: &Dataset, capture: &Capture, grid: Grid) -> Option<f64> {
+    let points = predict(&dataset.model, capture, &[0.0; PARAMETER_COUNT])?;
+    let mut sides = find::local_square(&points, grid);
+    sides.sort_by(f64::total_cmp);
+    sides.get(sides.len() / 2).copied()
+}
+
+/// Points refined at full resolution that fit one homography, or why they do not.
+type Checked = Result<Vec<[f64; 2]>, String>;
+
+/// Refines the `points` OpenCV found (its order) with `cornerSubPix` and checks that one
+/// homography explains them all (after removing the lens distortion): within a tenth of a
+/// square with the model, a quarter without.
+fn checked(
+    grey: &Mat,
+    mut points: Vec<[f64; 2]>,
+    grid: Grid,
+    options: &DetectOptions,
+    cam: &Camera,
+) -> opencv::Result<Checked> {
+    find::refine(grey, &mut points, grid, options.subpix_factor)?;
+    let board_xy: Vec<[f64; 2]> = (0..grid.len())
+        .map(|k| [(k as u32 % grid.cols) as f64, (k as u32 / grid.cols) as f64])
+        .collect();
+    let undistorted: Vec<[f64; 2]> = points
+        .iter()
+        .map(|p| {
+            let [a, b] = cam.undistort(p[0], p[1]);
+            [a * cam.fx + cam.cx, b * cam.fy + cam.cy]
+        })
+        .collect();
+    let mut squares = find::local_square(&points, grid);
+    squares.sort_by(f64::total_cmp);
+    let square = squares[squares.len() / 2];
+    let limit = if options.use_model {
+        (0.1 * square).max(1.0)
+    } else {
+        (0.25 * square).max(1.0)
+    };
+    Ok(match assign::homography_residual(&board_xy, &undistorted) {
+        None => Err("the points are degenerate (no homography fits them)".into()),
+        Some(r) if r > limit => Err(format!(
+            "the points do not fit one homography (a point is {r:.2} px off, more than \
+             {limit:.2} px)"
+        )),
+        Some(_) => Ok(points),
+    })
+}
+
+/// OpenCV's chessboard finder where `search` says; numbered by the model's orientation
+/// (or OpenCV's order without the model).
+pub(super) fn chessboard(
+    dataset: &Dataset,
+    capture: &Capture,
+    grey: &Mat,
+    grid: Grid,
+    options: &DetectOptions,
+    search: Search,
+) -> opencv::Result<Outcome> {
+    let model = &dataset.model;
+    let camera = [model.camera.width, model.camera.height];
+    let check = |points: Option<Vec<[f64; 2]>>| -> opencv::Result<Option<Checked>> {
+        match points {
+            None => Ok(None),
+            Some(points) => checked(grey, points, grid, options, &model.camera).map(Some),
+        }
+    };
+    let mut whole_image = false;
+    let found = match search {
+        Search::Whole => check(find::find_board(grey, grid, None)?)?,
+        Search::Predicted => {
+            let roi = if options.use_model {
+                predicted_roi(model, capture)
+            } else {
+                None
+            };
+            let mut found = match roi {
+                Some(rect) => check(find::find_board(grey, grid, Some(rect))?)?,
+                None => None,
+            };
+            if found.is_none() {
+                whole_image = roi.is_some();
+                let half = options.use_model
+                    && grid == board_grid(model)
+                    && predicted_square(dataset, capture, grid)
+                        .is_some_and(|s| s >= 2.0 * MIN_SQUARE);
+                if half {
+                    found = check(find::find_board_half(grey, grid)?)?;
+                }
+                // At full resolution when not tried at half, or when what was found there
+                // does not hold up at full resolution.
+                if !half || found.as_ref().is_some_and(|f| f.is_err()) {
+                    found = check(find::find_board(grey, grid, None)?)?.or(found);
+                }
+            }
+            found
+        }
+    };
+    let points = match found {
+        None => return Ok(Outcome::NotFound),
+        Some(Err(reason)) => return Ok(Outcome::Rejected { reason }),
+        Some(Ok(points)) => points,
+    };
+
+    let (vertices, order) = if options.use_model {
+        if grid != board_grid(model) {
+            return Ok(Outcome::Rejected {
+                reason: format!(
+                    "the pattern {}x{} is not the board's {}x{} (use --no-model)",
+                    grid.cols,
+                    grid.rows,
+                    model.board.cols(),
+                    model.board.rows()
+                ),
+            });
+        }
+        let Some(predicted) = predict(model, capture, &[0.0; PARAMETER_COUNT]) else {
+            return Ok(Outcome::Rejected {
+                reason: "the model puts the board behind the camera".into(),
+            });
+        };
+        match assign::assign(
+            &points,
+            &predicted,
+            grid,
+            [camera[0] as f64, camera[1] as f64],
+        ) {
+            Ok(a) => (a.vertices, a.order),
+            Err(reason) => return Ok(Outcome::Rejected { reason }),
+        }
+    } else {
+        let order = (0..grid.len() as u32)
+            .map(|k| (k / grid.cols, k % grid.cols))
+            .collect();
+        (order, assign::Order::Same)
+    };
+    let order = Some(order);
+    let mut corners: Vec<Corner> = vertices
+        .iter()
+        .zip(&points)
+        .map(|(&(row, col), p)| Corner {
+            capture: capture.id,
+            vertex: Vertex { row, col },
+            pixel: *p,
+            line: 0,
+        })
+        .collect();
+    corners.sort_by_key(|c| c.vertex);
+    Ok(Outcome::Found {
+        corners,
+        order,
+        whole_image,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Model;
+
+    /// A 6 × 4 board of 30 px squares with its top-left vertex at `origin`, found except
+    /// for the vertices in `missed`.
+    fn board(origin: [f64; 2], missed: &[(u32, u32)]) -> Board {
+        let fitted: Vec<(Vertex, Option<[f64; 2]>)> = (0..4)
+            .flat_map(|row| (0..6).map(move |col| Vertex { row, col }))
+            .map(|v| {
+                let p = [
+                    origin[0] + 30.0 * v.col as f64,
+                    origin[1] + 30.0 * v.row as f64,
+                ];
+                (v, Some(p))
+            })
+            .collect();
+        let vertices = fitted
+            .iter()
+            .filter(|(v, _)| !missed.contains(&(v.row, v.col)))
+            .map(|(v, p)| (*v, p.unwrap()))
+            .collect();
+        Board { vertices, fitted }
+    }
+
+    #[test]
+    fn the_finder_is_tried_only_for_a_vertex_missed_well_inside_a_board_in_view() {
+        let camera = Model::default().camera;
+        // Wholly in view, a vertex missed in the middle: worth trying.
+        assert!(worth_trying(
+            &board([200.0, 200.0], &[(1, 2)]),
+            &camera,
+            0.3
+        ));
+        // Cut by the left border: OpenCV's finder cannot find the whole board.
+        assert!(!worth_trying(
+            &board([-10.0, 200.0], &[(0, 0)]),
+            &camera,
+            0.3
+        ));
+        // In view, but the only vertex missed is 3 px from the border, where the guided
+        // search leaves it out on purpose (no unbiased 9 px window fits).
+        assert!(!worth_trying(&board([3.0, 200.0], &[(2, 0)]), &camera, 0.3));
+        // Nothing missed.
+        assert!(!worth_trying(&board([200.0, 200.0], &[]), &camera, 0.3));
+    }
+}

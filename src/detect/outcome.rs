@@ -1,0 +1,244 @@
+//! What detection makes of each capture: the outcome types, their counts and errors.
+
+use std::fmt;
+use std::path::PathBuf;
+
+use super::assign;
+use super::image::{MAX_PIXELS, MAX_SIDE};
+use crate::dataset::Corner;
+
+/// Why an image could not be used at all (as opposed to a board not found in it).
+#[derive(Debug, thiserror::Error)]
+pub enum DetectError {
+    /// The image file does not exist.
+    #[error("{}: no such file", path.display())]
+    Missing {
+        /// The image.
+        path: PathBuf,
+    },
+    /// The image file is empty.
+    #[error("{}: the file is empty", path.display())]
+    Empty {
+        /// The image.
+        path: PathBuf,
+    },
+    /// The image path leads out of the dataset directory.
+    #[error("{}: the image path leaves the dataset directory {}", path.display(), dir.display())]
+    OutsideDataset {
+        /// The image.
+        path: PathBuf,
+        /// The dataset directory.
+        dir: PathBuf,
+    },
+    /// The file could not be read.
+    #[error("{}: cannot read: {source}", path.display())]
+    Io {
+        /// The image.
+        path: PathBuf,
+        /// The operating system's error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is not an image that can be decoded.
+    #[error("{}: not a readable image: {message}", path.display())]
+    Decode {
+        /// The image.
+        path: PathBuf,
+        /// What the decoder said.
+        message: String,
+    },
+    /// The image does not have the camera's resolution.
+    #[error(
+        "{}: the image is {}×{} pixels, but the camera in dataset.toml is {}×{}",
+        path.display(), size[0], size[1], camera[0], camera[1]
+    )]
+    Size {
+        /// The image.
+        path: PathBuf,
+        /// Its size.
+        size: [u32; 2],
+        /// The camera's resolution.
+        camera: [u32; 2],
+    },
+    /// The image header claims a size beyond what detection reads (refused before decoding).
+    #[error(
+        "{}: the image header claims {}×{} pixels, more than the {} × {} pixels (and {} \
+         megapixels) detection reads; refused before decoding",
+        path.display(), size[0], size[1], MAX_SIDE, MAX_SIDE, MAX_PIXELS / 1_000_000
+    )]
+    TooLarge {
+        /// The image.
+        path: PathBuf,
+        /// The size its header claims.
+        size: [u32; 2],
+    },
+    /// An output (an overlay) could not be written.
+    #[error("{message}")]
+    Write {
+        /// The output file.
+        path: PathBuf,
+        /// Why (names the file).
+        message: String,
+    },
+    /// OpenCV failed.
+    #[error("{}: OpenCV: {message}", path.display())]
+    OpenCv {
+        /// The image.
+        path: PathBuf,
+        /// OpenCV's message.
+        message: String,
+    },
+}
+
+/// What became of one capture.
+#[derive(Debug)]
+pub enum Outcome {
+    /// The board was found; its vertices.
+    Found {
+        /// The vertices, in row-major order of the board.
+        corners: Vec<Corner>,
+        /// How OpenCV's order relates to the board's; `None` when the vertices were found
+        /// and numbered by the model-guided search ([`super::guided`]).
+        order: Option<assign::Order>,
+        /// Whether the board was found only in the whole image, not where predicted.
+        whole_image: bool,
+    },
+    /// No board was found.
+    NotFound,
+    /// A board was found but not used.
+    Rejected {
+        /// Why.
+        reason: String,
+    },
+    /// The image could not be used.
+    Failed(DetectError),
+    /// The capture names no image.
+    NoImage,
+}
+
+/// The result for one capture.
+#[derive(Debug)]
+pub struct ImageResult {
+    /// The capture id.
+    pub capture: u64,
+    /// Its image path, relative to the dataset directory.
+    pub image: Option<PathBuf>,
+    /// What became of it.
+    pub outcome: Outcome,
+}
+
+impl fmt::Display for ImageResult {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "capture {}", self.capture)?;
+        if let Some(image) = &self.image {
+            write!(f, " ({})", image.display())?;
+        }
+        match &self.outcome {
+            Outcome::Found {
+                corners,
+                order,
+                whole_image,
+            } => {
+                write!(f, ": found {} vertices", corners.len())?;
+                match order {
+                    None => write!(f, " (model-guided)")?,
+                    Some(assign::Order::Same) => {}
+                    Some(order) => write!(f, " ({order})")?,
+                }
+                if *whole_image {
+                    write!(f, " (not where predicted; found in the whole image)")?;
+                }
+                Ok(())
+            }
+            Outcome::NotFound => write!(f, ": not found"),
+            Outcome::Rejected { reason } => write!(f, ": rejected: {reason}"),
+            Outcome::Failed(e) => write!(f, ": error: {e}"),
+            Outcome::NoImage => write!(f, ": no image"),
+        }
+    }
+}
+
+/// Counts of outcomes.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Summary {
+    /// Boards found.
+    pub found: usize,
+    /// Boards not found.
+    pub not_found: usize,
+    /// Boards rejected.
+    pub rejected: usize,
+    /// Images that could not be used.
+    pub failed: usize,
+    /// Captures without an image.
+    pub no_image: usize,
+}
+
+impl Summary {
+    /// Counts the outcomes of `results`.
+    pub fn of(results: &[ImageResult]) -> Summary {
+        let mut s = Summary::default();
+        for r in results {
+            match r.outcome {
+                Outcome::Found { .. } => s.found += 1,
+                Outcome::NotFound => s.not_found += 1,
+                Outcome::Rejected { .. } => s.rejected += 1,
+                Outcome::Failed(_) => s.failed += 1,
+                Outcome::NoImage => s.no_image += 1,
+            }
+        }
+        s
+    }
+}
+
+impl fmt::Display for Summary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} found, {} not found, {} rejected, {} unreadable",
+            self.found, self.not_found, self.rejected, self.failed
+        )?;
+        if self.no_image > 0 {
+            write!(f, ", {} without an image", self.no_image)?;
+        }
+        Ok(())
+    }
+}
+
+/// Why detection gave nothing to solve with.
+#[derive(Debug, thiserror::Error)]
+pub enum NoCorners {
+    /// No capture names an image.
+    #[error(
+        "{}: no capture in captures.csv names an image (its image column is empty); \
+         there is nothing to detect",
+        dir.display()
+    )]
+    NoImages {
+        /// The dataset directory.
+        dir: PathBuf,
+    },
+    /// No board was found in any image.
+    #[error(
+        "{}: no board found in any of its {images} images ({summary}); first: {first}",
+        dir.display()
+    )]
+    NothingFound {
+        /// The dataset directory.
+        dir: PathBuf,
+        /// Captures with an image.
+        images: usize,
+        /// The counts.
+        summary: Summary,
+        /// The first capture's result line (why it failed).
+        first: String,
+    },
+}
+
+/// The result of detecting the vertices of a whole dataset in memory.
+#[derive(Debug)]
+pub struct Detection {
+    /// One result per capture, in capture order.
+    pub results: Vec<ImageResult>,
+    /// Their counts.
+    pub summary: Summary,
+}
