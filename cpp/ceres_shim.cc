@@ -409,9 +409,9 @@ class CaptureFunctor {
 };
 
 // Jet widths of the autodiff passes. A capture of the paper's model has at most camera (3)
-// + leg (6) + board (3) = 12 free amounts; one of the extended model about 30. Each block
-// gets the narrower width that covers its amounts in one pass (a pass re-evaluates the whole
-// chain), several passes of the wider one beyond.
+// + leg (6) + board (3) = 12 free amounts; one of the extended model with every family
+// free 27. Each block gets the narrower width that covers its amounts in one pass (a pass
+// re-evaluates the whole chain), several passes of the wider one beyond.
 constexpr int kNarrow = 12;
 constexpr int kWide = 28;
 

@@ -187,7 +187,7 @@ impl Scores {
             .flat_map(|(_, ps)| ps.iter().copied())
             .collect();
         let projected = project_out(
-            &jac,
+            jac,
             &fitted.iter().map(|p| column(*p)).collect::<Vec<_>>(),
             &candidate_params
                 .iter()
