@@ -502,41 +502,54 @@ fn screen(
         posed.initial[u.param.index()] = problem.initial[u.param.index()];
     }
     let first = fit(&posed, backend, false)?;
-    let whitened = if options.noise_model {
-        whiten(&posed, &first.values, options)?
-    } else {
-        None
-    };
-    let weighted = match &whitened {
-        Some((w, _)) => Some(fit(w, backend, false)?),
-        None => None,
-    };
-    let tests = tests_at(
-        &posed,
-        &first.values,
-        whitened
-            .as_ref()
-            .map(|(w, _)| w)
-            .zip(weighted.as_ref().map(|f| &f.values)),
-        &held,
-    );
+    let tests = misfit_tests(&posed, &first.values, &held, backend, options)?.tests;
     Ok((tests, first.values))
 }
 
-/// The misfit tests: on the plain residuals of `posed` at its fit `values`, and, when the
-/// noise model is on, on the whitened residuals at the whitened problem's own fit (see
-/// [`misfit::combined_tests`]).
-fn tests_at(
+/// The misfit tests after the plain fit `values` of `posed`: on its plain residuals there,
+/// and with the noise model on, on the residuals whitened by the levels estimated there, at
+/// the fit of that whitened problem (see [`misfit::combined_tests`]). Each score test runs
+/// at the estimate for the weights it uses: at the plain fit, which joint noise makes
+/// inefficient, the whitened residuals kept a nonlinear remainder of its error that the
+/// play test took for play in one run in four from planned stances (README, planning
+/// section). Returns the tests, the whitening and the whitened fit (the noise model's first
+/// round, for [`noise_rounds`] to reuse).
+fn misfit_tests(
     posed: &Problem,
     values: &[f64; PARAMETER_COUNT],
-    whitened: Option<(&Problem, &[f64; PARAMETER_COUNT])>,
     held: &[bool; PARAMETER_COUNT],
-) -> Vec<FamilyTest> {
+    backend: &dyn Backend,
+    options: &UncertaintyOptions,
+) -> Result<Screened, SolveError> {
     let plain = misfit::family_tests(posed, values, held);
-    match whitened {
-        Some((w, at)) => misfit::combined_tests(plain, misfit::family_tests(w, at, held)),
-        None => plain,
-    }
+    let whitened = if options.noise_model {
+        whiten(posed, values, options)?
+    } else {
+        None
+    };
+    let Some((w, _)) = &whitened else {
+        return Ok(Screened {
+            tests: plain,
+            whitened: None,
+            weighted: None,
+        });
+    };
+    let weighted = fit(w, backend, false)?;
+    let tests = misfit::combined_tests(plain, misfit::family_tests(w, &weighted.values, held));
+    Ok(Screened {
+        tests,
+        whitened,
+        weighted: Some(weighted),
+    })
+}
+
+/// The misfit tests with what the noise rounds reuse (see [`misfit_tests`]).
+struct Screened {
+    tests: Vec<FamilyTest>,
+    /// The problem whitened by the levels estimated at the plain fit, and those levels.
+    whitened: Option<(Problem, noise::NoiseLevels)>,
+    /// The fit of that whitened problem.
+    weighted: Option<Fit>,
 }
 
 /// The robust first fit (with `--loss`): flags vertices beyond [`OUTLIER_SIGMAS`] robust
@@ -668,32 +681,11 @@ fn calibrate_given(
             solver: backend.name().into(),
             message: "the solution puts a vertex behind the camera".into(),
         })?;
-    // The tests run on the residuals whitened by the noise model estimated at the plain
-    // fit, so that their power does not drown in joint noise (their variance estimate holds
-    // whatever the weights).
-    let whitened = if options.noise_model {
-        whiten(&posed, &first.values, options)?
-    } else {
-        None
-    };
-    // Each score test runs at the estimate for the weights it uses: the plain test at the
-    // plain fit, the whitened one at the fit of the whitened problem (the noise model's
-    // first round, reused below). At the plain fit, which joint noise makes inefficient,
-    // the whitened residuals kept a nonlinear remainder of its error that the play test
-    // took for play in one run in four from planned stances (README, planning section).
-    let weighted_first = match &whitened {
-        Some((w, _)) => Some(fit(w, backend, false)?),
-        None => None,
-    };
-    let tests = tests_at(
-        &posed,
-        &first.values,
-        whitened
-            .as_ref()
-            .map(|(w, _)| w)
-            .zip(weighted_first.as_ref().map(|f| &f.values)),
-        &held,
-    );
+    let Screened {
+        tests,
+        whitened,
+        weighted: weighted_first,
+    } = misfit_tests(&posed, &first.values, &held, backend, options)?;
     let mut verdict = misfit::verdict(tests.clone(), plain_rms, None);
 
     // The final fit: whitened by the noise model when the residuals are noise.
