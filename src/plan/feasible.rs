@@ -101,12 +101,7 @@ fn uncertain(side: Side, f: &Feasibility) -> Vec<(Param, f64)> {
 /// The projected vertices and the angle between the board normal and the line of sight
 /// for parameters `params`; `None` when a vertex is behind the camera.
 fn view(model: &Model, chains: &StanceChains, params: &[f64]) -> Option<(Vec<[f64; 2]>, f64)> {
-    let pose = chains.camera_to_board(params);
-    let to_camera: [f64; 3] = std::array::from_fn(|j| {
-        -(0..3)
-            .map(|i| pose.rotation[i][j] * pose.translation[i])
-            .sum::<f64>()
-    });
+    let to_camera = crate::sim::line_of_sight(&chains.camera_to_board(params));
     let dist = to_camera.iter().map(|x| x * x).sum::<f64>().sqrt();
     let angle = (to_camera[2] / dist).clamp(-1.0, 1.0).acos();
     let vertices: Vec<_> = model.board.vertices().collect();

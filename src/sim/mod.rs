@@ -12,7 +12,9 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
 use crate::dataset::{Capture, Corner, Dataset, Truth};
-use crate::model::{Family, Joint, JointAngles, Model, PARAMETER_COUNT, Param, Side, StanceChains};
+use crate::model::{
+    Family, Joint, JointAngles, Model, PARAMETER_COUNT, Param, Pose, Side, StanceChains,
+};
 
 /// What to simulate.
 #[derive(Debug, Clone, PartialEq)]
@@ -159,6 +161,17 @@ const MAX_VIEW_ANGLE_DEG: f64 = 60.0;
 /// ([`SimOptions::near_border`]).
 pub const MIN_VISIBLE: usize = 8;
 
+/// The line of sight from the board centre to the camera in the board frame (`−Rᵀ·t` of the
+/// camera-to-board pose `pose`); its z component over its length is the cosine of the angle
+/// between the board normal and the line of sight.
+pub(crate) fn line_of_sight(pose: &Pose<f64>) -> [f64; 3] {
+    std::array::from_fn(|j| {
+        -(0..3)
+            .map(|i| pose.rotation[i][j] * pose.translation[i])
+            .sum::<f64>()
+    })
+}
+
 /// The projected vertices of the board on `side`, if the whole board is in view (with
 /// `partial`, at least [`MIN_VISIBLE`] vertices), facing the camera, and not too small.
 fn board_in_view(
@@ -167,13 +180,7 @@ fn board_in_view(
     params: &[f64],
     partial: bool,
 ) -> Option<Vec<[f64; 2]>> {
-    let pose = chains.camera_to_board(params);
-    // Line of sight from the board centre to the camera, in the board frame: −Rᵀ·t.
-    let to_camera: [f64; 3] = std::array::from_fn(|j| {
-        -(0..3)
-            .map(|i| pose.rotation[i][j] * pose.translation[i])
-            .sum::<f64>()
-    });
+    let to_camera = line_of_sight(&chains.camera_to_board(params));
     let dist = to_camera.iter().map(|x| x * x).sum::<f64>().sqrt();
     if to_camera[2] < dist * MAX_VIEW_ANGLE_DEG.to_radians().cos() {
         return None;
