@@ -59,32 +59,6 @@ pub struct FamilyTest {
     pub explained_px2: f64,
 }
 
-/// The columns `targets` of `jac` with the span of the columns `basis` projected out
-/// (`J_t − A·(AᵀA)⁺·AᵀJ_t`, `A` scaled to unit-norm columns; directions of `A` below 1e-10
-/// of its largest squared singular value are left out): one matrix product each way
-/// instead of one per column.
-fn project_out(jac: &DMatrix<f64>, basis: &[usize], targets: &[usize]) -> DMatrix<f64> {
-    let targets = jac.select_columns(targets);
-    if basis.is_empty() {
-        return targets;
-    }
-    let mut a = jac.select_columns(basis);
-    for mut c in a.column_iter_mut() {
-        let norm = c.norm();
-        if norm > 0.0 {
-            c /= norm;
-        }
-    }
-    // An explicit transpose lets the products run as blocked GEMMs (tr_mul takes dots).
-    let a_t = a.transpose();
-    let gram = &a_t * &a;
-    let Ok(inverse) = gram.pseudo_inverse(1e-10) else {
-        return targets;
-    };
-    let coefficients = inverse * (&a_t * &targets);
-    targets - a * coefficients
-}
-
 /// The verdict on a fit.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Misfit {
@@ -109,18 +83,21 @@ pub fn family_tests(
     values: &[f64; PARAMETER_COUNT],
     held: &[bool; PARAMETER_COUNT],
 ) -> Vec<FamilyTest> {
-    Scores::at(problem, values, held).map_or_else(Vec::new, |s| s.tests(&s.r, &s.jac))
+    Scores::at(problem, values, held).map_or_else(Vec::new, |s| s.tests())
 }
 
-/// What the score tests need: the candidates, and one Jacobian over the fitted parameters
-/// and every candidate with its residuals, per capture row range.
+/// What the score tests need, over the fitted parameters and every candidate (the columns
+/// `free`): the Gram matrix `JᵀJ` of the Jacobian and each capture's gradient `J_cᵀ r_c`.
+/// Both are summed capture by capture from the captures' own Jacobians, so the tall
+/// Jacobian is never formed: the projections the tests need are small products of these.
 struct Scores {
     candidates: Vec<(Family, Vec<Param>)>,
     fitted: Vec<Param>,
     free: Vec<Param>,
-    ranges: Vec<std::ops::Range<usize>>,
-    r: DVector<f64>,
-    jac: DMatrix<f64>,
+    /// `JᵀJ` over `free`.
+    gram: DMatrix<f64>,
+    /// One row per capture: `J_cᵀ r_c` over `free`.
+    gradients: DMatrix<f64>,
 }
 
 impl Scores {
@@ -145,7 +122,7 @@ impl Scores {
         if candidates.is_empty() {
             return None;
         }
-        // One Jacobian over the fitted parameters and every candidate.
+        // The fitted parameters and every candidate free, at `values`.
         let mut all = problem.clone();
         all.loss = super::Loss::Squared;
         all.initial = *values;
@@ -156,96 +133,121 @@ impl Scores {
         }
         all.fixed = fixed;
         let eval = Evaluator::new(&all);
-        let x: Vec<f64> = all.free().iter().map(|p| values[p.index()]).collect();
-        let (r, jac) = eval.residuals_and_jacobian(&x)?;
-        let mut ranges = Vec::with_capacity(all.captures.len());
-        let mut row = 0;
-        for term in &all.captures {
-            ranges.push(row..row + term.residual_count());
-            row += term.residual_count();
+        let n = eval.free().len();
+        let mut gram = DMatrix::zeros(n, n);
+        let mut gradients = DMatrix::zeros(eval.capture_count(), n);
+        for c in 0..eval.capture_count() {
+            let local = eval.capture_at(c, values)?;
+            let k = local.columns.len();
+            let rows = local.residuals.len();
+            // Row-major `rows × k` read column-major is `Jᵀ` (k × rows): products as GEMMs.
+            let jt = DMatrix::from_column_slice(k, rows, &local.jacobian);
+            let r = DVector::from_column_slice(&local.residuals);
+            let jtj = &jt * jt.transpose();
+            let jtr = &jt * r;
+            for (a, &ca) in local.columns.iter().enumerate() {
+                gradients[(c, ca)] = jtr[a];
+                for (b, &cb) in local.columns.iter().enumerate() {
+                    gram[(ca, cb)] += jtj[(a, b)];
+                }
+            }
         }
         Some(Scores {
             candidates,
             fitted,
             free: eval.free().to_vec(),
-            ranges,
-            r,
-            jac,
+            gram,
+            gradients,
         })
     }
 
-    /// The tests on residuals `r` with Jacobian `jac` (the layout of `self.jac`).
-    fn tests(&self, r: &DVector<f64>, jac: &DMatrix<f64>) -> Vec<FamilyTest> {
+    /// The tests. With `A` the fitted columns scaled to unit norm and `J_K` the candidate
+    /// columns, the candidates with `A`'s span projected out are `J̃ = J_K − A·B`,
+    /// `B = (AᵀA)⁺AᵀJ_K` (directions of `AᵀA` below 1e-10 of its largest eigenvalue left
+    /// out); their Gram matrix is `J_KᵀJ_K − (AᵀJ_K)ᵀB` and capture `c`'s scores are
+    /// `J̃_cᵀr_c = J_K,cᵀr_c − Bᵀ·A_cᵀr_c`.
+    fn tests(&self) -> Vec<FamilyTest> {
         let free = &self.free;
         let column = |p: Param| free.iter().position(|q| *q == p).expect("free");
-        let fitted = &self.fitted;
-        let candidates = self.candidates.clone();
-        // Every candidate column with the fitted columns projected out, in one blocked pass:
-        // `P = J_c − A·(AᵀA)⁺·AᵀJ_c` with the fitted columns `A` scaled to unit norm.
-        let candidate_params: Vec<Param> = candidates
+        let fitted: Vec<usize> = self.fitted.iter().map(|p| column(*p)).collect();
+        let candidate_params: Vec<Param> = self
+            .candidates
             .iter()
             .flat_map(|(_, ps)| ps.iter().copied())
             .collect();
-        let projected = project_out(
-            jac,
-            &fitted.iter().map(|p| column(*p)).collect::<Vec<_>>(),
-            &candidate_params
-                .iter()
-                .map(|p| column(*p))
-                .collect::<Vec<_>>(),
-        );
-        let projected_column = |p: Param| {
-            let k = candidate_params
+        let targets: Vec<usize> = candidate_params.iter().map(|p| column(*p)).collect();
+        let captures = self.gradients.nrows();
+        let sub = |rows: &[usize], cols: &[usize]| {
+            DMatrix::from_fn(rows.len(), cols.len(), |i, j| self.gram[(rows[i], cols[j])])
+        };
+        let mut projected_gram = sub(&targets, &targets);
+        let mut capture_scores = self.gradients.select_columns(&targets);
+        if !fitted.is_empty() {
+            let scale: DVector<f64> = DVector::from_iterator(
+                fitted.len(),
+                fitted.iter().map(|&f| {
+                    let d = self.gram[(f, f)].sqrt();
+                    if d > 0.0 { 1.0 / d } else { 1.0 }
+                }),
+            );
+            let scaled_gram = DMatrix::from_fn(fitted.len(), fitted.len(), |i, j| {
+                self.gram[(fitted[i], fitted[j])] * scale[i] * scale[j]
+            });
+            // AᵀJ_K
+            let mut cross = sub(&fitted, &targets);
+            for (i, mut row) in cross.row_iter_mut().enumerate() {
+                row *= scale[i];
+            }
+            if let Ok(inverse) = scaled_gram.pseudo_inverse(1e-10) {
+                let b = inverse * &cross;
+                projected_gram -= cross.tr_mul(&b);
+                projected_gram = (&projected_gram + projected_gram.transpose()) * 0.5;
+                // Rows A_cᵀr_c of every capture.
+                let mut a_r = self.gradients.select_columns(&fitted);
+                for (j, mut col) in a_r.column_iter_mut().enumerate() {
+                    col *= scale[j];
+                }
+                capture_scores -= a_r * b;
+            }
+        }
+        let position = |p: Param| {
+            candidate_params
                 .iter()
                 .position(|q| *q == p)
-                .expect("candidate");
-            projected.column(k)
+                .expect("candidate")
         };
-        let ranges = &self.ranges;
-        let captures = ranges.len();
-        // Every capture's score on every projected candidate column (C × K), in one pass.
-        let mut capture_scores = DMatrix::zeros(captures, candidate_params.len());
-        for (c, range) in ranges.iter().enumerate() {
-            let rows = projected.rows(range.start, range.len());
-            let rc = r.rows(range.start, range.len());
-            capture_scores.set_row(c, &rc.tr_mul(&rows));
-        }
-        let score_column = |p: Param| {
-            capture_scores.column(
-                candidate_params
-                    .iter()
-                    .position(|q| *q == p)
-                    .expect("candidate"),
-            )
-        };
-        let tests = candidates.len().max(1) as f64;
-        candidates
-            .into_iter()
+        let tests = self.candidates.len().max(1) as f64;
+        self.candidates
+            .iter()
             .filter_map(|(family, params)| {
                 let mut kept = Vec::new();
                 let mut norms = Vec::new();
-                let mut cols: Vec<DVector<f64>> = Vec::new();
-                for p in params {
-                    let norm = jac.column(column(p)).norm();
+                for &p in params {
+                    let norm = self.gram[(column(p), column(p))].sqrt();
                     if norm == 0.0 {
                         continue;
                     }
-                    let projected = projected_column(p);
-                    if projected.norm() / norm >= threshold(p) {
+                    let i = position(p);
+                    let projected = projected_gram[(i, i)].max(0.0).sqrt();
+                    if projected / norm >= threshold(p) {
                         kept.push(p);
                         norms.push(norm);
-                        cols.push(projected / norm);
                     }
                 }
-                let k = cols.len();
+                let k = kept.len();
                 if k == 0 || captures <= k + 1 {
                     return None;
                 }
-                // The kept columns' capture scores, scaled as `cols` (C × k).
+                let at: Vec<usize> = kept.iter().map(|p| position(*p)).collect();
+                // The kept columns' capture scores and Gram matrix, scaled to the columns'
+                // norms before projection.
                 let mut scores = DMatrix::zeros(captures, k);
-                for (i, (p, norm)) in kept.iter().zip(&norms).enumerate() {
-                    scores.set_column(i, &(score_column(*p) / *norm));
+                for (i, (&a, norm)) in at.iter().zip(&norms).enumerate() {
+                    scores.set_column(i, &(capture_scores.column(a) / *norm));
                 }
+                let gram = DMatrix::from_fn(k, k, |i, j| {
+                    projected_gram[(at[i], at[j])] / (norms[i] * norms[j])
+                });
                 let g: DVector<f64> = scores.row_sum().transpose();
                 let v = scores.tr_mul(&scores);
                 // Hotelling's T² of the capture scores: the sample covariance is centred.
@@ -266,14 +268,6 @@ impl Scores {
                     }
                 }
                 t *= (captures_f - 1.0) / captures_f;
-                let mut gram = DMatrix::zeros(k, k);
-                for a in 0..k {
-                    for b in a..k {
-                        let d = cols[a].dot(&cols[b]);
-                        gram[(a, b)] = d;
-                        gram[(b, a)] = d;
-                    }
-                }
                 let explained_px2 = gram
                     .pseudo_inverse(1e-10)
                     .map(|p| g.dot(&(p * &g)))
@@ -285,7 +279,7 @@ impl Scores {
                     .map(|f| f.sf(statistic))
                     .unwrap_or(f64::NAN);
                 Some(FamilyTest {
-                    family,
+                    family: *family,
                     params: kept,
                     df,
                     statistic,
