@@ -180,15 +180,18 @@ use super::{Backend, BackendResult, Loss, Problem, SolveError, Summary, Whitenin
 use crate::model::chain::MAX_TERMS;
 use crate::model::{Affine, Axis, PARAMETER_COUNT, Projection, Step};
 
-/// Most free parameters for which each step is solved by dense QR (the paper's problem has
-/// 21). Beyond, QR's `2·m·n²` flops dominate the solve (at 61 parameters 60 % of it) and the
-/// normal equations take half of them; Ceres scales the columns first (Jacobi scaling), and
-/// the undetermined directions have been held (docs/MODEL.md), so squaring the condition
-/// number costs no accuracy that matters here.
-pub const QR_MAX_PARAMETERS: usize = 32;
+/// Residuals per free parameter from which each step solves the normal equations
+/// (`DENSE_NORMAL_CHOLESKY`) instead of a dense QR. A tall Jacobian (the paper's problem:
+/// 6912 × 21) costs QR `2·m·n²` flops against `m·n²` for `JᵀJ`, and the dense QR was most of
+/// Ceres' own time (measured: a whole `naocalib solve` 85 → 75 ms). Ceres scales the
+/// columns first (Jacobi scaling) and the undetermined directions have been held
+/// (docs/MODEL.md), so squaring the condition number costs no accuracy that matters here;
+/// small problems, where QR costs little more, keep it.
+pub const NORMAL_EQUATIONS_MIN_ROWS_PER_PARAMETER: usize = 10;
 
 /// The Ceres backend: Levenberg–Marquardt with autodiff on Jets through the C++ shim in
-/// `cpp/`; each step by dense QR, or by the normal equations above [`QR_MAX_PARAMETERS`].
+/// `cpp/`; each step by the normal equations, or by dense QR for a small problem
+/// ([`NORMAL_EQUATIONS_MIN_ROWS_PER_PARAMETER`]).
 /// The covariance is `(JᵀJ)⁺` computed as [`super::covariance::from_jacobian`] computes it,
 /// on the Jacobian Ceres evaluates at the solution.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -228,10 +231,12 @@ impl Ceres {
             parameter_tolerance: t.parameter,
             loss,
             loss_scale,
-            linear_solver: if ffi_problem.params.len() <= QR_MAX_PARAMETERS {
-                ffi::LinearSolver::DenseQr
-            } else {
+            linear_solver: if problem.residual_count()
+                >= NORMAL_EQUATIONS_MIN_ROWS_PER_PARAMETER * problem.free().len()
+            {
                 ffi::LinearSolver::DenseNormalCholesky
+            } else {
+                ffi::LinearSolver::DenseQr
             },
             covariance,
             rank_threshold: RELATIVE_RANK_THRESHOLD,
