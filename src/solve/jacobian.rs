@@ -1,11 +1,14 @@
 //! Residuals and their exact Jacobian in Rust, by forward-mode dual numbers through the same
 //! generic model: what the pure-Rust backends and the Rust covariance use.
 //!
-//! The Jacobian is exact but not computed by brute force. Per capture, the board pose in the
-//! camera frame `T_CB` is evaluated once on dual numbers (one lane per free parameter the
-//! capture depends on); per vertex, the chain rule then carries these derivatives through
-//! `p_C = R·p_B + t` (a constant `p_B`) and through the generic camera model evaluated on
-//! 3-lane duals of the point. This is the same derivative the all-dual evaluation gives,
+//! The Jacobian is exact but not computed by brute force. Per capture, the derivative of the
+//! board pose in the camera frame `T_CB` with respect to each free parameter comes from the
+//! chains' structure (see [`pose_derivatives`]): each step is a rotation or translation by
+//! an amount affine in the parameters, so one pass of prefix poses in `f64` gives every
+//! step's derivative, and a parameter's is the sum over the steps it enters. Per vertex,
+//! the chain rule then carries these derivatives through `p_C = R·p_B + t` (a constant
+//! `p_B`) and through the generic camera model evaluated on 3-lane duals of the point. This
+//! is the derivative the all-dual evaluation of the model gives (the tests compare them),
 //! at a fraction of its cost.
 //!
 //! A robust loss is honoured by rescaling each vertex's residual pair `r` to
@@ -21,9 +24,6 @@ use num_dual::{Derivative, Dual64, DualSVec64};
 use super::problem::{Loss, Problem, Whitening};
 use crate::model::{PARAMETER_COUNT, Param, Projection, Scalar, StanceChains, Step};
 
-/// Parameters differentiated at once per pass (the Jet width of the Ceres shim, too).
-const WIDTH: usize = 12;
-type Dual = DualSVec64<WIDTH>;
 type Dual3 = DualSVec64<3>;
 /// The point's three lanes, then the projection's six coefficients.
 type Dual9 = DualSVec64<9>;
@@ -82,11 +82,6 @@ struct Term {
     used: Vec<Param>,
     /// How many of `used` are the chains'.
     chain_count: usize,
-    /// Per chain parameter of `used`: `Some((leader, ratio))` when it enters the chains in
-    /// one step only, beside its leader (another of `used`, in that step only, too): its
-    /// derivative is then `ratio ×` the leader's, no dual lane needed. A leg joint's
-    /// compliance and play follow its offset this way.
-    follows: Vec<Option<(usize, f64)>>,
     /// Their Jacobian columns.
     columns: Vec<usize>,
     /// First residual row of this capture.
@@ -170,7 +165,6 @@ impl<'a> Evaluator<'a> {
                 }
                 used.retain(|p| column[p.index()].is_some());
                 let chain_count = used.len();
-                let follows = followers(&chains, &used);
                 used.extend(projection_scales.iter().map(|(p, _)| *p));
                 let columns = used
                     .iter()
@@ -180,7 +174,6 @@ impl<'a> Evaluator<'a> {
                     chains,
                     used,
                     chain_count,
-                    follows,
                     columns,
                     row,
                     points: term.observations.iter().map(|o| o.point).collect(),
@@ -329,7 +322,7 @@ impl<'a> Evaluator<'a> {
     ) -> Option<CaptureJacobian> {
         let k = term.used.len();
         let kc = term.chain_count;
-        let (pose, dpose) = pose_derivatives(&term.chains, params, &term.used[..kc], &term.follows);
+        let (pose, dpose) = pose_derivatives(&term.chains, params, &term.used[..kc]);
         let rows = term.residual_count();
         let mut residuals = vec![0.0; rows];
         let mut jacobian = vec![0.0; rows * k];
@@ -430,96 +423,107 @@ impl<'a> Evaluator<'a> {
     }
 }
 
-/// For each of the chain parameters `used`, whether its derivative is a multiple of
-/// another's (see `Term::follows`): both enter the chains in one and the same step only.
-fn followers(chains: &StanceChains, used: &[Param]) -> Vec<Option<(usize, f64)>> {
-    let amounts: Vec<&crate::model::Affine> = chains
-        .camera
-        .steps()
-        .iter()
-        .chain(chains.board.steps())
-        .filter_map(|s| match s {
-            Step::Rotate(_, a) | Step::Translate(_, a) => Some(a),
-            Step::Fixed(_) => None,
-        })
-        .collect();
-    let steps_of = |p: Param| {
-        amounts
-            .iter()
-            .filter(|a| a.terms().any(|(q, _)| q == p))
-            .count()
-    };
-    used.iter()
-        .map(|&p| {
-            let amount = amounts.iter().find(|a| a.terms().any(|(q, _)| q == p))?;
-            let (leader, leader_scale) = amount.terms().next()?;
-            if leader == p || steps_of(p) != 1 || steps_of(leader) != 1 {
-                return None;
-            }
-            let scale: f64 = amount
-                .terms()
-                .filter(|(q, _)| *q == p)
-                .map(|(_, s)| s)
-                .sum();
-            let index = used.iter().position(|q| *q == leader)?;
-            (leader_scale.abs() > 1e-9).then(|| (index, scale / leader_scale))
-        })
-        .collect()
-}
-
-/// `T_CB` at `params` and its derivatives with respect to each parameter of `used`, each as
-/// 12 numbers: the row-major rotation, then the translation. Parameters that follow another
-/// (`follows`) take a multiple of its derivative instead of a dual lane.
+/// `T_CB = T_OC⁻¹·T_OB` at `params` and its derivatives with respect to each parameter of
+/// `used`, each as 12 numbers: the row-major rotation, then the translation.
+///
+/// A chain is `T = S_1⋯S_n`; a step `S_k` rotates about or moves along a local axis `e` by
+/// an amount `a_k`, so `∂T/∂a_k = P_k·Ĝ·Q_k` with the prefix `P_k = S_1⋯S_k`, the rest
+/// `Q_k = S_(k+1)⋯S_n` and the generator `Ĝ` (`[e]×` for a rotation, the direction `e` for a
+/// translation). For `T_CB`, a board step gives `+M·Ĝ·N` and a camera step `−M·Ĝ·N` (from
+/// `∂(T⁻¹) = −T⁻¹·∂T·T⁻¹`), with `M = T_OC⁻¹·P_k` and `N = P_k⁻¹·T_OB` in both cases. A
+/// parameter's derivative is the sum over the steps its amount enters, times its
+/// coefficient there.
 fn pose_derivatives(
     chains: &StanceChains,
     params: &[f64; PARAMETER_COUNT],
     used: &[Param],
-    follows: &[Option<(usize, f64)>],
 ) -> (crate::model::Pose<f64>, Vec<[f64; 12]>) {
-    let lanes: Vec<usize> = (0..used.len()).filter(|&i| follows[i].is_none()).collect();
-    if lanes.is_empty() {
-        return (
-            chains.camera_to_board::<f64>(params),
-            vec![[0.0; 12]; used.len()],
-        );
+    let mut slot = [None; PARAMETER_COUNT];
+    for (i, p) in used.iter().enumerate() {
+        slot[p.index()] = Some(i);
     }
+    let camera = prefixes(&chains.camera, params);
+    let board = prefixes(&chains.board, params);
+    let t_oc = camera.last().expect("a prefix per step and the start");
+    let t_ob = board.last().expect("a prefix per step and the start");
     let mut derivatives = vec![[0.0; 12]; used.len()];
-    let mut value = None;
-    for chunk in lanes.chunks(WIDTH) {
-        let mut x: [Dual; PARAMETER_COUNT] = std::array::from_fn(|i| Dual::from(params[i]));
-        for (k, p) in chunk.iter().map(|&i| used[i]).enumerate() {
-            x[p.index()] = Dual::new(
-                params[p.index()],
-                Derivative::derivative_generic(Const::<WIDTH>, U1, k),
-            );
-        }
-        let pose = chains.camera_to_board(&x);
-        let entries: [&Dual; 12] = std::array::from_fn(|e| {
-            if e < 9 {
-                &pose.rotation[e / 3][e % 3]
-            } else {
-                &pose.translation[e - 9]
+    let chains_and_signs = [
+        (&chains.camera, &camera, -1.0),
+        (&chains.board, &board, 1.0),
+    ];
+    for (chain, prefix, sign) in chains_and_signs {
+        for (k, step) in chain.steps().iter().enumerate() {
+            let (axis, amount, rotation) = match step {
+                Step::Rotate(axis, a) => (*axis, a, true),
+                Step::Translate(axis, a) => (*axis, a, false),
+                Step::Fixed(_) => continue,
+            };
+            if !amount.terms().any(|(p, _)| slot[p.index()].is_some()) {
+                continue;
             }
-        });
-        let eps: [_; 12] =
-            std::array::from_fn(|e| entries[e].eps.unwrap_generic(Const::<WIDTH>, U1));
-        for (c, &i) in chunk.iter().enumerate() {
-            derivatives[i] = std::array::from_fn(|e| eps[e][c]);
+            let after = &prefix[k + 1];
+            let m = t_oc.inverse_then(after);
+            let e = axis.index();
+            let mut d = [0.0; 12];
+            if rotation {
+                let n = after.inverse_then(t_ob);
+                // ∂R = R_M·[e]×·R_N, ∂t = R_M·(e × t_N); `[e]×·v = e × v`.
+                let cross = |v: [f64; 3]| {
+                    let mut out = [0.0; 3];
+                    let (a, b) = ((e + 1) % 3, (e + 2) % 3);
+                    out[a] = -v[b];
+                    out[b] = v[a];
+                    out
+                };
+                let column = |j: usize| cross(std::array::from_fn(|i| n.rotation[i][j]));
+                let columns = [column(0), column(1), column(2), cross(n.translation)];
+                for (j, c) in columns.iter().enumerate() {
+                    for i in 0..3 {
+                        let v = m.rotation[i][0] * c[0]
+                            + m.rotation[i][1] * c[1]
+                            + m.rotation[i][2] * c[2];
+                        if j < 3 {
+                            d[3 * i + j] = sign * v;
+                        } else {
+                            d[9 + i] = sign * v;
+                        }
+                    }
+                }
+            } else {
+                // ∂R = 0, ∂t = R_M·e.
+                for i in 0..3 {
+                    d[9 + i] = sign * m.rotation[i][e];
+                }
+            }
+            for (p, c) in amount.terms() {
+                if let Some(i) = slot[p.index()] {
+                    for (o, v) in derivatives[i].iter_mut().zip(&d) {
+                        *o += c * v;
+                    }
+                }
+            }
         }
-        value.get_or_insert_with(|| crate::model::Pose {
-            rotation: pose
-                .rotation
-                .each_ref()
-                .map(|row| row.each_ref().map(|d| d.re)),
-            translation: pose.translation.each_ref().map(|d| d.re),
-        });
     }
-    for (i, follow) in follows.iter().enumerate() {
-        if let Some((leader, ratio)) = follow {
-            derivatives[i] = derivatives[*leader].map(|d| d * ratio);
+    (t_oc.inverse_then(t_ob), derivatives)
+}
+
+/// The poses `S_1⋯S_k` of a chain for `k = 0…n` (the identity first), at `params`.
+fn prefixes(
+    chain: &crate::model::chain::Chain,
+    params: &[f64; PARAMETER_COUNT],
+) -> Vec<crate::model::Pose<f64>> {
+    let mut out = Vec::with_capacity(chain.steps().len() + 1);
+    let mut pose = crate::model::Pose::identity();
+    out.push(pose.clone());
+    for step in chain.steps() {
+        match step {
+            Step::Fixed(p) => pose = pose.then_fixed(p),
+            Step::Rotate(axis, a) => pose.rotate(*axis, &a.eval(params)),
+            Step::Translate(axis, a) => pose.translate(*axis, &a.eval(params)),
         }
+        out.push(pose.clone());
     }
-    (value.expect("at least one chunk"), derivatives)
+    out
 }
 
 #[cfg(test)]
