@@ -151,6 +151,12 @@ pub fn identifiability_of(
     let max = svd.singular_values.max();
     report.singular_values = order.iter().map(|&k| svd.singular_values[k]).collect();
     let mut suggested: Vec<Param> = report.unobserved.clone();
+    // The undetermined directions with the components of the parameters already suggested
+    // eliminated (Gaussian elimination with pivoting on the largest component): each
+    // suggestion then removes a direction the earlier ones left, so holding them all leaves
+    // the rest determined. (Taking each direction's largest component instead can suggest a
+    // set that misses a direction, when the null space has several.)
+    let mut pivots: Vec<(usize, DVector<f64>)> = Vec::new();
     for p in &report.unobserved {
         report.determined[p.index()] = false;
     }
@@ -187,8 +193,17 @@ pub fn identifiability_of(
             for (p, _) in &direction.terms {
                 report.determined[p.index()] = false;
             }
-            if let Some((p, _)) = direction.terms.iter().find(|(p, _)| !suggested.contains(p)) {
-                suggested.push(*p);
+            let mut rest = v.transpose();
+            for (j, pivot) in &pivots {
+                let f = rest[*j] / pivot[*j];
+                rest -= pivot * f;
+            }
+            let pick = (0..rest.len())
+                .filter(|&i| !suggested.contains(&free[observed[i]]))
+                .max_by(|&a, &b| rest[a].abs().total_cmp(&rest[b].abs()));
+            if let Some(i) = pick {
+                suggested.push(free[observed[i]]);
+                pivots.push((i, rest));
             }
             report.undetermined.push(direction);
         }
