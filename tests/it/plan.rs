@@ -224,7 +224,9 @@ fn plan_lowers_the_worst_scatter_of_the_angle_offsets() {
         truth: Some(truth),
         ..SimOptions::default()
     };
-    let runs = 40;
+    // 120 runs per design: at 40 the worst of 15 robust scales is too noisy to judge a 2×
+    // target (40 runs gave 1.76×; 200 runs 2.05×).
+    let runs = 120;
     let planned = scatter(
         &SimOptions {
             schedule: Some(plan::to_stances(&plan.captures)),
@@ -234,7 +236,7 @@ fn plan_lowers_the_worst_scatter_of_the_angle_offsets() {
     );
     let random = scatter(&common, runs);
     // The prediction agrees with the scatter, parameter by parameter: on average over the
-    // 15 (each robust scale from 40 runs is off by about 15 %).
+    // 15 (each robust scale from 120 runs is off by about 10 %).
     let mean_ratio = |measured: &[f64], p: &plan::Prediction| {
         angle_offsets()
             .iter()
@@ -275,10 +277,10 @@ fn plan_lowers_the_worst_scatter_of_the_angle_offsets() {
         predicted_random >= 2.0 * predicted,
         "predicted: plan {predicted}°, random {predicted_random}°"
     );
-    // Measured: 1.76× with these seeds (README, planning section); the bound leaves room for
-    // the sampling error of 40 runs (about 15 % on each robust scale). Random stances
+    // Measured: 2.01× with these seeds (README, planning section); the bound leaves room for
+    // the sampling error of 120 runs (about 10 % on each robust scale). Random stances
     // against themselves give 1.0.
-    assert!(random >= 1.6 * planned, "plan {planned}°, random {random}°");
+    assert!(random >= 1.8 * planned, "plan {planned}°, random {random}°");
 }
 
 #[test]
