@@ -3,7 +3,7 @@
 //!
 //! The Jacobian is exact but not computed by brute force. Per capture, the derivative of the
 //! board pose in the camera frame `T_CB` with respect to each free parameter comes from the
-//! chains' structure (see [`pose_derivatives`]): each step is a rotation or translation by
+//! chains' structure (see `pose_derivatives`): each step is a rotation or translation by
 //! an amount affine in the parameters, so one pass of prefix poses in `f64` gives every
 //! step's derivative, and a parameter's is the sum over the steps it enters. Per vertex,
 //! the chain rule then carries these derivatives through `p_C = R·p_B + t` (a constant
