@@ -37,6 +37,10 @@ pub const AUTO_ALPHA: f64 = 0.10;
 pub const IMPLAUSIBLE_RMS_PX: f64 = 10.0;
 /// Joint noise beyond this per joint and capture is not what a NAO's encoders give (deg).
 pub const IMPLAUSIBLE_JOINT_NOISE_DEG: f64 = 0.5;
+/// A residual RMS (both coordinates) below this is rounding: the model explains the data
+/// exactly (a noise-free simulation), nothing is tested, and RMS comparisons treat
+/// differences this small as equal (px).
+pub const ROUNDING_RMS_PX: f64 = 1e-6;
 
 /// The score test of one family.
 #[derive(Debug, Clone, PartialEq)]
@@ -357,6 +361,11 @@ pub fn verdict(tests: Vec<FamilyTest>, rms_px: [f64; 2], joint_noise_deg: Option
              NAO's encoders give ({IMPLAUSIBLE_JOINT_NOISE_DEG}°); no family of the extended \
              model explains it — check the joint angles' timing and the images",
             joint_noise_deg.unwrap_or(f64::NAN)
+        )
+    } else if rms < ROUNDING_RMS_PX {
+        format!(
+            "the model explains the data to rounding (RMS below {ROUNDING_RMS_PX} px): nothing \
+             to test"
         )
     } else {
         "the model explains the data: no family's test is significant".to_string()

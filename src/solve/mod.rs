@@ -538,7 +538,16 @@ fn misfit_tests(
     options: &UncertaintyOptions,
     settled: &dyn Fn(&[FamilyTest]) -> bool,
 ) -> Result<Screened, SolveError> {
-    let plain = misfit::family_tests(posed, values, held);
+    let rounding = posed
+        .rms(values)
+        .is_some_and(|r| r[0].max(r[1]) < misfit::ROUNDING_RMS_PX);
+    let plain = if rounding {
+        // Residuals of rounding size hold nothing to test (their structure is the
+        // optimiser's last step, not the data's).
+        Vec::new()
+    } else {
+        misfit::family_tests(posed, values, held)
+    };
     if options.noise_model {
         let alone = misfit::combined_tests(plain.clone(), Vec::new());
         if settled(&alone) {
@@ -734,7 +743,7 @@ fn calibrate_given(
             verdict = misfit::verdict(tests, plain_rms, joint_deg);
             if verdict.detected {
                 verdict.noise_model_set_aside = true;
-            } else if both(rms) > WHITENED_RMS_LIMIT * both(plain_rms) {
+            } else if both(rms) > WHITENED_RMS_LIMIT * both(plain_rms) + misfit::ROUNDING_RMS_PX {
                 verdict.detected = true;
                 verdict.message = format!(
                     "misfit: weighting by the noise model moves the fit to {:.2} px RMS, \
