@@ -42,8 +42,16 @@ pub struct Undetermined {
     pub direction: Direction,
 }
 
-/// Finds the undetermined free parameters of `problem` at its start values.
+/// Finds the undetermined free parameters of `problem` at its start values. The paper's
+/// parameters are never held, so a problem that frees only them needs no Jacobian.
 pub fn undetermined(problem: &Problem) -> Result<Vec<Undetermined>, SolveError> {
+    if problem
+        .free()
+        .iter()
+        .all(|p| p.family() == crate::model::Family::Paper)
+    {
+        return Ok(Vec::new());
+    }
     let eval = Evaluator::new(problem);
     let x: Vec<f64> = problem
         .free()

@@ -134,12 +134,25 @@ pub struct CaptureJacobian {
 impl<'a> Evaluator<'a> {
     /// Prepares `problem` for evaluation.
     pub fn new(problem: &Problem) -> Self {
-        let free = problem.free();
+        Self::over(problem, problem.free(), &problem.initial, true)
+    }
+
+    /// Prepares `problem` for evaluation over the parameters `free` instead of its own free
+    /// ones, every other parameter held at its value in `values`; with its weights
+    /// (whitening, loss) if `weighted`, else plain least squares.
+    pub fn over(
+        problem: &Problem,
+        free: Vec<Param>,
+        values: &[f64; PARAMETER_COUNT],
+        weighted: bool,
+    ) -> Self {
         let mut column = [None; PARAMETER_COUNT];
+        let mut held = [true; PARAMETER_COUNT];
         for (k, p) in free.iter().enumerate() {
             column[p.index()] = Some(k);
+            held[p.index()] = false;
         }
-        let projection = problem.frozen_projection();
+        let projection = problem.camera.projection().freeze(&held, values);
         let projection_scales: Vec<(Param, [f64; 6])> = projection
             .params()
             .into_iter()
@@ -155,8 +168,8 @@ impl<'a> Evaluator<'a> {
         let terms = problem
             .captures
             .iter()
-            .zip(problem.frozen_chains())
-            .map(|(term, chains)| {
+            .map(|term| {
+                let chains = term.chains.freeze(&held, values);
                 let mut used = chains.camera.params();
                 for p in chains.board.params() {
                     if !used.contains(&p) {
@@ -178,7 +191,11 @@ impl<'a> Evaluator<'a> {
                     row,
                     points: term.observations.iter().map(|o| o.point).collect(),
                     pixels: term.observations.iter().map(|o| o.pixel).collect(),
-                    whitening: term.whitening.clone(),
+                    whitening: if weighted {
+                        term.whitening.clone()
+                    } else {
+                        None
+                    },
                 };
                 row += t.residual_count();
                 t
@@ -187,8 +204,12 @@ impl<'a> Evaluator<'a> {
         Evaluator {
             projection,
             projection_scales,
-            loss: problem.loss,
-            initial: problem.initial,
+            loss: if weighted {
+                problem.loss
+            } else {
+                Loss::Squared
+            },
+            initial: *values,
             terms,
             free,
             residual_count: row,

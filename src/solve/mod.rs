@@ -380,22 +380,17 @@ impl UncertaintyOptions {
 struct Fit {
     /// All parameter values, internal units.
     values: [f64; PARAMETER_COUNT],
-    /// `(JᵀJ)⁺` of the fitted (weighted) problem over its free parameters, unscaled.
-    covariance: Option<DMatrix<f64>>,
     /// The backend's summary.
     summary: Summary,
     /// `σ̂² = 2·cost/(m − n)` of the fitted residuals.
     residual_variance: f64,
 }
 
-/// Runs `backend` on `problem`, with the covariance if `covariance`.
-fn fit(problem: &Problem, backend: &dyn Backend, covariance: bool) -> Result<Fit, SolveError> {
+/// Runs `backend` on `problem` without its covariance: [`calibrate`] computes that once,
+/// from the Jacobian its statistics evaluate at the final fit.
+fn fit(problem: &Problem, backend: &dyn Backend) -> Result<Fit, SolveError> {
     validate(problem)?;
-    let result = if covariance {
-        backend.solve(problem)?
-    } else {
-        backend.solve_values(problem)?
-    };
+    let result = backend.solve_values(problem)?;
     let free = problem.free();
     if result.free_values.len() != free.len() {
         return Err(SolveError::Backend {
@@ -414,21 +409,9 @@ fn fit(problem: &Problem, backend: &dyn Backend, covariance: bool) -> Result<Fit
     let dof = problem.residual_count().saturating_sub(free.len()).max(1);
     Ok(Fit {
         values,
-        covariance: result.covariance,
         residual_variance: 2.0 * summary.final_cost / dof as f64,
         summary,
     })
-}
-
-/// `fit` again from `values` with the covariance: for a fit whose covariance was skipped.
-fn refit_with_covariance(
-    problem: &Problem,
-    values: &[f64; PARAMETER_COUNT],
-    backend: &dyn Backend,
-) -> Result<Fit, SolveError> {
-    let mut at = problem.clone();
-    at.initial = *values;
-    fit(&at, backend, true)
 }
 
 /// The whole identification phase (the one public entry point): see the module docs.
@@ -495,7 +478,7 @@ fn screen(
     for u in &undetermined {
         posed.initial[u.param.index()] = problem.initial[u.param.index()];
     }
-    let first = fit(&posed, backend, false)?;
+    let first = fit(&posed, backend)?;
     let settled = |tests: &[FamilyTest]| next_family(tests, chosen).is_some();
     let tests = misfit_tests(&posed, &first.values, &held, backend, options, &settled)?.tests;
     Ok((tests, first.values))
@@ -570,7 +553,7 @@ fn misfit_tests(
             weighted: None,
         });
     };
-    let weighted = fit(w, backend, false)?;
+    let weighted = fit(w, backend)?;
     let tests = misfit::combined_tests(plain, misfit::family_tests(w, &weighted.values, held));
     Ok(Screened {
         tests,
@@ -595,7 +578,7 @@ fn robust_stage(
     problem: &Problem,
     backend: &dyn Backend,
 ) -> Result<(Problem, Vec<Outlier>, Fit), SolveError> {
-    let robust = fit(problem, backend, false)?;
+    let robust = fit(problem, backend)?;
     let residuals = vertex_residuals(problem, &robust.values);
     let mut coords: Vec<f64> = residuals
         .iter()
@@ -651,7 +634,7 @@ fn whiten(
 }
 
 /// The noise-model rounds from the first whitening (estimated at the plain fit): fit it,
-/// estimate the levels again at that better fit, and fit once more with the covariance.
+/// estimate the levels again at that better fit, and fit once more.
 /// `done` is the first round's fit when it was made already. Returns the final fit, its
 /// whitened problem, the levels and the iterations.
 fn noise_rounds(
@@ -667,7 +650,7 @@ fn noise_rounds(
         let last = round == NOISE_ROUNDS;
         let f = match done.take() {
             Some(f) if !last => f,
-            _ => fit(&weighted, backend, last)?,
+            _ => fit(&weighted, backend)?,
         };
         iterations += f.summary.iterations;
         if last {
@@ -708,7 +691,7 @@ fn calibrate_given(
     let initial_cost = robust.as_ref().map(|r| r.summary.initial_cost);
 
     // The plain least-squares fit, and whether its residuals are noise.
-    let first = fit(&posed, backend, !options.noise_model)?;
+    let first = fit(&posed, backend)?;
     iterations += first.summary.iterations;
     optimiser_seconds += first.summary.seconds;
     let plain_rms = posed
@@ -762,40 +745,31 @@ fn calibrate_given(
         _ if options.noise_model && verdict.detected => verdict.noise_model_set_aside = true,
         _ => {}
     }
-    if last.covariance.is_none() {
-        // The plain fit's covariance was skipped (noise model expected, or a noise-free
-        // fit): a refit from its solution gives it in an iteration or two.
-        let refit = refit_with_covariance(&posed, &last.values, backend)?;
-        iterations += refit.summary.iterations;
-        optimiser_seconds += refit.summary.seconds;
-        last = Fit {
-            values: last.values,
-            ..refit
-        };
-    }
 
-    // Statistics from one Jacobian of the problem as fitted.
+    // The covariance and the statistics from one Jacobian of the problem as fitted.
     let fitted = weighted.as_ref().unwrap_or(&posed);
     let free = fitted.free();
     let free_values: Vec<f64> = free.iter().map(|p| last.values[p.index()]).collect();
-    let unscaled = last
-        .covariance
-        .clone()
-        .unwrap_or_else(|| DMatrix::zeros(free.len(), free.len()));
     let both_given = options.noise.px.is_some() && options.noise.joint.is_some();
     let variance = if levels.is_some() && both_given {
         1.0 // both noise levels given: trust them, do not rescale by the residuals
     } else {
         last.residual_variance
     };
-    let mut covariance = covariance::embed(&free, &unscaled, variance);
-    let (identifiability, sandwich) = uncertainty::statistics(fitted, &free_values, &covariance);
-    if verdict.noise_model_set_aside
-        && let Some(s) = &sandwich
-    {
+    let uncertainty::Statistics {
+        mut covariance,
+        identifiability,
+        sandwich,
+    } = uncertainty::statistics(fitted, &free_values, variance).ok_or_else(|| {
+        SolveError::Backend {
+            solver: backend.name().into(),
+            message: "the solution puts a vertex behind the camera".into(),
+        }
+    })?;
+    if verdict.noise_model_set_aside {
         // Residuals that are not noise: the capture-clustered sandwich holds whatever
         // their correlation within a capture.
-        covariance = s.clone();
+        covariance = sandwich.clone();
     }
     let std = std::array::from_fn(|i| covariance[(i, i)].max(0.0).sqrt());
     let residuals = vertex_residuals(problem, &last.values);
@@ -826,7 +800,7 @@ fn calibrate_given(
         seconds: 0.0,
         residuals,
         noise: levels,
-        sandwich_std: sandwich.map(|c| std::array::from_fn(|i| c[(i, i)].max(0.0).sqrt())),
+        sandwich_std: Some(std::array::from_fn(|i| sandwich[(i, i)].max(0.0).sqrt())),
         bootstrap: None,
         identifiability,
         outliers,

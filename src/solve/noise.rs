@@ -6,15 +6,11 @@
 //! respect to that capture's joint angles (head and the leg in view). The solve is whitened
 //! by `W_c = Σ_c^{-1/2}`; the noise levels are estimated from the residuals unless given.
 
-use nalgebra::{Const, DMatrix, DVector, U1};
-use num_dual::{Derivative, DualSVec64};
+use nalgebra::{DMatrix, DVector};
 
-use super::problem::{CaptureTerm, Problem, Whitening};
-use crate::model::{Camera, JOINT_COUNT, Joint, PARAMETER_COUNT, Param};
-
-/// The joints that can move one capture's vertices: two head joints and six leg joints.
-const JOINTS_PER_CAPTURE: usize = 8;
-type Dual = DualSVec64<JOINTS_PER_CAPTURE>;
+use super::jacobian::Evaluator;
+use super::problem::{Problem, Whitening};
+use crate::model::{Joint, PARAMETER_COUNT};
 
 /// Noise levels: given on the command line, or estimated from the residuals.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -43,50 +39,20 @@ pub struct CaptureNoise {
     s2: DVector<f64>,
 }
 
-/// A capture's unweighted residuals and `J_θ,c`, their derivatives with respect to the
-/// joint angles of the joints its chains use (equal to those with respect to their
-/// offsets), from one evaluation.
-fn residuals_and_joint_jacobian(
-    term: &CaptureTerm,
-    camera: &Camera,
-    params: &[f64],
-) -> Option<(DVector<f64>, DMatrix<f64>)> {
-    let joints: Vec<Param> = term
-        .chains
-        .camera
-        .params()
-        .into_iter()
-        .chain(term.chains.board.params())
-        .filter(|p| Joint::ALL.iter().any(|j| j.offset() == *p))
-        .collect();
-    debug_assert!(joints.len() <= JOINTS_PER_CAPTURE && JOINT_COUNT >= joints.len());
-    let mut x: Vec<Dual> = params.iter().map(|&v| Dual::from(v)).collect();
-    for (k, p) in joints.iter().enumerate() {
-        x[p.index()] = Dual::new(
-            params[p.index()],
-            Derivative::derivative_generic(Const::<JOINTS_PER_CAPTURE>, U1, k),
-        );
-    }
-    let r = term.residuals(camera, &x)?;
-    let mut jac = DMatrix::zeros(r.len(), joints.len());
-    for (i, d) in r.iter().enumerate() {
-        let eps = d.eps.unwrap_generic(Const::<JOINTS_PER_CAPTURE>, U1);
-        for k in 0..joints.len() {
-            jac[(i, k)] = eps[k];
-        }
-    }
-    Some((DVector::from_iterator(r.len(), r.iter().map(|d| d.re)), jac))
-}
-
 impl CaptureNoise {
-    /// Decomposes `J_θ,c` for a capture at parameters `params`; also returns the capture's
-    /// unweighted residuals, from one evaluation.
+    /// Decomposes `J_θ,c` of capture `index` at parameters `params` (`joints`: the
+    /// problem over the joint offsets, whose derivatives are those with respect to the
+    /// joint angles, see [`joint_evaluator`]); also returns the capture's unweighted
+    /// residuals, from one evaluation.
     fn with_residuals(
-        term: &CaptureTerm,
-        camera: &Camera,
-        params: &[f64],
+        joints: &Evaluator,
+        index: usize,
+        params: &[f64; PARAMETER_COUNT],
     ) -> Option<(CaptureNoise, DVector<f64>)> {
-        let (r, jac) = residuals_and_joint_jacobian(term, camera, params)?;
+        let local = joints.capture_at(index, params)?;
+        let rows = local.residuals.len();
+        let jac = DMatrix::from_row_slice(rows, local.columns.len(), &local.jacobian);
+        let r = DVector::from_vec(local.residuals);
         // From the small d × d eigenproblem of JᵀJ: JᵀJ v = s² v, u = J v / s. Directions
         // with s² below 1e-12 of the largest carry no joint noise worth weighting and are
         // dropped (their u would not be accurate).
@@ -119,6 +85,14 @@ impl CaptureNoise {
     }
 }
 
+/// `problem`'s unweighted residuals at `params` as a function of the joint offsets (every
+/// joint's, free or held): a joint's angle and its offset enter its step as one amount, so
+/// these are the derivatives with respect to the joint angles.
+fn joint_evaluator<'a>(problem: &Problem, params: &[f64; PARAMETER_COUNT]) -> Evaluator<'a> {
+    let joints = Joint::ALL.iter().map(|j| j.offset()).collect();
+    Evaluator::over(problem, joints, params, false)
+}
+
 /// Sufficient statistics of one capture's residual for the variance-component fit.
 struct Components {
     /// Squares of the residual's coordinates along the joint directions.
@@ -142,8 +116,9 @@ pub fn estimate(
 ) -> Option<(NoiseLevels, Vec<CaptureNoise>)> {
     let mut noise = Vec::with_capacity(problem.captures.len());
     let mut parts = Vec::with_capacity(problem.captures.len());
-    for term in &problem.captures {
-        let (cn, r) = CaptureNoise::with_residuals(term, &problem.camera, params)?;
+    let joints = joint_evaluator(problem, params);
+    for index in 0..problem.captures.len() {
+        let (cn, r) = CaptureNoise::with_residuals(&joints, index, params)?;
         let z = cn.u.transpose() * &r;
         let z2: Vec<f64> = z.iter().map(|x| x * x).collect();
         let rest = (r.norm_squared() - z2.iter().sum::<f64>()).max(0.0);

@@ -95,21 +95,32 @@ pub fn correlation(cov: &DMatrix<f64>) -> DMatrix<f64> {
     })
 }
 
-/// The identifiability report and the sandwich covariance of `problem` at the free values
-/// `x` from one evaluation of the Jacobian (what [`super::calibrate`] reports beside the fit).
-pub fn statistics(
-    problem: &Problem,
-    x: &[f64],
-    cov: &DMatrix<f64>,
-) -> (Identifiability, Option<DMatrix<f64>>) {
+/// What [`super::calibrate`] reports beside the fit, from one evaluation of the Jacobian.
+#[derive(Debug, Clone)]
+pub struct Statistics {
+    /// `σ̂²·(JᵀJ)⁺`, full PARAMETER_COUNT² matrix (zero rows and columns for fixed
+    /// parameters).
+    pub covariance: DMatrix<f64>,
+    /// What the data determine.
+    pub identifiability: Identifiability,
+    /// The capture-clustered sandwich covariance, full PARAMETER_COUNT² matrix.
+    pub sandwich: DMatrix<f64>,
+}
+
+/// The covariance (`(JᵀJ)⁺` as [`covariance::from_jacobian`] computes it, scaled by
+/// `variance`), the identifiability report and the sandwich covariance of `problem` at the
+/// free values `x`, from one evaluation of the Jacobian; `None` when a vertex falls behind
+/// the camera there.
+pub fn statistics(problem: &Problem, x: &[f64], variance: f64) -> Option<Statistics> {
     let eval = Evaluator::new(problem);
-    match eval.residuals_and_jacobian(x) {
-        Some((r, jac)) => (
-            identifiability_of(eval.free(), &jac, cov),
-            Some(sandwich_of(problem, eval.free(), &r, &jac)),
-        ),
-        None => (unanalysed(eval.free()), None),
-    }
+    let (r, jac) = eval.residuals_and_jacobian(x)?;
+    let (unscaled, _) = covariance::from_jacobian(&jac);
+    let covariance = covariance::embed(eval.free(), &unscaled, variance);
+    Some(Statistics {
+        identifiability: identifiability_of(eval.free(), &jac, &covariance),
+        sandwich: sandwich_of(problem, eval.free(), &r, &jac, &unscaled),
+        covariance,
+    })
 }
 
 /// The report when the Jacobian could not be evaluated: nothing flagged.
@@ -237,7 +248,8 @@ pub fn identifiability_of(
 }
 
 /// The capture-clustered sandwich covariance `H⁺ (Σ_c g_c g_cᵀ) H⁺` of the (weighted)
-/// problem from its residuals `r` and Jacobian `jac` over the `free` parameters, with
+/// problem from its residuals `r`, Jacobian `jac` over the `free` parameters and
+/// `h_inv = (JᵀJ)⁺` ([`covariance::from_jacobian`]), with
 /// `H = JᵀJ` and `g_c = J_cᵀ (I − H_cc)^{-1/2} r_c` (the "CR2" leverage correction,
 /// `H_cc = J_c H⁺ J_cᵀ`, since a fitted capture's residuals are smaller than its errors):
 /// robust to any correlation of the residuals within a capture. Full PARAMETER_COUNT²
@@ -247,8 +259,8 @@ pub fn sandwich_of(
     free: &[Param],
     r: &DVector<f64>,
     jac: &DMatrix<f64>,
+    h_inv: &DMatrix<f64>,
 ) -> DMatrix<f64> {
-    let (h_inv, _) = covariance::from_jacobian(jac);
     let n = free.len();
     let mut meat = DMatrix::zeros(n, n);
     let mut row = 0;
@@ -270,7 +282,7 @@ pub fn sandwich_of(
         }
         row += rows;
     }
-    let cov = &h_inv * meat * &h_inv;
+    let cov = h_inv * meat * h_inv;
     covariance::embed(free, &cov, 1.0)
 }
 
@@ -325,7 +337,7 @@ pub fn bootstrap(
         sample.captures = (0..count)
             .map(|_| problem.captures[rng.random_range(0..count)].clone())
             .collect();
-        match super::fit(&sample, backend, false) {
+        match super::fit(&sample, backend) {
             Ok(s) if s.summary.converged => {
                 ok += 1;
                 for i in 0..PARAMETER_COUNT {
