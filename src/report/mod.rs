@@ -100,7 +100,7 @@ pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
     let s = &solution.summary;
     let _ = writeln!(
         out,
-        "time {:.1} ms (optimiser and covariance {:.1} ms)",
+        "time {:.1} ms (optimiser {:.1} ms)",
         solution.seconds * 1e3,
         s.seconds * 1e3
     );
@@ -136,8 +136,13 @@ pub fn diagnosis(solution: &Solution) -> Vec<String> {
         solution.initial_rms_px[1]
     ));
     if let Some(noise) = solution.noise {
+        let sandwich = if solution.misfit.detected {
+            "; σ from the capture-clustered sandwich (a misfit is flagged)"
+        } else {
+            ""
+        };
         lines.push(format!(
-            "noise model: pixel σ {:.3} px, joint σ {:.3}° per capture; χ²/dof {:.2}",
+            "noise model: pixel σ {:.3} px, joint σ {:.3}° per capture; χ²/dof {:.2}{sandwich}",
             noise.px,
             noise.joint.to_degrees(),
             solution.residual_variance
