@@ -115,7 +115,7 @@ fn bench_solve(c: &mut Criterion) {
 }
 
 /// The whole identification phase as `naocalib solve` runs it: first fit, noise estimate,
-/// two whitened refits, covariance and statistics.
+/// the whitened refit, the misfit tests, the covariance and the statistics.
 fn bench_calibrate(c: &mut Criterion) {
     let problem = paper_sized();
     let options = UncertaintyOptions::default();
