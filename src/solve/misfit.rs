@@ -327,14 +327,27 @@ pub fn combined_tests(plain: Vec<FamilyTest>, whitened: Vec<FamilyTest>) -> Vec<
         .collect()
 }
 
+/// Whether a residual RMS (u, v; px) is beyond any plausible noise (or undefined): not a
+/// calibration.
+pub fn implausible_rms(rms_px: [f64; 2]) -> bool {
+    let rms = rms_px[0].max(rms_px[1]);
+    rms.is_nan() || rms > IMPLAUSIBLE_RMS_PX
+}
+
+/// Whether an estimated joint noise level (deg; `None` when it was given) is more than a
+/// NAO's encoders give: structure, not noise.
+pub fn implausible_joint_noise(joint_noise_deg: Option<f64>) -> bool {
+    joint_noise_deg.is_some_and(|j| j > IMPLAUSIBLE_JOINT_NOISE_DEG)
+}
+
 /// The verdict from the family tests, the RMS and (if estimated) the joint noise level.
 pub fn verdict(tests: Vec<FamilyTest>, rms_px: [f64; 2], joint_noise_deg: Option<f64>) -> Misfit {
     let mut significant: Vec<&FamilyTest> = tests.iter().filter(|t| t.significant).collect();
     significant.sort_by(|a, b| b.explained_px2.total_cmp(&a.explained_px2));
     let suggest: Vec<Family> = significant.iter().map(|t| t.family).collect();
     let rms = rms_px[0].max(rms_px[1]);
-    let implausible = rms.is_nan() || rms > IMPLAUSIBLE_RMS_PX;
-    let noisy = joint_noise_deg.is_some_and(|j| j > IMPLAUSIBLE_JOINT_NOISE_DEG);
+    let implausible = implausible_rms(rms_px);
+    let noisy = implausible_joint_noise(joint_noise_deg);
     let detected = !suggest.is_empty() || implausible || noisy;
     let names: Vec<&str> = suggest.iter().map(|f| f.name()).collect();
     let message = if implausible {

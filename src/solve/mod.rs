@@ -389,8 +389,6 @@ struct Fit {
     values: [f64; PARAMETER_COUNT],
     /// The backend's summary.
     summary: Summary,
-    /// `σ̂² = 2·cost/(m − n)` of the fitted residuals.
-    residual_variance: f64,
 }
 
 /// Runs `backend` on `problem` without its covariance: [`calibrate`] computes that once,
@@ -413,12 +411,7 @@ fn fit(problem: &Problem, backend: &dyn Backend) -> Result<Fit, SolveError> {
     let mut summary = result.summary;
     // A NaN gradient can end a search "converged" at non-finite values.
     summary.converged &= values.iter().all(|v| v.is_finite()) && summary.final_cost.is_finite();
-    let dof = problem.residual_count().saturating_sub(free.len()).max(1);
-    Ok(Fit {
-        values,
-        residual_variance: 2.0 * summary.final_cost / dof as f64,
-        summary,
-    })
+    Ok(Fit { values, summary })
 }
 
 /// The whole identification phase (the one public entry point): see the module docs.
@@ -644,7 +637,7 @@ fn whiten(
 /// (`done` when made already; with a `budget`, within that many iterations), then the
 /// levels estimated again at that efficient fit — a plain fit under joint noise is
 /// inefficient and its residuals overstate the joint noise. The result is that fit's values
-/// with the second levels' whitening and its residual variance there. (Refitting with the
+/// with the second levels' whitening. (Refitting with the
 /// second levels, as earlier versions did, moved the estimates by a small fraction of σ:
 /// the uncertainty example's σ/scatter ratios stayed within 0.84–1.14 without it, and the
 /// default calibration saves a third of its optimiser time.) Returns the fit, its whitened
@@ -661,7 +654,7 @@ fn noise_model(
     if let Some(b) = budget {
         weighted.tolerances.max_iterations = weighted.tolerances.max_iterations.min(b);
     }
-    let mut f = match done {
+    let f = match done {
         Some(f) => f,
         None => fit(&weighted, backend)?,
     };
@@ -669,19 +662,11 @@ fn noise_model(
     if budget.is_some() && !f.summary.converged {
         return Ok((f, weighted, levels, iterations));
     }
-    let Some((next, levels)) = whiten(problem, &f.values, options)? else {
+    match whiten(problem, &f.values, options)? {
+        Some((next, levels)) => Ok((f, next, levels, iterations)),
         // The whitened fit leaves no residual: keep its weights.
-        return Ok((f, weighted, levels, iterations));
-    };
-    let free = next.free();
-    let x: Vec<f64> = free.iter().map(|p| f.values[p.index()]).collect();
-    let cost = jacobian::Evaluator::new(&next)
-        .cost(&x)
-        .ok_or_else(|| SolveError::Invalid("a fit puts a vertex behind the camera".into()))?;
-    let dof = next.residual_count().saturating_sub(free.len()).max(1);
-    f.residual_variance = 2.0 * cost / dof as f64;
-    f.summary.final_cost = cost;
-    Ok((f, next, levels, iterations))
+        None => Ok((f, weighted, levels, iterations)),
+    }
 }
 
 /// [`ModelChoice::Given`]: the calibration of the problem's free parameters.
@@ -732,7 +717,7 @@ fn calibrate_given(
     // then keeps the efficient fit, while structure that the noise model would take for
     // joint noise sets it aside (docs/MODEL.md §9).
     let flagged = verdict.detected;
-    let implausible = plain_rms[0].max(plain_rms[1]) > misfit::IMPLAUSIBLE_RMS_PX;
+    let implausible = misfit::implausible_rms(plain_rms);
     let noise_start = match whitened {
         Some(w) => Some(w),
         None if options.noise_model && flagged && !implausible => {
@@ -756,7 +741,7 @@ fn calibrate_given(
             // is inefficient, and its residuals overstate the joint noise.
             let joint_deg = options.noise.joint.is_none().then(|| l.joint.to_degrees());
             verdict = misfit::verdict(tests, plain_rms, joint_deg);
-            let noisy = joint_deg.is_some_and(|j| j > misfit::IMPLAUSIBLE_JOINT_NOISE_DEG);
+            let noisy = misfit::implausible_joint_noise(joint_deg);
             let limit = if flagged {
                 MISFIT_RMS_LIMIT
             } else {
@@ -791,15 +776,13 @@ fn calibrate_given(
     let free = fitted.free();
     let free_values: Vec<f64> = free.iter().map(|p| last.values[p.index()]).collect();
     let both_given = options.noise.px.is_some() && options.noise.joint.is_some();
-    let variance = if levels.is_some() && both_given {
-        1.0 // both noise levels given: trust them, do not rescale by the residuals
-    } else {
-        last.residual_variance
-    };
+    // Both noise levels given: trust them, do not rescale by the residuals.
+    let variance = (levels.is_some() && both_given).then_some(1.0);
     let uncertainty::Statistics {
         mut covariance,
         identifiability,
         sandwich,
+        residual_variance,
     } = uncertainty::statistics(fitted, &free_values, variance).ok_or_else(|| {
         SolveError::Backend {
             solver: backend.name().into(),
@@ -836,7 +819,7 @@ fn calibrate_given(
         initial_rms_px,
         observations: posed.observation_count(),
         captures: posed.captures.len(),
-        residual_variance: last.residual_variance,
+        residual_variance,
         seconds: 0.0,
         residuals,
         noise: levels,

@@ -105,25 +105,34 @@ pub struct Statistics {
     pub identifiability: Identifiability,
     /// The capture-clustered sandwich covariance, full PARAMETER_COUNT² matrix.
     pub sandwich: DMatrix<f64>,
+    /// `σ̂² = ‖r‖²/(m − n)` of the (weighted) residuals there.
+    pub residual_variance: f64,
 }
 
-/// The covariance (`(JᵀJ)⁺` as [`covariance::from_jacobian`] computes it, scaled by
-/// `variance`), the identifiability report and the sandwich covariance of `problem` at the
-/// free values `x`, from one evaluation of the Jacobian; `None` when a vertex falls behind
-/// the camera there.
-pub fn statistics(problem: &Problem, x: &[f64], variance: f64) -> Option<Statistics> {
+/// The residual variance, the covariance (`(JᵀJ)⁺` as [`covariance::from_jacobian`]
+/// computes it, scaled by `variance`, or by the residual variance when that is `None`), the
+/// identifiability report and the sandwich covariance of `problem` at the free values `x`,
+/// from one evaluation of the Jacobian; `None` when a vertex falls behind the camera there.
+pub fn statistics(problem: &Problem, x: &[f64], variance: Option<f64>) -> Option<Statistics> {
     let eval = Evaluator::new(problem);
     let (r, jac) = eval.residuals_and_jacobian(x)?;
+    let dof = r.len().saturating_sub(eval.free().len()).max(1);
+    let residual_variance = r.norm_squared() / dof as f64;
     let (unscaled, _) = covariance::from_jacobian(&jac);
-    let covariance = covariance::embed(eval.free(), &unscaled, variance);
+    let covariance = covariance::embed(
+        eval.free(),
+        &unscaled,
+        variance.unwrap_or(residual_variance),
+    );
     Some(Statistics {
         identifiability: identifiability_of(eval.free(), &jac, &covariance),
         sandwich: sandwich_of(problem, eval.free(), &r, &jac, &unscaled),
         covariance,
+        residual_variance,
     })
 }
 
-/// The report when the Jacobian could not be evaluated: nothing flagged.
+/// The report before any analysis: every parameter determined, nothing flagged.
 fn unanalysed(free: &[Param]) -> Identifiability {
     Identifiability {
         free: free.len(),
