@@ -98,7 +98,7 @@ pub fn capture_information(
             let cols = cj.columns.len();
             let rows = cj.residuals.len();
             let jac = DMatrix::from_row_slice(rows, cols, &cj.jacobian);
-            let info = jac.tr_mul(&jac);
+            let info = jac.transpose() * &jac;
             let eigen = info.symmetric_eigen();
             let max = eigen.eigenvalues.iter().copied().fold(0.0, f64::max);
             let keep: Vec<usize> = (0..cols)
@@ -121,7 +121,7 @@ pub fn capture_information(
 
 /// Adds `sign · M_c` to the information `m`.
 pub fn accumulate(m: &mut DMatrix<f64>, info: &CaptureInformation, sign: f64) {
-    let local = info.factor.tr_mul(&info.factor);
+    let local = info.factor.transpose() * &info.factor;
     for (a, &i) in info.columns.iter().enumerate() {
         for (b, &j) in info.columns.iter().enumerate() {
             m[(i, j)] += sign * local[(a, b)];
@@ -374,7 +374,7 @@ pub fn predict(free: &[Param], infos: &[&CaptureInformation]) -> Prediction {
         }
         r0 += info.factor.nrows();
     }
-    let m = stacked.tr_mul(&stacked);
+    let m = stacked.transpose() * &stacked;
     let (cov, _) = crate::solve::covariance::from_jacobian(&stacked);
     let full = crate::solve::covariance::embed(free, &cov, 1.0);
     let report = crate::solve::uncertainty::identifiability_of(free, &stacked, &full);

@@ -21,85 +21,132 @@ pub fn embed(free: &[Param], cov: &DMatrix<f64>, variance: f64) -> DMatrix<f64> 
 /// scaling) is below [`RELATIVE_RANK_THRESHOLD`] count as not determined and are left out
 /// of the pseudo-inverse, so a rank-deficient problem gives a finite covariance, never NaN.
 ///
-/// Fast path: the eigen-decomposition of the column-scaled `JᵀJ` (n × n), whose
-/// eigenvalues are the squared singular values. Squaring loses precision only for the
-/// smallest singular values; when one of them lies near the threshold, where that could
-/// change the rank, the routine falls back to the SVD of the scaled `J` itself.
+/// Fast path: the eigen-decomposition of the column-scaled `JᵀJ` (see
+/// [`Spectrum::of_gram`]); near the threshold, the SVD of the scaled `J` itself.
 pub fn from_jacobian(jacobian: &DMatrix<f64>) -> (DMatrix<f64>, usize) {
-    let n = jacobian.ncols();
-    if n == 0 {
-        return (DMatrix::zeros(0, 0), 0);
-    }
-    let norms: Vec<f64> = (0..n).map(|j| jacobian.column(j).norm()).collect();
-    let scale: Vec<f64> = norms
-        .iter()
-        .map(|&norm| if norm > 0.0 { 1.0 / norm } else { 1.0 })
-        .collect();
-    let mut normal = DMatrix::zeros(n, n);
-    for i in 0..n {
-        for j in i..n {
-            let value = jacobian.column(i).dot(&jacobian.column(j)) * scale[i] * scale[j];
-            normal[(i, j)] = value;
-            normal[(j, i)] = value;
-        }
-    }
-    let eigen = normal.symmetric_eigen();
-    let max = eigen.eigenvalues.max();
-    let threshold = max * RELATIVE_RANK_THRESHOLD * RELATIVE_RANK_THRESHOLD;
-    // Eigenvalues of JᵀJ are accurate to about n·ε·max in absolute terms: within a factor
-    // of 100 of the threshold the rank is better decided on J itself.
-    if eigen
-        .eigenvalues
-        .iter()
-        .any(|&l| l > threshold * 1e-2 && l < threshold * 1e2)
-    {
-        return from_scaled_svd(jacobian, &scale);
-    }
-    let mut cov = DMatrix::zeros(n, n);
-    let mut rank = 0;
-    for (k, &l) in eigen.eigenvalues.iter().enumerate() {
-        if l > threshold && l > 0.0 {
-            rank += 1;
-            let v = eigen.eigenvectors.column(k);
-            cov.ger(1.0 / l, &v, &v, 1.0);
-        }
-    }
-    unscale(&mut cov, &scale);
-    (cov, rank)
+    Spectrum::of_gram(&(jacobian.transpose() * jacobian))
+        .unwrap_or_else(|| Spectrum::of_jacobian(jacobian))
+        .pseudo_inverse()
 }
 
-/// [`from_jacobian`] through the SVD of the column-scaled Jacobian (slower, but free of the
-/// squaring of `JᵀJ`).
-fn from_scaled_svd(jacobian: &DMatrix<f64>, scale: &[f64]) -> (DMatrix<f64>, usize) {
-    let n = jacobian.ncols();
-    let mut scaled = jacobian.clone();
-    for (j, s) in scale.iter().enumerate() {
-        scaled.column_mut(j).scale_mut(*s);
-    }
-    let svd = scaled.svd(false, true);
-    let v_t = svd.v_t.expect("requested V");
-    let max = svd.singular_values.max();
-    let threshold = max * RELATIVE_RANK_THRESHOLD;
-    let mut cov = DMatrix::zeros(n, n);
-    let mut rank = 0;
-    for (k, s) in svd.singular_values.iter().enumerate() {
-        if *s > threshold && *s > 0.0 {
-            rank += 1;
-            let v = v_t.row(k).transpose();
-            cov.ger(1.0 / (s * s), &v, &v, 1.0);
-        }
-    }
-    unscale(&mut cov, scale);
-    (cov, rank)
+/// The singular values and right singular vectors of a Jacobian with its observed columns
+/// scaled to unit norm: what the covariance ([`Spectrum::pseudo_inverse`]) and the
+/// identifiability report are built from.
+#[derive(Debug, Clone)]
+pub struct Spectrum {
+    /// Every column's norm (zero: a parameter no residual depends on).
+    pub norms: Vec<f64>,
+    /// The observed columns (non-zero norm), in order.
+    pub observed: Vec<usize>,
+    /// Singular values of the scaled observed columns, largest first.
+    pub singular_values: Vec<f64>,
+    /// The matching right singular vectors, one column each (over `observed`).
+    pub vectors: DMatrix<f64>,
 }
 
-/// `D·C·D` for the column scaling `D`.
-fn unscale(cov: &mut DMatrix<f64>, scale: &[f64]) {
-    let n = cov.ncols();
-    for j in 0..n {
-        for i in 0..n {
-            cov[(i, j)] *= scale[i] * scale[j];
+impl Spectrum {
+    /// From the Gram matrix `JᵀJ`, by the eigen-decomposition of its scaled observed block
+    /// (eigenvalues are the squared singular values). Squaring loses precision only for
+    /// the smallest singular values: when a squared one lies within a factor of 100 of the
+    /// squared rank threshold, where that could change the rank, `None` — decide on `J`
+    /// itself ([`Spectrum::of_jacobian`]).
+    pub fn of_gram(gram: &DMatrix<f64>) -> Option<Spectrum> {
+        let norms: Vec<f64> = (0..gram.ncols())
+            .map(|j| gram[(j, j)].max(0.0).sqrt())
+            .collect();
+        let observed: Vec<usize> = (0..norms.len()).filter(|&j| norms[j] > 0.0).collect();
+        if observed.is_empty() {
+            return Some(Spectrum::sorted(
+                norms,
+                observed,
+                Vec::new(),
+                DMatrix::zeros(0, 0),
+            ));
         }
+        let scaled = DMatrix::from_fn(observed.len(), observed.len(), |a, b| {
+            let (i, j) = (observed[a], observed[b]);
+            gram[(i, j)] / (norms[i] * norms[j])
+        });
+        let eigen = scaled.symmetric_eigen();
+        let max = eigen.eigenvalues.max();
+        let threshold = max * RELATIVE_RANK_THRESHOLD * RELATIVE_RANK_THRESHOLD;
+        // Eigenvalues of JᵀJ are accurate to about n·ε·max in absolute terms.
+        if eigen
+            .eigenvalues
+            .iter()
+            .any(|&l| l > threshold * 1e-2 && l < threshold * 1e2)
+        {
+            return None;
+        }
+        let values: Vec<f64> = eigen
+            .eigenvalues
+            .iter()
+            .map(|l| l.max(0.0).sqrt())
+            .collect();
+        Some(Spectrum::sorted(
+            norms,
+            observed,
+            values,
+            eigen.eigenvectors,
+        ))
+    }
+
+    /// From the Jacobian itself: the SVD of the triangular factor of its scaled observed
+    /// columns (same singular values and right vectors as the tall matrix's).
+    pub fn of_jacobian(jacobian: &DMatrix<f64>) -> Spectrum {
+        let norms: Vec<f64> = (0..jacobian.ncols())
+            .map(|j| jacobian.column(j).norm())
+            .collect();
+        let observed: Vec<usize> = (0..norms.len()).filter(|&j| norms[j] > 0.0).collect();
+        let mut scaled = DMatrix::zeros(jacobian.nrows(), observed.len());
+        for (k, &j) in observed.iter().enumerate() {
+            scaled.set_column(k, &(jacobian.column(j) / norms[j]));
+        }
+        let svd = scaled.qr().r().svd(false, true);
+        let vectors = svd.v_t.expect("requested V").transpose();
+        let values = svd.singular_values.iter().copied().collect();
+        Spectrum::sorted(norms, observed, values, vectors)
+    }
+
+    fn sorted(
+        norms: Vec<f64>,
+        observed: Vec<usize>,
+        values: Vec<f64>,
+        vectors: DMatrix<f64>,
+    ) -> Spectrum {
+        let mut order: Vec<usize> = (0..values.len()).collect();
+        order.sort_by(|a, b| values[*b].total_cmp(&values[*a]));
+        Spectrum {
+            singular_values: order.iter().map(|&k| values[k]).collect(),
+            vectors: vectors.select_columns(&order),
+            norms,
+            observed,
+        }
+    }
+
+    /// `(JᵀJ)⁺` over every column (zero rows and columns for unobserved ones), directions
+    /// below [`RELATIVE_RANK_THRESHOLD`] left out, and the numerical rank.
+    pub fn pseudo_inverse(&self) -> (DMatrix<f64>, usize) {
+        let n = self.norms.len();
+        let max = self.singular_values.first().copied().unwrap_or(0.0);
+        let threshold = max * RELATIVE_RANK_THRESHOLD;
+        let d = self.observed.len();
+        let mut scaled = DMatrix::zeros(d, d);
+        let mut rank = 0;
+        for (k, &s) in self.singular_values.iter().enumerate() {
+            if s > threshold && s > 0.0 {
+                rank += 1;
+                let v = self.vectors.column(k);
+                scaled.ger(1.0 / (s * s), &v, &v, 1.0);
+            }
+        }
+        let mut cov = DMatrix::zeros(n, n);
+        for (a, &i) in self.observed.iter().enumerate() {
+            for (b, &j) in self.observed.iter().enumerate() {
+                cov[(i, j)] = scaled[(a, b)] / (self.norms[i] * self.norms[j]);
+            }
+        }
+        (cov, rank)
     }
 }
 

@@ -131,6 +131,146 @@ pub struct CaptureJacobian {
     pub columns: Vec<usize>,
 }
 
+/// Every capture's unweighted residuals and Jacobian at one point, over a set of
+/// parameters: the one evaluation that the misfit tests, the noise estimate and the
+/// statistics at that point share, each taking its own columns and weights from it.
+#[derive(Debug, Clone)]
+pub struct Linearisation {
+    free: Vec<Param>,
+    values: [f64; PARAMETER_COUNT],
+    captures: Vec<Linearised>,
+}
+
+/// One capture of a [`Linearisation`].
+#[derive(Debug, Clone)]
+struct Linearised {
+    /// The parameters the capture depends on (of the linearisation's).
+    params: Vec<Param>,
+    /// Where each parameter is in `params`.
+    column: [Option<usize>; PARAMETER_COUNT],
+    residuals: DVector<f64>,
+    /// One column per parameter of `params`.
+    jacobian: DMatrix<f64>,
+}
+
+/// One capture's residuals and Jacobian over chosen parameters, weighted as asked (see
+/// [`Linearisation::capture`]).
+#[derive(Debug, Clone)]
+pub struct CaptureSlice {
+    /// The residuals (`u₀, v₀, …`).
+    pub residuals: DVector<f64>,
+    /// One column per chosen parameter (zero where the capture does not depend on it).
+    pub jacobian: DMatrix<f64>,
+}
+
+impl Linearisation {
+    /// Evaluates every capture of `problem` at the full parameter vector `values`, over the
+    /// parameters `free` (others held there), unweighted; `None` when a vertex falls behind
+    /// the camera.
+    pub fn at(
+        problem: &Problem,
+        free: Vec<Param>,
+        values: &[f64; PARAMETER_COUNT],
+    ) -> Option<Self> {
+        let eval = Evaluator::over(problem, free, values, false);
+        let captures = (0..eval.capture_count())
+            .map(|c| {
+                let local = eval.capture_at(c, values)?;
+                let term = &eval.terms[c];
+                let mut column = [None; PARAMETER_COUNT];
+                for (k, p) in term.used.iter().enumerate() {
+                    column[p.index()] = Some(k);
+                }
+                let rows = local.residuals.len();
+                Some(Linearised {
+                    params: term.used.clone(),
+                    column,
+                    jacobian: DMatrix::from_row_slice(rows, term.used.len(), &local.jacobian),
+                    residuals: DVector::from_vec(local.residuals),
+                })
+            })
+            .collect::<Option<Vec<_>>>()?;
+        Some(Linearisation {
+            free: eval.free,
+            values: *values,
+            captures,
+        })
+    }
+
+    /// The parameters it differentiates by.
+    pub fn free(&self) -> &[Param] {
+        &self.free
+    }
+
+    /// The point (full parameter vector, internal units).
+    pub fn values(&self) -> &[f64; PARAMETER_COUNT] {
+        &self.values
+    }
+
+    /// Number of captures (problem order).
+    pub fn capture_count(&self) -> usize {
+        self.captures.len()
+    }
+
+    /// Root mean square of the unweighted residuals in u and in v (px), as
+    /// [`Problem::rms`].
+    pub fn rms(&self) -> [f64; 2] {
+        let mut sum = [0.0; 2];
+        let mut n = 0usize;
+        for c in &self.captures {
+            for pair in c.residuals.as_slice().chunks_exact(2) {
+                sum[0] += pair[0] * pair[0];
+                sum[1] += pair[1] * pair[1];
+            }
+            n += c.residuals.len() / 2;
+        }
+        let n = n.max(1) as f64;
+        sum.map(|s| (s / n).sqrt())
+    }
+
+    /// `½‖r‖²` of the unweighted residuals.
+    pub fn cost(&self) -> f64 {
+        0.5 * self
+            .captures
+            .iter()
+            .map(|c| c.residuals.norm_squared())
+            .sum::<f64>()
+    }
+
+    /// The parameters capture `index` depends on (of [`Linearisation::free`]).
+    pub fn capture_params(&self, index: usize) -> &[Param] {
+        &self.captures[index].params
+    }
+
+    /// Capture `index`'s residuals and Jacobian over `params` (of
+    /// [`Linearisation::free`]), weighted by `whitening` if given.
+    pub fn capture(
+        &self,
+        index: usize,
+        params: &[Param],
+        whitening: Option<&Whitening>,
+    ) -> CaptureSlice {
+        let local = &self.captures[index];
+        let rows = local.residuals.len();
+        let mut jacobian = DMatrix::zeros(rows, params.len());
+        for (j, p) in params.iter().enumerate() {
+            if let Some(l) = local.column[p.index()] {
+                jacobian.set_column(j, &local.jacobian.column(l));
+            }
+        }
+        match whitening {
+            Some(w) => CaptureSlice {
+                residuals: w.apply(local.residuals.as_slice()).into(),
+                jacobian: w.apply_matrix(&jacobian),
+            },
+            None => CaptureSlice {
+                residuals: local.residuals.clone(),
+                jacobian,
+            },
+        }
+    }
+}
+
 impl<'a> Evaluator<'a> {
     /// Prepares `problem` for evaluation.
     pub fn new(problem: &Problem) -> Self {

@@ -20,9 +20,9 @@ use nalgebra::{DMatrix, DVector};
 use statrs::distribution::{ContinuousCDF, FisherSnedecor};
 
 use super::identify::threshold;
-use super::jacobian::Evaluator;
+use super::jacobian::Linearisation;
 use super::problem::Problem;
-use crate::model::{Family, FixedSet, PARAMETER_COUNT, Param};
+use crate::model::{Family, PARAMETER_COUNT, Param};
 
 /// Family-wise false-alarm rate of the misfit verdict (nominal; measured on clean simulated
 /// data: see the README).
@@ -87,7 +87,27 @@ pub fn family_tests(
     values: &[f64; PARAMETER_COUNT],
     held: &[bool; PARAMETER_COUNT],
 ) -> Vec<FamilyTest> {
-    Scores::at(problem, values, held).map_or_else(Vec::new, |s| s.tests())
+    Linearisation::at(problem, tested_columns(problem, held), values)
+        .map_or_else(Vec::new, |at| family_tests_at(problem, &at, held))
+}
+
+/// [`family_tests`] from a linearisation of `problem`'s captures at the solution that
+/// differentiates (at least) by [`tested_columns`].
+pub fn family_tests_at(
+    problem: &Problem,
+    at: &Linearisation,
+    held: &[bool; PARAMETER_COUNT],
+) -> Vec<FamilyTest> {
+    Scores::at(problem, at, held).map_or_else(Vec::new, |s| s.tests())
+}
+
+/// The parameters the tests differentiate by: the fitted ones and every candidate (fixed,
+/// not `held`).
+pub fn tested_columns(problem: &Problem, held: &[bool; PARAMETER_COUNT]) -> Vec<Param> {
+    Param::ALL
+        .into_iter()
+        .filter(|p| !problem.fixed.is_fixed(*p) || !held[p.index()])
+        .collect()
 }
 
 /// What the score tests need, over the fitted parameters and every candidate (the columns
@@ -105,12 +125,8 @@ struct Scores {
 }
 
 impl Scores {
-    /// `None` when there is nothing to test or a vertex falls behind the camera.
-    fn at(
-        problem: &Problem,
-        values: &[f64; PARAMETER_COUNT],
-        held: &[bool; PARAMETER_COUNT],
-    ) -> Option<Scores> {
+    /// `None` when there is nothing to test.
+    fn at(problem: &Problem, at: &Linearisation, held: &[bool; PARAMETER_COUNT]) -> Option<Scores> {
         let fitted = problem.free();
         let candidates: Vec<(Family, Vec<Param>)> = Family::ALL
             .into_iter()
@@ -126,40 +142,39 @@ impl Scores {
         if candidates.is_empty() {
             return None;
         }
-        // The fitted parameters and every candidate free, at `values`.
-        let mut all = problem.clone();
-        all.loss = super::Loss::Squared;
-        all.initial = *values;
-        let mut fixed = FixedSet::default();
-        for p in Param::ALL {
-            let tested = candidates.iter().any(|(_, ps)| ps.contains(&p));
-            fixed.set(p, !(fitted.contains(&p) || tested));
+        // The fitted parameters and every candidate.
+        let free = tested_columns(problem, held);
+        let mut column = [None; PARAMETER_COUNT];
+        for (k, p) in free.iter().enumerate() {
+            column[p.index()] = Some(k);
         }
-        all.fixed = fixed;
-        let eval = Evaluator::new(&all);
-        let n = eval.free().len();
+        let n = free.len();
+        let captures = at.capture_count();
         let mut gram = DMatrix::zeros(n, n);
-        let mut gradients = DMatrix::zeros(eval.capture_count(), n);
-        for c in 0..eval.capture_count() {
-            let local = eval.capture_at(c, values)?;
-            let k = local.columns.len();
-            let rows = local.residuals.len();
-            // Row-major `rows × k` read column-major is `Jᵀ` (k × rows): products as GEMMs.
-            let jt = DMatrix::from_column_slice(k, rows, &local.jacobian);
-            let r = DVector::from_column_slice(&local.residuals);
-            let jtj = &jt * jt.transpose();
-            let jtr = &jt * r;
-            for (a, &ca) in local.columns.iter().enumerate() {
+        let mut gradients = DMatrix::zeros(captures, n);
+        for c in 0..captures {
+            let local: Vec<Param> = at
+                .capture_params(c)
+                .iter()
+                .copied()
+                .filter(|p| column[p.index()].is_some())
+                .collect();
+            let whitening = problem.captures[c].whitening.as_ref();
+            let slice = at.capture(c, &local, whitening);
+            let jtj = slice.jacobian.transpose() * &slice.jacobian;
+            let jtr = slice.jacobian.tr_mul(&slice.residuals);
+            for (a, pa) in local.iter().enumerate() {
+                let ca = column[pa.index()].expect("tested");
                 gradients[(c, ca)] = jtr[a];
-                for (b, &cb) in local.columns.iter().enumerate() {
-                    gram[(ca, cb)] += jtj[(a, b)];
+                for (b, pb) in local.iter().enumerate() {
+                    gram[(ca, column[pb.index()].expect("tested"))] += jtj[(a, b)];
                 }
             }
         }
         Some(Scores {
             candidates,
             fitted,
-            free: eval.free().to_vec(),
+            free,
             gram,
             gradients,
         })
@@ -204,7 +219,7 @@ impl Scores {
             }
             if let Ok(inverse) = scaled_gram.pseudo_inverse(1e-10) {
                 let b = inverse * &cross;
-                projected_gram -= cross.tr_mul(&b);
+                projected_gram -= cross.transpose() * &b;
                 projected_gram = (&projected_gram + projected_gram.transpose()) * 0.5;
                 // Rows A_cᵀr_c of every capture.
                 let mut a_r = self.gradients.select_columns(&fitted);
@@ -253,7 +268,7 @@ impl Scores {
                     projected_gram[(at[i], at[j])] / (norms[i] * norms[j])
                 });
                 let g: DVector<f64> = scores.row_sum().transpose();
-                let v = scores.tr_mul(&scores);
+                let v = scores.transpose() * &scores;
                 // Hotelling's T² of the capture scores: the sample covariance is centred.
                 let captures_f = captures as f64;
                 let v = v - &g * g.transpose() / captures_f;

@@ -20,9 +20,13 @@ pub mod problem;
 pub mod tiny;
 pub mod uncertainty;
 
+use std::cell::RefCell;
+use std::rc::Rc;
 use std::time::Instant;
 
 use nalgebra::DMatrix;
+
+use jacobian::Linearisation;
 
 use crate::model::{Family, FixedSet, PARAMETER_COUNT, Param};
 pub use identify::Undetermined;
@@ -480,7 +484,8 @@ fn screen(
     }
     let first = fit(&posed, backend)?;
     let settled = |tests: &[FamilyTest]| next_family(tests, chosen).is_some();
-    let tests = misfit_tests(&posed, &first.values, &held, backend, options, &settled)?.tests;
+    let points = Linearisations::new(&posed, &held);
+    let tests = misfit_tests(&points, &first.values, &held, backend, options, &settled)?.tests;
     Ok((tests, first.values))
 }
 
@@ -514,22 +519,22 @@ fn next_family<'t>(tests: &'t [FamilyTest], chosen: &[FamilyTest]) -> Option<&'t
 /// whitened fit then wanders (measured: 37–101 iterations, 0.3–0.6 s per screening step
 /// of `--model auto` on a realistic robot, against 5–8 for the plain fit).
 fn misfit_tests(
-    posed: &Problem,
+    points: &Linearisations,
     values: &[f64; PARAMETER_COUNT],
     held: &[bool; PARAMETER_COUNT],
     backend: &dyn Backend,
     options: &UncertaintyOptions,
     settled: &dyn Fn(&[FamilyTest]) -> bool,
 ) -> Result<Screened, SolveError> {
-    let rounding = posed
-        .rms(values)
-        .is_some_and(|r| r[0].max(r[1]) < misfit::ROUNDING_RMS_PX);
+    let posed = points.problem;
+    let at = points.at(values)?;
+    let rounding = at.rms()[0].max(at.rms()[1]) < misfit::ROUNDING_RMS_PX;
     let plain = if rounding {
         // Residuals of rounding size hold nothing to test (their structure is the
         // optimiser's last step, not the data's).
         Vec::new()
     } else {
-        misfit::family_tests(posed, values, held)
+        misfit::family_tests_at(posed, &at, held)
     };
     if options.noise_model {
         let alone = misfit::combined_tests(plain.clone(), Vec::new());
@@ -542,7 +547,7 @@ fn misfit_tests(
         }
     }
     let whitened = if options.noise_model {
-        whiten(posed, values, options)?
+        whiten(points, values, options)?
     } else {
         None
     };
@@ -554,7 +559,8 @@ fn misfit_tests(
         });
     };
     let weighted = fit(w, backend)?;
-    let tests = misfit::combined_tests(plain, misfit::family_tests(w, &weighted.values, held));
+    let at = points.at(&weighted.values)?;
+    let tests = misfit::combined_tests(plain, misfit::family_tests_at(w, &at, held));
     Ok(Screened {
         tests,
         whitened,
@@ -615,13 +621,13 @@ fn robust_stage(
 /// there, with the levels; `None` when the residuals are zero (a noise-free fit has
 /// nothing to weight by).
 fn whiten(
-    problem: &Problem,
+    points: &Linearisations,
     values: &[f64; PARAMETER_COUNT],
     options: &UncertaintyOptions,
 ) -> Result<Option<(Problem, noise::NoiseLevels)>, SolveError> {
+    let problem = points.problem;
     let fitted = problem.free().len();
-    let (levels, captures) = noise::estimate(problem, values, fitted, options.noise)
-        .ok_or_else(|| SolveError::Invalid("a fit puts a vertex behind the camera".into()))?;
+    let (levels, captures) = noise::estimate_from(&*points.at(values)?, fitted, options.noise);
     if !(levels.px > 0.0 && levels.px.is_finite()) {
         return Ok(None);
     }
@@ -643,7 +649,7 @@ fn whiten(
 /// default calibration saves a third of its optimiser time.) Returns the fit, its whitened
 /// problem, the levels and the iterations.
 fn noise_model(
-    problem: &Problem,
+    points: &Linearisations,
     first: (Problem, noise::NoiseLevels),
     done: Option<Fit>,
     backend: &dyn Backend,
@@ -662,10 +668,49 @@ fn noise_model(
     if budget.is_some() && !f.summary.converged {
         return Ok((f, weighted, levels, iterations));
     }
-    match whiten(problem, &f.values, options)? {
+    match whiten(points, &f.values, options)? {
         Some((next, levels)) => Ok((f, next, levels, iterations)),
         // The whitened fit leaves no residual: keep its weights.
         None => Ok((f, weighted, levels, iterations)),
+    }
+}
+
+/// The linearisations of one posed problem at the points a calibration visits (the plain
+/// fit, the whitened fit): each point is evaluated once, over every parameter that the
+/// misfit tests, the noise estimate and the statistics need, and shared by them — each
+/// applies its own weights.
+struct Linearisations<'p> {
+    problem: &'p Problem,
+    columns: Vec<Param>,
+    done: RefCell<Vec<Rc<Linearisation>>>,
+}
+
+impl<'p> Linearisations<'p> {
+    /// For `problem` with the undetermined parameters `held`.
+    fn new(problem: &'p Problem, held: &[bool; PARAMETER_COUNT]) -> Self {
+        let mut columns = misfit::tested_columns(problem, held);
+        for p in noise::joint_offsets() {
+            if !columns.contains(&p) {
+                columns.push(p);
+            }
+        }
+        Linearisations {
+            problem,
+            columns,
+            done: RefCell::new(Vec::new()),
+        }
+    }
+
+    /// The linearisation at `values` (full parameter vector), evaluated on first use.
+    fn at(&self, values: &[f64; PARAMETER_COUNT]) -> Result<Rc<Linearisation>, SolveError> {
+        if let Some(done) = self.done.borrow().iter().find(|l| l.values() == values) {
+            return Ok(done.clone());
+        }
+        let at = Linearisation::at(self.problem, self.columns.clone(), values)
+            .map(Rc::new)
+            .ok_or_else(|| SolveError::Invalid("a fit puts a vertex behind the camera".into()))?;
+        self.done.borrow_mut().push(at.clone());
+        Ok(at)
     }
 }
 
@@ -696,17 +741,13 @@ fn calibrate_given(
     let first = fit(&posed, backend)?;
     iterations += first.summary.iterations;
     optimiser_seconds += first.summary.seconds;
-    let plain_rms = posed
-        .rms(&first.values)
-        .ok_or_else(|| SolveError::Backend {
-            solver: backend.name().into(),
-            message: "the solution puts a vertex behind the camera".into(),
-        })?;
+    let points = Linearisations::new(&posed, &held);
+    let plain_rms = points.at(&first.values)?.rms();
     let Screened {
         tests,
         whitened,
         weighted: weighted_first,
-    } = misfit_tests(&posed, &first.values, &held, backend, options, &|tests| {
+    } = misfit_tests(&points, &first.values, &held, backend, options, &|tests| {
         tests.iter().any(|t| t.significant)
     })?;
     let mut verdict = misfit::verdict(tests.clone(), plain_rms, None);
@@ -721,7 +762,7 @@ fn calibrate_given(
     let noise_start = match whitened {
         Some(w) => Some(w),
         None if options.noise_model && flagged && !implausible => {
-            whiten(&posed, &first.values, options)?
+            whiten(&points, &first.values, options)?
         }
         None => None,
     };
@@ -732,10 +773,10 @@ fn calibrate_given(
         Some(start) if !implausible => {
             let budget = flagged.then_some(MISFIT_NOISE_ITERATIONS);
             let (f, w, l, its) =
-                noise_model(&posed, start, weighted_first, backend, options, budget)?;
+                noise_model(&points, start, weighted_first, backend, options, budget)?;
             iterations += its;
             optimiser_seconds += f.summary.seconds;
-            let rms = posed.rms(&f.values).unwrap_or([f64::INFINITY; 2]);
+            let rms = points.at(&f.values)?.rms();
             let both = |r: [f64; 2]| ((r[0] * r[0] + r[1] * r[1]) / 2.0).sqrt();
             // The joint noise is judged at the whitened fit: a plain fit under joint noise
             // is inefficient, and its residuals overstate the joint noise.
@@ -773,8 +814,6 @@ fn calibrate_given(
     // The covariance and the statistics from one Jacobian of the problem as fitted.
     let sandwich_reported = verdict.noise_model_set_aside || (levels.is_some() && verdict.detected);
     let fitted = weighted.as_ref().unwrap_or(&posed);
-    let free = fitted.free();
-    let free_values: Vec<f64> = free.iter().map(|p| last.values[p.index()]).collect();
     let both_given = options.noise.px.is_some() && options.noise.joint.is_some();
     // Both noise levels given: trust them, do not rescale by the residuals.
     let variance = (levels.is_some() && both_given).then_some(1.0);
@@ -783,12 +822,7 @@ fn calibrate_given(
         identifiability,
         sandwich,
         residual_variance,
-    } = uncertainty::statistics(fitted, &free_values, variance).ok_or_else(|| {
-        SolveError::Backend {
-            solver: backend.name().into(),
-            message: "the solution puts a vertex behind the camera".into(),
-        }
-    })?;
+    } = uncertainty::statistics(fitted, &*points.at(&last.values)?, variance);
     if sandwich_reported {
         // Residuals that may not be noise: the capture-clustered sandwich holds whatever
         // their correlation within a capture.
@@ -797,11 +831,9 @@ fn calibrate_given(
     let std = std::array::from_fn(|i| covariance[(i, i)].max(0.0).sqrt());
     let residuals = vertex_residuals(problem, &last.values);
     let initial_rms_px = initial_rms(&residuals);
-    let rms_px = posed.rms(&last.values).unwrap_or([f64::NAN; 2]);
-    let final_cost = 0.5
-        * posed
-            .residuals(&last.values)
-            .map_or(f64::NAN, |r| r.iter().map(|x| x * x).sum::<f64>());
+    let at_last = points.at(&last.values)?;
+    let rms_px = at_last.rms();
+    let final_cost = at_last.cost();
     let summary = Summary {
         iterations,
         initial_cost: initial_cost.unwrap_or(first.summary.initial_cost),

@@ -8,9 +8,9 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::jacobian::Evaluator;
+use super::jacobian::{CaptureSlice, Linearisation};
 use super::problem::{Problem, Whitening};
-use crate::model::{Joint, PARAMETER_COUNT};
+use crate::model::{Joint, PARAMETER_COUNT, Param};
 
 /// Noise levels: given on the command line, or estimated from the residuals.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -40,19 +40,20 @@ pub struct CaptureNoise {
 }
 
 impl CaptureNoise {
-    /// Decomposes `J_θ,c` of capture `index` at parameters `params` (`joints`: the
-    /// problem over the joint offsets, whose derivatives are those with respect to the
-    /// joint angles, see [`joint_evaluator`]); also returns the capture's unweighted
-    /// residuals, from one evaluation.
-    fn with_residuals(
-        joints: &Evaluator,
-        index: usize,
-        params: &[f64; PARAMETER_COUNT],
-    ) -> Option<(CaptureNoise, DVector<f64>)> {
-        let local = joints.capture_at(index, params)?;
-        let rows = local.residuals.len();
-        let jac = DMatrix::from_row_slice(rows, local.columns.len(), &local.jacobian);
-        let r = DVector::from_vec(local.residuals);
+    /// Decomposes `J_θ,c`, the Jacobian of capture `index` of `at` with respect to its
+    /// joint angles (its joint offsets' columns: a joint's angle and its offset enter its
+    /// step as one amount); also returns the capture's unweighted residuals.
+    fn with_residuals(at: &Linearisation, index: usize) -> (CaptureNoise, DVector<f64>) {
+        let joints: Vec<Param> = at
+            .capture_params(index)
+            .iter()
+            .copied()
+            .filter(|p| Joint::ALL.iter().any(|j| j.offset() == *p))
+            .collect();
+        let CaptureSlice {
+            residuals: r,
+            jacobian: jac,
+        } = at.capture(index, &joints, None);
         // From the small d × d eigenproblem of JᵀJ: JᵀJ v = s² v, u = J v / s. Directions
         // with s² below 1e-12 of the largest carry no joint noise worth weighting and are
         // dropped (their u would not be accurate).
@@ -68,7 +69,7 @@ impl CaptureNoise {
             u.set_column(c, &(&jac * eigen.eigenvectors.column(k) / l.sqrt()));
             s2[c] = l;
         }
-        Some((CaptureNoise { u, s2 }, r))
+        (CaptureNoise { u, s2 }, r)
     }
 
     /// The whitening `Σ_c^{-1/2}` (symmetric, low rank plus identity) for the given noise
@@ -85,12 +86,9 @@ impl CaptureNoise {
     }
 }
 
-/// `problem`'s unweighted residuals at `params` as a function of the joint offsets (every
-/// joint's, free or held): a joint's angle and its offset enter its step as one amount, so
-/// these are the derivatives with respect to the joint angles.
-fn joint_evaluator<'a>(problem: &Problem, params: &[f64; PARAMETER_COUNT]) -> Evaluator<'a> {
-    let joints = Joint::ALL.iter().map(|j| j.offset()).collect();
-    Evaluator::over(problem, joints, params, false)
+/// Every joint's offset: what a [`Linearisation`] for [`estimate_from`] must differentiate by.
+pub fn joint_offsets() -> impl Iterator<Item = Param> {
+    Joint::ALL.into_iter().map(|j| j.offset())
 }
 
 /// Sufficient statistics of one capture's residual for the variance-component fit.
@@ -114,11 +112,22 @@ pub fn estimate(
     fitted: usize,
     given: NoiseOptions,
 ) -> Option<(NoiseLevels, Vec<CaptureNoise>)> {
-    let mut noise = Vec::with_capacity(problem.captures.len());
-    let mut parts = Vec::with_capacity(problem.captures.len());
-    let joints = joint_evaluator(problem, params);
-    for index in 0..problem.captures.len() {
-        let (cn, r) = CaptureNoise::with_residuals(&joints, index, params)?;
+    let at = Linearisation::at(problem, joint_offsets().collect(), params)?;
+    Some(estimate_from(&at, fitted, given))
+}
+
+/// [`estimate`] from a linearisation at the solution that differentiates by every joint
+/// offset ([`joint_offsets`]), among other parameters.
+pub fn estimate_from(
+    at: &Linearisation,
+    fitted: usize,
+    given: NoiseOptions,
+) -> (NoiseLevels, Vec<CaptureNoise>) {
+    let count = at.capture_count();
+    let mut noise = Vec::with_capacity(count);
+    let mut parts = Vec::with_capacity(count);
+    for index in 0..count {
+        let (cn, r) = CaptureNoise::with_residuals(at, index);
         let z = cn.u.transpose() * &r;
         let z2: Vec<f64> = z.iter().map(|x| x * x).collect();
         let rest = (r.norm_squared() - z2.iter().sum::<f64>()).max(0.0);
@@ -188,7 +197,7 @@ pub fn estimate(
         px: px2.sqrt(),
         joint: (rho * px2).sqrt(),
     };
-    Some((levels, noise))
+    (levels, noise)
 }
 
 /// Minimises a unimodal function on `[lo, hi]` by golden-section search.

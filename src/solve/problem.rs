@@ -110,11 +110,11 @@ impl Whitening {
     }
 
     /// `W·M` for a matrix `M` with [`Whitening::size`] rows.
-    fn apply_matrix(&self, plain: &DMatrix<f64>) -> DMatrix<f64> {
+    pub fn apply_matrix(&self, plain: &DMatrix<f64>) -> DMatrix<f64> {
         match self {
             Whitening::Dense(w) => w * plain,
             Whitening::LowRank { u, shrink, scale } => {
-                let mut z = u.tr_mul(plain);
+                let mut z = u.transpose() * plain;
                 for (c, mut row) in z.row_iter_mut().enumerate() {
                     row *= shrink[c];
                 }

@@ -6,8 +6,9 @@ use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::jacobian::Evaluator;
-use super::{Backend, Problem, SolveError, covariance};
+use super::covariance::{self, Spectrum};
+use super::jacobian::{CaptureSlice, Linearisation};
+use super::{Backend, Problem, SolveError};
 use crate::model::{PARAMETER_COUNT, Param};
 
 /// Relative singular value (column-scaled Jacobian) below which a direction counts as not
@@ -111,25 +112,50 @@ pub struct Statistics {
 
 /// The residual variance, the covariance (`(JᵀJ)⁺` as [`covariance::from_jacobian`]
 /// computes it, scaled by `variance`, or by the residual variance when that is `None`), the
-/// identifiability report and the sandwich covariance of `problem` at the free values `x`,
-/// from one evaluation of the Jacobian; `None` when a vertex falls behind the camera there.
-pub fn statistics(problem: &Problem, x: &[f64], variance: Option<f64>) -> Option<Statistics> {
-    let eval = Evaluator::new(problem);
-    let (r, jac) = eval.residuals_and_jacobian(x)?;
-    let dof = r.len().saturating_sub(eval.free().len()).max(1);
-    let residual_variance = r.norm_squared() / dof as f64;
-    let (unscaled, _) = covariance::from_jacobian(&jac);
-    let covariance = covariance::embed(
-        eval.free(),
-        &unscaled,
-        variance.unwrap_or(residual_variance),
-    );
-    Some(Statistics {
-        identifiability: identifiability_of(eval.free(), &jac, &covariance),
-        sandwich: sandwich_of(problem, eval.free(), &r, &jac, &unscaled),
+/// identifiability report and the sandwich covariance of `problem` at the solution, from
+/// `at`: a linearisation of its captures there that differentiates (at least) by its free
+/// parameters, weighted here by each capture's whitening. The problem's loss must be plain
+/// least squares (a robust loss is not applied: the calibration fits its final problem
+/// without one).
+pub fn statistics(problem: &Problem, at: &Linearisation, variance: Option<f64>) -> Statistics {
+    debug_assert_eq!(problem.loss, super::Loss::Squared);
+    let free = problem.free();
+    let n = free.len();
+    let slices: Vec<CaptureSlice> = problem
+        .captures
+        .iter()
+        .enumerate()
+        .map(|(c, term)| at.capture(c, &free, term.whitening.as_ref()))
+        .collect();
+    let mut gram = DMatrix::zeros(n, n);
+    let mut rss = 0.0;
+    let mut rows = 0;
+    for slice in &slices {
+        gram += slice.jacobian.transpose() * &slice.jacobian;
+        rss += slice.residuals.norm_squared();
+        rows += slice.residuals.len();
+    }
+    let spectrum = Spectrum::of_gram(&gram).unwrap_or_else(|| {
+        // Near the rank threshold: decide on the stacked Jacobian itself.
+        let mut jac = DMatrix::zeros(rows, n);
+        let mut row = 0;
+        for slice in &slices {
+            let m = slice.residuals.len();
+            jac.rows_mut(row, m).copy_from(&slice.jacobian);
+            row += m;
+        }
+        Spectrum::of_jacobian(&jac)
+    });
+    let dof = rows.saturating_sub(n).max(1);
+    let residual_variance = rss / dof as f64;
+    let (unscaled, _) = spectrum.pseudo_inverse();
+    let covariance = covariance::embed(&free, &unscaled, variance.unwrap_or(residual_variance));
+    Statistics {
+        identifiability: identifiability_from(&free, &spectrum, &covariance),
+        sandwich: sandwich_of(&free, &slices, &unscaled),
         covariance,
         residual_variance,
-    })
+    }
 }
 
 /// The report before any analysis: every parameter determined, nothing flagged.
@@ -147,29 +173,26 @@ pub fn identifiability_of(
     jac: &DMatrix<f64>,
     cov: &DMatrix<f64>,
 ) -> Identifiability {
+    identifiability_from(free, &Spectrum::of_jacobian(jac), cov)
+}
+
+/// The identifiability report from the spectrum of the (weighted) Jacobian over the `free`
+/// parameters and the covariance `cov` (full PARAMETER_COUNT² matrix).
+pub fn identifiability_from(
+    free: &[Param],
+    spectrum: &Spectrum,
+    cov: &DMatrix<f64>,
+) -> Identifiability {
     let mut report = unanalysed(free);
     let n = free.len();
-    let norms: Vec<f64> = (0..n).map(|j| jac.column(j).norm()).collect();
-    report.unobserved = free
-        .iter()
-        .zip(&norms)
-        .filter(|(_, n)| **n == 0.0)
-        .map(|(p, _)| *p)
+    let observed = &spectrum.observed;
+    // Unobserved parameters are reported by name; the spectrum is the observed ones'.
+    report.unobserved = (0..n)
+        .filter(|j| !observed.contains(j))
+        .map(|j| free[j])
         .collect();
-    // Unobserved parameters are reported by name; the SVD looks at the observed ones.
-    let observed: Vec<usize> = (0..n).filter(|&j| norms[j] > 0.0).collect();
-    let mut scaled = DMatrix::zeros(jac.nrows(), observed.len());
-    for (k, &j) in observed.iter().enumerate() {
-        scaled.set_column(k, &(jac.column(j) / norms[j]));
-    }
-    // The SVD of the small triangular factor: same singular values and right vectors as
-    // the tall Jacobian's, at a fraction of the cost.
-    let svd = scaled.qr().r().svd(false, true);
-    let v_t = svd.v_t.expect("requested V");
-    let mut order: Vec<usize> = (0..svd.singular_values.len()).collect();
-    order.sort_by(|a, b| svd.singular_values[*b].total_cmp(&svd.singular_values[*a]));
-    let max = svd.singular_values.max();
-    report.singular_values = order.iter().map(|&k| svd.singular_values[k]).collect();
+    let max = spectrum.singular_values.first().copied().unwrap_or(0.0);
+    report.singular_values = spectrum.singular_values.clone();
     let mut suggested: Vec<Param> = report.unobserved.clone();
     // The undetermined directions with the components of the parameters already suggested
     // eliminated (Gaussian elimination with pivoting on the largest component): each
@@ -180,19 +203,15 @@ pub fn identifiability_of(
     for p in &report.unobserved {
         report.determined[p.index()] = false;
     }
-    for &k in &order {
-        let rel = if max > 0.0 {
-            svd.singular_values[k] / max
-        } else {
-            0.0
-        };
+    for (k, &value) in spectrum.singular_values.iter().enumerate() {
+        let rel = if max > 0.0 { value / max } else { 0.0 };
         if rel > UNDETERMINED {
             report.rank += 1;
         }
         if rel >= WEAK {
             continue;
         }
-        let v = v_t.row(k);
+        let v = spectrum.vectors.column(k);
         let mut terms: Vec<(Param, f64)> = observed
             .iter()
             .enumerate()
@@ -213,7 +232,7 @@ pub fn identifiability_of(
             for (p, _) in &direction.terms {
                 report.determined[p.index()] = false;
             }
-            let mut rest = v.transpose();
+            let mut rest = v.into_owned();
             for (j, pivot) in &pivots {
                 let f = rest[*j] / pivot[*j];
                 rest -= pivot * f;
@@ -257,39 +276,34 @@ pub fn identifiability_of(
 }
 
 /// The capture-clustered sandwich covariance `H⁺ (Σ_c g_c g_cᵀ) H⁺` of the (weighted)
-/// problem from its residuals `r`, Jacobian `jac` over the `free` parameters and
+/// problem from each capture's residuals and Jacobian over the `free` parameters and
 /// `h_inv = (JᵀJ)⁺` ([`covariance::from_jacobian`]), with
 /// `H = JᵀJ` and `g_c = J_cᵀ (I − H_cc)^{-1/2} r_c` (the "CR2" leverage correction,
 /// `H_cc = J_c H⁺ J_cᵀ`, since a fitted capture's residuals are smaller than its errors):
 /// robust to any correlation of the residuals within a capture. Full PARAMETER_COUNT²
 /// matrix.
 pub fn sandwich_of(
-    problem: &Problem,
     free: &[Param],
-    r: &DVector<f64>,
-    jac: &DMatrix<f64>,
+    captures: &[CaptureSlice],
     h_inv: &DMatrix<f64>,
 ) -> DMatrix<f64> {
     let n = free.len();
     let mut meat = DMatrix::zeros(n, n);
-    let mut row = 0;
-    for term in &problem.captures {
-        let rows = term.residual_count();
-        let j_c = jac.rows(row, rows);
+    for capture in captures {
+        let j_c = &capture.jacobian;
         // The capture's own columns: at most a dozen of the free parameters.
         let cols: Vec<usize> = (0..n)
             .filter(|&j| j_c.column(j).iter().any(|v| *v != 0.0))
             .collect();
         let b = j_c.select_columns(&cols);
         let p = h_inv.select_rows(&cols).select_columns(&cols);
-        let r_c = leverage_corrected(&b, &p, &r.rows(row, rows).into_owned());
-        let g: DVector<f64> = b.transpose() * r_c;
+        let r_c = leverage_corrected(&b, &p, &capture.residuals);
+        let g: DVector<f64> = b.tr_mul(&r_c);
         for (a, &ia) in cols.iter().enumerate() {
             for (c, &ic) in cols.iter().enumerate() {
                 meat[(ia, ic)] += g[a] * g[c];
             }
         }
-        row += rows;
     }
     let cov = h_inv * meat * h_inv;
     covariance::embed(free, &cov, 1.0)
