@@ -51,7 +51,7 @@ impl CsvTable {
                         ),
                     ));
                 }
-                Some(_) => rows.push((line, std::mem::take(&mut record))),
+                Some(_) => rows.push((line, record.clone())),
             }
         }
         let Some((header_line, header)) = header else {
