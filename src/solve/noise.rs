@@ -159,19 +159,19 @@ pub fn estimate_from(
                 / dof
         })
     };
+    // −2·log-likelihood up to a constant: Σ_c [n_c·ln a + rest_c/a
+    //   + Σ_k (ln(1 + ρ s²_k) + z²_k / (a (1 + ρ s²_k)))].
     let neg_log_lik = |rho: f64| -> f64 {
         let a = px2_for(rho).max(1e-300);
-        parts
-            .iter()
-            .map(|c| {
-                let mut v = c.n as f64 * a.ln() + c.rest / a;
-                for (z2, s2) in c.z2.iter().zip(&c.s2) {
-                    let var = a * (1.0 + rho * s2);
-                    v += var.ln() - a.ln() + z2 / var;
-                }
-                v
-            })
-            .sum()
+        let mut v = total as f64 * a.ln();
+        for c in &parts {
+            v += c.rest / a;
+            for (z2, s2) in c.z2.iter().zip(&c.s2) {
+                let f = rho * s2;
+                v += f.ln_1p() + z2 / (a * (1.0 + f));
+            }
+        }
+        v
     };
     let rho = match (given.joint, px2_given) {
         (Some(j), Some(a)) => j * j / a,
