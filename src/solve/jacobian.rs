@@ -136,7 +136,6 @@ pub struct CaptureJacobian {
 /// statistics at that point share, each taking its own columns and weights from it.
 #[derive(Debug, Clone)]
 pub struct Linearisation {
-    free: Vec<Param>,
     values: [f64; PARAMETER_COUNT],
     captures: Vec<Linearised>,
 }
@@ -191,15 +190,9 @@ impl Linearisation {
             })
             .collect::<Option<Vec<_>>>()?;
         Some(Linearisation {
-            free: eval.free,
             values: *values,
             captures,
         })
-    }
-
-    /// The parameters it differentiates by.
-    pub fn free(&self) -> &[Param] {
-        &self.free
     }
 
     /// The point (full parameter vector, internal units).
@@ -237,13 +230,14 @@ impl Linearisation {
             .sum::<f64>()
     }
 
-    /// The parameters capture `index` depends on (of [`Linearisation::free`]).
+    /// The parameters capture `index` depends on (of those the linearisation
+    /// differentiates by).
     pub fn capture_params(&self, index: usize) -> &[Param] {
         &self.captures[index].params
     }
 
-    /// Capture `index`'s residuals and Jacobian over `params` (of
-    /// [`Linearisation::free`]), weighted by `whitening` if given.
+    /// Capture `index`'s residuals and Jacobian over `params` (zero columns for those it
+    /// does not depend on), weighted by `whitening` if given.
     pub fn capture(
         &self,
         index: usize,

@@ -528,7 +528,8 @@ fn misfit_tests(
 ) -> Result<Screened, SolveError> {
     let posed = points.problem;
     let at = points.at(values)?;
-    let rounding = at.rms()[0].max(at.rms()[1]) < misfit::ROUNDING_RMS_PX;
+    let rms = at.rms();
+    let rounding = rms[0].max(rms[1]) < misfit::ROUNDING_RMS_PX;
     let plain = if rounding {
         // Residuals of rounding size hold nothing to test (their structure is the
         // optimiser's last step, not the data's).
@@ -817,12 +818,13 @@ fn calibrate_given(
     let both_given = options.noise.px.is_some() && options.noise.joint.is_some();
     // Both noise levels given: trust them, do not rescale by the residuals.
     let variance = (levels.is_some() && both_given).then_some(1.0);
+    let at_last = points.at(&last.values)?;
     let uncertainty::Statistics {
         mut covariance,
         identifiability,
         sandwich,
         residual_variance,
-    } = uncertainty::statistics(fitted, &*points.at(&last.values)?, variance);
+    } = uncertainty::statistics(fitted, &at_last, variance);
     if sandwich_reported {
         // Residuals that may not be noise: the capture-clustered sandwich holds whatever
         // their correlation within a capture.
@@ -831,7 +833,6 @@ fn calibrate_given(
     let std = std::array::from_fn(|i| covariance[(i, i)].max(0.0).sqrt());
     let residuals = vertex_residuals(problem, &last.values);
     let initial_rms_px = initial_rms(&residuals);
-    let at_last = points.at(&last.values)?;
     let rms_px = at_last.rms();
     let final_cost = at_last.cost();
     let summary = Summary {

@@ -48,7 +48,7 @@ impl CaptureNoise {
             .capture_params(index)
             .iter()
             .copied()
-            .filter(|p| Joint::ALL.iter().any(|j| j.offset() == *p))
+            .filter(|p| joint_offsets().any(|j| j == *p))
             .collect();
         let CaptureSlice {
             residuals: r,
