@@ -485,7 +485,7 @@ fn screen(
     let first = fit(&posed, backend)?;
     let settled = |tests: &[FamilyTest]| next_family(tests, chosen).is_some();
     let points = Linearisations::new(&posed, &held);
-    let tests = misfit_tests(&points, &first.values, &held, backend, options, &settled)?.tests;
+    let tests = misfit_tests(&points, &first, &held, backend, options, &settled)?.tests;
     Ok((tests, first.values))
 }
 
@@ -520,13 +520,14 @@ fn next_family<'t>(tests: &'t [FamilyTest], chosen: &[FamilyTest]) -> Option<&'t
 /// of `--model auto` on a realistic robot, against 5–8 for the plain fit).
 fn misfit_tests(
     points: &Linearisations,
-    values: &[f64; PARAMETER_COUNT],
+    first: &Fit,
     held: &[bool; PARAMETER_COUNT],
     backend: &dyn Backend,
     options: &UncertaintyOptions,
     settled: &dyn Fn(&[FamilyTest]) -> bool,
 ) -> Result<Screened, SolveError> {
     let posed = points.problem;
+    let values = &first.values;
     let at = points.at(values)?;
     let rms = at.rms();
     let rounding = rms[0].max(rms[1]) < misfit::ROUNDING_RMS_PX;
@@ -559,15 +560,56 @@ fn misfit_tests(
             weighted: None,
         });
     };
-    let weighted = fit(w, backend)?;
-    let at = points.at(&weighted.values)?;
-    let tests = misfit::combined_tests(plain, misfit::family_tests_at(w, &at, held));
+    let (weighted, whitened_tests) = whitened_fit(points, w, first, held, backend)?;
+    let tests = misfit::combined_tests(plain, whitened_tests);
     Ok(Screened {
         tests,
         whitened,
         weighted: Some(weighted),
     })
 }
+
+/// The fit of `whitened` (the problem weighted by the noise model estimated at the plain
+/// fit `plain`, started there) and the whitened misfit tests at it. The tests at the plain
+/// fit come first, with the Gauss–Newton step from there: when the step is at most
+/// [`WHITENED_STEP_SIGMAS`] standard deviations long, the plain fit is the whitened fit's
+/// optimum to that precision, the backend is not called, and the tests stand. (On data
+/// without joint noise the whitened problem is the plain one up to a scale, and a backend
+/// run from its optimum took one iteration that changed nothing.)
+fn whitened_fit(
+    points: &Linearisations,
+    whitened: &Problem,
+    plain: &Fit,
+    held: &[bool; PARAMETER_COUNT],
+    backend: &dyn Backend,
+) -> Result<(Fit, Vec<FamilyTest>), SolveError> {
+    let scored = misfit::scored_at(whitened, &*points.at(&plain.values)?, held);
+    if scored
+        .step_sigmas
+        .is_some_and(|s| s <= WHITENED_STEP_SIGMAS)
+    {
+        let summary = Summary {
+            iterations: 0,
+            initial_cost: scored.cost,
+            final_cost: scored.cost,
+            seconds: 0.0,
+            ..plain.summary.clone()
+        };
+        let fit = Fit {
+            values: plain.values,
+            summary,
+        };
+        return Ok((fit, scored.tests));
+    }
+    let weighted = fit(whitened, backend)?;
+    let at = points.at(&weighted.values)?;
+    Ok((weighted, misfit::family_tests_at(whitened, &at, held)))
+}
+
+/// A whitened fit whose Gauss–Newton step from the plain fit is at most this many standard
+/// deviations long (every parameter within this fraction of its σ) is the plain fit: see
+/// [`whitened_fit`].
+const WHITENED_STEP_SIGMAS: f64 = 1e-3;
 
 /// The misfit tests with what the noise rounds reuse (see [`misfit_tests`]).
 struct Screened {
@@ -669,6 +711,12 @@ fn noise_model(
     if budget.is_some() && !f.summary.converged {
         return Ok((f, weighted, levels, iterations));
     }
+    if f.values == weighted.initial {
+        // The whitened fit stayed at the plain fit (see [`whitened_fit`]): the levels
+        // estimated there are the first ones.
+        weighted.tolerances = points.problem.tolerances;
+        return Ok((f, weighted, levels, iterations));
+    }
     match whiten(points, &f.values, options)? {
         Some((next, levels)) => Ok((f, next, levels, iterations)),
         // The whitened fit leaves no residual: keep its weights.
@@ -748,7 +796,7 @@ fn calibrate_given(
         tests,
         whitened,
         weighted: weighted_first,
-    } = misfit_tests(&points, &first.values, &held, backend, options, &|tests| {
+    } = misfit_tests(&points, &first, &held, backend, options, &|tests| {
         tests.iter().any(|t| t.significant)
     })?;
     let mut verdict = misfit::verdict(tests.clone(), plain_rms, None);

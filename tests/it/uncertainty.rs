@@ -314,3 +314,60 @@ fn a_false_alarm_under_joint_noise_keeps_the_noise_model() {
         assert!(z.abs() < 4.0, "{p}: err/σ {z:.1}");
     }
 }
+
+/// The whitened fit is not run when the Gauss–Newton step from the plain fit is below
+/// 10⁻³ σ (pixel noise alone: the whitened problem is the plain one up to a scale); the
+/// result is then within that of the backend's own whitened fit from the plain fit, which
+/// this test runs. Under joint noise the step is larger and the backend runs.
+#[test]
+fn the_whitened_fit_is_skipped_only_where_it_would_not_move() {
+    let whitened_fit = |problem: &Problem, plain: &Solution| {
+        let free = problem.free().len();
+        let (levels, captures) =
+            naocalib::solve::noise::estimate(problem, &plain.values, free, Default::default())
+                .expect("noise estimated");
+        let mut w = problem.clone();
+        w.initial = plain.values;
+        for (term, c) in w.captures.iter_mut().zip(&captures) {
+            term.whitening = Some(c.whitening(levels));
+        }
+        let r = ceres().solve_values(&w).expect("whitened fit");
+        w.expand(&r.free_values)
+    };
+    let mut skipped = 0;
+    for (seed, joint_deg) in [(21, 0.0), (22, 0.0), (23, 0.0), (24, 0.0), (25, 0.1)] {
+        let (problem, _) = problem(&SimOptions {
+            seed,
+            stances: 12,
+            heads: 2,
+            joint_noise: f64::to_radians(joint_deg),
+            ..SimOptions::default()
+        });
+        let s = calibrate(&problem, ceres().as_ref(), &UncertaintyOptions::default()).unwrap();
+        let plain = calibrate(&problem, ceres().as_ref(), &UncertaintyOptions::plain()).unwrap();
+        let reference = whitened_fit(&problem, &plain);
+        for p in problem.free() {
+            let i = p.index();
+            let d = (s.values[i] - reference[i]).abs() / s.std[i];
+            assert!(
+                d <= 1e-3,
+                "seed {seed}, {p}: {d:.1e} σ from the whitened fit"
+            );
+        }
+        let skip = s.summary.iterations == plain.summary.iterations;
+        if joint_deg > 0.0 {
+            assert!(
+                !skip,
+                "seed {seed}: joint noise, yet the whitened fit was not run"
+            );
+            assert_ne!(s.values, plain.values);
+        } else if skip {
+            skipped += 1;
+            assert_eq!(s.values, plain.values);
+        }
+    }
+    assert!(
+        skipped >= 2,
+        "whitened fit skipped on {skipped} of 4 noise-free datasets"
+    );
+}
