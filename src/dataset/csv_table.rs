@@ -6,14 +6,24 @@ use std::path::{Path, PathBuf};
 use super::error::{DatasetError, Location};
 use super::text::{line_at, parse_f64, parse_uint};
 
-/// A parsed CSV file: its header and its non-blank records, each with its line.
+/// A parsed CSV file: its header and its non-blank records, each with its line. The
+/// records' trimmed fields are kept in one string (a dataset's `corners.csv` has thousands
+/// of short records, and a record each cost an allocation).
 #[derive(Debug)]
 pub(crate) struct CsvTable {
     path: PathBuf,
     header_line: u64,
     /// Column name → every index it appears at.
     columns: HashMap<String, Vec<usize>>,
-    rows: Vec<(u64, csv::StringRecord)>,
+    /// Fields per record (the header's).
+    width: usize,
+    /// Every record's trimmed fields, one after the other.
+    text: String,
+    /// Where each field ends in `text` (`width` per record; a field starts where the one
+    /// before it ends).
+    ends: Vec<usize>,
+    /// The line each record starts on.
+    lines: Vec<u64>,
 }
 
 impl CsvTable {
@@ -26,7 +36,9 @@ impl CsvTable {
             .from_reader(bytes);
         let mut lines = LineCounter::new(bytes);
         let mut header: Option<(u64, csv::StringRecord)> = None;
-        let mut rows = Vec::new();
+        let mut text = String::with_capacity(bytes.len());
+        let mut ends = Vec::new();
+        let mut lines_of_rows = Vec::new();
         let mut record = csv::StringRecord::new();
         loop {
             match reader.read_record(&mut record) {
@@ -51,7 +63,13 @@ impl CsvTable {
                         ),
                     ));
                 }
-                Some(_) => rows.push((line, record.clone())),
+                Some(_) => {
+                    for field in record.iter() {
+                        text.push_str(field.trim());
+                        ends.push(text.len());
+                    }
+                    lines_of_rows.push(line);
+                }
             }
         }
         let Some((header_line, header)) = header else {
@@ -68,7 +86,10 @@ impl CsvTable {
             path: path.to_path_buf(),
             header_line,
             columns,
-            rows,
+            width: header.len(),
+            text,
+            ends,
+            lines: lines_of_rows,
         })
     }
 
@@ -100,10 +121,15 @@ impl CsvTable {
 
     /// The records, in file order.
     pub fn rows(&self) -> impl Iterator<Item = Row<'_>> {
-        self.rows.iter().map(|(line, record)| Row {
-            path: &self.path,
-            line: *line,
-            record,
+        self.lines.iter().enumerate().map(|(k, line)| {
+            let first = k * self.width;
+            Row {
+                path: &self.path,
+                line: *line,
+                text: &self.text,
+                start: if first == 0 { 0 } else { self.ends[first - 1] },
+                ends: &self.ends[first..first + self.width],
+            }
         })
     }
 }
@@ -113,7 +139,11 @@ pub(crate) struct Row<'a> {
     path: &'a Path,
     /// The line the record starts on.
     pub line: u64,
-    record: &'a csv::StringRecord,
+    text: &'a str,
+    /// Where the record's first field starts in `text`.
+    start: usize,
+    /// Where each of its fields ends.
+    ends: &'a [usize],
 }
 
 impl Row<'_> {
@@ -124,7 +154,11 @@ impl Row<'_> {
 
     /// The (trimmed) text of column `col`.
     pub fn str(&self, col: usize) -> &str {
-        self.record.get(col).unwrap_or("").trim()
+        let Some(&end) = self.ends.get(col) else {
+            return "";
+        };
+        let start = if col == 0 { self.start } else { self.ends[col - 1] };
+        &self.text[start..end]
     }
 
     /// Column `col`, named `name`, as a finite number.
