@@ -157,7 +157,11 @@ impl Row<'_> {
         let Some(&end) = self.ends.get(col) else {
             return "";
         };
-        let start = if col == 0 { self.start } else { self.ends[col - 1] };
+        let start = if col == 0 {
+            self.start
+        } else {
+            self.ends[col - 1]
+        };
         &self.text[start..end]
     }
 

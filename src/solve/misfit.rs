@@ -98,37 +98,7 @@ pub fn family_tests_at(
     at: &Linearisation,
     held: &[bool; PARAMETER_COUNT],
 ) -> Vec<FamilyTest> {
-    scored_at(problem, at, held).tests
-}
-
-/// The score tests at a point, and how far the fit is from the optimum of `problem` there.
-#[derive(Debug, Clone)]
-pub struct Scored {
-    /// The tests, as [`family_tests_at`] gives them.
-    pub tests: Vec<FamilyTest>,
-    /// The length of the Gauss–Newton step of the fitted parameters from this point, in
-    /// standard deviations of the estimate: `√(gᵀ(JᵀJ)⁺g / σ̂²)` with `g = Jᵀr` and
-    /// `σ̂² = ‖r‖²/(m − n)`, over the fitted columns as `problem` weighs them. No parameter
-    /// is more than this many of its σ from where the step leads (Cauchy–Schwarz). `None`
-    /// when it cannot be computed (nothing fitted, no residual left).
-    pub step_sigmas: Option<f64>,
-    /// `½‖r‖²` of the residuals as `problem` weighs them.
-    pub cost: f64,
-}
-
-/// [`family_tests_at`] with the Gauss–Newton step to the optimum of `problem` (see
-/// [`Scored`]), both from the one pass over the captures the tests make.
-pub fn scored_at(problem: &Problem, at: &Linearisation, held: &[bool; PARAMETER_COUNT]) -> Scored {
-    let scores = Scores::at(problem, at, held);
-    Scored {
-        step_sigmas: scores.step_sigmas(),
-        cost: 0.5 * scores.rss,
-        tests: if scores.candidates.is_empty() {
-            Vec::new()
-        } else {
-            scores.tests()
-        },
-    }
+    Scores::at(problem, at, held).map_or_else(Vec::new, |s| s.tests())
 }
 
 /// The parameters the tests differentiate by: the fitted ones and every candidate (fixed,
@@ -152,15 +122,11 @@ struct Scores {
     gram: DMatrix<f64>,
     /// One row per capture: `J_cᵀ r_c` over `free`.
     gradients: DMatrix<f64>,
-    /// `‖r‖²` and the number of residuals.
-    rss: f64,
-    rows: usize,
 }
 
 impl Scores {
-    /// The Gram matrix and gradients at `at` (`candidates` is empty when there is nothing
-    /// to test).
-    fn at(problem: &Problem, at: &Linearisation, held: &[bool; PARAMETER_COUNT]) -> Scores {
+    /// `None` when there is nothing to test.
+    fn at(problem: &Problem, at: &Linearisation, held: &[bool; PARAMETER_COUNT]) -> Option<Scores> {
         let fitted = problem.free();
         let candidates: Vec<(Family, Vec<Param>)> = Family::ALL
             .into_iter()
@@ -173,6 +139,9 @@ impl Scores {
             })
             .filter(|(_, params)| !params.is_empty())
             .collect();
+        if candidates.is_empty() {
+            return None;
+        }
         // The fitted parameters and every candidate.
         let free = tested_columns(problem, held);
         let mut column = [None; PARAMETER_COUNT];
@@ -183,7 +152,6 @@ impl Scores {
         let captures = at.capture_count();
         let mut gram = DMatrix::zeros(n, n);
         let mut gradients = DMatrix::zeros(captures, n);
-        let (mut rss, mut rows) = (0.0, 0);
         for c in 0..captures {
             let local: Vec<Param> = at
                 .capture_params(c)
@@ -195,8 +163,6 @@ impl Scores {
             let slice = at.capture(c, &local, whitening);
             let jtj = slice.jacobian.transpose() * &slice.jacobian;
             let jtr = slice.jacobian.tr_mul(&slice.residuals);
-            rss += slice.residuals.norm_squared();
-            rows += slice.residuals.len();
             for (a, pa) in local.iter().enumerate() {
                 let ca = column[pa.index()].expect("tested");
                 gradients[(c, ca)] = jtr[a];
@@ -205,45 +171,13 @@ impl Scores {
                 }
             }
         }
-        Scores {
+        Some(Scores {
             candidates,
             fitted,
             free,
             gram,
             gradients,
-            rss,
-            rows,
-        }
-    }
-
-    /// See [`Scored::step_sigmas`]: with `S` scaling the fitted columns to unit norm,
-    /// `gᵀ(JᵀJ)⁺g = (Sg)ᵀ(SJᵀJS)⁺(Sg)`.
-    fn step_sigmas(&self) -> Option<f64> {
-        let fitted: Vec<usize> = self
-            .fitted
-            .iter()
-            .map(|p| self.free.iter().position(|q| q == p).expect("fitted"))
-            .collect();
-        let n = fitted.len();
-        if n == 0 || self.rows <= n {
-            return None;
-        }
-        let scale: Vec<f64> = fitted
-            .iter()
-            .map(|&f| {
-                let d = self.gram[(f, f)].sqrt();
-                if d > 0.0 { 1.0 / d } else { 1.0 }
-            })
-            .collect();
-        let gram = DMatrix::from_fn(n, n, |i, j| {
-            self.gram[(fitted[i], fitted[j])] * scale[i] * scale[j]
-        });
-        let g = DVector::from_fn(n, |i, _| self.gradients.column(fitted[i]).sum() * scale[i]);
-        let variance = self.rss / (self.rows - n) as f64;
-        let inverse = gram.pseudo_inverse(1e-10).ok()?;
-        let q = g.dot(&(inverse * &g)).max(0.0);
-        let sigmas = (q / variance).sqrt();
-        sigmas.is_finite().then_some(sigmas)
+        })
     }
 
     /// The tests. With `A` the fitted columns scaled to unit norm and `J_K` the candidate

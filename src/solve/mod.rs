@@ -570,12 +570,12 @@ fn misfit_tests(
 }
 
 /// The fit of `whitened` (the problem weighted by the noise model estimated at the plain
-/// fit `plain`, started there) and the whitened misfit tests at it. The tests at the plain
-/// fit come first, with the Gauss–Newton step from there: when the step is at most
-/// [`WHITENED_STEP_SIGMAS`] standard deviations long, the plain fit is the whitened fit's
-/// optimum to that precision, the backend is not called, and the tests stand. (On data
-/// without joint noise the whitened problem is the plain one up to a scale, and a backend
-/// run from its optimum took one iteration that changed nothing.)
+/// fit `plain`, started there) and the whitened misfit tests at it. When the Gauss–Newton
+/// step of the whitened problem from the plain fit is at most [`WHITENED_STEP_SIGMAS`]
+/// standard deviations long, the plain fit is the whitened fit's optimum to that
+/// precision, and the backend is not called. (On data without joint noise the whitened
+/// problem is the plain one up to a scale, and a backend run from its optimum took one
+/// iteration that changed nothing.)
 fn whitened_fit(
     points: &Linearisations,
     whitened: &Problem,
@@ -583,15 +583,14 @@ fn whitened_fit(
     held: &[bool; PARAMETER_COUNT],
     backend: &dyn Backend,
 ) -> Result<(Fit, Vec<FamilyTest>), SolveError> {
-    let scored = misfit::scored_at(whitened, &*points.at(&plain.values)?, held);
-    if scored
-        .step_sigmas
-        .is_some_and(|s| s <= WHITENED_STEP_SIGMAS)
+    let at = points.at(&plain.values)?;
+    if let Some(step) = uncertainty::gauss_newton_step(whitened, &at)
+        && step.sigmas <= WHITENED_STEP_SIGMAS
     {
         let summary = Summary {
             iterations: 0,
-            initial_cost: scored.cost,
-            final_cost: scored.cost,
+            initial_cost: step.cost,
+            final_cost: step.cost,
             seconds: 0.0,
             ..plain.summary.clone()
         };
@@ -599,7 +598,7 @@ fn whitened_fit(
             values: plain.values,
             summary,
         };
-        return Ok((fit, scored.tests));
+        return Ok((fit, misfit::family_tests_at(whitened, &at, held)));
     }
     let weighted = fit(whitened, backend)?;
     let at = points.at(&weighted.values)?;

@@ -158,6 +158,70 @@ pub fn statistics(problem: &Problem, at: &Linearisation, variance: Option<f64>) 
     }
 }
 
+/// How far a point is from the optimum of a least-squares problem, to first order.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GaussNewtonStep {
+    /// The length of the Gauss–Newton step of the free parameters, in standard deviations
+    /// of the estimate: `√(gᵀ(JᵀJ)⁺g / σ̂²)` with `g = Jᵀr` and `σ̂² = ‖r‖²/(m − n)`. No
+    /// parameter is more than this many of its σ from where the step leads
+    /// (Cauchy–Schwarz).
+    pub sigmas: f64,
+    /// `½‖r‖²` at the point.
+    pub cost: f64,
+}
+
+/// The [`GaussNewtonStep`] of `problem` (residuals weighted by each capture's whitening,
+/// plain least squares) from the point of `at`, a linearisation that differentiates by (at
+/// least) its free parameters; `None` when nothing is free, no degree of freedom is left or
+/// the step is not finite.
+pub fn gauss_newton_step(problem: &Problem, at: &Linearisation) -> Option<GaussNewtonStep> {
+    let free = problem.free();
+    let n = free.len();
+    let mut column = [None; PARAMETER_COUNT];
+    for (k, p) in free.iter().enumerate() {
+        column[p.index()] = Some(k);
+    }
+    let mut gram = DMatrix::<f64>::zeros(n, n);
+    let mut gradient = DVector::zeros(n);
+    let (mut rss, mut rows) = (0.0, 0);
+    for (c, term) in problem.captures.iter().enumerate() {
+        let local: Vec<Param> = at
+            .capture_params(c)
+            .iter()
+            .copied()
+            .filter(|p| column[p.index()].is_some())
+            .collect();
+        let slice = at.capture(c, &local, term.whitening.as_ref());
+        let jtj = slice.jacobian.transpose() * &slice.jacobian;
+        let jtr = slice.jacobian.tr_mul(&slice.residuals);
+        for (a, pa) in local.iter().enumerate() {
+            let ca = column[pa.index()].expect("free");
+            gradient[ca] += jtr[a];
+            for (b, pb) in local.iter().enumerate() {
+                gram[(ca, column[pb.index()].expect("free"))] += jtj[(a, b)];
+            }
+        }
+        rss += slice.residuals.norm_squared();
+        rows += slice.residuals.len();
+    }
+    if n == 0 || rows <= n {
+        return None;
+    }
+    // Columns scaled to unit norm: gᵀ(JᵀJ)⁺g = (Sg)ᵀ(S·JᵀJ·S)⁺(Sg).
+    let scale = DVector::from_fn(n, |i, _| {
+        let d = gram[(i, i)].sqrt();
+        if d > 0.0 { 1.0 / d } else { 1.0 }
+    });
+    let scaled = DMatrix::from_fn(n, n, |i, j| gram[(i, j)] * scale[i] * scale[j]);
+    let g = gradient.component_mul(&scale);
+    let q = g.dot(&(scaled.pseudo_inverse(1e-10).ok()? * &g)).max(0.0);
+    let sigmas = (q / (rss / (rows - n) as f64)).sqrt();
+    sigmas.is_finite().then_some(GaussNewtonStep {
+        sigmas,
+        cost: 0.5 * rss,
+    })
+}
+
 /// The report before any analysis: every parameter determined, nothing flagged.
 fn unanalysed(free: &[Param]) -> Identifiability {
     Identifiability {
