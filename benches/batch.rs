@@ -3,8 +3,8 @@
 //! all cores, each solved as `naocalib solve` does (Ceres, noise model).
 //!
 //! This is the solving alone, in memory. `naocalib batch` as a whole process adds loading
-//! and validating the datasets (about 6 ms CPU each) and the summary; the README quotes
-//! both beside one Python scipy solve (`scripts/solve_scipy.py`).
+//! and validating the datasets (about 1.1 ms CPU each) and the summary; the README quotes
+//! the whole process beside one Python scipy solve (`scripts/solve_scipy.py`).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use naocalib::batch::{BatchOptions, solve_datasets};
