@@ -162,6 +162,20 @@ pub struct CaptureSlice {
     pub jacobian: DMatrix<f64>,
 }
 
+/// The normal equations of a weighted problem at one point over chosen columns (see
+/// [`Linearisation::normal_sums`]).
+#[derive(Debug, Clone)]
+pub struct NormalSums {
+    /// `JᵀJ`.
+    pub gram: DMatrix<f64>,
+    /// One row per capture: `J_cᵀ r_c`.
+    pub gradients: DMatrix<f64>,
+    /// `‖r‖²`.
+    pub rss: f64,
+    /// The number of residuals.
+    pub rows: usize,
+}
+
 impl Linearisation {
     /// Evaluates every capture of `problem` at the full parameter vector `values`, over the
     /// parameters `free` (others held there), unweighted; `None` when a vertex falls behind
@@ -234,6 +248,45 @@ impl Linearisation {
     /// differentiates by).
     pub fn capture_params(&self, index: usize) -> &[Param] {
         &self.captures[index].params
+    }
+
+    /// The normal equations of `problem` (whose captures this linearises, each weighted by
+    /// its whitening) over `columns`, summed capture by capture from the captures' own
+    /// Jacobians, so the tall Jacobian is never formed.
+    pub fn normal_sums(&self, problem: &Problem, columns: &[Param]) -> NormalSums {
+        let n = columns.len();
+        let mut column = [None; PARAMETER_COUNT];
+        for (k, p) in columns.iter().enumerate() {
+            column[p.index()] = Some(k);
+        }
+        let captures = self.capture_count();
+        let mut sums = NormalSums {
+            gram: DMatrix::zeros(n, n),
+            gradients: DMatrix::zeros(captures, n),
+            rss: 0.0,
+            rows: 0,
+        };
+        for c in 0..captures {
+            let local: Vec<Param> = self
+                .capture_params(c)
+                .iter()
+                .copied()
+                .filter(|p| column[p.index()].is_some())
+                .collect();
+            let slice = self.capture(c, &local, problem.captures[c].whitening.as_ref());
+            let jtj = slice.jacobian.transpose() * &slice.jacobian;
+            let jtr = slice.jacobian.tr_mul(&slice.residuals);
+            for (a, pa) in local.iter().enumerate() {
+                let ca = column[pa.index()].expect("a chosen column");
+                sums.gradients[(c, ca)] = jtr[a];
+                for (b, pb) in local.iter().enumerate() {
+                    sums.gram[(ca, column[pb.index()].expect("a chosen column"))] += jtj[(a, b)];
+                }
+            }
+            sums.rss += slice.residuals.norm_squared();
+            sums.rows += slice.residuals.len();
+        }
+        sums
     }
 
     /// Capture `index`'s residuals and Jacobian over `params` (zero columns for those it

@@ -144,39 +144,13 @@ impl Scores {
         }
         // The fitted parameters and every candidate.
         let free = tested_columns(problem, held);
-        let mut column = [None; PARAMETER_COUNT];
-        for (k, p) in free.iter().enumerate() {
-            column[p.index()] = Some(k);
-        }
-        let n = free.len();
-        let captures = at.capture_count();
-        let mut gram = DMatrix::zeros(n, n);
-        let mut gradients = DMatrix::zeros(captures, n);
-        for c in 0..captures {
-            let local: Vec<Param> = at
-                .capture_params(c)
-                .iter()
-                .copied()
-                .filter(|p| column[p.index()].is_some())
-                .collect();
-            let whitening = problem.captures[c].whitening.as_ref();
-            let slice = at.capture(c, &local, whitening);
-            let jtj = slice.jacobian.transpose() * &slice.jacobian;
-            let jtr = slice.jacobian.tr_mul(&slice.residuals);
-            for (a, pa) in local.iter().enumerate() {
-                let ca = column[pa.index()].expect("tested");
-                gradients[(c, ca)] = jtr[a];
-                for (b, pb) in local.iter().enumerate() {
-                    gram[(ca, column[pb.index()].expect("tested"))] += jtj[(a, b)];
-                }
-            }
-        }
+        let sums = at.normal_sums(problem, &free);
         Some(Scores {
             candidates,
             fitted,
             free,
-            gram,
-            gradients,
+            gram: sums.gram,
+            gradients: sums.gradients,
         })
     }
 

@@ -7,7 +7,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::covariance::{self, Spectrum};
-use super::jacobian::{CaptureSlice, Linearisation};
+use super::jacobian::{CaptureSlice, Linearisation, NormalSums};
 use super::{Backend, Problem, SolveError};
 use crate::model::{PARAMETER_COUNT, Param};
 
@@ -177,33 +177,13 @@ pub struct GaussNewtonStep {
 pub fn gauss_newton_step(problem: &Problem, at: &Linearisation) -> Option<GaussNewtonStep> {
     let free = problem.free();
     let n = free.len();
-    let mut column = [None; PARAMETER_COUNT];
-    for (k, p) in free.iter().enumerate() {
-        column[p.index()] = Some(k);
-    }
-    let mut gram = DMatrix::<f64>::zeros(n, n);
-    let mut gradient = DVector::zeros(n);
-    let (mut rss, mut rows) = (0.0, 0);
-    for (c, term) in problem.captures.iter().enumerate() {
-        let local: Vec<Param> = at
-            .capture_params(c)
-            .iter()
-            .copied()
-            .filter(|p| column[p.index()].is_some())
-            .collect();
-        let slice = at.capture(c, &local, term.whitening.as_ref());
-        let jtj = slice.jacobian.transpose() * &slice.jacobian;
-        let jtr = slice.jacobian.tr_mul(&slice.residuals);
-        for (a, pa) in local.iter().enumerate() {
-            let ca = column[pa.index()].expect("free");
-            gradient[ca] += jtr[a];
-            for (b, pb) in local.iter().enumerate() {
-                gram[(ca, column[pb.index()].expect("free"))] += jtj[(a, b)];
-            }
-        }
-        rss += slice.residuals.norm_squared();
-        rows += slice.residuals.len();
-    }
+    let NormalSums {
+        gram,
+        gradients,
+        rss,
+        rows,
+    } = at.normal_sums(problem, &free);
+    let gradient = gradients.row_sum().transpose();
     if n == 0 || rows <= n {
         return None;
     }
