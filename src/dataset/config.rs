@@ -13,6 +13,8 @@ use serde::{Deserialize, Serialize, Serializer};
 
 use crate::model::{Board, Camera, Model, RobotGeometry};
 
+use super::{AngleKind, AngleSource};
+
 use super::error::{DatasetError, Location};
 use super::toml_doc::TomlDoc;
 use super::units::degrees_for;
@@ -45,6 +47,19 @@ pub(crate) struct DatasetToml {
     board: BoardToml,
     #[serde(default)]
     robot: RobotToml,
+    /// What the logged joint angles are; raw when absent.
+    #[serde(default)]
+    joints: JointsToml,
+}
+
+/// `[joints]`: whether `captures.csv` holds raw encoder readings or angles a framework has
+/// already corrected with the robot's joint calibration (docs/MODEL.md §7).
+#[derive(Debug, Clone, PartialEq, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+struct JointsToml {
+    angles: AngleKind,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    corrected_by: Option<String>,
 }
 
 /// `[camera]`: the lower camera's a-priori intrinsics.
@@ -189,11 +204,15 @@ impl<const N: usize> Serialize for Numbers<N> {
 
 impl DatasetToml {
     /// The file for `model`, every value written out.
-    fn from_model(model: &Model) -> Self {
+    fn from_model(model: &Model, angles: &AngleSource) -> Self {
         DatasetToml {
             camera: Some(CameraToml::from(&model.camera)),
             board: BoardToml::from(&model.board),
             robot: RobotToml::from(&model.robot),
+            joints: JointsToml {
+                angles: angles.kind,
+                corrected_by: angles.corrected_by.clone(),
+            },
         }
     }
 
@@ -271,8 +290,30 @@ const UNIT_TOLERANCE: f64 = 1e-12;
 
 /// Reads a model from the content of `dataset.toml` at `path`, and validates it.
 pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Model, DatasetError> {
+    parse_with_angles(path, bytes).map(|(model, _)| model)
+}
+
+/// Reads a model and what its joint angles are from the content of `dataset.toml` at
+/// `path`, and validates them.
+pub(crate) fn parse_with_angles(
+    path: &Path,
+    bytes: &[u8],
+) -> Result<(Model, AngleSource), DatasetError> {
     let doc = TomlDoc::new(path, bytes)?;
-    let file: DatasetToml = doc.deserialize()?;
+    let mut file: DatasetToml = doc.deserialize()?;
+    let joints = std::mem::take(&mut file.joints);
+    if joints.angles == AngleKind::Raw && joints.corrected_by.is_some() {
+        return Err(doc.error(
+            "joints.corrected_by",
+            "is only meaningful with angles = \"corrected\" (raw angles were corrected by \
+             nothing)"
+                .into(),
+        ));
+    }
+    let angles = AngleSource {
+        kind: joints.angles,
+        corrected_by: joints.corrected_by,
+    };
     let at = |(key, message): KeyError| {
         if key == "camera" {
             // A missing table has no line.
@@ -283,7 +324,7 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Model, DatasetError> {
     };
     let model = file.into_model().map_err(at)?;
     check(&model).map_err(|(key, message)| doc.error(&key, message))?;
-    Ok(model)
+    Ok((model, angles))
 }
 
 /// Checks a model in memory against the same rules as [`parse`]; errors name `path` and the
@@ -429,8 +470,8 @@ fn check(model: &Model) -> Result<(), KeyError> {
 /// `dataset.toml` for `model`, every value written out. Floats round-trip exactly; angles
 /// are written in degrees chosen so that reading them back gives the same radians whenever
 /// such a decimal exists.
-pub(crate) fn render(model: &Model) -> Result<String, toml::ser::Error> {
-    let body = toml::to_string(&DatasetToml::from_model(model))?;
+pub(crate) fn render(model: &Model, angles: &AngleSource) -> Result<String, toml::ser::Error> {
+    let body = toml::to_string(&DatasetToml::from_model(model, angles))?;
     Ok(format!(
         "# naocalib dataset: lengths in mm, angles in degrees, masses in g; \
          distortion is OpenCV's [k1, k2, p1, p2, k3];\n# gravity is a direction in the origin \
@@ -566,11 +607,11 @@ mod tests {
         ];
         model.board.mount_origin = [1.0 / 3.0, 2.5, -7.0];
         model.robot.lower_camera_tilt = 39.5f64.to_radians();
-        let text = render(&model).unwrap();
+        let text = render(&model, &AngleSource::default()).unwrap();
         let back = parse(Path::new("x"), text.as_bytes()).unwrap();
         assert_eq!(back, model);
         assert!(
-            render(&Model::default())
+            render(&Model::default(), &AngleSource::default())
                 .unwrap()
                 .contains("lower_camera_tilt_deg = 39.7\n"),
             "{text}"
@@ -690,11 +731,36 @@ mod tests {
         // Written and read again: the very same bits.
         let mut m = m;
         m.robot.gravity = [1.0, 1.0, 1.0].map(|x: f64| x / 3f64.sqrt());
-        let back = parse(Path::new("x"), render(&m).unwrap().as_bytes()).unwrap();
+        let back = parse(
+            Path::new("x"),
+            render(&m, &AngleSource::default()).unwrap().as_bytes(),
+        )
+        .unwrap();
         assert_eq!(back, m);
         assert_eq!(
             back.robot.gravity.map(f64::to_bits),
             m.robot.gravity.map(f64::to_bits)
         );
+    }
+
+    #[test]
+    fn joint_angle_source_reads_back_and_is_checked() {
+        let corrected = AngleSource {
+            kind: AngleKind::Corrected,
+            corrected_by: Some("jointCalibration.cfg".into()),
+        };
+        let text = render(&Model::default(), &corrected).unwrap();
+        let (_, back) = parse_with_angles(Path::new("x"), text.as_bytes()).unwrap();
+        assert_eq!(back, corrected);
+        let minimal =
+            "[camera]\nwidth = 640\nheight = 480\nfx = 560.0\nfy = 560.0\ncx = 320.0\ncy = 240.0\n";
+        let (_, absent) = parse_with_angles(Path::new("x"), minimal.as_bytes()).unwrap();
+        assert_eq!(absent.kind, AngleKind::Raw);
+        let wrong = format!("{minimal}[joints]\nangles = \"raw\"\ncorrected_by = \"x\"\n");
+        let e = parse_with_angles(Path::new("x"), wrong.as_bytes()).unwrap_err();
+        assert!(e.to_string().contains("corrected_by"), "{e}");
+        let bad = format!("{minimal}[joints]\nangles = \"cooked\"\n");
+        let e = parse_with_angles(Path::new("x"), bad.as_bytes()).unwrap_err();
+        assert!(e.to_string().contains("angles"), "{e}");
     }
 }

@@ -72,6 +72,27 @@ pub struct Truth {
     pub simulation: toml::Table,
 }
 
+/// What the joint angles in `captures.csv` are (`[joints] angles` in `dataset.toml`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AngleKind {
+    /// Raw encoder readings, as LoLA reports them: nothing has corrected them.
+    #[default]
+    Raw,
+    /// Angles a team framework logged after correcting them with the robot's joint
+    /// calibration (true = sensor − stored offset), e.g. B-Human's `JointAngles`.
+    Corrected,
+}
+
+/// Where a dataset's joint angles come from: raw or corrected, and by which calibration.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct AngleSource {
+    /// Raw or corrected.
+    pub kind: AngleKind,
+    /// The joint calibration that corrected them (a file name or a note), when corrected.
+    pub corrected_by: Option<String>,
+}
+
 /// A whole dataset, in memory.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Dataset {
@@ -85,6 +106,8 @@ pub struct Dataset {
     pub corners: Vec<Corner>,
     /// `truth.toml`, when present.
     pub truth: Option<Truth>,
+    /// What the logged joint angles are (`[joints]` in `dataset.toml`; raw by default).
+    pub angles: AngleSource,
 }
 
 impl Truth {
@@ -108,6 +131,7 @@ impl Dataset {
             captures: Vec::new(),
             corners: Vec::new(),
             truth: None,
+            angles: AngleSource::default(),
         }
     }
 
@@ -137,7 +161,7 @@ impl Dataset {
         }
         let path = dir.join(DATASET_TOML);
         let bytes = text::read_file(&path, true, " (it needs at least a [camera] table)")?;
-        let model = config::parse(&path, &bytes.unwrap_or_default())?;
+        let (model, angles) = config::parse_with_angles(&path, &bytes.unwrap_or_default())?;
 
         let path = dir.join(CAPTURES_CSV);
         let bytes = text::read_file(&path, true, " (it needs at least its header line)")?;
@@ -167,6 +191,7 @@ impl Dataset {
             captures,
             corners,
             truth,
+            angles,
         })
     }
 
@@ -224,7 +249,7 @@ impl Dataset {
         let captures_path = dir.join(CAPTURES_CSV);
         let corners_path = dir.join(CORNERS_CSV);
         let truth_path = dir.join(TRUTH_TOML);
-        let dataset_toml = config::render(&self.model).map_err(|e| {
+        let dataset_toml = config::render(&self.model, &self.angles).map_err(|e| {
             DatasetError::invalid(
                 Location::file(&toml_path),
                 format!("cannot be written as TOML: {e}"),

@@ -515,5 +515,6 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
             values: truth,
             simulation,
         }),
+        angles: Default::default(),
     })
 }

@@ -135,6 +135,10 @@ fn rich_dataset(dir: &Path) -> Dataset {
         captures,
         corners,
         truth: Some(Truth { values, simulation }),
+        angles: naocalib::dataset::AngleSource {
+            kind: naocalib::dataset::AngleKind::Corrected,
+            corrected_by: Some("Config/Robots/Nao22/jointCalibration.cfg".into()),
+        },
     }
 }
 
