@@ -306,8 +306,7 @@ pub(crate) fn parse_with_angles(
         return Err(doc.error(
             "joints.corrected_by",
             "is only meaningful with angles = \"corrected\" (raw angles were corrected by \
-             nothing)"
-                .into(),
+             nothing)",
         ));
     }
     let angles = AngleSource {
