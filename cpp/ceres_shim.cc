@@ -31,7 +31,7 @@
 #include <Eigen/SVD>
 #include <glog/logging.h>
 
-#include "naocalib/src/solve/ceres.rs.h"
+#include "naocalib/src/solve/ceres/bridge.rs.h"
 
 namespace naocalib {
 namespace {
@@ -160,8 +160,6 @@ void validate(const FfiProblem& p, const FfiOptions& o) {
   if (o.linear_solver != LinearSolver::DenseQr &&
       o.linear_solver != LinearSolver::DenseNormalCholesky)
     fail("unknown linear solver");
-  if (!(finite(o.rank_threshold) && o.rank_threshold > 0.0 && o.rank_threshold < 1.0))
-    fail("rank threshold must lie in (0, 1)");
 }
 
 // ---------------------------------------------------------------------------------------
@@ -695,55 +693,6 @@ bool dense_jacobian(Built& built, std::vector<double>* residuals, Eigen::MatrixX
   return true;
 }
 
-// (JᵀJ)⁺ over all free parameters, row-major; zero rows/columns for parameters no residual
-// depends on. The algorithm of covariance::from_jacobian in Rust: columns scaled to unit
-// norm, the eigen-decomposition of the scaled JᵀJ, directions with a relative singular value
-// below `threshold` left out; where one lies within a factor 10 of that cut (its squared
-// value within 100), the SVD of the scaled J decides instead. False when not computable.
-bool covariance(Built& built, std::size_t n, double threshold, rust::Vec<double>& out) {
-  Eigen::MatrixXd j;
-  if (!dense_jacobian(built, nullptr, j)) return false;
-  const Eigen::Index d = j.cols();
-  Eigen::VectorXd scale(d);
-  for (Eigen::Index c = 0; c < d; ++c) {
-    const double norm = j.col(c).norm();
-    scale(c) = norm > 0.0 ? 1.0 / norm : 1.0;
-    j.col(c) *= scale(c);
-  }
-  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(d, d);
-  normal.selfadjointView<Eigen::Lower>().rankUpdate(j.transpose());
-  normal.triangularView<Eigen::StrictlyUpper>() = normal.transpose();
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normal);
-  if (eigen.info() != Eigen::Success) return false;
-  Eigen::VectorXd squared = eigen.eigenvalues();  // squared singular values
-  Eigen::MatrixXd vectors = eigen.eigenvectors();
-  const double cut = squared.maxCoeff() * threshold * threshold;
-  const bool near_cut = ((squared.array() > cut * 1e-2) && (squared.array() < cut * 1e2)).any();
-  if (near_cut) {
-    const Eigen::BDCSVD<Eigen::MatrixXd> svd(j, Eigen::ComputeThinV);
-    squared = svd.singularValues().array().square();
-    vectors = svd.matrixV();
-  }
-  const double max = squared.maxCoeff();
-  Eigen::MatrixXd inverse = Eigen::MatrixXd::Zero(d, d);
-  for (Eigen::Index k = 0; k < squared.size(); ++k)
-    if (squared(k) > max * threshold * threshold && squared(k) > 0.0)
-      inverse.noalias() += vectors.col(k) * (vectors.col(k).transpose() / squared(k));
-  inverse = scale.asDiagonal() * inverse * scale.asDiagonal();
-
-  const std::vector<int> columns = built.used_columns();
-  std::vector<double> full(n * n, 0.0);
-  for (Eigen::Index r = 0; r < d; ++r)
-    for (Eigen::Index c = 0; c < d; ++c) {
-      const double x = inverse(r, c);
-      if (!finite(x)) return false;
-      full[columns[r] * n + columns[c]] = x;
-    }
-  out.reserve(n * n);
-  for (double x : full) out.push_back(x);
-  return true;
-}
-
 }  // namespace
 
 FfiSolution solve(const FfiProblem& problem, const FfiOptions& options) {
@@ -779,14 +728,6 @@ FfiSolution solve(const FfiProblem& problem, const FfiOptions& options) {
 
     FfiSolution out;
     out.params = built.gather();
-    out.covariance_ok = false;
-    if (options.covariance) {
-      rust::Vec<double> cov;
-      if (covariance(built, problem.params.size(), options.rank_threshold, cov)) {
-        out.covariance = std::move(cov);
-        out.covariance_ok = true;
-      }
-    }
     out.iterations = static_cast<std::uint32_t>(summary.num_successful_steps +
                                                 summary.num_unsuccessful_steps);
     out.initial_cost = summary.initial_cost;

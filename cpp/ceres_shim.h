@@ -1,4 +1,4 @@
-// The Ceres side of the `cxx` bridge declared in src/solve/ceres.rs.
+// The Ceres side of the `cxx` bridge declared in src/solve/ceres/bridge.rs.
 //
 // Rust ships the calibration problem as data (each capture's camera and board chains as
 // lists of elementary transforms over the free parameters, plus the observed vertices);
@@ -22,8 +22,8 @@ struct FfiSolution;
 struct FfiEvaluation;
 
 // Runs Levenberg–Marquardt (dense QR or normal equations, as `options` says) from
-// `problem.params`; optionally the covariance (JᵀJ)⁺ over the free parameters (the
-// rank-deficiency tolerant pseudo-inverse of Rust's covariance::from_jacobian).
+// `problem.params`: the values and the run's summary (the covariance is Rust's, from the
+// Jacobian at the final fit).
 FfiSolution solve(const FfiProblem& problem, const FfiOptions& options);
 
 // Evaluates the cost, the (weighted) residuals and the dense row-major Jacobian over the

@@ -11,7 +11,7 @@ use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt, TerminationRe
 use nalgebra::{DMatrix, DVector, Dyn, Owned};
 
 use super::jacobian::{Evaluator, LOSS_WITH_WHITENING};
-use super::{Backend, BackendResult, Problem, SolveError, Summary, covariance};
+use super::{Backend, BackendResult, Problem, SolveError, Summary};
 
 /// The MINPACK-style Levenberg–Marquardt backend (`--solver lm`).
 #[derive(Debug, Clone, Copy, Default)]
@@ -33,7 +33,7 @@ const BEHIND_CAMERA_NORM: f64 = 1e10;
 struct Target<'a> {
     eval: &'a Evaluator<'a>,
     x: DVector<f64>,
-    /// The compressed Jacobian at `x`, and the full one (for the covariance).
+    /// The compressed Jacobian at `x`.
     current: RefCell<Option<Compressed>>,
     /// Jacobian requests so far (MINPACK's outer iterations).
     jacobians: Cell<usize>,
@@ -45,7 +45,6 @@ struct Target<'a> {
 struct Compressed {
     x: DVector<f64>,
     jacobian: DMatrix<f64>,
-    full_jacobian: DMatrix<f64>,
 }
 
 impl Target<'_> {
@@ -87,7 +86,6 @@ impl Target<'_> {
         *self.current.borrow_mut() = Some(Compressed {
             x: self.x.clone(),
             jacobian: compressed_jac,
-            full_jacobian: jac,
         });
         Some(compressed_r)
     }
@@ -168,18 +166,9 @@ impl Backend for MinpackLm {
         };
         let (target, report) = lm.minimize(target);
         let x = target.x;
-        let jac = match target.current.into_inner() {
-            Some(c) if c.x == x => c.full_jacobian,
-            _ => {
-                eval.residuals_and_jacobian(x.as_slice())
-                    .ok_or_else(|| fail("the solution puts a vertex behind the camera".into()))?
-                    .1
-            }
-        };
         let final_cost = eval
             .cost(x.as_slice())
             .ok_or_else(|| fail("the solution puts a vertex behind the camera".into()))?;
-        let (cov, _rank) = covariance::from_jacobian(&jac);
         let converged = report.termination.was_successful()
             || matches!(
                 report.termination,
@@ -202,7 +191,6 @@ impl Backend for MinpackLm {
         };
         Ok(BackendResult {
             free_values: x.iter().copied().collect(),
-            covariance: Some(cov),
             summary: Summary {
                 solver: self.name().into(),
                 converged,

@@ -73,9 +73,6 @@ pub struct Summary {
 pub struct BackendResult {
     /// Final values of the free parameters (order of [`Problem::free`]), internal units.
     pub free_values: Vec<f64>,
-    /// `(JᵀJ)⁻¹` (pseudo-inverse) of the weighted problem over the free parameters, not yet
-    /// scaled by the residual variance; `None` when it could not be computed.
-    pub covariance: Option<DMatrix<f64>>,
     /// The run's summary.
     pub summary: Summary,
 }
@@ -84,13 +81,10 @@ pub struct BackendResult {
 pub trait Backend {
     /// Short name, as in `--solver` and the result JSON.
     fn name(&self) -> &'static str;
-    /// Solves the problem from its initial values.
+    /// Solves the problem from its initial values: the values and the run's summary. The
+    /// uncertainty is not the backend's: [`calibrate`] computes it from the Jacobian at the
+    /// final fit, the same for every backend.
     fn solve(&self, problem: &Problem) -> Result<BackendResult, SolveError>;
-    /// Like [`Backend::solve`], but the covariance may be left out (`None`): for fits whose
-    /// uncertainty nobody reads (the first fits before the noise model, bootstrap refits).
-    fn solve_values(&self, problem: &Problem) -> Result<BackendResult, SolveError> {
-        self.solve(problem)
-    }
 }
 
 /// Names of the available backends, the default first.
@@ -395,11 +389,11 @@ struct Fit {
     summary: Summary,
 }
 
-/// Runs `backend` on `problem` without its covariance: [`calibrate`] computes that once,
+/// Runs `backend` on `problem`: the values; [`calibrate`] computes the covariance once,
 /// from the Jacobian its statistics evaluate at the final fit.
 fn fit(problem: &Problem, backend: &dyn Backend) -> Result<Fit, SolveError> {
     validate(problem)?;
-    let result = backend.solve_values(problem)?;
+    let result = backend.solve(problem)?;
     let free = problem.free();
     if result.free_values.len() != free.len() {
         return Err(SolveError::Backend {

@@ -208,9 +208,9 @@ impl Backend for Tiny {
         let (r, jac) = eval
             .residuals_and_jacobian(&x)
             .ok_or_else(|| fail("the solution puts a vertex behind the camera".into()))?;
-        let (cov, _rank) = covariance::from_jacobian(&jac);
         // tiny-solver does not say why it stopped: call it converged when one more
         // Gauss–Newton step could remove only a negligible part of the cost.
+        let (cov, _rank) = covariance::from_jacobian(&jac);
         let gradient = jac.tr_mul(&r);
         let decrease = 0.5 * (gradient.transpose() * &cov * &gradient)[(0, 0)];
         let final_cost = 0.5 * r.norm_squared();
@@ -219,7 +219,6 @@ impl Backend for Tiny {
             iterations < tol.max_iterations && decrease <= (1e-9 * final_cost).max(1e-12);
         Ok(BackendResult {
             free_values: x,
-            covariance: Some(cov),
             summary: Summary {
                 solver: self.name().into(),
                 converged,

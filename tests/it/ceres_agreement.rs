@@ -324,11 +324,11 @@ fn noise_free_solve_recovers_the_truth() {
         solution.summary.final_cost
     );
 
-    // The covariance is (JᵀJ)⁻¹ of the Rust Jacobian at the solution.
+    // The covariance from Ceres' Jacobian at the solution is (JᵀJ)⁻¹ of the Rust Jacobian.
     let free = problem.free();
     let x: Vec<f64> = free.iter().map(|p| solution.values[p.index()]).collect();
-    let result = naocalib::solve::Backend::solve(&Ceres::default(), &problem).expect("solves");
-    let cov = result.covariance.expect("covariance");
+    let (_, ceres_j) = evaluate(&problem, &x).expect("ceres evaluates");
+    let (cov, _) = naocalib::solve::covariance::from_jacobian(&ceres_j);
     let (_, j) = rust_jacobian(&problem, &x);
     let inv = (j.transpose() * &j).try_inverse().expect("JᵀJ invertible");
     let rel = cov
@@ -369,18 +369,7 @@ fn rank_deficient_problem_does_not_crash() {
     let result =
         naocalib::solve::Backend::solve(&Ceres::default(), &problem).expect("backend runs");
     assert!(result.free_values.iter().all(|v| v.is_finite()));
-    if let Some(cov) = &result.covariance {
-        assert!(cov.iter().all(|v| v.is_finite()), "covariance has NaN/inf");
-    }
-    println!(
-        "rank deficient: covariance {}, {}",
-        if result.covariance.is_some() {
-            "computed"
-        } else {
-            "not computed"
-        },
-        result.summary.termination
-    );
+    println!("rank deficient: {}", result.summary.termination);
 
     let solution = solve(&problem, &Ceres::default()).expect("solves");
     assert!(solution.values.iter().all(|v| v.is_finite()));

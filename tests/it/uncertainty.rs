@@ -331,7 +331,7 @@ fn the_whitened_fit_is_skipped_only_where_it_would_not_move() {
         for (term, c) in w.captures.iter_mut().zip(&captures) {
             term.whitening = Some(c.whitening(levels));
         }
-        let r = ceres().solve_values(&w).expect("whitened fit");
+        let r = ceres().solve(&w).expect("whitened fit");
         w.expand(&r.free_values)
     };
     let mut skipped = 0;
