@@ -29,6 +29,7 @@ mod fuzz_readers;
 mod hostile_inputs;
 mod misfit;
 mod plan;
+mod plan_around;
 mod plot_files;
 mod pure_rust_agreement;
 mod pure_rust_cli;
