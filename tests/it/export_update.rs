@@ -414,3 +414,74 @@ fn docs_list_exactly_the_registry() {
         );
     }
 }
+
+#[test]
+fn solve_records_corrected_angles_and_update_composes_with_the_robots_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("robot");
+    crate::util::simulate_small(&data, 6);
+    // The logged angles were corrected by the robot's jointCalibration.cfg.
+    let toml_path = data.join("dataset.toml");
+    let toml = std::fs::read_to_string(&toml_path).unwrap();
+    let corrected = "angles = \"corrected\"\ncorrected_by = \"jointCalibration.cfg\"\n";
+    let toml = if toml.contains("angles = \"raw\"") {
+        toml.replace("angles = \"raw\"\n", corrected)
+    } else {
+        format!("{toml}\n[joints]\n{corrected}")
+    };
+    std::fs::write(&toml_path, toml).unwrap();
+    let out = naocalib().arg("solve").arg(&data).arg("--json").output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let result: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(result["angles"], "corrected");
+    assert_eq!(result["corrected_by"], "jointCalibration.cfg");
+    let result_path = dir.path().join("result.json");
+    std::fs::write(&result_path, &out.stdout).unwrap();
+
+    // A fresh joint file cannot be right: refused.
+    let fresh = dir.path().join("fresh_jointCalibration.cfg");
+    let out = naocalib()
+        .arg("export")
+        .arg(&result_path)
+        .args(["--format", "bhuman-joints", "--out"])
+        .arg(&fresh)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--update"));
+    assert!(!fresh.exists());
+
+    // --update composes stored_new = stored_old − α.
+    let joints = dir.path().join("jointCalibration.cfg");
+    std::fs::copy(fixture("bhuman/jointCalibration.cfg"), &joints).unwrap();
+    let old = export::bhuman::read_bhuman_joint_cfg(
+        &std::fs::read_to_string(&joints).unwrap(),
+        &joints,
+    )
+    .unwrap();
+    let out = naocalib()
+        .arg("export")
+        .arg(&result_path)
+        .arg("--update")
+        .arg(&joints)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let new = export::bhuman::read_bhuman_joint_cfg(
+        &std::fs::read_to_string(&joints).unwrap(),
+        &joints,
+    )
+    .unwrap();
+    let mut checked = 0;
+    for ((name, s_old), (_, s_new)) in old.iter().zip(&new) {
+        match export::bhuman::joint_param(name) {
+            Some(p) if result["parameters"][p.name()]["fixed"] != true => {
+                let alpha = result["parameters"][p.name()]["value"].as_f64().unwrap();
+                assert!((s_new - (s_old - alpha)).abs() < 1e-9, "{name}");
+                checked += 1;
+            }
+            _ => assert_eq!(s_old, s_new, "{name} kept"),
+        }
+    }
+    assert_eq!(checked, 12, "every leg joint");
+}
