@@ -9,7 +9,7 @@ use clap::Args;
 
 use naocalib::report::export::io::check_writable;
 use naocalib::report::export::{
-    Calibration, ExportError, ExportFormat, WriteOptions, check_fresh, export, export_all,
+    Calibration, ExportError, ExportFormat, Posture, WriteOptions, check_fresh, export, export_all,
     read_calibration, write_atomic,
 };
 use naocalib::report::plot;
@@ -38,10 +38,24 @@ pub struct ExportArgs {
     /// Replace existing files (never the input).
     #[arg(long)]
     force: bool,
+    /// The posture whose leg offsets the robot files carry when compliance or play have
+    /// values: `standing` (the standard stand, α + κ·τ_stand + ½π·sgn τ_stand; docs/MODEL.md
+    /// §6) or `lying` (the offsets α as calibrated, lying on the back).
+    #[arg(long, value_enum, default_value_t = PostureArg::Standing)]
+    posture: PostureArg,
     /// Write robot files even for a result that is not a calibration (not converged,
     /// non-finite, implausible residuals); they start with a NOT A CALIBRATION marker.
     #[arg(long)]
     allow_unconverged: bool,
+}
+
+/// `--posture`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum PostureArg {
+    /// The standard stand.
+    Standing,
+    /// Lying on the back, as calibrated.
+    Lying,
 }
 
 /// The `--format` help: one line per registry row.
@@ -100,7 +114,11 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
             })?),
             None => None,
         };
-    let calibration = read_calibration(&args.input)?;
+    let mut calibration = read_calibration(&args.input)?;
+    calibration.posture = match args.posture {
+        PostureArg::Standing => Posture::Standing,
+        PostureArg::Lying => Posture::Lying,
+    };
     let problems = calibration.problems();
     if !problems.is_empty() {
         eprintln!(

@@ -112,6 +112,7 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     )?;
     let truth = dataset.truth.as_ref().map(|t| &t.values[..]);
     let mut stdout = std::io::stdout().lock();
+    let calibration = naocalib::report::export::Calibration::from_solution(&solution, None);
     let changes = previous
         .as_ref()
         .map(|p| naocalib::report::changes(&solution, p, corrected));
@@ -125,10 +126,19 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
         if let Some(changes) = &changes {
             value["changes"] = naocalib::report::changes_json(changes);
         }
+        let standing = naocalib::report::standing_offsets(&calibration);
+        if !standing.is_empty() {
+            value["standing"] = standing
+                .iter()
+                .map(|(p, _, s)| (p.name().to_string(), serde_json::json!(s)))
+                .collect::<serde_json::Map<_, _>>()
+                .into();
+        }
         writeln!(stdout, "{}", serde_json::to_string_pretty(&value)?)?;
     } else {
         writeln!(stdout, "{}", args.dataset.display())?;
         write!(stdout, "{}", naocalib::report::table(&solution, truth))?;
+        write!(stdout, "{}", naocalib::report::standing_table(&calibration))?;
         if let Some(changes) = &changes {
             write!(stdout, "{}", naocalib::report::changes_table(changes))?;
         }

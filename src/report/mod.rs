@@ -477,3 +477,41 @@ pub fn changes_json(changes: &[Change]) -> Value {
     }
     Value::Object(map)
 }
+
+/// The leg offsets for a robot in the standard stand beside the lying ones (when compliance
+/// or play have values; empty otherwise): `α + κ·τ_stand + ½π·sgn τ_stand`
+/// ([`export::Calibration::standing_offset`]).
+pub fn standing_offsets(cal: &export::Calibration) -> Vec<(Param, f64, f64)> {
+    cal.parameters
+        .iter()
+        .filter_map(|e| cal.standing_offset(e.param).map(|s| (e.param, e.value, s)))
+        .collect()
+}
+
+/// [`standing_offsets`] as a text table (empty when there are none).
+pub fn standing_table(cal: &export::Calibration) -> String {
+    let rows = standing_offsets(cal);
+    if rows.is_empty() {
+        return String::new();
+    }
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "\nLeg offsets lying (as calibrated) and standing (alpha + kappa*tau_stand + \
+         play/2*sgn tau_stand; team files carry the standing ones unless --posture lying):"
+    );
+    let _ = writeln!(
+        out,
+        "{:<24} {:>10} {:>10} {:>10}  unit",
+        "parameter", "lying", "standing", "tau_stand"
+    );
+    for (p, lying, standing) in rows {
+        let tau = export::calibration::stand_torque(p).unwrap_or(f64::NAN);
+        let _ = writeln!(
+            out,
+            "{:<24} {lying:>10.4} {standing:>10.4} {tau:>+10.4}  deg, N·m",
+            p.name()
+        );
+    }
+    out
+}

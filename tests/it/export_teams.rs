@@ -80,6 +80,8 @@ fn random_calibration(rng: &mut impl Rng, camera_deg: f64) -> Calibration {
             })
             .collect(),
         angles: None,
+        // The lying offsets themselves (the standing ones are tested in export_posture.rs).
+        posture: export::Posture::Lying,
     }
 }
 

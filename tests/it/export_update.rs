@@ -47,6 +47,7 @@ fn calibration(rng: &mut impl Rng) -> Calibration {
             })
             .collect(),
         angles: None,
+        posture: export::Posture::Standing,
     }
 }
 
@@ -430,8 +431,17 @@ fn solve_records_corrected_angles_and_update_composes_with_the_robots_file() {
         format!("{toml}\n[joints]\n{corrected}")
     };
     std::fs::write(&toml_path, toml).unwrap();
-    let out = naocalib().arg("solve").arg(&data).arg("--json").output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = naocalib()
+        .arg("solve")
+        .arg(&data)
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let result: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(result["angles"], "corrected");
     assert_eq!(result["corrected_by"], "jointCalibration.cfg");
@@ -454,11 +464,9 @@ fn solve_records_corrected_angles_and_update_composes_with_the_robots_file() {
     // --update composes stored_new = stored_old − α.
     let joints = dir.path().join("jointCalibration.cfg");
     std::fs::copy(fixture("bhuman/jointCalibration.cfg"), &joints).unwrap();
-    let old = export::bhuman::read_bhuman_joint_cfg(
-        &std::fs::read_to_string(&joints).unwrap(),
-        &joints,
-    )
-    .unwrap();
+    let old =
+        export::bhuman::read_bhuman_joint_cfg(&std::fs::read_to_string(&joints).unwrap(), &joints)
+            .unwrap();
     let out = naocalib()
         .arg("export")
         .arg(&result_path)
@@ -466,12 +474,14 @@ fn solve_records_corrected_angles_and_update_composes_with_the_robots_file() {
         .arg(&joints)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let new = export::bhuman::read_bhuman_joint_cfg(
-        &std::fs::read_to_string(&joints).unwrap(),
-        &joints,
-    )
-    .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let new =
+        export::bhuman::read_bhuman_joint_cfg(&std::fs::read_to_string(&joints).unwrap(), &joints)
+            .unwrap();
     let mut checked = 0;
     for ((name, s_old), (_, s_new)) in old.iter().zip(&new) {
         match export::bhuman::joint_param(name) {

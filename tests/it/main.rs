@@ -18,6 +18,7 @@ mod detect_files;
 mod detect_render;
 #[cfg(feature = "detect")]
 mod detect_robust;
+mod export_posture;
 mod export_robustness;
 mod export_roundtrip;
 mod export_signs;

@@ -273,7 +273,7 @@ pub fn import_camera(text: &str, path: &Path) -> Result<Imported, ExportError> {
 pub fn import_joints(text: &str, path: &Path) -> Result<Imported, ExportError> {
     Ok(read_bhuman_joint_cfg(text, path)?
         .into_iter()
-        .filter_map(|(name, stored)| joint_param(&name).map(|p| (p, -stored)))
+        .filter_map(|(name, stored)| joint_param(&name).map(|p| (p, 0.0 - stored)))
         .collect())
 }
 

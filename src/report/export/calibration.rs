@@ -105,6 +105,35 @@ pub struct Calibration {
     /// Whether the dataset's joint angles were raw or already corrected by a joint
     /// calibration (`None`: not recorded, read as raw, the dataset default).
     pub angles: Option<AngleSource>,
+    /// The posture whose leg offsets robot files carry (standing unless asked otherwise);
+    /// it matters only when compliance or play have values.
+    pub posture: Posture,
+}
+
+/// The posture a robot file's leg offsets are for (`naocalib export --posture`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Posture {
+    /// The standard stand the robot plays in ([`crate::model::gravity::STAND_DEG`]): leg
+    /// offsets `α + κ·τ_stand + ½π·sgn τ_stand`.
+    #[default]
+    Standing,
+    /// Lying on its back as calibrated: the offsets `α` themselves.
+    Lying,
+}
+
+/// The standing gravity torque (N·m) about the leg joint whose offset is `param`, in the
+/// standard stand with the default geometry; `None` for other parameters.
+pub fn stand_torque(param: Param) -> Option<f64> {
+    use crate::model::{RobotGeometry, Side, gravity};
+    let side = match param.group() {
+        crate::model::ParamGroup::LeftLeg => Side::Left,
+        crate::model::ParamGroup::RightLeg => Side::Right,
+        _ => return None,
+    };
+    let k = side.leg_joints().iter().position(|j| j.offset() == param)?;
+    let torques =
+        gravity::standing_leg_torques(&RobotGeometry::default(), side, &gravity::stand_joints());
+    Some(torques[k])
 }
 
 impl Calibration {
@@ -135,6 +164,43 @@ impl Calibration {
                 })
                 .collect(),
             angles: None,
+            posture: Posture::Standing,
+        }
+    }
+
+    /// The effective offset (deg) of the leg joint whose offset is `param` for a robot in
+    /// the standard stand: `α + κ·τ_stand + ½π·sgn τ_stand` with the compliance `κ` and
+    /// play `π` of this calibration (zero when absent or not determined) — `None` when
+    /// `param` is no leg offset, or when neither compliance nor play has a value (the
+    /// standing offset is then `α` itself).
+    pub fn standing_offset(&self, param: Param) -> Option<f64> {
+        let tau = stand_torque(param)?;
+        let alpha = self.get(param)?.value;
+        let other = |suffix: &str| {
+            Param::from_name(&format!("{}{suffix}", param.name()))
+                .and_then(|p| self.robot_value(p))
+                .unwrap_or(0.0)
+        };
+        let (kappa, play) = (other("Compliance"), other("Play"));
+        if kappa == 0.0 && play == 0.0 {
+            return None;
+        }
+        let sign = if tau > 0.0 {
+            1.0
+        } else if tau < 0.0 {
+            -1.0
+        } else {
+            0.0
+        };
+        Some(alpha + kappa * tau + 0.5 * play * sign)
+    }
+
+    /// The value a robot file carries for `param` in [`Calibration::posture`]: the standing
+    /// offset of a leg joint when compliance or play have values, otherwise the value.
+    fn posture_value(&self, param: Param, value: f64) -> f64 {
+        match self.posture {
+            Posture::Standing => self.standing_offset(param).unwrap_or(value),
+            Posture::Lying => value,
         }
     }
 
@@ -154,7 +220,7 @@ impl Calibration {
     pub fn robot_value(&self, param: Param) -> Option<f64> {
         self.get(param)
             .filter(|e| e.is_determined())
-            .map(|e| e.value)
+            .map(|e| self.posture_value(param, e.value))
     }
 
     /// The value of `param` when this calibration estimated it and the data determine it
@@ -163,7 +229,7 @@ impl Calibration {
     pub fn determined_here(&self, param: Param) -> Option<f64> {
         self.get(param)
             .filter(|e| !e.fixed && e.std.is_some())
-            .map(|e| e.value)
+            .map(|e| self.posture_value(param, e.value))
     }
 
     /// Whether the joint angles the calibration was fitted to were already corrected by
@@ -245,6 +311,11 @@ impl Calibration {
             angles: self.angles.as_ref().map(|a| a.kind),
             corrected_by: self.angles.as_ref().and_then(|a| a.corrected_by.as_deref()),
             parameters: Entries(&self.parameters),
+            standing: self
+                .parameters
+                .iter()
+                .filter_map(|e| self.standing_offset(e.param).map(|v| (e.param.name(), v)))
+                .collect(),
         }
     }
 
@@ -340,6 +411,8 @@ struct CalibrationOut<'a> {
     #[serde(skip_serializing_if = "Option::is_none")]
     corrected_by: Option<&'a str>,
     parameters: Entries<'a>,
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    standing: BTreeMap<&'a str, f64>,
 }
 
 /// The parameters as a map in registry order.
@@ -396,6 +469,9 @@ struct CalibrationIn {
     angles: Option<AngleKind>,
     corrected_by: Option<String>,
     parameters: BTreeMap<String, EntryFile>,
+    /// Derived from the parameters on writing ([`Calibration::standing_offset`]).
+    #[allow(dead_code)]
+    standing: Option<BTreeMap<String, f64>>,
 }
 
 impl CalibrationIn {
@@ -431,6 +507,7 @@ impl CalibrationIn {
             rms_px: self.rms_px,
             parameters: entries_from(entries, path)?,
             angles,
+            posture: Posture::Standing,
         })
     }
 }
@@ -497,6 +574,7 @@ impl ResultIn {
             rms_px: self.rms_px,
             parameters: entries_from(entries, path)?,
             angles,
+            posture: Posture::Standing,
         })
     }
 }

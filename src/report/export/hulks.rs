@@ -236,7 +236,7 @@ pub fn import_body(text: &str, path: &Path) -> Result<Imported, ExportError> {
     let root = jsonedit::parse(text, path)?;
     Ok(stored(&root, path)?
         .into_iter()
-        .map(|(p, x)| (p, -x.to_degrees()))
+        .map(|(p, x)| (p, 0.0 - x.to_degrees()))
         .collect())
 }
 

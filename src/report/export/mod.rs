@@ -69,7 +69,9 @@ pub use bhuman::{
     BHUMAN_JOINTS, bhuman_camera_cfg, bhuman_joint_cfg, read_bhuman_camera_cfg,
     read_bhuman_joint_cfg,
 };
-pub use calibration::{COMPENSATION, Calibration, Entry, FORMAT, VERSION, read_calibration};
+pub use calibration::{
+    COMPENSATION, Calibration, Entry, FORMAT, Posture, VERSION, read_calibration,
+};
 pub use io::{WriteOptions, check_writable, dataset_files, write_atomic, write_atomic_with};
 
 /// Everything that can go wrong exporting or reading an export.
@@ -657,6 +659,7 @@ pub fn import_calibration(
         rms_px: None,
         parameters,
         angles: None,
+        posture: Posture::Standing,
     };
     Ok((cal, read))
 }

@@ -192,7 +192,7 @@ pub fn import_joints(text: &str, path: &Path) -> Result<Imported, ExportError> {
     let mut out = Vec::new();
     for (name, entry) in read_joint_calibration_cfg(text, path)? {
         if let Some(p) = joint_param(&name) {
-            out.push((p, -entry.offset));
+            out.push((p, 0.0 - entry.offset));
             if let Some(play) = play_param(p) {
                 out.push((play, entry.joint_play));
             }
