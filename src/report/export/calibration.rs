@@ -170,16 +170,19 @@ impl Calibration {
 
     /// The effective offset (deg) of the leg joint whose offset is `param` for a robot in
     /// the standard stand: `α + κ·τ_stand + ½π·sgn τ_stand` with the compliance `κ` and
-    /// play `π` of this calibration (zero when absent or not determined) — `None` when
-    /// `param` is no leg offset, or when neither compliance nor play has a value (the
+    /// play `π` this calibration estimated (zero when held or not determined) — `None` when
+    /// `param` is no leg offset, or when neither compliance nor play was estimated (the
     /// standing offset is then `α` itself).
     pub fn standing_offset(&self, param: Param) -> Option<f64> {
         let tau = stand_torque(param)?;
         let alpha = self.get(param)?.value;
+        // Only compliance and play this calibration estimated: held values (a robot's
+        // imported jointPlay, say) are already in the offsets its file holds.
         let other = |suffix: &str| {
             Param::from_name(&format!("{}{suffix}", param.name()))
-                .and_then(|p| self.robot_value(p))
-                .unwrap_or(0.0)
+                .and_then(|p| self.get(p))
+                .filter(|e| !e.fixed && e.std.is_some())
+                .map_or(0.0, |e| e.value)
         };
         let (kappa, play) = (other("Compliance"), other("Play"));
         if kappa == 0.0 && play == 0.0 {
