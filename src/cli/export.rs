@@ -87,6 +87,16 @@ fn run_update(
             })?
         }
     };
+    if !format.spec().joints {
+        let head = |p: naocalib::model::Param| calibration.value(p);
+        eprintln!(
+            "note: the lower camera's correction holds for head offsets HeadYaw {} deg, \
+             HeadPitch {} deg (as this calibration had them); if the robot's joint \
+             calibration holds others, solve with --start-from (naocalib import) first",
+            head(naocalib::model::Param::HeadYaw),
+            head(naocalib::model::Param::HeadPitch)
+        );
+    }
     let backup = naocalib::report::export::update(
         calibration,
         format,

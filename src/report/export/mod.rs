@@ -12,7 +12,7 @@
 //!   with `jointPlay`), [`runswift`] (`[kinematics]`). [`camera`] turns naocalib's camera
 //!   offsets into each team's parameterisation of the same rotation and back.
 //! - [`update`]: a robot's own file with only what a calibration determined replaced, every
-//!   other byte kept ([`cfg`], [`jsonedit`], [`ini`] read the files with the span of every
+//!   other byte kept ([`mod@cfg`], [`jsonedit`], [`ini`] read the files with the span of every
 //!   value); [`import`] / [`import_calibration`]: a robot's files read back.
 //! - [`io`]: where files may be written and how (atomically, never over an input).
 //!
