@@ -282,4 +282,18 @@ mod tests {
         let bad = parse("a = 1;\nb 2;\n", Path::new("t.cfg")).unwrap_err();
         assert!(bad.to_string().contains("line 2"), "{bad}");
     }
+
+    #[test]
+    fn any_text_parses_or_is_refused_without_panic() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let alphabet: Vec<char> = "ab=;{}[],/*\"\n é0.5deg".chars().collect();
+        for _ in 0..5000 {
+            let len = rng.random_range(0..40);
+            let text: String = (0..len)
+                .map(|_| alphabet[rng.random_range(0..alphabet.len())])
+                .collect();
+            let _ = parse(&text, Path::new("t.cfg"));
+        }
+    }
 }
