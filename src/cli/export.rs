@@ -9,8 +9,8 @@ use clap::Args;
 
 use naocalib::report::export::io::check_writable;
 use naocalib::report::export::{
-    Calibration, ExportError, ExportFormat, WriteOptions, export, export_all, read_calibration,
-    write_atomic,
+    Calibration, ExportError, ExportFormat, Posture, WriteOptions, check_fresh, export, export_all,
+    read_calibration, write_atomic,
 };
 use naocalib::report::plot;
 use naocalib::solve::Solution;
@@ -24,27 +24,98 @@ pub struct ExportArgs {
     /// *camera*.cfg, *joint*.cfg). May be given several times.
     #[arg(long, value_name = "FILE")]
     out: Vec<PathBuf>,
-    /// Format of the --out files: toml, json, bhuman-camera, bhuman-joints, hulks-head,
-    /// hulks-body, naoth-camera, nomadz-joints, runswift-camera (docs/EXPORTS.md).
-    #[arg(long, value_name = "FORMAT")]
+    /// Format of the --out / --update files (docs/EXPORTS.md).
+    #[arg(long, value_name = "FORMAT", long_help = format_help())]
     format: Option<String>,
-    /// Write every format into this directory (calibration.toml, calibration.json,
-    /// cameraCalibration.cfg, jointCalibration.cfg, hulks/, naoth/, nomadz/, runswift/).
+    /// Write every format into this directory, under the file names listed for --format.
     #[arg(long, value_name = "DIR")]
     dir: Option<PathBuf>,
+    /// Update a robot's existing file in its team's layout (--format, or recognised from
+    /// the content): replace only what this calibration determined, keep every other byte,
+    /// keep the previous file as FILE.bak.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["out", "dir"])]
+    update: Option<PathBuf>,
     /// Replace existing files (never the input).
     #[arg(long)]
     force: bool,
+    /// The posture whose leg offsets the robot files carry when compliance or play have
+    /// values: `standing` (the standard stand, α + κ·τ_stand + ½π·sgn τ_stand; docs/MODEL.md
+    /// §6) or `lying` (the offsets α as calibrated, lying on the back).
+    #[arg(long, value_enum, default_value_t = PostureArg::Standing)]
+    posture: PostureArg,
     /// Write robot files even for a result that is not a calibration (not converged,
     /// non-finite, implausible residuals); they start with a NOT A CALIBRATION marker.
     #[arg(long)]
     allow_unconverged: bool,
 }
 
+/// `--posture`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum PostureArg {
+    /// The standard stand.
+    Standing,
+    /// Lying on the back, as calibrated.
+    Lying,
+}
+
+/// The `--format` help: one line per registry row.
+fn format_help() -> String {
+    format!(
+        "Format of the --out / --update files (docs/EXPORTS.md):\n{}",
+        ExportFormat::help()
+    )
+}
+
+/// `naocalib export --update FILE`.
+fn run_update(
+    args: &ExportArgs,
+    file: &Path,
+    format: Option<ExportFormat>,
+    calibration: &Calibration,
+) -> Result<ExitCode> {
+    let format = match format {
+        Some(f) => f,
+        None => {
+            let text = std::fs::read_to_string(file)
+                .with_context(|| format!("{}: cannot read", file.display()))?;
+            ExportFormat::recognise(&text).with_context(|| {
+                format!(
+                    "{}: layout not recognised; give --format ({})",
+                    file.display(),
+                    ExportFormat::names()
+                )
+            })?
+        }
+    };
+    if !format.spec().joints {
+        let head = |p: naocalib::model::Param| calibration.value(p);
+        eprintln!(
+            "note: the lower camera's correction holds for head offsets HeadYaw {} deg, \
+             HeadPitch {} deg (as this calibration had them); if the robot's joint \
+             calibration holds others, solve with --start-from (naocalib import) first",
+            head(naocalib::model::Param::HeadYaw),
+            head(naocalib::model::Param::HeadPitch)
+        );
+    }
+    let backup = naocalib::report::export::update(
+        calibration,
+        format,
+        file,
+        std::slice::from_ref(&args.input),
+    )?;
+    println!(
+        "updated {} ({}); previous file kept as {}",
+        file.display(),
+        format.name(),
+        backup.display()
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
 /// Runs `naocalib export`.
 pub fn run(args: &ExportArgs) -> Result<ExitCode> {
-    if args.out.is_empty() && args.dir.is_none() {
-        bail!("nothing to write: give --out FILE or --dir DIR");
+    if args.out.is_empty() && args.dir.is_none() && args.update.is_none() {
+        bail!("nothing to write: give --out FILE, --dir DIR or --update FILE");
     }
     let format =
         match &args.format {
@@ -53,7 +124,11 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
             })?),
             None => None,
         };
-    let calibration = read_calibration(&args.input)?;
+    let mut calibration = read_calibration(&args.input)?;
+    calibration.posture = match args.posture {
+        PostureArg::Standing => Posture::Standing,
+        PostureArg::Lying => Posture::Lying,
+    };
     let problems = calibration.problems();
     if !problems.is_empty() {
         eprintln!(
@@ -61,6 +136,9 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
             args.input.display(),
             problems.join("; ")
         );
+    }
+    if let Some(file) = &args.update {
+        return run_update(args, file, format, &calibration);
     }
     let options = WriteOptions {
         force: args.force,
@@ -93,7 +171,9 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
         .context("give --allow-unconverged to write it anyway, marked NOT A CALIBRATION"));
     }
     // Every path is checked before any file is written.
-    for (_, path) in &targets {
+    for (format, path) in &targets {
+        check_fresh(&calibration, *format)
+            .with_context(|| format!("not writing {}", path.display()))?;
         check_writable(path, &options)?;
     }
     for (format, path) in targets {
@@ -130,10 +210,26 @@ pub fn solve_outputs(
         eprintln!("wrote {} plot files into {}", files.len(), dir.display());
     }
     if let Some(dir) = export_dir {
-        let calibration = Calibration::from_solution(solution, Some(&dataset.dir));
+        let mut calibration = Calibration::from_solution(solution, Some(&dataset.dir));
+        calibration.angles = Some(dataset.angles.clone());
         let problems = calibration.problems();
-        let files: Vec<PathBuf> = if problems.is_empty() {
+        let files: Vec<PathBuf> = if problems.is_empty() && !calibration.corrected_angles() {
             export_all(&calibration, dir, &options).context("--export")?
+        } else if problems.is_empty() {
+            eprintln!(
+                "warning: the dataset's joint angles were already corrected by the robot's \
+                 joint calibration: --export writes no joint files (their offsets are changes \
+                 to the robot's file: use `naocalib export --update FILE`)"
+            );
+            let mut files = Vec::new();
+            for (format, _, name) in ExportFormat::ALL {
+                if check_fresh(&calibration, format).is_ok() {
+                    let path = dir.join(name);
+                    export(&calibration, format, &path, &options).context("--export")?;
+                    files.push(path);
+                }
+            }
+            files
         } else {
             eprintln!(
                 "warning: not a calibration ({}); --export writes only calibration.toml and \

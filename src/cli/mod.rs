@@ -5,6 +5,7 @@ mod compare;
 #[cfg(feature = "detect")]
 mod detect;
 mod export;
+mod import;
 mod options;
 mod plan;
 mod simulate;
@@ -42,8 +43,11 @@ enum Command {
     /// Calibrate many datasets in parallel: a table of all runs with mean ± std across
     /// runs, drift between runs of the same robot, and failures reported and skipped.
     Batch(batch::BatchArgs),
-    /// Write a result as calibration files: TOML/JSON and B-Human style .cfg.
+    /// Write a result as calibration files: TOML/JSON and the teams' formats, fresh or
+    /// updating a robot's own file (--update).
     Export(export::ExportArgs),
+    /// Read a robot's current team calibration files into naocalib's calibration TOML.
+    Import(import::ImportArgs),
     /// Find the sandal's vertices in a dataset's images with OpenCV; write corners.csv.
     #[cfg(feature = "detect")]
     Detect(detect::DetectArgs),
@@ -91,6 +95,7 @@ pub fn run(cli: &Cli) -> Result<ExitCode> {
         Command::Compare(args) => compare::run(args),
         Command::Batch(args) => batch::run(args, cli.verbose),
         Command::Export(args) => export::run(args),
+        Command::Import(args) => import::run(args),
         #[cfg(feature = "detect")]
         Command::Detect(args) => detect::run(args),
     }

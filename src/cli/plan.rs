@@ -49,6 +49,12 @@ pub struct PlanArgs {
     /// Replace an existing OUT.
     #[arg(long)]
     force: bool,
+    /// Design the stances around the robot's current calibration (a calibration TOML/JSON,
+    /// e.g. from `naocalib import`) instead of zero: the board must stay in view for every
+    /// offset within ±--offset-deg of the robot's values (for captures whose logged angles
+    /// are raw, as LoLA reports them).
+    #[arg(long, value_name = "CAL.toml")]
+    around: Option<PathBuf>,
 }
 
 /// The families of `--families`.
@@ -115,6 +121,13 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
     };
     options.feasibility.offset_angle = args.offset_deg.to_radians();
     options.feasibility.offset_length = args.offset_deg;
+    if let Some(path) = &args.around {
+        let current = naocalib::report::export::read_calibration(path)
+            .with_context(|| format!("--around {}", path.display()))?;
+        for e in current.parameters.iter().filter(|e| e.is_determined()) {
+            options.feasibility.centre[e.param.index()] = e.param.unit().from_report(e.value);
+        }
+    }
     let start = Instant::now();
     let plan = naocalib::plan::plan(&model, &options)?;
     let elapsed = start.elapsed().as_secs_f64();

@@ -42,6 +42,12 @@ pub struct SolveArgs {
     /// Replace existing --plots/--export/--report files (never the dataset's).
     #[arg(long)]
     force: bool,
+    /// Start from the robot's current calibration (`naocalib import`, or an earlier
+    /// calibration TOML/JSON): its values are the start values, the head offsets are held
+    /// at its values unless the head family is freed (the framework applies them before
+    /// the camera correction), and the report shows the change since it, z = change/σ.
+    #[arg(long, value_name = "CAL.toml")]
+    start_from: Option<PathBuf>,
 }
 
 fn load(path: &Path) -> Result<Dataset> {
@@ -77,6 +83,22 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     };
     let mut problem = Problem::from_dataset(&dataset, fixed)?;
     problem.loss = args.problem.loss();
+    let corrected = dataset.angles.kind == naocalib::dataset::AngleKind::Corrected;
+    let previous = match &args.start_from {
+        Some(path) => {
+            let previous = naocalib::report::export::read_calibration(path)
+                .with_context(|| format!("--start-from {}", path.display()))?;
+            let values: Vec<_> = previous
+                .parameters
+                .iter()
+                .filter(|e| e.is_determined())
+                .map(|e| (e.param, e.value))
+                .collect();
+            problem.start_from(&values, corrected);
+            Some(previous)
+        }
+        None => None,
+    };
     let options = args.uncertainty.options();
     let solution = solve::calibrate(&problem, backend.as_ref(), &options)
         .with_context(|| format!("solving {}", args.dataset.display()))?;
@@ -90,13 +112,36 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     )?;
     let truth = dataset.truth.as_ref().map(|t| &t.values[..]);
     let mut stdout = std::io::stdout().lock();
+    let calibration = naocalib::report::export::Calibration::from_solution(&solution, None);
+    let changes = previous
+        .as_ref()
+        .map(|p| naocalib::report::changes(&solution, p, corrected));
     if args.json {
         let mut value = naocalib::report::json(&solution, truth);
         value["dataset"] = serde_json::Value::String(args.dataset.display().to_string());
+        value["angles"] = serde_json::to_value(dataset.angles.kind)?;
+        if let Some(by) = &dataset.angles.corrected_by {
+            value["corrected_by"] = serde_json::Value::String(by.clone());
+        }
+        if let Some(changes) = &changes {
+            value["changes"] = naocalib::report::changes_json(changes);
+        }
+        let standing = naocalib::report::standing_offsets(&calibration);
+        if !standing.is_empty() {
+            value["standing"] = standing
+                .iter()
+                .map(|(p, _, s)| (p.name().to_string(), serde_json::json!(s)))
+                .collect::<serde_json::Map<_, _>>()
+                .into();
+        }
         writeln!(stdout, "{}", serde_json::to_string_pretty(&value)?)?;
     } else {
         writeln!(stdout, "{}", args.dataset.display())?;
         write!(stdout, "{}", naocalib::report::table(&solution, truth))?;
+        write!(stdout, "{}", naocalib::report::standing_table(&calibration))?;
+        if let Some(changes) = &changes {
+            write!(stdout, "{}", naocalib::report::changes_table(changes))?;
+        }
     }
     Ok(if solution.is_calibration() {
         ExitCode::SUCCESS

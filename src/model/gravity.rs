@@ -78,16 +78,15 @@ fn column(pose: &Pose<f64>, k: usize) -> [f64; 3] {
     ]
 }
 
-/// The gravity torque (N·m) about each joint of one leg (HipYawPitch, HipRoll, HipPitch,
-/// KneePitch, AnklePitch, AnkleRoll) at the logged angles, offsets left out:
-/// `τ_j = u_j · Σ_{i ≥ j} (c_i − o_j) × (m_i·g·d)` with `u_j` the axis about which a growing
-/// angle turns, `o_j` a point on it and `d` the unit gravity direction of `robot`.
-pub fn leg_torques(
-    robot: &RobotGeometry,
-    board: &Board,
-    side: Side,
-    joints: &JointAngles,
-) -> [f64; 6] {
+/// One leg's joint frames `F_0 … F_5` in `O`, the axes `u_j` about which a growing angle
+/// turns and a point `o_j` on each (docs/MODEL.md §6).
+struct LegFrames {
+    frames: [Pose<f64>; 6],
+    axes: [[f64; 3]; 6],
+    points: [[f64; 3]; 6],
+}
+
+fn leg_frames(robot: &RobotGeometry, side: Side, joints: &JointAngles) -> LegFrames {
     let s = side.sign();
     let q = side.leg_joints().map(|j| joints.get(j));
     let base = Pose::translation(0.0, s * robot.hip_offset_y, 0.0)
@@ -104,7 +103,6 @@ pub fn leg_torques(
         .compose(&Pose::translation(0.0, 0.0, -robot.tibia))
         .compose(&Pose::rotation(Axis::Y, q[4]));
     let f5 = f4.compose(&Pose::rotation(Axis::X, q[5]));
-    let frames = [&f0, &f1, &f2, &f3, &f4, &f5];
 
     let z0 = column(&base, 2);
     let axes = [
@@ -124,31 +122,112 @@ pub fn leg_torques(
         f4.translation,
         f4.translation,
     ];
+    LegFrames {
+        frames: [f0, f1, f2, f3, f4, f5],
+        axes,
+        points,
+    }
+}
 
+/// `u_j · Σ (c − o_j) × (m·g·d)` (N·m) over `masses` (g, mm in `O`) for unit gravity `d`.
+fn moment_about(axis: [f64; 3], point: [f64; 3], masses: &[(f64, [f64; 3])], d: [f64; 3]) -> f64 {
+    let moment = masses.iter().fold([0.0; 3], |acc, (mass, c)| {
+        let r = [0, 1, 2].map(|k| (c[k] - point[k]) / 1000.0);
+        let force = d.map(|x| mass / 1000.0 * G * x);
+        let m = cross(r, force);
+        [acc[0] + m[0], acc[1] + m[1], acc[2] + m[2]]
+    });
+    dot(axis, moment)
+}
+
+/// The gravity torque (N·m) about each joint of one leg (HipYawPitch, HipRoll, HipPitch,
+/// KneePitch, AnklePitch, AnkleRoll) at the logged angles, offsets left out:
+/// `τ_j = u_j · Σ_{i ≥ j} (c_i − o_j) × (m_i·g·d)` with `u_j` the axis about which a growing
+/// angle turns, `o_j` a point on it and `d` the unit gravity direction of `robot`.
+pub fn leg_torques(
+    robot: &RobotGeometry,
+    board: &Board,
+    side: Side,
+    joints: &JointAngles,
+) -> [f64; 6] {
+    let s = side.sign();
+    let LegFrames {
+        frames,
+        axes,
+        points,
+    } = leg_frames(robot, side, joints);
     let norm = dot(robot.gravity, robot.gravity).sqrt();
     let d = robot.gravity.map(|x| x / norm);
     let mirror = |c: [f64; 3]| [c[0], s * c[1], c[2]];
-    // Every mass with its position in O [m] and the index of the frame it hangs from.
+    // Every mass with its position in O [mm] and the index of the frame it hangs from.
     let mut masses: Vec<(f64, [f64; 3], usize)> = LEG_LINKS
         .iter()
         .enumerate()
         .map(|(i, link)| (link.mass_g, frames[i].apply(&mirror(link.com_mm)), i))
         .collect();
     let [cx, cy, cz] = mirror(board.com_mm);
-    masses.push((board.mass_g, f5.apply(&[cx, cy, cz - robot.foot_height]), 5));
+    masses.push((
+        board.mass_g,
+        frames[5].apply(&[cx, cy, cz - robot.foot_height]),
+        5,
+    ));
 
     std::array::from_fn(|j| {
-        let moment =
-            masses
-                .iter()
-                .filter(|(_, _, i)| *i >= j)
-                .fold([0.0; 3], |acc, (mass, c, _)| {
-                    let r = [0, 1, 2].map(|k| (c[k] - points[j][k]) / 1000.0);
-                    let force = d.map(|x| mass / 1000.0 * G * x);
-                    let m = cross(r, force);
-                    [acc[0] + m[0], acc[1] + m[1], acc[2] + m[2]]
-                });
-        dot(axes[j], moment)
+        let distal: Vec<(f64, [f64; 3])> = masses
+            .iter()
+            .filter(|(_, _, i)| *i >= j)
+            .map(|(m, c, _)| (*m, *c))
+            .collect();
+        moment_about(axes[j], points[j], &distal, d)
+    })
+}
+
+/// naocalib's standard stand, the posture a robot plays in (deg), the same for both legs:
+/// `HipYawPitch, HipRoll, HipPitch, KneePitch, AnklePitch, AnkleRoll`. Hip, knee and ankle
+/// pitch sum to zero, so the soles lie flat and the torso is upright.
+pub const STAND_DEG: [f64; 6] = [0.0, 0.0, -22.0, 44.0, -22.0, 0.0];
+
+/// The upper body (torso, neck, head and both arms hanging down) of the NAO H25, the
+/// public mass table: total mass (g) …
+pub const UPPER_BODY_MASS_G: f64 = 2876.5;
+/// … and its centre of mass in `O` (mm) with the torso upright and the arms down.
+pub const UPPER_BODY_COM_MM: [f64; 3] = [-1.7, 0.0, 148.8];
+
+/// The logged angles of the standard stand ([`STAND_DEG`], both legs, head and arms 0).
+pub fn stand_joints() -> JointAngles {
+    let mut joints = JointAngles::default();
+    for side in [Side::Left, Side::Right] {
+        for (j, deg) in side.leg_joints().into_iter().zip(STAND_DEG) {
+            joints.set(j, deg.to_radians());
+        }
+    }
+    joints
+}
+
+/// The gravity torque (N·m) about each joint of one leg of a robot **standing** at `joints`
+/// (torso upright, gravity along −z of `O`, both soles on the ground): the leg supports
+/// its own links above each joint and half the upper body ([`UPPER_BODY_MASS_G`] at
+/// [`UPPER_BODY_COM_MM`]). The torque the joint transmits is minus the moment of those
+/// loads about its axis, `τ_j = −u_j · Σ_{above j} (c − o_j) × (m·g·d)`, in the sign
+/// convention of [`leg_torques`] (positive: the load turns the angle up). The lateral
+/// forces between the two legs in double support are left out.
+pub fn standing_leg_torques(robot: &RobotGeometry, side: Side, joints: &JointAngles) -> [f64; 6] {
+    let s = side.sign();
+    let LegFrames {
+        frames,
+        axes,
+        points,
+    } = leg_frames(robot, side, joints);
+    let d = [0.0, 0.0, -1.0];
+    let mirror = |c: [f64; 3]| [c[0], s * c[1], c[2]];
+    std::array::from_fn(|j| {
+        let mut above: Vec<(f64, [f64; 3])> = LEG_LINKS[..j]
+            .iter()
+            .enumerate()
+            .map(|(i, link)| (link.mass_g, frames[i].apply(&mirror(link.com_mm))))
+            .collect();
+        above.push((UPPER_BODY_MASS_G / 2.0, UPPER_BODY_COM_MM));
+        -moment_about(axes[j], points[j], &above, d)
     })
 }
 
@@ -158,6 +237,28 @@ mod tests {
     use crate::model::Joint;
 
     /// The reference torques of docs/MODEL.md (pose A, default geometry, lying on its back).
+    #[test]
+    fn standing_torques_load_the_knees_and_mirror_between_legs() {
+        let robot = RobotGeometry::default();
+        let joints = stand_joints();
+        let left = standing_leg_torques(&robot, Side::Left, &joints);
+        let right = standing_leg_torques(&robot, Side::Right, &joints);
+        // The bent knee carries the body: the load bends it further (turns the angle up).
+        assert!(left[3] > 0.3, "{left:?}");
+        for k in [2, 3, 4] {
+            assert!(
+                (left[k] - right[k]).abs() < 1e-9,
+                "pitch {k}: {left:?} {right:?}"
+            );
+        }
+        for k in [1, 5] {
+            assert!(
+                (left[k] + right[k]).abs() < 1e-9,
+                "roll {k}: {left:?} {right:?}"
+            );
+        }
+    }
+
     #[test]
     fn reference_torques_of_pose_a() {
         use Joint::*;

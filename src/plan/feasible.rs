@@ -31,6 +31,10 @@ pub struct Feasibility {
     pub max_view_angle: f64,
     /// The collision model.
     pub body: BodyModel,
+    /// The robot's current calibration (internal units) the box of offsets is centred on
+    /// (`naocalib plan --around`); zero by default. Real lower-camera tilt corrections of
+    /// −2° to −8° lie outside a ±3° box around zero.
+    pub centre: [f64; PARAMETER_COUNT],
 }
 
 impl Default for Feasibility {
@@ -47,6 +51,7 @@ impl Default for Feasibility {
             min_square_px: 14.0,
             max_view_angle: 60f64.to_radians(),
             body: BodyModel::default(),
+            centre: [0.0; PARAMETER_COUNT],
         }
     }
 }
@@ -113,8 +118,8 @@ fn view(model: &Model, chains: &StanceChains, params: &[f64]) -> Option<(Vec<[f6
 }
 
 /// Whether the board on `side` stays fully in the image (with the margin) and facing the
-/// camera for every combination of offsets within the bounds, at the logged angles
-/// `joints`.
+/// camera for every combination of offsets within the bounds around
+/// [`Feasibility::centre`], at the logged angles `joints`.
 ///
 /// The pixel positions and the view angle are linear enough in the offsets over ±3° that
 /// their extremes over the box of offsets lie at its corners given by the signs of their
@@ -127,7 +132,7 @@ pub fn board_in_view_for_all_offsets(
     f: &Feasibility,
 ) -> bool {
     let chains = model.chains(side, joints);
-    let zero = [0.0; PARAMETER_COUNT];
+    let zero = f.centre;
     let Some((uv, angle)) = view(model, &chains, &zero) else {
         return false;
     };
@@ -150,8 +155,8 @@ pub fn board_in_view_for_all_offsets(
     for (k, (p, _)) in bounds.iter().enumerate() {
         let mut plus = zero;
         let mut minus = zero;
-        plus[p.index()] = h;
-        minus[p.index()] = -h;
+        plus[p.index()] += h;
+        minus[p.index()] -= h;
         let (Some((up, ap)), Some((um, am))) =
             (view(model, &chains, &plus), view(model, &chains, &minus))
         else {
@@ -203,7 +208,7 @@ pub fn board_in_view_for_all_offsets(
     let corner = |sign: &dyn Fn(usize) -> f64| {
         let mut params = zero;
         for (k, (p, b)) in bounds.iter().enumerate() {
-            params[p.index()] = sign(k) * b;
+            params[p.index()] += sign(k) * b;
         }
         params
     };
@@ -285,9 +290,9 @@ pub fn check(
     if !board_in_view_for_all_offsets(model, side, joints, f) {
         return Err(Infeasible::View);
     }
-    // Every vertex in plain sight of the camera past the resting leg (at the nominal model).
+    // Every vertex in plain sight of the camera past the resting leg (at the centre).
     let chains = model.chains(side, joints);
-    let zero = [0.0; PARAMETER_COUNT];
+    let zero = f.centre;
     let eye = chains.camera.eval(&zero).translation;
     let board = chains.board.eval(&zero);
     let vertices: Vec<[f64; 3]> = model
@@ -307,8 +312,8 @@ pub fn check(
     Ok(())
 }
 
-/// Turns the head so that the board centre appears at pixel `target` at the nominal model
-/// (Gauss–Newton on HeadYaw and HeadPitch); `None` when it does not get there within the
+/// Turns the head so that the board centre appears at pixel `target` for the parameters
+/// `centre` (the nominal model at zero; Gauss–Newton on HeadYaw and HeadPitch); `None` when it does not get there within the
 /// head's limits less the margin.
 pub fn aim_head(
     model: &Model,
@@ -316,8 +321,9 @@ pub fn aim_head(
     joints: &JointAngles,
     target: [f64; 2],
     joint_margin: f64,
+    centre: &[f64; PARAMETER_COUNT],
 ) -> Option<JointAngles> {
-    let zero = [0.0; PARAMETER_COUNT];
+    let zero = *centre;
     let centre = |j: &JointAngles| -> Option<[f64; 2]> {
         let pose = model.chains(side, j).camera_to_board(&zero);
         model.camera.project(&pose.translation)
@@ -428,7 +434,7 @@ fn postures(
         if out.len() == heads {
             break;
         }
-        let Some(aimed) = aim_head(model, side, &joints, *target, f.joint_margin) else {
+        let Some(aimed) = aim_head(model, side, &joints, *target, f.joint_margin, &f.centre) else {
             continue;
         };
         if check(model, side, &aimed, f).is_ok() {

@@ -116,9 +116,10 @@ fn page_start(out: &mut String, title: &str) {
         out,
         "<!DOCTYPE html>\n<html xmlns=\"http://www.w3.org/1999/xhtml\" lang=\"en\">\n<head>\n\
          <meta charset=\"utf-8\"/>\n<title>{}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n\
-         <h1>{}</h1>\n<p>Written by naocalib {}. Offsets are added to requested joint angles \
-         and subtracted from measured ones; camera offsets are rotation corrections of the \
-         lower camera.</p>\n",
+         <h1>{}</h1>\n<p>Written by naocalib {}. A joint offset α means true angle = logged \
+         angle + α; team frameworks compute true = sensor − stored and command request + \
+         stored, so their files store −α. Camera offsets are rotation corrections of the \
+         lower camera, after the head joints.</p>\n",
         escape(title),
         escape(title),
         env!("CARGO_PKG_VERSION")

@@ -384,3 +384,134 @@ fn identifiability_json(solution: &Solution) -> Value {
         "suggest_fix": id.suggest_fix.iter().map(|p| p.name()).collect::<Vec<_>>(),
     })
 }
+
+/// One parameter's change since the robot's previous calibration (report units).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Change {
+    /// The parameter.
+    pub param: Param,
+    /// Its value in the previous calibration.
+    pub previous: f64,
+    /// Its value now (for offsets estimated on already-corrected angles: previous + the
+    /// estimated change).
+    pub value: f64,
+    /// `value − previous`.
+    pub change: f64,
+    /// `change / σ`, σ combining this calibration's and the previous one's one-sigma.
+    pub z: f64,
+}
+
+/// What changed since the robot's previous calibration (`solve --start-from`): every
+/// parameter estimated now (free and determined) that the previous calibration holds with
+/// a known value. With `corrected_angles` the joint offsets estimated are changes to the
+/// previous ones.
+pub fn changes(
+    solution: &Solution,
+    previous: &export::Calibration,
+    corrected_angles: bool,
+) -> Vec<Change> {
+    Param::ALL
+        .iter()
+        .filter(|&&p| !solution.fixed.is_fixed(p) && solution.is_determined(p))
+        .filter_map(|&p| {
+            let before = previous.get(p).filter(|e| e.is_determined())?;
+            let estimate = solution.report_value(p);
+            let (value, change) = if corrected_angles && crate::solve::problem::is_joint_offset(p) {
+                (before.value + estimate, estimate)
+            } else {
+                (estimate, estimate - before.value)
+            };
+            let sigma = solution.report_std(p).hypot(before.std.unwrap_or(0.0));
+            Some(Change {
+                param: p,
+                previous: before.value,
+                value,
+                change,
+                z: if sigma > 0.0 {
+                    change / sigma
+                } else {
+                    f64::NAN
+                },
+            })
+        })
+        .collect()
+}
+
+/// [`changes`] as a text table (`parameter previous now change z unit`), largest |z| marked.
+pub fn changes_table(changes: &[Change]) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "\nChange since the previous calibration (z = change / sigma):"
+    );
+    let _ = writeln!(
+        out,
+        "{:<24} {:>10} {:>10} {:>10} {:>7}  unit",
+        "parameter", "previous", "now", "change", "z"
+    );
+    for c in changes {
+        let mark = if c.z.abs() > 3.0 { "  <- |z| > 3" } else { "" };
+        let _ = writeln!(
+            out,
+            "{:<24} {:>10.4} {:>10.4} {:>+10.4} {:>+7.2}  {}{mark}",
+            c.param.name(),
+            c.previous,
+            c.value,
+            c.change,
+            c.z,
+            c.param.unit().name()
+        );
+    }
+    out
+}
+
+/// [`changes`] as JSON: `{param: {previous, value, change, z}}`.
+pub fn changes_json(changes: &[Change]) -> Value {
+    let mut map = Map::new();
+    for c in changes {
+        map.insert(
+            c.param.name().to_string(),
+            json!({"previous": c.previous, "value": c.value, "change": c.change,
+                   "z": if c.z.is_finite() { json!(c.z) } else { Value::Null }}),
+        );
+    }
+    Value::Object(map)
+}
+
+/// The leg offsets for a robot in the standard stand beside the lying ones (when compliance
+/// or play have values; empty otherwise): `α + κ·τ_stand + ½π·sgn τ_stand`
+/// ([`export::Calibration::standing_offset`]).
+pub fn standing_offsets(cal: &export::Calibration) -> Vec<(Param, f64, f64)> {
+    cal.parameters
+        .iter()
+        .filter_map(|e| cal.standing_offset(e.param).map(|s| (e.param, e.value, s)))
+        .collect()
+}
+
+/// [`standing_offsets`] as a text table (empty when there are none).
+pub fn standing_table(cal: &export::Calibration) -> String {
+    let rows = standing_offsets(cal);
+    if rows.is_empty() {
+        return String::new();
+    }
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "\nLeg offsets lying (as calibrated) and standing (alpha + kappa*tau_stand + \
+         play/2*sgn tau_stand; team files carry the standing ones unless --posture lying):"
+    );
+    let _ = writeln!(
+        out,
+        "{:<24} {:>10} {:>10} {:>10}  unit",
+        "parameter", "lying", "standing", "tau_stand"
+    );
+    for (p, lying, standing) in rows {
+        let tau = export::calibration::stand_torque(p).unwrap_or(f64::NAN);
+        let _ = writeln!(
+            out,
+            "{:<24} {lying:>10.4} {standing:>10.4} {tau:>+10.4}  deg, N·m",
+            p.name()
+        );
+    }
+    out
+}

@@ -286,6 +286,35 @@ impl Problem {
     }
 }
 
+/// Whether `param` is a joint offset (legs or head): the part of a robot's calibration that
+/// a team framework applies to the joint angles it logs.
+pub fn is_joint_offset(param: Param) -> bool {
+    use crate::model::ParamGroup as G;
+    matches!(param.group(), G::LeftLeg | G::RightLeg | G::Head)
+}
+
+impl Problem {
+    /// Starts from a robot's current calibration (`naocalib solve --start-from`): each
+    /// `(parameter, value in report units)` becomes its start value, and a parameter held
+    /// fixed (the head offsets, unless the head family is freed) is held at it — so that
+    /// the camera correction is estimated behind the head offsets the robot's framework
+    /// applies. With `corrected_angles` (the logged angles were already corrected by that
+    /// calibration) the joint offsets start at zero instead: what is estimated is their
+    /// change.
+    pub fn start_from(&mut self, previous: &[(Param, f64)], corrected_angles: bool) {
+        for &(p, value) in previous {
+            let value = if corrected_angles && is_joint_offset(p) {
+                0.0
+            } else {
+                p.unit().from_report(value)
+            };
+            if value.is_finite() {
+                self.initial[p.index()] = value;
+            }
+        }
+    }
+}
+
 impl Problem {
     /// Turns a dataset's measurements into the least-squares problem: one term per capture
     /// with at least one corner, all parameters starting at zero (docs/MODEL.md §5), and the

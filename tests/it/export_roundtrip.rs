@@ -41,7 +41,7 @@ fn toml_and_json_round_trip() {
     let back = read_calibration(&toml_path).unwrap();
     assert_eq!(back, cal, "TOML reads back bit for bit");
     let text = std::fs::read_to_string(&toml_path).unwrap();
-    assert!(text.contains("ADDED to requested") && text.contains("SUBTRACTED from measured"));
+    assert!(text.contains("true angle = logged angle + alpha") && text.contains("store -alpha"));
     assert!(text.contains("unit = \"deg\"") && text.contains("unit = \"mm\""));
     assert!(text.contains("converged = true"));
 
@@ -76,16 +76,18 @@ fn bhuman_files_carry_the_offsets() {
     assert!(close(x, s.report_value(Param::CamRoll)), "{camera}");
     assert!(close(y, s.report_value(Param::CamPitch)), "{camera}");
     assert!(close(z, s.report_value(Param::CamYaw)), "{camera}");
-    assert!(camera.contains("lowerCameraRotationCorrection = {x = "));
+    assert!(camera.contains("cameraRotationCorrections = {\n  upper = {x = 0deg;"));
+    assert!(camera.contains("\n  lower = {x = "));
 
     let joints = export::bhuman_joint_cfg(&cal);
     let offsets = read_bhuman_joint_cfg(&joints, Path::new("-")).unwrap();
-    assert_eq!(offsets.len(), 26);
+    assert_eq!(offsets.len(), 27);
     let get = |n: &str| offsets.iter().find(|(k, _)| k == n).unwrap().1;
-    assert!(close(get("lKneePitch"), s.report_value(Param::LKneePitch)));
-    assert!(close(get("rAnkleRoll"), s.report_value(Param::RAnkleRoll)));
+    assert!(close(get("lKneePitch"), -s.report_value(Param::LKneePitch)));
+    assert!(close(get("rAnkleRoll"), -s.report_value(Param::RAnkleRoll)));
     assert_eq!(get("lShoulderPitch"), 0.0);
-    assert!(joints.contains("ADDED to requested"));
+    assert_eq!(get("waistYaw"), 0.0);
+    assert!(joints.contains("store -alpha"));
 }
 
 #[test]
@@ -190,7 +192,7 @@ fn cli_solve_export_and_export_command() {
     assert!(
         std::fs::read_to_string(&cfg)
             .unwrap()
-            .contains("lowerCameraRotationCorrection")
+            .contains("cameraRotationCorrections = {")
     );
     // --export into the dataset directory never touches the dataset's files.
     let out = Command::cargo_bin("naocalib")

@@ -79,6 +79,9 @@ fn random_calibration(rng: &mut impl Rng, camera_deg: f64) -> Calibration {
                 }
             })
             .collect(),
+        angles: None,
+        // The lying offsets themselves (the standing ones are tested in export_posture.rs).
+        posture: export::Posture::Lying,
     }
 }
 
@@ -207,12 +210,13 @@ fn joint_formats_round_trip() {
         .map(|j| j.offset())
         .collect();
 
-    // B-Human: degrees, exactly.
+    // B-Human: degrees, exactly, stored = -alpha (the sign is proven in export_signs.rs).
     let text = export::bhuman_joint_cfg(&cal);
     let back = bhuman::read_bhuman_joint_cfg(&text, Path::new("-")).unwrap();
+    assert_eq!(back.len(), 27, "the 2025 layout, waistYaw included");
     for (name, param) in bhuman::BHUMAN_JOINTS {
         let value = back.iter().find(|(n, _)| n == name).unwrap().1;
-        assert_eq!(value, param.map_or(0.0, |p| cal.value(p)), "{name}");
+        assert_eq!(value, param.map_or(0.0, |p| -cal.value(p)), "{name}");
     }
 
     // HULKs: radians, every calibrated joint.
@@ -220,7 +224,7 @@ fn joint_formats_round_trip() {
     let back = hulks::read_body_json(&text, Path::new("-")).unwrap();
     assert_eq!(back.len(), legs.len());
     for (param, value) in back {
-        assert_eq!(value, cal.value(param).to_radians(), "{param}");
+        assert_eq!(value, -cal.value(param).to_radians(), "{param}");
     }
     let head = hulks::read_head_json(&hulks::head_json(&cal), Path::new("-")).unwrap();
     assert_eq!(head, export::camera::hulks(&cal));
@@ -231,7 +235,7 @@ fn joint_formats_round_trip() {
     assert_eq!(back.len(), 26);
     for ((name, param), (read_name, entry)) in bhuman::BHUMAN_JOINTS.iter().zip(&back) {
         assert_eq!(name, read_name);
-        assert_eq!(entry.offset, param.map_or(0.0, |p| cal.value(p)), "{name}");
+        assert_eq!(entry.offset, param.map_or(0.0, |p| -cal.value(p)), "{name}");
         let play = param.and_then(nomadz::play_param);
         assert_eq!(
             entry.joint_play,
@@ -272,7 +276,7 @@ fn every_format_is_written_by_export_all_and_says_its_units() {
         assert!(!text.contains("NOT A CALIBRATION"), "{file}");
         if !file.ends_with(".json") {
             assert!(
-                text.contains("ADDED to requested"),
+                text.contains("true angle = logged angle + alpha") && text.contains("store -alpha"),
                 "{file} states the rule"
             );
             assert!(text.contains("Units:"), "{file} states its units");

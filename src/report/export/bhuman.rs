@@ -1,24 +1,46 @@
-//! B-Human's `cameraCalibration.cfg` (lower camera rotation correction) and
-//! `jointCalibration.cfg` (joint offsets), in degrees.
+//! B-Human's `Config/Robots/<robot>/cameraCalibration.cfg` (camera rotation corrections)
+//! and `jointCalibration.cfg` (joint offsets), in degrees — and the frameworks built on
+//! B-Human's code (SPQR, …), which read the same files.
 //!
-//! Axis mapping, from B-Human's `RobotCameraMatrix::computeRobotCameraMatrix`
-//! (`Src/Representations/Perception/ImagePreprocessing/CameraMatrix.cpp`):
-//! `rotateY(tiltNeckToLowerCamera + y) · rotateX(x) · rotateZ(z)` in a camera frame with x
-//! along the optical axis, y left, z up — naocalib's camera frame and order. So B-Human's
-//! x = roll = CamRoll, y = tilt = CamPitch, z = pan = CamYaw, same signs, exactly.
-//! Joint offsets: B-Human adds them to requested angles and subtracts them from measured
-//! ones, as naocalib's compensation rule says.
+//! **Camera.** B-Human's `RobotCameraMatrix::computeRobotCameraMatrix`
+//! (`Src/Representations/Perception/ImagePreprocessing/CameraMatrix.cpp`, lines 309–312 of
+//! the 2025 Code Release) applies, after the head joints, `rotateY(tiltNeckToLowerCamera +
+//! y) · rotateX(x) · rotateZ(z)` in a camera frame with x along the optical axis, y left,
+//! z up — naocalib's camera frame and order. So x = CamRoll, y = CamPitch, z = CamYaw,
+//! same signs, exactly. The layout B-Human reads since its 2019 Code Release
+//! (`Src/Representations/Configuration/CameraCalibration.h`: an enum-indexed array over
+//! `CameraInfo::Camera`):
+//!
+//! ```text
+//! cameraRotationCorrections = {
+//!   upper = {x = 0deg; y = -3.5deg; z = 0deg;};
+//!   lower = {x = 0deg; y = -3deg; z = 0deg;};
+//! };
+//! bodyRotationCorrection = {x = 0deg; y = 0deg;};
+//! ```
+//!
+//! Releases up to 2018 read `lowerCameraRotationCorrection = {x; y; z;}` instead
+//! ([`bhuman_camera_2016_cfg`], format `bhuman-camera-2016`).
+//!
+//! **Joints.** B-Human computes the true angle as the sensor reading minus the stored
+//! offset (`Src/Modules/Infrastructure/JointAnglesProvider/JointAnglesProvider.cpp`, line
+//! 15: `jointAngles.angles[joint] -= theJointCalibration.offsets[joint]`) and sends the
+//! request plus the offset to the motor (`Src/Modules/Infrastructure/RobotProvider/
+//! NaoProvider.cpp`, line 471). naocalib's α means true = logged + α, so the file stores
+//! **−α**. The 2025 file lists `waistYaw` (not present on the NAO) after `headPitch`.
 
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::{Calibration, ExportError, header, num, parse_error};
+use super::cfg::{self, Kind};
+use super::{Calibration, ExportError, Imported, header, num, parse_error};
 use crate::model::Param;
 
 const UNITS: &str = "angles in degrees (deg)";
 
-/// B-Human's name of each joint, in its `Joints` order (head, left arm, right arm, left
-/// leg, right leg), with the naocalib parameter holding its offset, if any.
+/// The NAO's joints by B-Human's names, in B-Human's `Joints` order before 2025 (head,
+/// left arm, right arm, left leg, right leg; NomadZ keeps it), with the naocalib parameter
+/// holding each one's offset, if any.
 pub const BHUMAN_JOINTS: [(&str, Option<Param>); 26] = [
     ("headYaw", Some(Param::HeadYaw)),
     ("headPitch", Some(Param::HeadPitch)),
@@ -48,68 +70,110 @@ pub const BHUMAN_JOINTS: [(&str, Option<Param>); 26] = [
     ("rAnkleRoll", Some(Param::RAnkleRoll)),
 ];
 
+/// The naocalib parameter of a B-Human joint name (`lKneePitch` → `LKneePitch`).
+pub fn joint_param(name: &str) -> Option<Param> {
+    BHUMAN_JOINTS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .and_then(|(_, p)| *p)
+}
+
 /// Degrees as B-Human writes angles: `-4.5627deg` (every digit kept: exact read-back).
 fn deg(x: f64) -> String {
     format!("{}deg", num(x))
 }
 
-/// A B-Human style `cameraCalibration.cfg` block with the lower camera's rotation
-/// correction, in degrees:
-///
-/// ```text
-/// lowerCameraRotationCorrection = {x = <CamRoll>deg; y = <CamPitch>deg; z = <CamYaw>deg;};
-/// ```
-///
-/// Mapping: B-Human's camera frame is naocalib's camera frame C (x along the optical axis,
-/// y left, z up), and its camera matrix applies the corrections after the fixed tilt as
-/// `rotateY(tilt + y) · rotateX(x) · rotateZ(z)` — naocalib's
-/// `Ry(tilt) · Ry(α_CamPitch) · Rx(α_CamRoll) · Rz(α_CamYaw)`. So `x = CamRoll`,
-/// `y = CamPitch`, `z = CamYaw`, same signs. The upper camera and the body rotation are
-/// not calibrated here and are written as zero.
-pub fn bhuman_camera_cfg(cal: &Calibration) -> String {
-    let mut s = String::new();
-    header(&mut s, "//", cal, UNITS);
+/// The lower camera's correction `[x, y, z]` (deg) of `cal`: `[CamRoll, CamPitch, CamYaw]`.
+fn lower(cal: &Calibration) -> [f64; 3] {
+    [
+        cal.robot_value(Param::CamRoll).unwrap_or(0.0),
+        cal.robot_value(Param::CamPitch).unwrap_or(0.0),
+        cal.robot_value(Param::CamYaw).unwrap_or(0.0),
+    ]
+}
+
+fn camera_notes(s: &mut String) {
     let _ = writeln!(
         s,
         "// Mapping: x = CamRoll, y = CamPitch, z = CamYaw (Ry(tilt)·Ry(CamPitch)·Rx(CamRoll)·Rz(CamYaw))."
     );
     let _ = writeln!(
         s,
-        "// Only the lower camera is calibrated; the upper camera and body corrections are zero."
+        "// Only the lower camera is calibrated: the upper camera and the body correction are"
+    );
+    let _ = writeln!(
+        s,
+        "// written as zero here. Use `naocalib export --update <robot's file>` to keep them."
+    );
+}
+
+/// B-Human's `cameraCalibration.cfg` as its framework reads it since 2019, with the lower
+/// camera's rotation correction (deg); the upper camera and body corrections are zero
+/// (they are not calibrated here; [`update_camera`] keeps a robot's own).
+pub fn bhuman_camera_cfg(cal: &Calibration) -> String {
+    let mut s = String::new();
+    header(&mut s, "//", cal, UNITS);
+    camera_notes(&mut s);
+    let [x, y, z] = lower(cal);
+    let _ = writeln!(s, "cameraRotationCorrections = {{");
+    let _ = writeln!(s, "  upper = {{x = 0deg; y = 0deg; z = 0deg;}};");
+    let _ = writeln!(
+        s,
+        "  lower = {{x = {}; y = {}; z = {};}};",
+        deg(x),
+        deg(y),
+        deg(z)
+    );
+    let _ = writeln!(s, "}};");
+    let _ = writeln!(s, "bodyRotationCorrection = {{x = 0deg; y = 0deg;}};");
+    s
+}
+
+/// B-Human's `cameraCalibration.cfg` as its releases up to 2018 read it
+/// (`lowerCameraRotationCorrection = {x; y; z;}`), same values as [`bhuman_camera_cfg`].
+pub fn bhuman_camera_2016_cfg(cal: &Calibration) -> String {
+    let mut s = String::new();
+    header(&mut s, "//", cal, UNITS);
+    camera_notes(&mut s);
+    let [x, y, z] = lower(cal);
+    let _ = writeln!(
+        s,
+        "lowerCameraRotationCorrection = {{x = {}; y = {}; z = {};}};",
+        deg(x),
+        deg(y),
+        deg(z)
     );
     let _ = writeln!(
         s,
         "upperCameraRotationCorrection = {{x = 0deg; y = 0deg; z = 0deg;}};"
     );
-    let _ = writeln!(
-        s,
-        "lowerCameraRotationCorrection = {{x = {}; y = {}; z = {};}};",
-        deg(cal.value(Param::CamRoll)),
-        deg(cal.value(Param::CamPitch)),
-        deg(cal.value(Param::CamYaw))
-    );
     let _ = writeln!(s, "bodyRotationCorrection = {{x = 0deg; y = 0deg;}};");
     s
 }
 
-/// A B-Human style `jointCalibration.cfg` joint-offset list in degrees, one entry per
-/// joint in B-Human's joint order (`offsets = {headYaw = 0deg; …; rAnkleRoll = …deg;};`),
-/// with the estimated leg offsets and zero for joints not calibrated (arms; the head unless
-/// its offsets were estimated). Sign as naocalib's compensation rule: the value is added to requested
-/// angles and subtracted from measured ones.
+/// B-Human's 2025 `jointCalibration.cfg`: one offset per joint in its joint order
+/// (`waistYaw` after `headPitch`), the value stored being **−α** (deg): B-Human subtracts
+/// it from sensor readings and adds it to requests. Joints not calibrated (arms; the head
+/// unless its offsets were estimated or held at a robot's values; a parameter the data do
+/// not determine) are 0deg.
 pub fn bhuman_joint_cfg(cal: &Calibration) -> String {
     let mut s = String::new();
     header(&mut s, "//", cal, UNITS);
     let _ = writeln!(
         s,
-        "// One offset per joint in B-Human's joint order; joints not calibrated are 0deg."
+        "// Stored = -alpha: B-Human's true angle = sensor - stored; its motor command = request + stored."
     );
+    let _ = writeln!(s, "// Joints not calibrated are 0deg.");
     let _ = writeln!(s, "offsets = {{");
-    for (name, param) in BHUMAN_JOINTS {
+    for (k, (name, param)) in BHUMAN_JOINTS.iter().enumerate() {
+        if k == 2 {
+            let _ = writeln!(s, "  waistYaw = 0deg; // not present on the NAO");
+        }
         let entry = param.and_then(|p| cal.get(p));
-        let value = entry.map_or(0.0, |e| e.value);
+        let value = param.and_then(|p| cal.robot_value(p)).map_or(0.0, |a| -a);
         let note = match entry {
-            Some(e) => format!(" // {}", e.describe()),
+            Some(e) if e.is_determined() => format!(" // alpha = {}", e.describe()),
+            Some(e) => format!(" // {}: written as 0", e.describe()),
             None => " // not calibrated".to_string(),
         };
         let _ = writeln!(s, "  {name} = {};{note}", deg(value));
@@ -118,54 +182,146 @@ pub fn bhuman_joint_cfg(cal: &Calibration) -> String {
     s
 }
 
-/// Reads back the lower camera correction of a [`bhuman_camera_cfg`] file: `[x, y, z]`
-/// in degrees (CamRoll, CamPitch, CamYaw).
+/// The lower camera's path in a camera file of either B-Human layout.
+fn lower_path(root: &cfg::Value) -> Option<Vec<&'static str>> {
+    if root.get(&["cameraRotationCorrections", "lower"]).is_some() {
+        Some(vec!["cameraRotationCorrections", "lower"])
+    } else if root.get(&["lowerCameraRotationCorrection"]).is_some() {
+        Some(vec!["lowerCameraRotationCorrection"])
+    } else {
+        None
+    }
+}
+
+/// An angle at `at` below `root` (deg), checked plausible, with its span.
+fn angle_at(
+    root: &cfg::Value,
+    at: &[&str],
+    path: &Path,
+    limit_deg: f64,
+) -> Result<Option<(f64, usize, usize)>, ExportError> {
+    let Some(v) = root.get(at) else {
+        return Ok(None);
+    };
+    let key = at.join(".");
+    let text = v
+        .scalar()
+        .ok_or_else(|| parse_error(path, format!("line {}: {key}: expected an angle", v.line)))?;
+    let deg = cfg::angle_deg(text).ok_or_else(|| {
+        parse_error(
+            path,
+            format!("line {}: {key}: '{text}' is not an angle", v.line),
+        )
+    })?;
+    super::check_plausible(path, v.line, &key, deg, limit_deg)?;
+    Ok(Some((deg, v.start, v.end)))
+}
+
+/// Reads the lower camera correction `[x, y, z]` (deg; CamRoll, CamPitch, CamYaw) of a
+/// B-Human `cameraCalibration.cfg` of either layout.
 pub fn read_bhuman_camera_cfg(text: &str, path: &Path) -> Result<[f64; 3], ExportError> {
-    let line = text
-        .lines()
-        .find(|l| l.trim_start().starts_with("lowerCameraRotationCorrection"))
-        .ok_or_else(|| parse_error(path, "no lowerCameraRotationCorrection"))?;
-    let mut out = [f64::NAN; 3];
-    for (k, key) in ["x", "y", "z"].iter().enumerate() {
-        out[k] = cfg_value(line, key)
-            .ok_or_else(|| parse_error(path, format!("lowerCameraRotationCorrection: no {key}")))?;
+    let root = cfg::parse(text, path)?;
+    let base = lower_path(&root).ok_or_else(|| {
+        parse_error(
+            path,
+            "no cameraRotationCorrections.lower (nor the pre-2019 lowerCameraRotationCorrection)",
+        )
+    })?;
+    let mut out = [0.0; 3];
+    for (k, axis) in ["x", "y", "z"].iter().enumerate() {
+        let mut at = base.clone();
+        at.push(axis);
+        out[k] = angle_at(&root, &at, path, super::CAMERA_LIMIT_DEG)?
+            .ok_or_else(|| parse_error(path, format!("{}: missing", at.join("."))))?
+            .0;
     }
     Ok(out)
 }
 
-/// Reads back the offsets of a [`bhuman_joint_cfg`] file: B-Human joint name → degrees.
+/// Reads the offsets of a B-Human `jointCalibration.cfg`: joint name → stored value (deg).
 pub fn read_bhuman_joint_cfg(text: &str, path: &Path) -> Result<Vec<(String, f64)>, ExportError> {
+    let root = cfg::parse(text, path)?;
+    let offsets = root
+        .get(&["offsets"])
+        .ok_or_else(|| parse_error(path, "no `offsets = {…};`"))?;
+    let Kind::Map(entries) = &offsets.kind else {
+        return Err(parse_error(
+            path,
+            format!("line {}: offsets: expected {{…}}", offsets.line),
+        ));
+    };
     let mut out = Vec::new();
-    for line in text.lines() {
-        let code = line.split("//").next().unwrap_or("").trim();
-        let Some((name, rest)) = code.split_once('=') else {
-            continue;
-        };
-        let name = name.trim();
-        if name == "offsets" {
+    for (name, _) in entries {
+        let (deg, _, _) = angle_at(&root, &["offsets", name], path, super::JOINT_LIMIT_DEG)?
+            .expect("the entry exists");
+        out.push((name.clone(), deg));
+    }
+    Ok(out)
+}
+
+/// The camera values of a B-Human camera file as naocalib parameters (deg).
+pub fn import_camera(text: &str, path: &Path) -> Result<Imported, ExportError> {
+    let [x, y, z] = read_bhuman_camera_cfg(text, path)?;
+    Ok(vec![
+        (Param::CamRoll, x),
+        (Param::CamPitch, y),
+        (Param::CamYaw, z),
+    ])
+}
+
+/// The joint offsets of a B-Human joint file as naocalib parameters: α = −stored (deg).
+pub fn import_joints(text: &str, path: &Path) -> Result<Imported, ExportError> {
+    Ok(read_bhuman_joint_cfg(text, path)?
+        .into_iter()
+        .filter_map(|(name, stored)| joint_param(&name).map(|p| (p, 0.0 - stored)))
+        .collect())
+}
+
+/// `text` (a robot's `cameraCalibration.cfg`, either layout) with the lower camera's
+/// correction replaced where this calibration determined it; every other byte kept.
+pub fn update_camera(text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
+    let root = cfg::parse(text, path)?;
+    let base = lower_path(&root).ok_or_else(|| {
+        parse_error(
+            path,
+            "no cameraRotationCorrections.lower (nor lowerCameraRotationCorrection) to update",
+        )
+    })?;
+    let mut edits = Vec::new();
+    for (axis, param) in [
+        ("x", Param::CamRoll),
+        ("y", Param::CamPitch),
+        ("z", Param::CamYaw),
+    ] {
+        let mut at = base.clone();
+        at.push(axis);
+        let found = angle_at(&root, &at, path, super::CAMERA_LIMIT_DEG)?;
+        if let Some(value) = cal.determined_here(param) {
+            let (_, start, end) =
+                found.ok_or_else(|| parse_error(path, format!("{}: missing", at.join("."))))?;
+            edits.push((start, end, deg(value)));
+        }
+    }
+    Ok(cfg::splice(text, edits))
+}
+
+/// `text` (a robot's `jointCalibration.cfg`) with the offsets this calibration determined
+/// replaced: stored = −α for raw angles, stored_old − α for angles already corrected by
+/// this file ([`Calibration::stored_joint_value`]); every other byte kept.
+pub fn update_joints(text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
+    let root = cfg::parse(text, path)?;
+    let mut edits = Vec::new();
+    for (name, param) in BHUMAN_JOINTS {
+        let at = ["offsets", name];
+        let found = angle_at(&root, &at, path, super::JOINT_LIMIT_DEG)?;
+        let Some(param) = param else { continue };
+        if cal.determined_here(param).is_none() {
             continue;
         }
-        let number = rest
-            .trim()
-            .trim_end_matches(';')
-            .trim()
-            .trim_end_matches("deg");
-        let value: f64 = number.parse().map_err(|_| {
-            parse_error(
-                path,
-                format!("{name}: '{}' is not an angle in deg", rest.trim()),
-            )
-        })?;
-        out.push((name.to_string(), value));
+        let (old, start, end) =
+            found.ok_or_else(|| parse_error(path, format!("offsets.{name}: missing")))?;
+        let new = cal.stored_joint_value(param, old, path)?;
+        edits.push((start, end, deg(new)));
     }
-    Ok(out)
-}
-
-/// The number after `key = ` in a `{x = 1deg; y = …}` block.
-fn cfg_value(line: &str, key: &str) -> Option<f64> {
-    let inner = line.split_once('{')?.1;
-    inner.split(';').find_map(|part| {
-        let (k, v) = part.split_once('=')?;
-        (k.trim() == key).then(|| v.trim().trim_end_matches("deg").parse().ok())?
-    })
+    Ok(cfg::splice(text, edits))
 }

@@ -38,6 +38,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use super::{ExportError, parse_error};
+use crate::dataset::{AngleKind, AngleSource};
 use crate::model::{PAPER_PARAMETERS, Param};
 use crate::solve::Solution;
 
@@ -46,10 +47,11 @@ pub const FORMAT: &str = "naocalib-calibration";
 /// The `version` key of the TOML and JSON calibration files.
 pub const VERSION: i64 = 1;
 
-/// The compensation rule, as stated in every exported file.
-pub const COMPENSATION: &str = "joint offsets are added to requested joint angles and \
-     subtracted from measured joint angles; camera offsets are rotation corrections of the \
-     lower camera in the camera matrix";
+/// The meaning of the offsets, as stated in every exported file.
+pub const COMPENSATION: &str = "joint offset alpha: true joint angle = logged (sensor) angle + \
+     alpha; team frameworks compute true = sensor - stored and command request + stored, so \
+     their files store -alpha; camera offsets are rotation corrections of the lower camera \
+     in the camera matrix, after the head joints";
 
 /// A final RMS residual beyond this (px) is no plausible detection noise: such a fit is
 /// not a calibration (the same bound as [`Solution::is_calibration`]).
@@ -100,6 +102,38 @@ pub struct Calibration {
     pub rms_px: Option<[f64; 2]>,
     /// The parameters, in the order of [`Param::ALL`].
     pub parameters: Vec<Entry>,
+    /// Whether the dataset's joint angles were raw or already corrected by a joint
+    /// calibration (`None`: not recorded, read as raw, the dataset default).
+    pub angles: Option<AngleSource>,
+    /// The posture whose leg offsets robot files carry (standing unless asked otherwise);
+    /// it matters only when compliance or play have values.
+    pub posture: Posture,
+}
+
+/// The posture a robot file's leg offsets are for (`naocalib export --posture`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Posture {
+    /// The standard stand the robot plays in ([`crate::model::gravity::STAND_DEG`]): leg
+    /// offsets `α + κ·τ_stand + ½π·sgn τ_stand`.
+    #[default]
+    Standing,
+    /// Lying on its back as calibrated: the offsets `α` themselves.
+    Lying,
+}
+
+/// The standing gravity torque (N·m) about the leg joint whose offset is `param`, in the
+/// standard stand with the default geometry; `None` for other parameters.
+pub fn stand_torque(param: Param) -> Option<f64> {
+    use crate::model::{RobotGeometry, Side, gravity};
+    let side = match param.group() {
+        crate::model::ParamGroup::LeftLeg => Side::Left,
+        crate::model::ParamGroup::RightLeg => Side::Right,
+        _ => return None,
+    };
+    let k = side.leg_joints().iter().position(|j| j.offset() == param)?;
+    let torques =
+        gravity::standing_leg_torques(&RobotGeometry::default(), side, &gravity::stand_joints());
+    Some(torques[k])
 }
 
 impl Calibration {
@@ -129,6 +163,47 @@ impl Calibration {
                     }
                 })
                 .collect(),
+            angles: None,
+            posture: Posture::Standing,
+        }
+    }
+
+    /// The effective offset (deg) of the leg joint whose offset is `param` for a robot in
+    /// the standard stand: `α + κ·τ_stand + ½π·sgn τ_stand` with the compliance `κ` and
+    /// play `π` this calibration estimated (zero when held or not determined) — `None` when
+    /// `param` is no leg offset, or when neither compliance nor play was estimated (the
+    /// standing offset is then `α` itself).
+    pub fn standing_offset(&self, param: Param) -> Option<f64> {
+        let tau = stand_torque(param)?;
+        let alpha = self.get(param)?.value;
+        // Only compliance and play this calibration estimated: held values (a robot's
+        // imported jointPlay, say) are already in the offsets its file holds.
+        let other = |suffix: &str| {
+            Param::from_name(&format!("{}{suffix}", param.name()))
+                .and_then(|p| self.get(p))
+                .filter(|e| !e.fixed && e.std.is_some())
+                .map_or(0.0, |e| e.value)
+        };
+        let (kappa, play) = (other("Compliance"), other("Play"));
+        if kappa == 0.0 && play == 0.0 {
+            return None;
+        }
+        let sign = if tau > 0.0 {
+            1.0
+        } else if tau < 0.0 {
+            -1.0
+        } else {
+            0.0
+        };
+        Some(alpha + kappa * tau + 0.5 * play * sign)
+    }
+
+    /// The value a robot file carries for `param` in [`Calibration::posture`]: the standing
+    /// offset of a leg joint when compliance or play have values, otherwise the value.
+    fn posture_value(&self, param: Param, value: f64) -> f64 {
+        match self.posture {
+            Posture::Standing => self.standing_offset(param).unwrap_or(value),
+            Posture::Lying => value,
         }
     }
 
@@ -140,6 +215,54 @@ impl Calibration {
     /// The value of `param` in report units; 0 when absent.
     pub fn value(&self, param: Param) -> f64 {
         self.get(param).map_or(0.0, |e| e.value)
+    }
+
+    /// The value of `param` a fresh robot file carries (report units): its value when it is
+    /// determined (estimated, or held at a known value); `None` when absent or not
+    /// determined by the data (a robot file never carries an arbitrary value).
+    pub fn robot_value(&self, param: Param) -> Option<f64> {
+        self.get(param)
+            .filter(|e| e.is_determined())
+            .map(|e| self.posture_value(param, e.value))
+    }
+
+    /// The value of `param` when this calibration estimated it and the data determine it
+    /// (report units): what `--update` writes into a robot's file. Held parameters and
+    /// undetermined ones are `None`: the robot's file keeps its value.
+    pub fn determined_here(&self, param: Param) -> Option<f64> {
+        self.get(param)
+            .filter(|e| !e.fixed && e.std.is_some())
+            .map(|e| self.posture_value(param, e.value))
+    }
+
+    /// Whether the joint angles the calibration was fitted to were already corrected by
+    /// the robot's joint calibration (dataset `[joints] angles = "corrected"`).
+    pub fn corrected_angles(&self) -> bool {
+        self.angles
+            .as_ref()
+            .is_some_and(|a| a.kind == AngleKind::Corrected)
+    }
+
+    /// The value a team file stores for the offset `param` (deg), whose file held
+    /// `old_stored` (deg): `−α` for raw angles; for angles the file's calibration already
+    /// corrected (true = logged + α with logged = sensor − old), `old_stored − α`.
+    pub fn stored_joint_value(
+        &self,
+        param: Param,
+        old_stored: f64,
+        path: &Path,
+    ) -> Result<f64, ExportError> {
+        let alpha = self.determined_here(param).ok_or_else(|| {
+            parse_error(
+                path,
+                format!("{param} was not determined by this calibration"),
+            )
+        })?;
+        Ok(if self.corrected_angles() {
+            old_stored - alpha
+        } else {
+            -alpha
+        })
     }
 
     /// Why this result is not a calibration a robot should load (empty when it is one):
@@ -188,7 +311,14 @@ impl Calibration {
                 ])
             }),
             compensation: COMPENSATION,
+            angles: self.angles.as_ref().map(|a| a.kind),
+            corrected_by: self.angles.as_ref().and_then(|a| a.corrected_by.as_deref()),
             parameters: Entries(&self.parameters),
+            standing: self
+                .parameters
+                .iter()
+                .filter_map(|e| self.standing_offset(e.param).map(|v| (e.param.name(), v)))
+                .collect(),
         }
     }
 
@@ -279,7 +409,13 @@ struct CalibrationOut<'a> {
     #[serde(skip_serializing_if = "Option::is_none")]
     units: Option<BTreeMap<String, String>>,
     compensation: &'a str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    angles: Option<AngleKind>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    corrected_by: Option<&'a str>,
     parameters: Entries<'a>,
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    standing: BTreeMap<&'a str, f64>,
 }
 
 /// The parameters as a map in registry order.
@@ -333,7 +469,12 @@ struct CalibrationIn {
     units: Option<BTreeMap<String, String>>,
     #[allow(dead_code)]
     compensation: Option<String>,
+    angles: Option<AngleKind>,
+    corrected_by: Option<String>,
     parameters: BTreeMap<String, EntryFile>,
+    /// Derived from the parameters on writing ([`Calibration::standing_offset`]).
+    #[allow(dead_code)]
+    standing: Option<BTreeMap<String, f64>>,
 }
 
 impl CalibrationIn {
@@ -361,13 +502,33 @@ impl CalibrationIn {
                 (name, e.value, e.std, e.unit, e.fixed, determined)
             })
             .collect();
+        let angles = angle_source(self.angles, self.corrected_by, path)?;
         Ok(Calibration {
             solver: self.solver,
             dataset: self.dataset,
             converged: self.converged,
             rms_px: self.rms_px,
             parameters: entries_from(entries, path)?,
+            angles,
+            posture: Posture::Standing,
         })
+    }
+}
+
+/// The `angles` / `corrected_by` keys as an [`AngleSource`] (`None` when absent).
+fn angle_source(
+    kind: Option<AngleKind>,
+    corrected_by: Option<String>,
+    path: &Path,
+) -> Result<Option<AngleSource>, ExportError> {
+    match (kind, corrected_by) {
+        (None, None) => Ok(None),
+        (None, Some(_)) => Err(parse_error(path, "corrected_by without angles")),
+        (Some(AngleKind::Raw), Some(_)) => Err(parse_error(
+            path,
+            "corrected_by is only meaningful with angles = \"corrected\"",
+        )),
+        (Some(kind), corrected_by) => Ok(Some(AngleSource { kind, corrected_by })),
     }
 }
 
@@ -378,6 +539,8 @@ struct ResultIn {
     dataset: Option<String>,
     converged: Option<bool>,
     rms_px: Option<[f64; 2]>,
+    angles: Option<AngleKind>,
+    corrected_by: Option<String>,
     parameters: BTreeMap<String, ResultEntry>,
 }
 
@@ -406,12 +569,15 @@ impl ResultIn {
                 (name, e.value, e.std, e.unit, e.fixed, determined)
             })
             .collect();
+        let angles = angle_source(self.angles, self.corrected_by, path)?;
         Ok(Calibration {
             solver: self.solver,
             dataset: self.dataset,
             converged: self.converged,
             rms_px: self.rms_px,
             parameters: entries_from(entries, path)?,
+            angles,
+            posture: Posture::Standing,
         })
     }
 }

@@ -125,6 +125,45 @@ pub fn runswift(cal: &Calibration) -> [f64; 3] {
     [a - FRAC_PI_2, b + FRAC_PI_2, c]
 }
 
+/// `(a, b, c)` with `m = Ry(a) · Rx(b) · Rz(c)`, `b` in [−π/2, π/2]: naocalib's order.
+pub fn yxz_angles(m: &Matrix3<f64>) -> [f64; 3] {
+    let b = (-m[(1, 2)]).clamp(-1.0, 1.0).asin();
+    let a = m[(0, 2)].atan2(m[(2, 2)]);
+    let c = m[(1, 0)].atan2(m[(1, 1)]);
+    [a, b, c]
+}
+
+/// naocalib's camera offsets `[CamYaw, CamPitch, CamRoll]` (deg) of the camera → head
+/// rotation `head_from_camera` (naocalib's camera frame), with the nominal tilt.
+pub fn offsets_deg_of(head_from_camera: &Matrix3<f64>) -> [f64; 3] {
+    let rc = rot_y(-NOMINAL_TILT_DEG.to_radians()) * head_from_camera;
+    let [pitch, roll, yaw] = yxz_angles(&rc);
+    [yaw, pitch, roll].map(f64::to_degrees)
+}
+
+/// The inverse of [`naoth`]: naocalib's `[CamYaw, CamPitch, CamRoll]` (deg) of NaoTH's
+/// `[x, y, z]` (rad).
+pub fn from_naoth([x, y, z]: [f64; 3]) -> [f64; 3] {
+    offsets_deg_of(&(rot_z(z) * rot_y(NOMINAL_TILT_DEG.to_radians() + y) * rot_x(x)))
+}
+
+/// The inverse of [`hulks`]: naocalib's `[CamYaw, CamPitch, CamRoll]` (deg) of HULKs'
+/// `[x, y, z]` (rad).
+pub fn from_hulks([x, y, z]: [f64; 3]) -> [f64; 3] {
+    let q = optical_axes();
+    let c = rot_z(z) * rot_y(y) * rot_x(x);
+    let rc = q * c.transpose() * q.transpose();
+    offsets_deg_of(&(rot_y(NOMINAL_TILT_DEG.to_radians()) * rc))
+}
+
+/// The inverse of [`runswift`]: naocalib's `[CamYaw, CamPitch, CamRoll]` (deg) of
+/// rUNSWift's `[yaw, pitch, roll]` (rad).
+pub fn from_runswift([yaw, pitch, roll]: [f64; 3]) -> [f64; 3] {
+    use std::f64::consts::FRAC_PI_2;
+    let chain = runswift_base() * rot_z(FRAC_PI_2 + yaw) * rot_x(-FRAC_PI_2 + pitch) * rot_z(roll);
+    offsets_deg_of(&(chain * optical_axes().transpose()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -137,5 +176,8 @@ mod tests {
         let m = rot_z(0.3) * rot_x(-1.4) * rot_z(-0.2);
         let [a, b, c] = zxz_angles_negative(&m);
         assert!((a - 0.3).abs() < 1e-12 && (b + 1.4).abs() < 1e-12 && (c + 0.2).abs() < 1e-12);
+        let m = rot_y(0.3) * rot_x(-0.2) * rot_z(0.1);
+        let [a, b, c] = yxz_angles(&m);
+        assert!((a - 0.3).abs() < 1e-12 && (b + 0.2).abs() < 1e-12 && (c - 0.1).abs() < 1e-12);
     }
 }

@@ -13,8 +13,11 @@
 //!   `y ≈ CamYaw`, `z ≈ −CamRoll` (the optical frame's axes are others).
 //! - Body: `joint_calibration_offsets.{head,left_leg,right_leg}.<joint>` in radians
 //!   (`hip_yaw_pitch`, `hip_roll`, `hip_pitch`, `knee_pitch`, `ankle_pitch`,
-//!   `ankle_roll`; head `yaw`, `pitch`), added to commands and subtracted from sensor
-//!   readings as naocalib's compensation rule says.
+//!   `ankle_roll`; head `yaw`, `pitch`). HULKs subtracts the stored value from the sensor
+//!   readings (`crates/control/src/sensor_data_receiver.rs`, line 155 at commit
+//!   21e8a3de9: `sensor_data.positions - joint_calibration_offsets`) and adds it to the
+//!   motor commands (`crates/control/src/motion/command_sender.rs`, line 52), so the file
+//!   stores **−α**.
 //!
 //! JSON has no comments: the units and the compensation rule are in the docs; a result
 //! that is not a calibration gets a top-level `naocalib_not_a_calibration` key, which
@@ -25,7 +28,8 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use super::{Calibration, ExportError, parse_error};
+use super::jsonedit;
+use super::{Calibration, ExportError, Imported, num, parse_error};
 use crate::model::{Param, Side};
 
 /// HULKs' name of each leg joint, in naocalib's leg order.
@@ -89,34 +93,35 @@ pub fn head_json(cal: &Calibration) -> String {
     })
 }
 
-/// The leg (and head, when estimated) joint offsets of `cal` by HULKs group and name
-/// (rad); joints whose offsets are absent are left out (HULKs keeps its default).
-fn offsets(cal: &Calibration) -> BTreeMap<String, BTreeMap<String, f64>> {
-    let mut out: BTreeMap<String, BTreeMap<String, f64>> = BTreeMap::new();
-    for side in [Side::Left, Side::Right] {
-        let group = match side {
-            Side::Left => "left_leg",
-            Side::Right => "right_leg",
-        };
+/// Every joint naocalib calibrates: `(group, name, parameter)` in HULKs' names.
+pub fn joints() -> Vec<(&'static str, &'static str, Param)> {
+    let mut out = vec![
+        ("head", "yaw", Param::HeadYaw),
+        ("head", "pitch", Param::HeadPitch),
+    ];
+    for (side, group) in [(Side::Left, "left_leg"), (Side::Right, "right_leg")] {
         for (joint, name) in side.leg_joints().iter().zip(LEG_JOINTS) {
-            if let Some(e) = cal.get(joint.offset()) {
-                out.entry(group.into())
-                    .or_default()
-                    .insert(name.into(), e.value.to_radians());
-            }
-        }
-    }
-    for (param, name) in [(Param::HeadYaw, "yaw"), (Param::HeadPitch, "pitch")] {
-        if let Some(e) = cal.get(param) {
-            out.entry("head".into())
-                .or_default()
-                .insert(name.into(), e.value.to_radians());
+            out.push((group, name, joint.offset()));
         }
     }
     out
 }
 
-/// The per-body JSON: `joint_calibration_offsets` (rad).
+/// The stored values (−α, rad) of `cal`'s determined joint offsets by HULKs group and
+/// name; joints without a determined offset are left out (HULKs keeps its default).
+fn offsets(cal: &Calibration) -> BTreeMap<String, BTreeMap<String, f64>> {
+    let mut out: BTreeMap<String, BTreeMap<String, f64>> = BTreeMap::new();
+    for (group, name, param) in joints() {
+        if let Some(alpha) = cal.robot_value(param) {
+            out.entry(group.into())
+                .or_default()
+                .insert(name.into(), (-alpha).to_radians());
+        }
+    }
+    out
+}
+
+/// The per-body JSON: `joint_calibration_offsets` (rad), storing −α.
 pub fn body_json(cal: &Calibration) -> String {
     pretty(&BodyFile {
         naocalib_not_a_calibration: marker(cal),
@@ -134,40 +139,153 @@ pub fn read_head_json(text: &str, path: &Path) -> Result<[f64; 3], ExportError> 
         .correction_in_camera_bottom)
 }
 
-/// Reads back a [`body_json`] file: each offset by naocalib parameter (rad).
+/// Reads the stored joint offsets of a HULKs body file (other keys allowed): each by
+/// naocalib parameter (rad), checked plausible.
 pub fn read_body_json(text: &str, path: &Path) -> Result<Vec<(Param, f64)>, ExportError> {
-    let file: BodyFile = serde_json::from_str(text)
-        .map_err(|e| parse_error(path, format!("line {}: {e}", e.line())))?;
+    let root = jsonedit::parse(text, path)?;
+    stored(&root, path)
+}
+
+/// A number with the byte span of its text.
+type Spanned = (f64, usize, usize);
+
+const BOTTOM: [&str; 3] = [
+    "camera_matrix_parameters",
+    "calibration",
+    "correction_in_camera_bottom",
+];
+
+/// The `[x, y, z]` (rad) at [`BOTTOM`] of a parsed head file, checked plausible, with each
+/// number's span.
+fn bottom(root: &jsonedit::Value, path: &Path) -> Result<Option<[Spanned; 3]>, ExportError> {
+    let Some(v) = root.get(&BOTTOM) else {
+        return Ok(None);
+    };
+    let key = BOTTOM.join(".");
+    let bad = || {
+        parse_error(
+            path,
+            format!("line {}: {key}: expected [x, y, z] in rad", v.line),
+        )
+    };
+    let jsonedit::Kind::Array(items) = &v.kind else {
+        return Err(bad());
+    };
+    if items.len() != 3 {
+        return Err(bad());
+    }
+    let mut out = [(0.0, 0, 0); 3];
+    for (k, item) in items.iter().enumerate() {
+        let jsonedit::Kind::Number(x) = item.kind else {
+            return Err(bad());
+        };
+        super::check_plausible(
+            path,
+            item.line,
+            &key,
+            x.to_degrees(),
+            super::CAMERA_LIMIT_DEG,
+        )?;
+        out[k] = (x, item.start, item.end);
+    }
+    Ok(Some(out))
+}
+
+/// Reads a HULKs head file (any other keys allowed): naocalib's camera offsets (deg).
+pub fn import_head(text: &str, path: &Path) -> Result<Imported, ExportError> {
+    let root = jsonedit::parse(text, path)?;
+    let [x, y, z] = bottom(&root, path)?
+        .ok_or_else(|| parse_error(path, format!("{}: missing", BOTTOM.join("."))))?
+        .map(|(v, _, _)| v);
+    let [yaw, pitch, roll] = super::camera::from_hulks([x, y, z]);
+    Ok(vec![
+        (Param::CamYaw, yaw),
+        (Param::CamPitch, pitch),
+        (Param::CamRoll, roll),
+    ])
+}
+
+/// The stored joint offsets (rad) of a parsed body file, checked plausible.
+fn stored(root: &jsonedit::Value, path: &Path) -> Result<Vec<(Param, f64)>, ExportError> {
     let mut out = Vec::new();
-    for (group, joints) in file.joint_calibration_offsets {
-        for (name, value) in joints {
-            let param = match group.as_str() {
-                "head" => match name.as_str() {
-                    "yaw" => Some(Param::HeadYaw),
-                    "pitch" => Some(Param::HeadPitch),
-                    _ => None,
-                },
-                "left_leg" | "right_leg" => {
-                    let side = if group == "left_leg" {
-                        Side::Left
-                    } else {
-                        Side::Right
-                    };
-                    LEG_JOINTS
-                        .iter()
-                        .position(|n| *n == name)
-                        .map(|k| side.leg_joints()[k].offset())
-                }
-                _ => None,
-            };
-            let param = param.ok_or_else(|| {
-                parse_error(
+    for (group, name, param) in joints() {
+        let at = ["joint_calibration_offsets", group, name];
+        if let Some(v) = root.get(&at) {
+            let jsonedit::Kind::Number(x) = v.kind else {
+                return Err(parse_error(
                     path,
-                    format!("joint_calibration_offsets.{group}.{name}: unknown joint"),
-                )
-            })?;
-            out.push((param, value));
+                    format!("line {}: {}: expected a number (rad)", v.line, at.join(".")),
+                ));
+            };
+            super::check_plausible(
+                path,
+                v.line,
+                &at.join("."),
+                x.to_degrees(),
+                super::JOINT_LIMIT_DEG,
+            )?;
+            out.push((param, x));
         }
+    }
+    Ok(out)
+}
+
+/// Reads a HULKs body file (any other keys allowed): α = −stored (deg) of each joint it
+/// lists.
+pub fn import_body(text: &str, path: &Path) -> Result<Imported, ExportError> {
+    let root = jsonedit::parse(text, path)?;
+    Ok(stored(&root, path)?
+        .into_iter()
+        .map(|(p, x)| (p, 0.0 - x.to_degrees()))
+        .collect())
+}
+
+/// A robot's head file with `correction_in_camera_bottom` replaced (inserted when
+/// missing) when this calibration determined the lower camera; every other byte kept.
+pub fn update_head(text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
+    let root = jsonedit::parse(text, path)?;
+    let found = bottom(&root, path)?;
+    if !super::camera_determined(cal, path)? {
+        return Ok(text.to_string());
+    }
+    let new = super::camera::hulks(cal);
+    match found {
+        Some(old) => Ok(super::cfg::splice(
+            text,
+            old.iter()
+                .zip(new)
+                .map(|(&(_, s, e), x)| (s, e, num(x)))
+                .collect(),
+        )),
+        None => {
+            let array = format!("[{}, {}, {}]", num(new[0]), num(new[1]), num(new[2]));
+            jsonedit::set(text, &BOTTOM, &array, path)
+        }
+    }
+}
+
+/// A robot's body file with the joint offsets this calibration determined replaced
+/// (inserted when missing): stored = −α (rad) for raw angles, stored_old − α for
+/// corrected ones; every other byte kept.
+pub fn update_body(text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
+    let root = jsonedit::parse(text, path)?;
+    let old = stored(&root, path)?;
+    let mut out = text.to_string();
+    for (group, name, param) in joints() {
+        if cal.determined_here(param).is_none() {
+            continue;
+        }
+        let old_deg = old
+            .iter()
+            .find(|(p, _)| *p == param)
+            .map_or(0.0, |(_, x)| x.to_degrees());
+        let new = cal.stored_joint_value(param, old_deg, path)?.to_radians();
+        out = jsonedit::set(
+            &out,
+            &["joint_calibration_offsets", group, name],
+            &num(new),
+            path,
+        )?;
     }
     Ok(out)
 }

@@ -5,16 +5,23 @@
 //!   every parameter with its one-sigma, and reads back the result JSON of
 //!   `naocalib solve --json` as well.
 //! - the formats SPL teams load, each in its own module with its units and axis
-//!   conventions: [`bhuman`] (`cameraCalibration.cfg`, `jointCalibration.cfg`), [`hulks`]
-//!   (per-head and per-body parameter JSON), [`naoth`] (`CameraMatrixOffset.cfg`),
-//!   [`nomadz`] (`jointCalibration.cfg` with `jointPlay`), [`runswift`] (`[kinematics]`).
-//!   [`camera`] turns naocalib's camera offsets into each team's parameterisation of the
-//!   same rotation.
+//!   conventions, one row each in [`REGISTRY`] (name, file, description, reader, writer,
+//!   updater): [`bhuman`] (`cameraCalibration.cfg` in the 2019+ and the older layout,
+//!   `jointCalibration.cfg`), [`hulks`] (per-head and per-body parameter JSON), [`naoth`]
+//!   (`CameraMatrixOffset.cfg`), [`nomadz`] (`cameraCalibration.cfg`, `jointCalibration.cfg`
+//!   with `jointPlay`), [`runswift`] (`[kinematics]`). [`camera`] turns naocalib's camera
+//!   offsets into each team's parameterisation of the same rotation and back.
+//! - [`update`]: a robot's own file with only what a calibration determined replaced, every
+//!   other byte kept ([`mod@cfg`], [`jsonedit`], [`ini`] read the files with the span of every
+//!   value); [`import`] / [`import_calibration`]: a robot's files read back.
 //! - [`io`]: where files may be written and how (atomically, never over an input).
 //!
-//! Compensation (as in the paper): joint offsets are **added to requested angles and
-//! subtracted from measured ones**; the camera offsets go into the camera matrix. Every
-//! exported file says so in its header, with its units.
+//! The sign of the joint offsets: naocalib's α means true angle = logged angle + α. Every
+//! team framework computes true = sensor − stored and commands request + stored, so the
+//! team files store **−α** (docs/EXPORTS.md cites each team's code; `tests/it/
+//! export_signs.rs` proves it through that code). The camera offsets go into the camera
+//! matrix, after the head joints. Every exported file says so in its header, with its
+//! units.
 //!
 //! A result that is not a calibration — not converged, non-finite, or with residuals far
 //! beyond any plausible noise ([`Calibration::problems`]) — is never written into a file a
@@ -44,8 +51,11 @@
 pub mod bhuman;
 pub mod calibration;
 pub mod camera;
+pub mod cfg;
 pub mod hulks;
+pub mod ini;
 pub mod io;
+pub mod jsonedit;
 pub mod naoth;
 pub mod nomadz;
 pub mod runswift;
@@ -53,11 +63,15 @@ pub mod runswift;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use crate::model::Param;
+
 pub use bhuman::{
     BHUMAN_JOINTS, bhuman_camera_cfg, bhuman_joint_cfg, read_bhuman_camera_cfg,
     read_bhuman_joint_cfg,
 };
-pub use calibration::{COMPENSATION, Calibration, Entry, FORMAT, VERSION, read_calibration};
+pub use calibration::{
+    COMPENSATION, Calibration, Entry, FORMAT, Posture, VERSION, read_calibration,
+};
 pub use io::{WriteOptions, check_writable, dataset_files, write_atomic, write_atomic_with};
 
 /// Everything that can go wrong exporting or reading an export.
@@ -100,6 +114,16 @@ pub enum ExportError {
     UnknownFormat {
         /// The file.
         path: PathBuf,
+    },
+    /// A joint file from a calibration of corrected angles needs the robot's file.
+    #[error(
+        "{format}: the calibration was fitted to joint angles already corrected by the \
+             robot's joint calibration, so its offsets are changes to that file: give the \
+             robot's file with --update FILE"
+    )]
+    NeedsUpdate {
+        /// The format's name.
+        format: &'static str,
     },
     /// The result is not a calibration a robot should load.
     #[error("not a calibration, refusing to write {what}: {}", reasons.join("; "))]
@@ -144,15 +168,19 @@ pub(crate) fn header(s: &mut String, comment: &str, cal: &Calibration, units: &s
     let _ = writeln!(s, "{comment} Units: {units}.");
     let _ = writeln!(
         s,
-        "{comment} Compensation: joint offsets are ADDED to requested joint angles and"
+        "{comment} Joint offsets: naocalib's alpha means true angle = logged angle + alpha."
     );
     let _ = writeln!(
         s,
-        "{comment} SUBTRACTED from measured joint angles; the camera offsets are rotation"
+        "{comment} Team frameworks compute true = sensor - stored and command request + stored,"
     );
     let _ = writeln!(
         s,
-        "{comment} corrections of the lower camera that go into the camera matrix."
+        "{comment} so their files store -alpha. Camera offsets are rotation corrections of the"
+    );
+    let _ = writeln!(
+        s,
+        "{comment} lower camera in the camera matrix, applied after the head joints."
     );
     let undetermined: Vec<&str> = cal
         .parameters
@@ -163,21 +191,23 @@ pub(crate) fn header(s: &mut String, comment: &str, cal: &Calibration, units: &s
     if !undetermined.is_empty() {
         let _ = writeln!(
             s,
-            "{comment} NOT determined by the data (arbitrary values, see the report): {}",
+            "{comment} NOT determined by the data (not written into robot files, see the report): {}",
             undetermined.join(", ")
         );
     }
 }
 
-/// The output formats of [`export`].
+/// The output formats of [`export`]; each has one row in [`REGISTRY`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ExportFormat {
     /// Calibration TOML ([`Calibration::to_toml`]).
     Toml,
     /// Calibration JSON ([`Calibration::to_json`]).
     Json,
-    /// B-Human `cameraCalibration.cfg` ([`bhuman_camera_cfg`]).
+    /// B-Human `cameraCalibration.cfg`, 2019+ layout ([`bhuman_camera_cfg`]).
     BHumanCamera,
+    /// B-Human `cameraCalibration.cfg`, layout up to 2018 ([`bhuman::bhuman_camera_2016_cfg`]).
+    BHumanCamera2016,
     /// B-Human `jointCalibration.cfg` ([`bhuman_joint_cfg`]).
     BHumanJoints,
     /// HULKs per-head parameter JSON ([`hulks::head_json`]).
@@ -186,65 +216,273 @@ pub enum ExportFormat {
     HulksBody,
     /// NaoTH `CameraMatrixOffset.cfg` ([`naoth::camera_matrix_offset_cfg`]).
     NaothCamera,
+    /// NomadZ `cameraCalibration.cfg` ([`nomadz::camera_calibration_cfg`]).
+    NomadzCamera,
     /// NomadZ `jointCalibration.cfg` ([`nomadz::joint_calibration_cfg`]).
     NomadzJoints,
     /// rUNSWift `[kinematics]` camera entries ([`runswift::kinematics_cfg`]).
     RunswiftCamera,
 }
 
+/// What a robot's team file holds, as naocalib parameters in report units (deg): joint
+/// offsets as α = −stored, camera corrections converted to naocalib's offsets.
+pub type Imported = Vec<(Param, f64)>;
+
+/// Reads a team file's values ([`Imported`]).
+pub type ImportFn = fn(&str, &Path) -> Result<Imported, ExportError>;
+/// A robot's file with what a calibration determined replaced, every other byte kept.
+pub type UpdateFn = fn(&str, &Path, &Calibration) -> Result<String, ExportError>;
+
+/// One format: everything the CLI, `--dir`, `import`, `--update` and docs/EXPORTS.md
+/// know of it. Adding a team is one module and one row of [`REGISTRY`].
+#[derive(Clone, Copy)]
+pub struct FormatSpec {
+    /// The format.
+    pub format: ExportFormat,
+    /// Its `--format` name.
+    pub name: &'static str,
+    /// The file name `--dir` gives it (relative to the directory).
+    pub file: &'static str,
+    /// One line: the team, the file and what it carries.
+    pub description: &'static str,
+    /// The calibration in this format, as a fresh file.
+    pub render: fn(&Calibration) -> String,
+    /// Reads a file of this format (`naocalib import`), when supported.
+    pub read: Option<ImportFn>,
+    /// Updates a robot's file of this format (`naocalib export --update`), when supported.
+    pub update: Option<UpdateFn>,
+    /// Whether a file's text is of this format (for `naocalib import` without --format).
+    pub recognise: fn(&str) -> bool,
+    /// Whether the file carries joint offsets (which a calibration from angles already
+    /// corrected by the robot's joint calibration can only write with `--update`).
+    pub joints: bool,
+}
+
+fn json_text(cal: &Calibration) -> String {
+    let mut s = serde_json::to_string_pretty(&cal.to_json()).expect("JSON of plain values");
+    s.push('\n');
+    s
+}
+
+fn is_naocalib(text: &str) -> bool {
+    text.contains(calibration::FORMAT)
+}
+
+/// Every format, one row each, in `--dir` order.
+pub const REGISTRY: [FormatSpec; 11] = [
+    FormatSpec {
+        format: ExportFormat::Toml,
+        name: "toml",
+        file: "calibration.toml",
+        description: "naocalib's calibration TOML: every parameter with sigma and unit",
+        render: Calibration::to_toml,
+        read: None,
+        update: None,
+        recognise: is_naocalib,
+        joints: false,
+    },
+    FormatSpec {
+        format: ExportFormat::Json,
+        name: "json",
+        file: "calibration.json",
+        description: "naocalib's calibration JSON (same keys as the TOML)",
+        render: json_text,
+        read: None,
+        update: None,
+        recognise: is_naocalib,
+        joints: false,
+    },
+    FormatSpec {
+        format: ExportFormat::BHumanCamera,
+        name: "bhuman-camera",
+        file: "cameraCalibration.cfg",
+        description: "B-Human (2019+), SPQR: cameraRotationCorrections.lower {x; y; z} in deg",
+        render: bhuman_camera_cfg,
+        read: Some(bhuman::import_camera),
+        update: Some(bhuman::update_camera),
+        recognise: |t| t.contains("cameraRotationCorrections"),
+        joints: false,
+    },
+    FormatSpec {
+        format: ExportFormat::BHumanCamera2016,
+        name: "bhuman-camera-2016",
+        file: "bhuman2016/cameraCalibration.cfg",
+        description: "B-Human up to 2018: lowerCameraRotationCorrection {x; y; z} in deg",
+        render: bhuman::bhuman_camera_2016_cfg,
+        read: Some(bhuman::import_camera),
+        update: Some(bhuman::update_camera),
+        recognise: |t| t.contains("lowerCameraRotationCorrection"),
+        joints: false,
+    },
+    FormatSpec {
+        format: ExportFormat::BHumanJoints,
+        name: "bhuman-joints",
+        file: "jointCalibration.cfg",
+        description: "B-Human, SPQR: offsets {<joint> = -alpha deg; ...}",
+        render: bhuman_joint_cfg,
+        read: Some(bhuman::import_joints),
+        update: Some(bhuman::update_joints),
+        recognise: |t| {
+            !t.trim_start().starts_with('{') && t.contains("offsets") && !t.contains("minAngle")
+        },
+        joints: true,
+    },
+    FormatSpec {
+        format: ExportFormat::HulksHead,
+        name: "hulks-head",
+        file: "hulks/head.json",
+        description: "HULKs head.<id>.json: correction_in_camera_bottom [x, y, z] in rad",
+        render: hulks::head_json,
+        read: Some(hulks::import_head),
+        update: Some(hulks::update_head),
+        recognise: |t| t.contains("correction_in_camera_bottom"),
+        joints: false,
+    },
+    FormatSpec {
+        format: ExportFormat::HulksBody,
+        name: "hulks-body",
+        file: "hulks/body.json",
+        description: "HULKs body.<id>.json: joint_calibration_offsets = -alpha in rad",
+        render: hulks::body_json,
+        read: Some(hulks::import_body),
+        update: Some(hulks::update_body),
+        recognise: |t| t.contains("joint_calibration_offsets"),
+        joints: true,
+    },
+    FormatSpec {
+        format: ExportFormat::NaothCamera,
+        name: "naoth-camera",
+        file: "naoth/CameraMatrixOffset.cfg",
+        description: "NaoTH: [CameraMatrixOffset] cam_rot.bottom.x/y/z in rad",
+        render: naoth::camera_matrix_offset_cfg,
+        read: Some(naoth::import),
+        update: Some(naoth::update),
+        recognise: |t| t.contains("[CameraMatrixOffset]"),
+        joints: false,
+    },
+    FormatSpec {
+        format: ExportFormat::NomadzCamera,
+        name: "nomadz-camera",
+        file: "nomadz/cameraCalibration.cfg",
+        description: "NomadZ: cameraTiltCorrection, cameraRollCorrection, cameraPanCorrection in rad",
+        render: nomadz::camera_calibration_cfg,
+        read: Some(nomadz::import_camera),
+        update: Some(nomadz::update_camera),
+        recognise: |t| t.contains("cameraTiltCorrection"),
+        joints: false,
+    },
+    FormatSpec {
+        format: ExportFormat::NomadzJoints,
+        name: "nomadz-joints",
+        file: "nomadz/jointCalibration.cfg",
+        description: "NomadZ: <joint> = {offset = -alpha; minAngle; maxAngle; jointPlay} in deg",
+        render: nomadz::joint_calibration_cfg,
+        read: Some(nomadz::import_joints),
+        update: Some(nomadz::update_joints),
+        recognise: |t| t.contains("minAngle") && t.contains("jointPlay"),
+        joints: true,
+    },
+    FormatSpec {
+        format: ExportFormat::RunswiftCamera,
+        name: "runswift-camera",
+        file: "runswift/kinematics.cfg",
+        description: "rUNSWift: [kinematics] cameraYawBottom/cameraPitchBottom/cameraRollBottom in deg",
+        render: runswift::kinematics_cfg,
+        read: Some(runswift::import),
+        update: Some(runswift::update),
+        recognise: |t| t.contains("cameraPitchBottom"),
+        joints: false,
+    },
+];
+
+/// A camera correction beyond this (deg) in a robot's file is no plausible correction: the
+/// file is refused as corrupt (e.g. a tilt of 3.38 written in radians, 194°).
+pub const CAMERA_LIMIT_DEG: f64 = 30.0;
+/// A joint offset beyond this (deg) in a robot's file is refused as corrupt.
+pub const JOINT_LIMIT_DEG: f64 = 30.0;
+
+/// Refuses a value read from a robot's file beyond `limit_deg`, naming file, line and key.
+pub(crate) fn check_plausible(
+    path: &Path,
+    line: usize,
+    key: &str,
+    value_deg: f64,
+    limit_deg: f64,
+) -> Result<(), ExportError> {
+    if value_deg.abs() <= limit_deg {
+        Ok(())
+    } else {
+        Err(parse_error(
+            path,
+            format!(
+                "line {line}: {key} = {value_deg:.3} deg is no plausible correction (beyond \
+                 ±{limit_deg} deg): the file looks corrupt; fix it by hand first"
+            ),
+        ))
+    }
+}
+
+/// Whether `cal` determined the lower camera, for formats whose parameterisation mixes
+/// naocalib's three camera offsets: `false` when none was estimated; an error (nothing
+/// written) when only some are known.
+pub(crate) fn camera_determined(cal: &Calibration, path: &Path) -> Result<bool, ExportError> {
+    let cams = [Param::CamYaw, Param::CamPitch, Param::CamRoll];
+    if cams.iter().all(|&p| cal.determined_here(p).is_none()) {
+        return Ok(false);
+    }
+    if cams.iter().any(|&p| cal.robot_value(p).is_none()) {
+        return Err(parse_error(
+            path,
+            "the camera offsets are only partly determined, and this format mixes them: \
+             not updated",
+        ));
+    }
+    Ok(true)
+}
+
 impl ExportFormat {
-    /// Every format, with its `--format` name and the file name [`export_all`] gives it.
-    pub const ALL: [(ExportFormat, &'static str, &'static str); 9] = [
-        (ExportFormat::Toml, "toml", "calibration.toml"),
-        (ExportFormat::Json, "json", "calibration.json"),
-        (
-            ExportFormat::BHumanCamera,
-            "bhuman-camera",
-            "cameraCalibration.cfg",
-        ),
-        (
-            ExportFormat::BHumanJoints,
-            "bhuman-joints",
-            "jointCalibration.cfg",
-        ),
-        (ExportFormat::HulksHead, "hulks-head", "hulks/head.json"),
-        (ExportFormat::HulksBody, "hulks-body", "hulks/body.json"),
-        (
-            ExportFormat::NaothCamera,
-            "naoth-camera",
-            "naoth/CameraMatrixOffset.cfg",
-        ),
-        (
-            ExportFormat::NomadzJoints,
-            "nomadz-joints",
-            "nomadz/jointCalibration.cfg",
-        ),
-        (
-            ExportFormat::RunswiftCamera,
-            "runswift-camera",
-            "runswift/kinematics.cfg",
-        ),
-    ];
+    /// Every format, with its `--format` name and the file name [`export_all`] gives it
+    /// (from [`REGISTRY`]).
+    pub const ALL: [(ExportFormat, &'static str, &'static str); REGISTRY.len()] = {
+        let mut out = [(ExportFormat::Toml, "", ""); REGISTRY.len()];
+        let mut i = 0;
+        while i < REGISTRY.len() {
+            out[i] = (REGISTRY[i].format, REGISTRY[i].name, REGISTRY[i].file);
+            i += 1;
+        }
+        out
+    };
+
+    /// The format's row of [`REGISTRY`].
+    pub fn spec(self) -> &'static FormatSpec {
+        REGISTRY
+            .iter()
+            .find(|s| s.format == self)
+            .expect("every format has a registry row")
+    }
 
     /// The `--format` names, comma-separated (for messages).
     pub fn names() -> String {
         Self::ALL.map(|(_, name, _)| name).join(", ")
     }
 
+    /// One line per format, `name: description (file)` (for the CLI help).
+    pub fn help() -> String {
+        REGISTRY
+            .iter()
+            .map(|s| format!("{}: {} ({})", s.name, s.description, s.file))
+            .collect::<Vec<_>>()
+            .join("\n")
+    }
+
     /// The format named `name` (`toml`, `json`, `bhuman-camera`, …; see [`Self::ALL`]).
     pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL
-            .iter()
-            .find(|(_, n, _)| *n == name)
-            .map(|(f, _, _)| *f)
+        REGISTRY.iter().find(|s| s.name == name).map(|s| s.format)
     }
 
     /// The format's `--format` name.
     pub fn name(self) -> &'static str {
-        Self::ALL
-            .iter()
-            .find(|(f, _, _)| *f == self)
-            .map_or("", |(_, n, _)| n)
+        self.spec().name
     }
 
     /// Whether a robot loads files of this format (all but naocalib's TOML and JSON).
@@ -271,25 +509,32 @@ impl ExportFormat {
         }
     }
 
+    /// The robot format a file's text is in ([`FormatSpec::recognise`]), if any.
+    pub fn recognise(text: &str) -> Option<Self> {
+        REGISTRY
+            .iter()
+            .filter(|s| s.read.is_some())
+            .find(|s| (s.recognise)(text))
+            .map(|s| s.format)
+    }
+
     /// The calibration rendered in this format (with the `NOT A CALIBRATION` marker when
     /// [`Calibration::problems`] finds any).
     pub fn render(self, cal: &Calibration) -> String {
-        match self {
-            ExportFormat::Toml => cal.to_toml(),
-            ExportFormat::Json => {
-                let mut s =
-                    serde_json::to_string_pretty(&cal.to_json()).expect("JSON of plain values");
-                s.push('\n');
-                s
-            }
-            ExportFormat::BHumanCamera => bhuman_camera_cfg(cal),
-            ExportFormat::BHumanJoints => bhuman_joint_cfg(cal),
-            ExportFormat::HulksHead => hulks::head_json(cal),
-            ExportFormat::HulksBody => hulks::body_json(cal),
-            ExportFormat::NaothCamera => naoth::camera_matrix_offset_cfg(cal),
-            ExportFormat::NomadzJoints => nomadz::joint_calibration_cfg(cal),
-            ExportFormat::RunswiftCamera => runswift::kinematics_cfg(cal),
-        }
+        (self.spec().render)(cal)
+    }
+}
+
+/// Refuses a fresh joint file for a calibration fitted to angles the robot's joint
+/// calibration had already corrected: its offsets are changes to that calibration, which
+/// only `--update` of the robot's file can compose (stored_new = stored_old − α).
+pub fn check_fresh(cal: &Calibration, format: ExportFormat) -> Result<(), ExportError> {
+    if format.spec().joints && cal.corrected_angles() {
+        Err(ExportError::NeedsUpdate {
+            format: format.name(),
+        })
+    } else {
+        Ok(())
     }
 }
 
@@ -318,7 +563,134 @@ pub fn export(
     if format.is_robot_format() {
         check_usable(cal, || path.display().to_string())?;
     }
+    check_fresh(cal, format)?;
     write_atomic(path, format.render(cal).as_bytes(), options)
+}
+
+/// `naocalib export --update`: replaces in the robot's file `path` (in `format`'s layout)
+/// only what `cal` determined — the lower camera's correction, the leg joint offsets, the
+/// head offsets only when estimated, NomadZ's `jointPlay` only when the play was — and
+/// keeps every other byte. The previous file is kept as `<path>.bak`; both are written
+/// atomically. A file that cannot be parsed, or holds an implausible value, is refused
+/// with its name and line, and nothing is written. Returns the backup's path.
+pub fn update(
+    cal: &Calibration,
+    format: ExportFormat,
+    path: &Path,
+    inputs: &[PathBuf],
+) -> Result<PathBuf, ExportError> {
+    check_usable(cal, || path.display().to_string())?;
+    let spec = format.spec();
+    let update = spec.update.ok_or_else(|| {
+        parse_error(
+            path,
+            format!("--update is not supported for --format {}", spec.name),
+        )
+    })?;
+    let text = std::fs::read_to_string(path).map_err(|source| ExportError::Io {
+        path: path.to_path_buf(),
+        action: "read",
+        source,
+    })?;
+    let new = update(&text, path, cal)?;
+    let mut backup = path.as_os_str().to_owned();
+    backup.push(".bak");
+    let backup = PathBuf::from(backup);
+    let options = WriteOptions {
+        force: true,
+        inputs: inputs.to_vec(),
+    };
+    io::check_writable(path, &options)?;
+    io::check_writable(&backup, &options)?;
+    write_atomic(&backup, text.as_bytes(), &options)?;
+    write_atomic(path, new.as_bytes(), &options)?;
+    Ok(backup)
+}
+
+/// One file `naocalib import` read: its path, format name and how many values it held.
+pub type FileRead = (PathBuf, &'static str, usize);
+
+/// Reads a robot's team files into a [`Calibration`] (`naocalib import`): every value they
+/// hold, as naocalib parameters held at it (`fixed`, the robot's current calibration);
+/// every other parameter of the paper's set present but undetermined (never written into
+/// a robot file). Returns it with `(file, format name, values read)` per file. The same
+/// parameter in two files is an error.
+pub fn import_calibration(
+    files: &[PathBuf],
+    format: Option<ExportFormat>,
+) -> Result<(Calibration, Vec<FileRead>), ExportError> {
+    let mut values: Vec<Option<(f64, usize)>> = vec![None; Param::ALL.len()];
+    let mut read = Vec::new();
+    for (k, file) in files.iter().enumerate() {
+        let (format, imported) = import(file, format)?;
+        for (p, v) in &imported {
+            if let Some((_, other)) = values[p.index()] {
+                return Err(parse_error(
+                    file,
+                    format!("{p} is also in {}", files[other].display()),
+                ));
+            }
+            values[p.index()] = Some((*v, k));
+        }
+        read.push((file.clone(), format.name(), imported.len()));
+    }
+    let parameters = Param::ALL
+        .iter()
+        .filter_map(|&p| match values[p.index()] {
+            Some((value, _)) => Some(Entry {
+                param: p,
+                value,
+                std: Some(0.0),
+                fixed: true,
+            }),
+            None => (p.index() < crate::model::PAPER_PARAMETERS).then_some(Entry {
+                param: p,
+                value: 0.0,
+                std: None,
+                fixed: false,
+            }),
+        })
+        .collect();
+    let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
+    let cal = Calibration {
+        solver: Some(format!("naocalib import of {}", names.join(", "))),
+        dataset: None,
+        converged: None,
+        rms_px: None,
+        parameters,
+        angles: None,
+        posture: Posture::Standing,
+    };
+    Ok((cal, read))
+}
+
+/// Reads a robot's team file: its format (given, or recognised from the content) and the
+/// values it holds as naocalib parameters ([`Imported`]: α = −stored for joints).
+pub fn import(
+    path: &Path,
+    format: Option<ExportFormat>,
+) -> Result<(ExportFormat, Imported), ExportError> {
+    let text = std::fs::read_to_string(path).map_err(|source| ExportError::Io {
+        path: path.to_path_buf(),
+        action: "read",
+        source,
+    })?;
+    let format = match format {
+        Some(f) => f,
+        None => ExportFormat::recognise(&text).ok_or_else(|| {
+            parse_error(
+                path,
+                "not a team calibration file naocalib knows (give --format)",
+            )
+        })?,
+    };
+    let read = format.spec().read.ok_or_else(|| {
+        parse_error(
+            path,
+            format!("import is not supported for --format {}", format.name()),
+        )
+    })?;
+    Ok((format, read(&text, path)?))
 }
 
 /// Writes `cal` into `dir` in every format (file names in [`ExportFormat::ALL`]) and
@@ -332,6 +704,9 @@ pub fn export_all(
     check_usable(cal, || {
         format!("the calibration files into {}", dir.display())
     })?;
+    for (format, _, _) in ExportFormat::ALL {
+        check_fresh(cal, format)?;
+    }
     let paths: Vec<PathBuf> = ExportFormat::ALL
         .iter()
         .map(|(_, _, name)| dir.join(name))

@@ -1,23 +1,35 @@
-//! NomadZ: `Config/Robots/<robot>/jointCalibration.cfg`, one entry per joint in B-Human's
-//! joint order (NomadZ descends from B-Human 2013):
+//! NomadZ (descended from B-Human 2013): `Config/Robots/<robot>/jointCalibration.cfg` and
+//! `cameraCalibration.cfg`.
+//!
+//! **Joints**, one entry per joint in B-Human's 2013 joint order, in degrees
+//! (`Src/Representations/Configuration/JointCalibration.h`, `JointInfo::serialize` converts
+//! with `toDegrees`/`fromDegrees`), on one line as in `Config/Robots/Default/` or spread
+//! over several as in `Config/Robots/Borin/`:
 //!
 //! ```text
-//! lKneePitch = {offset = -0.178186; minAngle = -5; maxAngle = 120; jointPlay = 2.63675;};
+//! lKneePitch = {offset = 0.178186; minAngle = -5; maxAngle = 120; jointPlay = 2.63675;};
 //! ```
 //!
-//! `offset`, `minAngle`, `maxAngle` and `jointPlay` are in degrees (NomadZ
-//! `Config/Robots/Default/jointCalibration.cfg`). The offset is added to requested angles
-//! and subtracted from measured ones (B-Human's rule, naocalib's too). `jointPlay` is the
-//! full width of the joint's play (backlash): naocalib's play family, parameter
-//! `<Joint>Play`, looked up in the registry by name — a joint without such a parameter,
-//! or one whose play was held fixed at zero, gets 0. The joint limits are NomadZ's
-//! defaults, which naocalib does not estimate.
+//! NomadZ subtracts `offset` from the sensor readings (`Src/Modules/Infrastructure/
+//! NaoProvider.cpp`, line 173: `sensors[j++] - theJointCalibration.joints[i].offset`) and
+//! adds it to the requests (line 123), so `offset` stores **−α**. `jointPlay` is the full
+//! width of the joint's play (backlash): naocalib's play family, parameter
+//! `<Joint>Play`, looked up in the registry by name. The joint limits are NomadZ's
+//! defaults, which naocalib does not estimate; `--update` keeps a robot's.
+//!
+//! **Camera**: `cameraTiltCorrection`, `cameraRollCorrection`, `cameraPanCorrection` in
+//! radians (`Src/Representations/Configuration/CameraCalibration.h`), applied after the
+//! head joints as `rotateY(headTiltToCameraTilt + tilt) · rotateX(roll) · rotateZ(pan)`
+//! (`Src/Representations/Perception/CameraMatrix.cpp`, lines 589–591) — B-Human's order:
+//! tilt = CamPitch, roll = CamRoll, pan = CamYaw, exactly. The `upperCamera…` and
+//! `body…` keys are not calibrated here.
 
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::bhuman::BHUMAN_JOINTS;
-use super::{Calibration, ExportError, header, num, parse_error};
+use super::bhuman::{BHUMAN_JOINTS, joint_param};
+use super::cfg::{self, Kind};
+use super::{Calibration, ExportError, Imported, header, num, parse_error};
 use crate::model::Param;
 
 /// NomadZ's default `(minAngle, maxAngle)` (deg) of each joint, in [`BHUMAN_JOINTS`]
@@ -70,72 +82,90 @@ pub struct JointEntry {
     pub joint_play: f64,
 }
 
-/// The `jointCalibration.cfg` of `cal`.
+/// The `jointCalibration.cfg` of `cal` (NomadZ's one-line layout), `offset` = −α.
 pub fn joint_calibration_cfg(cal: &Calibration) -> String {
     let mut s = String::new();
     header(
         &mut s,
         "//",
         cal,
-        "offset, minAngle, maxAngle and jointPlay in degrees; jointPlay is the full width \
-         of the play",
+        "offset, minAngle, maxAngle and jointPlay in degrees; offset = -alpha; jointPlay is \
+         the full width of the play",
     );
     for ((name, param), (min, max)) in BHUMAN_JOINTS.iter().zip(LIMITS_DEG) {
         let entry = param.and_then(|p| cal.get(p));
-        let play = param.and_then(play_param).and_then(|p| cal.get(p));
+        let offset = param.and_then(|p| cal.robot_value(p)).map_or(0.0, |a| -a);
+        let play_param = param.and_then(play_param);
+        let play = play_param.and_then(|p| cal.robot_value(p)).unwrap_or(0.0);
         let mut notes = Vec::new();
         match entry {
-            Some(e) => notes.push(format!("offset {}", e.describe())),
+            Some(e) => notes.push(format!("alpha {}", e.describe())),
             None => notes.push("offset not calibrated".into()),
         }
-        if let Some(p) = play {
+        if let Some(p) = play_param.and_then(|p| cal.get(p)) {
             notes.push(format!("play {}", p.describe()));
         }
         let _ = writeln!(
             s,
             "{name} = {{offset = {}; minAngle = {}; maxAngle = {}; jointPlay = {};}}; // {}",
-            num(entry.map_or(0.0, |e| e.value)),
+            num(offset),
             num(min),
             num(max),
-            num(play.map_or(0.0, |e| e.value)),
+            num(play),
             notes.join("; ")
         );
     }
     s
 }
 
-/// Reads back a [`joint_calibration_cfg`] file: NomadZ joint name → entry.
+/// A number at `at` below `root`, with its span; `None` when absent.
+fn number_at(
+    root: &cfg::Value,
+    at: &[&str],
+    path: &Path,
+) -> Result<Option<(f64, usize, usize, usize)>, ExportError> {
+    let Some(v) = root.get(at) else {
+        return Ok(None);
+    };
+    let text = v.scalar().unwrap_or("{…}");
+    let x = cfg::number(text).ok_or_else(|| {
+        parse_error(
+            path,
+            format!(
+                "line {}: {}: '{text}' is not a number",
+                v.line,
+                at.join(".")
+            ),
+        )
+    })?;
+    Ok(Some((x, v.start, v.end, v.line)))
+}
+
+/// Reads back a NomadZ `jointCalibration.cfg` (either layout): joint name → entry (deg),
+/// every offset checked plausible.
 pub fn read_joint_calibration_cfg(
     text: &str,
     path: &Path,
 ) -> Result<Vec<(String, JointEntry)>, ExportError> {
+    let root = cfg::parse(text, path)?;
+    let Kind::Map(entries) = &root.kind else {
+        unreachable!("a file is a map")
+    };
     let mut out = Vec::new();
-    for (n, line) in text.lines().enumerate() {
-        let code = line.split("//").next().unwrap_or("").trim();
-        if code.is_empty() {
-            continue;
+    for (name, v) in entries {
+        if !matches!(v.kind, Kind::Map(_)) {
+            return Err(parse_error(
+                path,
+                format!(
+                    "line {}: {name}: expected {{offset; minAngle; maxAngle; jointPlay}}",
+                    v.line
+                ),
+            ));
         }
-        let at = |m: String| parse_error(path, format!("line {}: {m}", n + 1));
-        let (name, rest) = code
-            .split_once('=')
-            .ok_or_else(|| at("expected `joint = {…};`".into()))?;
-        let name = name.trim().to_string();
-        let inner = rest
-            .trim()
-            .strip_prefix('{')
-            .and_then(|r| r.trim_end().strip_suffix("};"))
-            .ok_or_else(|| at(format!("{name}: expected {{…}};")))?;
         let field = |key: &str| -> Result<f64, ExportError> {
-            inner
-                .split(';')
-                .filter_map(|part| part.split_once('='))
-                .find(|(k, _)| k.trim() == key)
-                .ok_or_else(|| at(format!("{name}.{key}: missing")))
-                .and_then(|(_, v)| {
-                    v.trim()
-                        .parse()
-                        .map_err(|_| at(format!("{name}.{key}: '{}' is not a number", v.trim())))
-                })
+            number_at(&root, &[name.as_str(), key], path)?
+                .map(|(x, ..)| x)
+                .ok_or_else(|| parse_error(path, format!("line {}: {name}.{key}: missing", v.line)))
         };
         let entry = JointEntry {
             offset: field("offset")?,
@@ -143,7 +173,129 @@ pub fn read_joint_calibration_cfg(
             max_angle: field("maxAngle")?,
             joint_play: field("jointPlay")?,
         };
-        out.push((name, entry));
+        let (_, _, _, line) =
+            number_at(&root, &[name.as_str(), "offset"], path)?.expect("read above");
+        super::check_plausible(
+            path,
+            line,
+            &format!("{name}.offset"),
+            entry.offset,
+            super::JOINT_LIMIT_DEG,
+        )?;
+        out.push((name.clone(), entry));
     }
     Ok(out)
+}
+
+/// Reads a NomadZ joint file as naocalib parameters: α = −offset, and the play (deg).
+pub fn import_joints(text: &str, path: &Path) -> Result<Imported, ExportError> {
+    let mut out = Vec::new();
+    for (name, entry) in read_joint_calibration_cfg(text, path)? {
+        if let Some(p) = joint_param(&name) {
+            out.push((p, 0.0 - entry.offset));
+            if let Some(play) = play_param(p) {
+                out.push((play, entry.joint_play));
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// A robot's `jointCalibration.cfg` with the offsets this calibration determined replaced
+/// (stored = −α for raw angles, stored_old − α for corrected ones) and `jointPlay` where
+/// the play was estimated; limits, arms and every other byte kept.
+pub fn update_joints(text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
+    read_joint_calibration_cfg(text, path)?;
+    let root = cfg::parse(text, path)?;
+    let mut edits = Vec::new();
+    for (name, param) in BHUMAN_JOINTS {
+        let Some(param) = param else { continue };
+        if cal.determined_here(param).is_some() {
+            let (old, start, end, _) = number_at(&root, &[name, "offset"], path)?
+                .ok_or_else(|| parse_error(path, format!("{name}.offset: missing")))?;
+            edits.push((start, end, num(cal.stored_joint_value(param, old, path)?)));
+        }
+        if let Some(play) = play_param(param).and_then(|p| cal.determined_here(p)) {
+            let (_, start, end, _) = number_at(&root, &[name, "jointPlay"], path)?
+                .ok_or_else(|| parse_error(path, format!("{name}.jointPlay: missing")))?;
+            edits.push((start, end, num(play)));
+        }
+    }
+    Ok(cfg::splice(text, edits))
+}
+
+/// NomadZ's lower-camera keys and naocalib's parameter of each (same rotation, radians).
+pub const CAMERA_KEYS: [(&str, Param); 3] = [
+    ("cameraTiltCorrection", Param::CamPitch),
+    ("cameraRollCorrection", Param::CamRoll),
+    ("cameraPanCorrection", Param::CamYaw),
+];
+
+/// The `cameraCalibration.cfg` of `cal` (radians); the upper camera and body corrections
+/// zero (not calibrated here; `--update` keeps a robot's).
+pub fn camera_calibration_cfg(cal: &Calibration) -> String {
+    let mut s = String::new();
+    header(&mut s, "//", cal, "radians (rad), body translation in mm");
+    let _ = writeln!(
+        s,
+        "// tilt = CamPitch, roll = CamRoll, pan = CamYaw. Only the lower camera is calibrated:"
+    );
+    let _ = writeln!(
+        s,
+        "// upper camera and body are zero here; `naocalib export --update <file>` keeps a robot's."
+    );
+    for (key, param) in CAMERA_KEYS {
+        let x = cal.robot_value(param).unwrap_or(0.0).to_radians();
+        let _ = writeln!(s, "{key} = {};", num(x));
+    }
+    for key in [
+        "upperCameraTiltCorrection",
+        "upperCameraRollCorrection",
+        "upperCameraPanCorrection",
+        "bodyTiltCorrection",
+        "bodyRollCorrection",
+    ] {
+        let _ = writeln!(s, "{key} = 0;");
+    }
+    let _ = writeln!(s, "bodyTranslationCorrection = {{x = 0; y = 0; z = 0;}};");
+    s
+}
+
+/// The lower camera's corrections of a NomadZ camera file (rad, with spans), checked
+/// plausible.
+fn camera_values(
+    root: &cfg::Value,
+    path: &Path,
+) -> Result<Vec<(Param, f64, usize, usize)>, ExportError> {
+    let mut out = Vec::new();
+    for (key, param) in CAMERA_KEYS {
+        let (x, start, end, line) = number_at(root, &[key], path)?
+            .ok_or_else(|| parse_error(path, format!("{key}: missing")))?;
+        super::check_plausible(path, line, key, x.to_degrees(), super::CAMERA_LIMIT_DEG)?;
+        out.push((param, x, start, end));
+    }
+    Ok(out)
+}
+
+/// Reads a NomadZ camera file: naocalib's camera offsets (deg).
+pub fn import_camera(text: &str, path: &Path) -> Result<Imported, ExportError> {
+    let root = cfg::parse(text, path)?;
+    Ok(camera_values(&root, path)?
+        .into_iter()
+        .map(|(p, x, _, _)| (p, x.to_degrees()))
+        .collect())
+}
+
+/// A robot's `cameraCalibration.cfg` with the lower camera's corrections this calibration
+/// determined replaced; every other byte kept.
+pub fn update_camera(text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
+    let root = cfg::parse(text, path)?;
+    let edits = camera_values(&root, path)?
+        .into_iter()
+        .filter_map(|(p, _, start, end)| {
+            cal.determined_here(p)
+                .map(|v| (start, end, num(v.to_radians())))
+        })
+        .collect();
+    Ok(cfg::splice(text, edits))
 }

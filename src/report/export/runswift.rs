@@ -20,7 +20,8 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::{Calibration, ExportError, header, num, parse_error};
+use super::{Calibration, ExportError, Imported, header, num, parse_error};
+use crate::model::Param;
 
 /// The INI section rUNSWift reads the entries from.
 pub const SECTION: &str = "kinematics";
@@ -96,4 +97,49 @@ pub fn ini_section(
         out.push((key.trim().to_string(), value));
     }
     Ok(out)
+}
+
+const KEYS: [&str; 3] = ["cameraYawBottom", "cameraPitchBottom", "cameraRollBottom"];
+
+/// The bottom camera's `[yaw, pitch, roll]` (deg) of a rUNSWift config, checked plausible.
+fn bottom(text: &str, path: &Path) -> Result<[f64; 3], ExportError> {
+    let (entries, _) = super::ini::section(text, SECTION, path)?
+        .ok_or_else(|| parse_error(path, format!("no [{SECTION}] section")))?;
+    let mut out = [0.0; 3];
+    for (k, key) in KEYS.iter().enumerate() {
+        let (x, e) = super::ini::number(&entries, key, path)?
+            .ok_or_else(|| parse_error(path, format!("[{SECTION}] {key}: missing")))?;
+        super::check_plausible(path, e.line, key, x, super::CAMERA_LIMIT_DEG)?;
+        out[k] = x;
+    }
+    Ok(out)
+}
+
+/// Reads a rUNSWift head config (other keys and sections allowed): naocalib's camera
+/// offsets (deg).
+pub fn import(text: &str, path: &Path) -> Result<Imported, ExportError> {
+    let [yaw, pitch, roll] = super::camera::from_runswift(bottom(text, path)?.map(f64::to_radians));
+    Ok(vec![
+        (Param::CamYaw, yaw),
+        (Param::CamPitch, pitch),
+        (Param::CamRoll, roll),
+    ])
+}
+
+/// A robot's head config with the bottom camera's entries replaced when this calibration
+/// determined the lower camera (added when missing); every other byte kept.
+pub fn update(text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
+    if let Some((entries, _)) = super::ini::section(text, SECTION, path)? {
+        for key in KEYS {
+            if let Some((x, e)) = super::ini::number(&entries, key, path)? {
+                super::check_plausible(path, e.line, key, x, super::CAMERA_LIMIT_DEG)?;
+            }
+        }
+    }
+    if !super::camera_determined(cal, path)? {
+        return Ok(text.to_string());
+    }
+    let new = super::camera::runswift(cal).map(f64::to_degrees);
+    let values: Vec<(&str, String)> = KEYS.iter().zip(new).map(|(k, x)| (*k, num(x))).collect();
+    super::ini::set(text, SECTION, &values, path)
 }

@@ -1,0 +1,246 @@
+//! JSON read with the byte span of every value, so that an update of a robot's parameter
+//! file replaces (or inserts) a value and keeps every other byte.
+
+use std::path::Path;
+
+use super::{ExportError, parse_error};
+
+/// A JSON value with where its text is.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Value {
+    /// What it is.
+    pub kind: Kind,
+    /// Byte offset of its first character.
+    pub start: usize,
+    /// Byte offset after its last character.
+    pub end: usize,
+    /// Its line (1-based).
+    pub line: usize,
+}
+
+/// The kinds of JSON values.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Kind {
+    /// A number (its value, when finite).
+    Number(f64),
+    /// A string, `true`, `false` or `null` (their text).
+    Other,
+    /// An object, in file order.
+    Object(Vec<(String, Value)>),
+    /// An array.
+    Array(Vec<Value>),
+}
+
+impl Value {
+    /// The value at `path` below this object.
+    pub fn get(&self, path: &[&str]) -> Option<&Value> {
+        let Some((first, rest)) = path.split_first() else {
+            return Some(self);
+        };
+        match &self.kind {
+            Kind::Object(members) => members
+                .iter()
+                .find(|(k, _)| k == first)
+                .and_then(|(_, v)| v.get(rest)),
+            _ => None,
+        }
+    }
+}
+
+/// Parses `text` (checked with serde_json first, whose error names the line).
+pub fn parse(text: &str, path: &Path) -> Result<Value, ExportError> {
+    serde_json::from_str::<serde::de::IgnoredAny>(text)
+        .map_err(|e| parse_error(path, format!("line {}: {e}", e.line())))?;
+    let mut p = Parser {
+        text,
+        b: text.as_bytes(),
+        pos: 0,
+    };
+    Ok(p.value())
+}
+
+struct Parser<'a> {
+    text: &'a str,
+    b: &'a [u8],
+    pos: usize,
+}
+
+impl Parser<'_> {
+    fn ws(&mut self) {
+        while self.pos < self.b.len() && self.b[self.pos].is_ascii_whitespace() {
+            self.pos += 1;
+        }
+    }
+
+    fn string(&mut self) -> String {
+        // At the opening quote; the text is valid JSON.
+        let start = self.pos;
+        self.pos += 1;
+        while self.b[self.pos] != b'"' {
+            if self.b[self.pos] == b'\\' {
+                self.pos += 1;
+            }
+            self.pos += 1;
+        }
+        self.pos += 1;
+        serde_json::from_str(&self.text[start..self.pos]).unwrap_or_default()
+    }
+
+    fn value(&mut self) -> Value {
+        self.ws();
+        let start = self.pos;
+        let line = self.text[..start].matches('\n').count() + 1;
+        let kind = match self.b[self.pos] {
+            b'{' => {
+                self.pos += 1;
+                let mut members = Vec::new();
+                loop {
+                    self.ws();
+                    if self.b[self.pos] == b'}' {
+                        self.pos += 1;
+                        break;
+                    }
+                    if self.b[self.pos] == b',' {
+                        self.pos += 1;
+                        continue;
+                    }
+                    let key = self.string();
+                    self.ws();
+                    self.pos += 1; // ':'
+                    let v = self.value();
+                    members.push((key, v));
+                }
+                Kind::Object(members)
+            }
+            b'[' => {
+                self.pos += 1;
+                let mut items = Vec::new();
+                loop {
+                    self.ws();
+                    if self.b[self.pos] == b']' {
+                        self.pos += 1;
+                        break;
+                    }
+                    if self.b[self.pos] == b',' {
+                        self.pos += 1;
+                        continue;
+                    }
+                    items.push(self.value());
+                }
+                Kind::Array(items)
+            }
+            b'"' => {
+                self.string();
+                Kind::Other
+            }
+            _ => {
+                let len = self.text[start..]
+                    .find(|c: char| !(c.is_ascii_alphanumeric() || matches!(c, '-' | '+' | '.')))
+                    .unwrap_or(self.text.len() - start);
+                self.pos = start + len;
+                match self.text[start..self.pos].parse::<f64>() {
+                    Ok(x) => Kind::Number(x),
+                    Err(_) => Kind::Other,
+                }
+            }
+        };
+        Value {
+            kind,
+            start,
+            end: self.pos,
+            line,
+        }
+    }
+}
+
+/// The whitespace that starts the line holding byte `at`.
+fn indent_at(text: &str, at: usize) -> &str {
+    let line_start = text[..at].rfind('\n').map_or(0, |n| n + 1);
+    let rest = &text[line_start..];
+    &rest[..rest.len() - rest.trim_start().len()]
+}
+
+/// `text` with the number at `path` set to `new` (its text): replaced where it exists,
+/// otherwise inserted into the deepest existing object on the path, creating the missing
+/// objects. Fails when something on the path is not an object.
+pub fn set(text: &str, path: &[&str], new: &str, file: &Path) -> Result<String, ExportError> {
+    let root = parse(text, file)?;
+    let mut node = &root;
+    for (depth, key) in path.iter().enumerate() {
+        let Kind::Object(members) = &node.kind else {
+            return Err(parse_error(
+                file,
+                format!(
+                    "line {}: {}: expected an object",
+                    node.line,
+                    path[..depth].join(".")
+                ),
+            ));
+        };
+        match members.iter().find(|(k, _)| k == key) {
+            Some((_, v)) => node = v,
+            None => {
+                // Insert `key: {rest…: new}` into this object.
+                let mut value = new.to_string();
+                for k in path[depth + 1..].iter().rev() {
+                    value = format!("{{\"{k}\": {value}}}");
+                }
+                let member = format!("\"{key}\": {value}");
+                let (at, insert) = match members.last() {
+                    Some((_, last)) => {
+                        // The last member's key starts its line (pretty-printed files).
+                        let indent = indent_at(text, last.start);
+                        (last.end, format!(",\n{indent}{member}"))
+                    }
+                    None => {
+                        let indent = indent_at(text, node.start);
+                        (node.start + 1, format!("\n{indent}  {member}\n{indent}"))
+                    }
+                };
+                let mut out = text.to_string();
+                out.insert_str(at, &insert);
+                return Ok(out);
+            }
+        }
+    }
+    match node.kind {
+        Kind::Number(_) => {
+            let mut out = text.to_string();
+            out.replace_range(node.start..node.end, new);
+            Ok(out)
+        }
+        _ => Err(parse_error(
+            file,
+            format!("line {}: {}: expected a number", node.line, path.join(".")),
+        )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sets_existing_and_inserts_missing_keeping_other_bytes() {
+        let text = "{\n  \"a\": {\n    \"x\": 1.5\n  },\n  \"b\": [1, 2]\n}\n";
+        let f = Path::new("t.json");
+        let out = set(text, &["a", "x"], "-2", f).unwrap();
+        assert_eq!(out, text.replace("1.5", "-2"));
+        let out = set(text, &["a", "y"], "3", f).unwrap();
+        assert_eq!(
+            out,
+            "{\n  \"a\": {\n    \"x\": 1.5,\n    \"y\": 3\n  },\n  \"b\": [1, 2]\n}\n"
+        );
+        let out = set(text, &["c", "d"], "4", f).unwrap();
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(v["c"]["d"], 4);
+        assert_eq!(v["b"][1], 2);
+        assert!(set(text, &["b", "x"], "1", f).is_err());
+        assert!(
+            parse("{\n\"a\": 1,\n}", f)
+                .unwrap_err()
+                .to_string()
+                .contains("line 3")
+        );
+    }
+}
