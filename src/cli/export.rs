@@ -12,6 +12,7 @@ use naocalib::report::export::{
     Calibration, ExportError, ExportFormat, WriteOptions, export, export_all, read_calibration,
     write_atomic,
 };
+use naocalib::output::Staged;
 use naocalib::report::plot;
 use naocalib::solve::Solution;
 
@@ -56,7 +57,7 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
     let calibration = read_calibration(&args.input)?;
     let problems = calibration.problems();
     if !problems.is_empty() {
-        eprintln!(
+        note!(
             "warning: {} is not a calibration: {}",
             args.input.display(),
             problems.join("; ")
@@ -100,9 +101,11 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
         write_atomic(&path, format.render(&calibration).as_bytes(), &options)?;
         written.push(path);
     }
+    let mut out = String::new();
     for path in written {
-        println!("wrote {}", path.display());
+        out.push_str(&format!("wrote {}\n", path.display()));
     }
+    super::print_out(out)?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -119,15 +122,28 @@ pub fn solve_outputs(
     force: bool,
 ) -> Result<()> {
     let options = WriteOptions::protecting_dataset(&dataset.dir, force);
+    naocalib::output::check_outputs(
+        &report.into_iter().collect::<Vec<_>>(),
+        &plots.into_iter().chain(export_dir).collect::<Vec<_>>(),
+        &options,
+    )?;
     if let Some(dir) = plots {
+        // All or nothing: staged beside `dir`, published when every plot is drawn.
+        let stage = Staged::new(dir, &options).context("--plots")?;
         let sides = plot::capture_sides(dataset);
-        let mut files = plot::solution_plots(solution, Some(&sides), dir, "solve", &options)
+        let staged = stage.options();
+        plot::solution_plots(solution, Some(&sides), stage.dir(), "solve", &staged)
             .context("--plots")?;
-        files.extend(
-            naocalib::report::misfit_plot::misfit_plots(solution, dataset, dir, "misfit", &options)
-                .context("--plots")?,
-        );
-        eprintln!("wrote {} plot files into {}", files.len(), dir.display());
+        naocalib::report::misfit_plot::misfit_plots(
+            solution,
+            dataset,
+            stage.dir(),
+            "misfit",
+            &staged,
+        )
+        .context("--plots")?;
+        let files = stage.publish().context("--plots")?;
+        note!("wrote {} plot files into {}", files.len(), dir.display());
     }
     if let Some(dir) = export_dir {
         let calibration = Calibration::from_solution(solution, Some(&dataset.dir));
@@ -135,27 +151,26 @@ pub fn solve_outputs(
         let files: Vec<PathBuf> = if problems.is_empty() {
             export_all(&calibration, dir, &options).context("--export")?
         } else {
-            eprintln!(
+            note!(
                 "warning: not a calibration ({}); --export writes only calibration.toml and \
                  calibration.json, marked so, and no robot files",
                 problems.join("; ")
             );
-            let mut files = Vec::new();
+            let stage = Staged::new(dir, &options).context("--export")?;
             for format in [ExportFormat::Toml, ExportFormat::Json] {
-                let path = dir.join(format!("calibration.{}", format.name()));
-                export(&calibration, format, &path, &options).context("--export")?;
-                files.push(path);
+                let path = stage.dir().join(format!("calibration.{}", format.name()));
+                export(&calibration, format, &path, &stage.options()).context("--export")?;
             }
-            files
+            stage.publish().context("--export")?
         };
         for f in files {
-            eprintln!("wrote {}", f.display());
+            note!("wrote {}", f.display());
         }
     }
     if let Some(path) = report {
         naocalib::report::html::write_report(solution, dataset, path, &options)
             .context("--report")?;
-        eprintln!("wrote {}", path.display());
+        note!("wrote {}", path.display());
     }
     Ok(())
 }

@@ -24,6 +24,8 @@ mod export_teams;
 mod extended;
 mod fuzz_readers;
 mod hostile_inputs;
+mod hostile_outputs;
+mod robot_file_bounds;
 mod misfit;
 mod plan;
 mod plot_files;
