@@ -439,6 +439,7 @@ impl Staged {
         };
         std::fs::create_dir_all(parent).map_err(|e| io_err("create the directory for", e))?;
         sweep_stale(parent);
+        sweep_stale(target);
         let prefix = format!("{}stage-", temp_prefix());
         let mut builder = tempfile::Builder::new();
         builder.prefix(&prefix);

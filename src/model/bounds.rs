@@ -36,7 +36,32 @@ impl Bound {
     pub fn contains(&self, value: f64) -> bool {
         value.is_finite() && (self.min..=self.max).contains(&value)
     }
+
+    /// Whether an estimate `value` with one-sigma `sigma` (report units) is consistent
+    /// with the bound: within it, where a limit of zero (compliance and play are never
+    /// negative) is widened by [`SIGMAS`] σ, capped at [`MAX_SLACK`] of the bound's width
+    /// — a joint without play has its play estimated slightly negative half the time, but
+    /// a σ as wide as the bound excuses nothing. Limits away from zero (±30° for an
+    /// offset) are far from any real estimate and are not widened.
+    pub fn admits(&self, value: f64, sigma: f64) -> bool {
+        let cap = MAX_SLACK * (self.max - self.min);
+        let slack = if sigma.is_finite() && sigma > 0.0 {
+            (SIGMAS * sigma).min(cap)
+        } else {
+            0.0
+        };
+        let at_zero = |limit: f64| if limit == 0.0 { slack } else { 0.0 };
+        value.is_finite()
+            && (self.min - at_zero(self.min)..=self.max + at_zero(self.max)).contains(&value)
+    }
 }
+
+/// How many standard deviations an estimate may lie beyond its bound ([`Bound::admits`]).
+pub const SIGMAS: f64 = 3.0;
+
+/// The most an estimate may lie beyond its bound, as a fraction of the bound's width
+/// ([`Bound::admits`]).
+pub const MAX_SLACK: f64 = 0.5;
 
 /// The physical bound of `param` (report units), from its family and unit (see the
 /// module's table).
@@ -104,11 +129,19 @@ impl std::fmt::Display for Violation {
 /// The values of `values` (pairs of parameter and value in report units) outside their
 /// physical bounds.
 pub fn violations(values: impl IntoIterator<Item = (Param, f64)>) -> Vec<Violation> {
-    values
+    violations_of_estimates(values.into_iter().map(|(p, v)| (p, v, 0.0)))
+}
+
+/// The estimates of `estimates` (parameter, value, one-sigma; report units) that are not
+/// consistent with their physical bounds ([`Bound::admits`]).
+pub fn violations_of_estimates(
+    estimates: impl IntoIterator<Item = (Param, f64, f64)>,
+) -> Vec<Violation> {
+    estimates
         .into_iter()
-        .filter_map(|(param, value)| {
+        .filter_map(|(param, value, sigma)| {
             let bound = bound(param);
-            (!bound.contains(value)).then_some(Violation {
+            (!bound.admits(value, sigma)).then_some(Violation {
                 param,
                 value,
                 bound,
@@ -117,17 +150,20 @@ pub fn violations(values: impl IntoIterator<Item = (Param, f64)>) -> Vec<Violati
         .collect()
 }
 
-/// The parameters of `params` whose value in `values` (every parameter, internal units:
-/// rad, mm, px) is outside its physical bound.
+/// The parameters of `params` whose estimate in `values` with one-sigma `std` (every
+/// parameter, internal units: rad, mm, px; `std` `None` for the widest slack, as for a
+/// fit whose σ is not known yet) is not consistent with its physical bound.
 pub fn violations_internal(
     values: &[f64; super::PARAMETER_COUNT],
+    std: Option<&[f64; super::PARAMETER_COUNT]>,
     params: impl IntoIterator<Item = Param>,
 ) -> Vec<Violation> {
-    violations(
-        params
-            .into_iter()
-            .map(|p| (p, p.unit().to_report(values[p.index()]))),
-    )
+    violations_of_estimates(params.into_iter().map(|p| {
+        let unit = p.unit();
+        let sigma = std.map_or(f64::INFINITY, |s| unit.to_report(s[p.index()]));
+        let sigma = if sigma.is_infinite() { f64::MAX } else { sigma };
+        (p, unit.to_report(values[p.index()]), sigma)
+    }))
 }
 
 #[cfg(test)]
@@ -171,12 +207,18 @@ mod tests {
         assert!(violations([(Param::CamYaw, 1.0)]).is_empty());
         let mut values = [0.0; crate::model::PARAMETER_COUNT];
         values[Param::CamRoll.index()] = 31f64.to_radians();
+        let std = [0.0; crate::model::PARAMETER_COUNT];
         assert_eq!(
-            violations_internal(&values, Param::ALL)
+            violations_internal(&values, Some(&std), Param::ALL)
                 .iter()
                 .map(|v| v.param)
                 .collect::<Vec<_>>(),
             [Param::CamRoll]
         );
+        // Within σ of a bound is consistent with it; far beyond is not, whatever the σ.
+        let play = bound(Param::LKneePitchPlay);
+        assert!(play.admits(-0.02, 0.01) && !play.admits(-0.02, 0.005));
+        assert!(!play.admits(-2.6, 10.0), "the slack is capped");
+        assert_eq!(violations_internal(&values, None, Param::ALL).len(), 1, "no slack at 30°");
     }
 }

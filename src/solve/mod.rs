@@ -216,7 +216,7 @@ impl Solution {
     /// The parameters whose value is outside its physical bound
     /// ([`crate::model::bounds`]): such a fit is no calibration, whatever its residuals.
     pub fn out_of_bounds(&self) -> Vec<crate::model::bounds::Violation> {
-        crate::model::bounds::violations_internal(&self.values, Param::ALL)
+        crate::model::bounds::violations_internal(&self.values, Some(&self.std), Param::ALL)
     }
 }
 
@@ -471,7 +471,11 @@ fn select_model(
         let mut trial_chosen = chosen.clone();
         trial_chosen.push(test.clone());
         let within = match screen(&trial, &warm, backend, options, &trial_chosen) {
-            Ok((t, v)) if crate::model::bounds::violations_internal(&v, trial.free()).is_empty() => {
+            // No σ yet at a screening fit: the widest slack of the bounds.
+            Ok((t, v))
+                if crate::model::bounds::violations_internal(&v, None, trial.free())
+                    .is_empty() =>
+            {
                 Some((t, v))
             }
             _ => None,

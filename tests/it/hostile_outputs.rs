@@ -10,6 +10,11 @@ use std::time::Duration;
 
 use crate::util::{assert_clean_failure, naocalib, run, simulate_small, stderr};
 
+/// The `naocalib` binary as a plain command (to spawn, kill and redirect it).
+fn plain() -> std::process::Command {
+    std::process::Command::new(assert_cmd::cargo::cargo_bin("naocalib"))
+}
+
 /// A small simulated dataset in `tmp/d`.
 fn dataset(tmp: &Path) -> PathBuf {
     let dir = tmp.join("d");
@@ -125,9 +130,13 @@ fn a_degenerate_problem_is_an_error_not_a_panic() {
     );
     let err = stderr(&out);
     assert!(!err.contains("panicked"), "{err}");
-    assert_ne!(out.status.code(), Some(101), "{err}");
-    assert!(out.status.code().is_some(), "killed by a signal: {err}");
-    if !out.status.success() {
+    // A result (exit 0, or 3 when it is no calibration) or a clean error (exit 1).
+    assert!(
+        matches!(out.status.code(), Some(0 | 1 | 3)),
+        "{:?}: {err}",
+        out.status
+    );
+    if out.status.code() == Some(1) {
         assert!(err.contains("naocalib: error:"), "{err}");
     }
 }
@@ -138,7 +147,7 @@ fn a_closed_or_full_standard_output_does_not_panic() {
     let tmp = tempfile::tempdir().unwrap();
     // simulate … | true: the reader is gone before anything is printed.
     let out_dir = tmp.path().join("s");
-    let mut child = naocalib()
+    let mut child = plain()
         .args(["simulate", "--stances", "6", "--heads", "2"])
         .arg(&out_dir)
         .stdout(Stdio::piped())
@@ -163,7 +172,7 @@ fn a_closed_or_full_standard_output_does_not_panic() {
         .write(true)
         .open("/dev/full")
         .unwrap();
-    let out = naocalib()
+    let out = plain()
         .arg("export")
         .arg(&json)
         .arg("--out")
@@ -238,7 +247,7 @@ fn a_killed_batch_leaves_all_or_nothing_and_no_temporary_survives() {
     let complete = ["r0.json", "r1.json", "r2.json", "summary.json"];
     let mut outcomes = Vec::new();
     for delay_ms in [0u64, 40, 120, 250, 400, 700] {
-        let mut child = naocalib()
+        let mut child = plain()
             .args(["batch", "--solver", "lm", "--no-progress", "--threads", "1"])
             .arg("--out")
             .arg(&out_dir)

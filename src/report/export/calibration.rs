@@ -163,11 +163,11 @@ impl Calibration {
             out.push("it does not say whether the solver converged".to_string());
         }
         // Physical bounds (crate::model::bounds) and a determined rank.
-        let outside = crate::model::bounds::violations(
+        let outside = crate::model::bounds::violations_of_estimates(
             self.parameters
                 .iter()
                 .filter(|e| e.value.is_finite())
-                .map(|e| (e.param, e.value)),
+                .map(|e| (e.param, e.value, e.std.unwrap_or(0.0))),
         );
         if !outside.is_empty() {
             let list: Vec<String> = outside.iter().map(|v| v.to_string()).collect();

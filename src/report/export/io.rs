@@ -32,7 +32,7 @@ impl From<crate::output::WriteError> for ExportError {
                 path,
                 action: "create its directory",
                 source: io::Error::other(format!(
-                    "{} is a file in the way (it exists and is not a directory)",
+                    "a file is in the way: {} exists and is not a directory",
                     in_the_way.display()
                 )),
             },
