@@ -742,6 +742,12 @@ mod tests {
         assert!(matches!(e, WriteError::InTheWay { .. }), "{e}");
         assert!(e.to_string().contains("a file is in the way"), "{e}");
         let e = Staged::new(&file, &WriteOptions::new(true)).unwrap_err();
-        assert!(e.to_string().starts_with(&format!("{}: exists and is not a directory", file.display())), "{e}");
+        assert!(
+            e.to_string().starts_with(&format!(
+                "{}: exists and is not a directory",
+                file.display()
+            )),
+            "{e}"
+        );
     }
 }

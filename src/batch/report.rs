@@ -386,7 +386,13 @@ impl Batch {
         }
         for (run, name) in self.runs.iter().zip(run_file_names(&self.runs)) {
             let prefix = name.trim_end_matches(".json");
-            plot::solution_plots(&run.solution, Some(&run.sides), stage.dir(), prefix, &staged)?;
+            plot::solution_plots(
+                &run.solution,
+                Some(&run.sides),
+                stage.dir(),
+                prefix,
+                &staged,
+            )?;
         }
         Ok(stage.publish().map_err(ExportError::from)?)
     }

@@ -119,7 +119,12 @@ pub fn run(args: &BatchArgs, verbose: bool) -> Result<ExitCode> {
     );
     naocalib::output::check_outputs(
         &args.report.as_deref().into_iter().collect::<Vec<_>>(),
-        &args.out.iter().chain(&args.plots).map(PathBuf::as_path).collect::<Vec<_>>(),
+        &args
+            .out
+            .iter()
+            .chain(&args.plots)
+            .map(PathBuf::as_path)
+            .collect::<Vec<_>>(),
         &write_options,
     )?;
     let show = !args.no_progress && !verbose && std::io::stderr().is_terminal();

@@ -7,12 +7,12 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 
+use naocalib::output::Staged;
 use naocalib::report::export::io::check_writable;
 use naocalib::report::export::{
     Calibration, ExportError, ExportFormat, WriteOptions, export, export_all, read_calibration,
     write_atomic,
 };
-use naocalib::output::Staged;
 use naocalib::report::plot;
 use naocalib::solve::Solution;
 

@@ -148,7 +148,12 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
     };
     // Every output against every input, and the dataset files against --force, before
     // anything is simulated or written.
-    let inputs: Vec<PathBuf> = args.truth.iter().chain(&args.stance_file).cloned().collect();
+    let inputs: Vec<PathBuf> = args
+        .truth
+        .iter()
+        .chain(&args.stance_file)
+        .cloned()
+        .collect();
     let write_options = WriteOptions::new(args.force).protecting(inputs);
     let dataset_files = naocalib::output::dataset_files(&args.out);
     let files: Vec<&std::path::Path> = dataset_files.iter().map(PathBuf::as_path).collect();

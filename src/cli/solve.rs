@@ -73,7 +73,12 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     // Every output against the dataset's files, before the solve.
     naocalib::output::check_outputs(
         &args.report.as_deref().into_iter().collect::<Vec<_>>(),
-        &args.plots.iter().chain(&args.export).map(PathBuf::as_path).collect::<Vec<_>>(),
+        &args
+            .plots
+            .iter()
+            .chain(&args.export)
+            .map(PathBuf::as_path)
+            .collect::<Vec<_>>(),
         &naocalib::output::WriteOptions::protecting_dataset(&args.dataset, args.force),
     )?;
     let dataset = if args.detect {

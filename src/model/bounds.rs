@@ -72,9 +72,10 @@ pub fn bound(param: Param) -> Bound {
         why,
     };
     match (param.family(), param.unit()) {
-        (Family::Paper | Family::Head, Unit::Deg) => {
-            sym(30.0, "an angle offset beyond ±30° is no mounting or encoder error")
-        }
+        (Family::Paper | Family::Head, Unit::Deg) => sym(
+            30.0,
+            "an angle offset beyond ±30° is no mounting or encoder error",
+        ),
         (Family::Paper, _) => sym(50.0, "the sandal is strapped to the foot"),
         (Family::Intrinsics, _) if matches!(param, Param::Fx | Param::Fy) => sym(
             280.0,
@@ -219,6 +220,10 @@ mod tests {
         let play = bound(Param::LKneePitchPlay);
         assert!(play.admits(-0.02, 0.01) && !play.admits(-0.02, 0.005));
         assert!(!play.admits(-2.6, 10.0), "the slack is capped");
-        assert_eq!(violations_internal(&values, None, Param::ALL).len(), 1, "no slack at 30°");
+        assert_eq!(
+            violations_internal(&values, None, Param::ALL).len(),
+            1,
+            "no slack at 30°"
+        );
     }
 }

@@ -473,8 +473,7 @@ fn select_model(
         let within = match screen(&trial, &warm, backend, options, &trial_chosen) {
             // No σ yet at a screening fit: the widest slack of the bounds.
             Ok((t, v))
-                if crate::model::bounds::violations_internal(&v, None, trial.free())
-                    .is_empty() =>
+                if crate::model::bounds::violations_internal(&v, None, trial.free()).is_empty() =>
             {
                 Some((t, v))
             }

@@ -407,17 +407,17 @@ fn leverage_corrected(b: &DMatrix<f64>, p: &DMatrix<f64>, r_c: &DVector<f64>) ->
     out
 }
 
+/// A hook told `(done, total)` after each bootstrap refit.
+pub type ProgressHook = Box<dyn Fn(usize, usize)>;
+
 thread_local! {
-    static BOOTSTRAP_PROGRESS: std::cell::RefCell<Option<Box<dyn Fn(usize, usize)>>> =
+    static BOOTSTRAP_PROGRESS: std::cell::RefCell<Option<ProgressHook>> =
         const { std::cell::RefCell::new(None) };
 }
 
 /// Runs `f` with `hook` told `(done, total)` after every bootstrap refit that [`bootstrap`]
 /// makes on this thread meanwhile (a long `--bootstrap` shows progress with it).
-pub fn with_bootstrap_progress<R>(
-    hook: Box<dyn Fn(usize, usize)>,
-    f: impl FnOnce() -> R,
-) -> R {
+pub fn with_bootstrap_progress<R>(hook: Box<dyn Fn(usize, usize)>, f: impl FnOnce() -> R) -> R {
     let previous = BOOTSTRAP_PROGRESS.with(|p| p.replace(Some(hook)));
     let result = f();
     BOOTSTRAP_PROGRESS.with(|p| *p.borrow_mut() = previous);

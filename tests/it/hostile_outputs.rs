@@ -39,7 +39,11 @@ fn temporaries(dir: &Path) -> Vec<PathBuf> {
     let mut out = Vec::new();
     for entry in std::fs::read_dir(dir).into_iter().flatten().flatten() {
         let path = entry.path();
-        if entry.file_name().to_string_lossy().starts_with(".naocalib-") {
+        if entry
+            .file_name()
+            .to_string_lossy()
+            .starts_with(".naocalib-")
+        {
             out.push(path.clone());
         }
         if path.is_dir() {
@@ -76,7 +80,14 @@ fn no_output_replaces_an_input() {
     let before = snapshot(&dir);
     // batch --report onto the dataset's captures.csv, even with --force.
     let out = naocalib()
-        .args(["batch", "--solver", "lm", "--no-progress", "--force", "--report"])
+        .args([
+            "batch",
+            "--solver",
+            "lm",
+            "--no-progress",
+            "--force",
+            "--report",
+        ])
         .arg(dir.join("captures.csv"))
         .arg(&dir)
         .output()
@@ -84,7 +95,14 @@ fn no_output_replaces_an_input() {
     assert_clean_failure(&out, &["captures.csv", "is an input file"]);
     // … and --out into a dataset file's place.
     let out = naocalib()
-        .args(["batch", "--solver", "lm", "--no-progress", "--force", "--out"])
+        .args([
+            "batch",
+            "--solver",
+            "lm",
+            "--no-progress",
+            "--force",
+            "--out",
+        ])
         .arg(dir.join("corners.csv"))
         .arg(&dir)
         .output()
@@ -92,7 +110,15 @@ fn no_output_replaces_an_input() {
     assert_clean_failure(&out, &["corners.csv"]);
     // plan over its own --camera file.
     let out = naocalib()
-        .args(["plan", "--captures", "4", "--pool", "2", "--force", "--camera"])
+        .args([
+            "plan",
+            "--captures",
+            "4",
+            "--pool",
+            "2",
+            "--force",
+            "--camera",
+        ])
         .arg(dir.join("dataset.toml"))
         .arg(dir.join("dataset.toml"))
         .output()
@@ -158,7 +184,11 @@ fn a_closed_or_full_standard_output_does_not_panic() {
     let out = child.wait_with_output().unwrap();
     let err = stderr(&out);
     assert!(!err.contains("panicked"), "{err}");
-    assert_eq!(out.status.code(), Some(0), "a closed pipe ends quietly: {err}");
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "a closed pipe ends quietly: {err}"
+    );
     assert!(err.is_empty(), "quietly: {err}");
     assert_eq!(
         names(&out_dir),
@@ -181,7 +211,12 @@ fn a_closed_or_full_standard_output_does_not_panic() {
         .output()
         .unwrap();
     assert_clean_failure(&out, &["standard output", "No space left on device"]);
-    assert_eq!(stderr(&out).matches("os error").count(), 1, "{}", stderr(&out));
+    assert_eq!(
+        stderr(&out).matches("os error").count(),
+        1,
+        "{}",
+        stderr(&out)
+    );
     assert!(tmp.path().join("c.toml").is_file());
 }
 
@@ -201,8 +236,15 @@ fn a_refused_plot_set_writes_no_plot() {
         .unwrap();
     assert_clean_failure(&out, &["solve_captures.svg", "already exists"]);
     assert_eq!(names(&plots), ["solve_captures.svg"]);
-    assert_eq!(std::fs::read(plots.join("solve_captures.svg")).unwrap(), b"mine");
-    assert!(temporaries(tmp.path()).is_empty(), "{:?}", temporaries(tmp.path()));
+    assert_eq!(
+        std::fs::read(plots.join("solve_captures.svg")).unwrap(),
+        b"mine"
+    );
+    assert!(
+        temporaries(tmp.path()).is_empty(),
+        "{:?}",
+        temporaries(tmp.path())
+    );
 }
 
 #[test]
@@ -270,7 +312,14 @@ fn a_killed_batch_leaves_all_or_nothing_and_no_temporary_survives() {
     // The next run (with --force where a whole set was published) succeeds and removes
     // what the killed ones left.
     let out = naocalib()
-        .args(["batch", "--solver", "lm", "--no-progress", "--force", "--out"])
+        .args([
+            "batch",
+            "--solver",
+            "lm",
+            "--no-progress",
+            "--force",
+            "--out",
+        ])
         .arg(&out_dir)
         .arg(&data)
         .output()
@@ -300,13 +349,23 @@ fn a_stale_temporary_of_a_dead_process_is_removed_and_a_live_ones_kept() {
     std::fs::write(dead_stage.join("r.json"), b"half").unwrap();
     std::fs::write(&live, b"being written").unwrap();
     let out = naocalib()
-        .args(["solve", "--solver", "lm", "--plain-std", "--force", "--export"])
+        .args([
+            "solve",
+            "--solver",
+            "lm",
+            "--plain-std",
+            "--force",
+            "--export",
+        ])
         .arg(&export)
         .arg(&dir)
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", stderr(&out));
-    assert!(!dead.exists() && !dead_stage.exists(), "stale temporaries removed");
+    assert!(
+        !dead.exists() && !dead_stage.exists(),
+        "stale temporaries removed"
+    );
     assert!(live.exists(), "a running process's temporary is kept");
     assert!(export.join("cameraCalibration.cfg").is_file());
 }
@@ -342,18 +401,34 @@ fn garbage_never_becomes_a_robot_file() {
         ("knee", set("LKneePitch", 720.0.into()), "LKneePitch"),
         ("fx", set("Fx", (-600.0).into()), "Fx"),
         ("thigh", set("LThigh", (-150.0).into()), "LThigh"),
-        ("play", set("RKneePitchPlay", (-0.2).into()), "RKneePitchPlay"),
-        ("compliance", set("LHipRollCompliance", (-0.1).into()), "LHipRollCompliance"),
-        ("missing", {
-            let mut j = good.clone();
-            j.as_object_mut().unwrap().remove("converged");
-            j
-        }, "converged"),
-        ("rms", {
-            let mut j = good.clone();
-            j["rms_px"] = serde_json::json!([-0.5, 0.4]);
-            j
-        }, "rms_px"),
+        (
+            "play",
+            set("RKneePitchPlay", (-0.2).into()),
+            "RKneePitchPlay",
+        ),
+        (
+            "compliance",
+            set("LHipRollCompliance", (-0.1).into()),
+            "LHipRollCompliance",
+        ),
+        (
+            "missing",
+            {
+                let mut j = good.clone();
+                j.as_object_mut().unwrap().remove("converged");
+                j
+            },
+            "converged",
+        ),
+        (
+            "rms",
+            {
+                let mut j = good.clone();
+                j["rms_px"] = serde_json::json!([-0.5, 0.4]);
+                j
+            },
+            "rms_px",
+        ),
     ];
     for (name, json, needle) in cases {
         let out = export_all(tmp.path(), name, &json);
@@ -365,7 +440,11 @@ fn garbage_never_becomes_a_robot_file() {
     }
     // A parameter given twice: serde would keep the last silently.
     let text = serde_json::to_string_pretty(&good).unwrap();
-    let twice = text.replacen("\"CamYaw\": {", "\"CamYaw\": {\"value\": 0.1},\n    \"CamYaw\": {", 1);
+    let twice = text.replacen(
+        "\"CamYaw\": {",
+        "\"CamYaw\": {\"value\": 0.1},\n    \"CamYaw\": {",
+        1,
+    );
     assert_ne!(twice, text);
     let path = tmp.path().join("twice.json");
     std::fs::write(&path, twice).unwrap();
@@ -395,7 +474,10 @@ fn auto_model_on_one_pixel_corners_writes_no_robot_file() {
     let mut one = format!("{}\n", lines.next().unwrap());
     for line in lines {
         let fields: Vec<&str> = line.split(',').collect();
-        one.push_str(&format!("{},{},{},320.5,240.5\n", fields[0], fields[1], fields[2]));
+        one.push_str(&format!(
+            "{},{},{},320.5,240.5\n",
+            fields[0], fields[1], fields[2]
+        ));
     }
     std::fs::write(dir.join("corners.csv"), one).unwrap();
     let export = tmp.path().join("export");
@@ -409,7 +491,12 @@ fn auto_model_on_one_pixel_corners_writes_no_robot_file() {
     let err = stderr(&out);
     assert!(!err.contains("panicked"), "{err}");
     assert_ne!(out.status.code(), Some(0), "no calibration: {err}");
-    for robot in ["cameraCalibration.cfg", "jointCalibration.cfg", "hulks", "naoth"] {
+    for robot in [
+        "cameraCalibration.cfg",
+        "jointCalibration.cfg",
+        "hulks",
+        "naoth",
+    ] {
         assert!(!export.join(robot).exists(), "{robot} written: {err}");
     }
 }
@@ -434,13 +521,29 @@ fn absurd_flags_are_refused_with_their_range() {
         .unwrap();
     assert_clean_failure(&out, &["--px-noise", "0.001"]);
     assert!(!tmp.path().join("p.csv").exists());
-    for (free, fix) in [("LKneePitch", "LKneePitch"), ("play", "play"), ("Fx", "intrinsics")] {
-        let out = run(&["solve", "--solver", "lm", "--free", free, "--fix", fix], &dir);
+    for (free, fix) in [
+        ("LKneePitch", "LKneePitch"),
+        ("play", "play"),
+        ("Fx", "intrinsics"),
+    ] {
+        let out = run(
+            &["solve", "--solver", "lm", "--free", free, "--fix", fix],
+            &dir,
+        );
         assert_clean_failure(&out, &["--free", "--fix"]);
     }
     // Freeing a family but holding one of its members stays allowed.
     let out = run(
-        &["solve", "--solver", "lm", "--plain-std", "--free", "head", "--fix", "HeadYaw"],
+        &[
+            "solve",
+            "--solver",
+            "lm",
+            "--plain-std",
+            "--free",
+            "head",
+            "--fix",
+            "HeadYaw",
+        ],
         &dir,
     );
     assert!(out.status.code() != Some(1), "{}", stderr(&out));

@@ -25,13 +25,13 @@ mod extended;
 mod fuzz_readers;
 mod hostile_inputs;
 mod hostile_outputs;
-mod robot_file_bounds;
 mod misfit;
 mod plan;
 mod plot_files;
 mod pure_rust_agreement;
 mod pure_rust_cli;
 mod report_html;
+mod robot_file_bounds;
 mod spec_reference;
 #[cfg(feature = "ceres")]
 mod uncertainty;

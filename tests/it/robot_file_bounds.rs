@@ -88,7 +88,10 @@ fn the_property_sees_both_accepted_and_refused_results() {
     let mut good = serde_json::json!({"solver": "lm", "converged": true, "rms_px": [0.3, 0.3]});
     let mut parameters = serde_json::Map::new();
     for p in Param::ALL {
-        parameters.insert(p.name().into(), serde_json::json!({"value": 0.5, "std": 0.1}));
+        parameters.insert(
+            p.name().into(),
+            serde_json::json!({"value": 0.5, "std": 0.1}),
+        );
     }
     good["parameters"] = parameters.into();
     let cal = Calibration::from_json(&good.to_string(), Path::new("g.json")).unwrap();
@@ -96,5 +99,9 @@ fn the_property_sees_both_accepted_and_refused_results() {
     let mut bad = good.clone();
     bad["parameters"]["LKneePitch"]["value"] = 720.0.into();
     let cal = Calibration::from_json(&bad.to_string(), Path::new("b.json")).unwrap();
-    assert!(cal.problems().iter().any(|p| p.contains("LKneePitch")), "{:?}", cal.problems());
+    assert!(
+        cal.problems().iter().any(|p| p.contains("LKneePitch")),
+        "{:?}",
+        cal.problems()
+    );
 }
