@@ -97,9 +97,26 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
     for (_, path) in &targets {
         check_writable(path, &options)?;
     }
+    // The --dir set is all or nothing: staged beside DIR, published after the --out files.
+    let stage = match &args.dir {
+        Some(dir) => Some(Staged::new(dir, &options)?),
+        None => None,
+    };
     for (format, path) in targets {
-        write_atomic(&path, format.render(&calibration).as_bytes(), &options)?;
+        let staged = match (&stage, &args.dir) {
+            (Some(stage), Some(dir)) if path.starts_with(dir) && !args.out.contains(&path) => {
+                path.strip_prefix(dir).ok().map(|rel| stage.dir().join(rel))
+            }
+            _ => None,
+        };
+        match &staged {
+            Some(to) => write_atomic(to, format.render(&calibration).as_bytes(), &options)?,
+            None => write_atomic(&path, format.render(&calibration).as_bytes(), &options)?,
+        }
         written.push(path);
+    }
+    if let Some(stage) = stage {
+        stage.publish()?;
     }
     let mut out = String::new();
     for path in written {
