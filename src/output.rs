@@ -9,7 +9,16 @@
 //! - **no-clobber**: an existing path is refused unless [`WriteOptions::force`];
 //! - **input-safe**: a path that is one of [`WriteOptions::inputs`] is refused even with
 //!   `force`, compared after resolving symbolic links and `..` (and, on Unix, by device
-//!   and inode, so a hard link to an input is refused too).
+//!   and inode, so a hard link to an input is refused too);
+//! - **clean after a kill**: temporary files and staging directories are named
+//!   `.naocalib-<pid>-…`; the next write into the same directory removes those whose
+//!   process is gone ([`sweep_stale`]).
+//!
+//! A set of files that belongs together (`solve --plots`, `--export`, `batch --out`, a
+//! simulated dataset) is written through a [`Staged`] directory beside its target and
+//! published at the end, so that a refusal, an error or a kill part-way leaves the
+//! previous state. [`check_outputs`] checks every output of a command against every input
+//! before anything is written.
 
 use std::io::{self, Write as _};
 use std::path::{Path, PathBuf};
@@ -90,6 +99,14 @@ pub enum WriteError {
         /// The path.
         path: PathBuf,
     },
+    /// A directory on the way to the file cannot be made: a file is in the way.
+    #[error("{}", in_the_way_message(path, in_the_way))]
+    InTheWay {
+        /// The file being written.
+        path: PathBuf,
+        /// The existing non-directory where a directory is needed.
+        in_the_way: PathBuf,
+    },
 }
 
 impl WriteError {
@@ -99,8 +116,25 @@ impl WriteError {
             WriteError::Io { path, .. }
             | WriteError::Exists { path }
             | WriteError::Input { path }
-            | WriteError::NotAFile { path } => path,
+            | WriteError::NotAFile { path }
+            | WriteError::InTheWay { path, .. } => path,
         }
+    }
+}
+
+fn in_the_way_message(path: &Path, in_the_way: &Path) -> String {
+    if path == in_the_way {
+        format!(
+            "{}: exists and is not a directory: a file is in the way of the directory to \
+             write into",
+            path.display()
+        )
+    } else {
+        format!(
+            "{}: exists and is not a directory: a file is in the way of the directory for {}",
+            in_the_way.display(),
+            path.display()
+        )
     }
 }
 
@@ -145,6 +179,130 @@ fn resolve(p: &Path) -> Option<PathBuf> {
     Some(parent_dir(p).canonicalize().ok()?.join(p.file_name()?))
 }
 
+/// The nearest existing ancestor of `path` that is not a directory (a file where a
+/// directory would have to be created), if any.
+pub fn file_in_the_way(path: &Path) -> Option<PathBuf> {
+    for dir in path.ancestors().skip(1) {
+        if dir.as_os_str().is_empty() {
+            return None;
+        }
+        match std::fs::metadata(dir) {
+            Ok(m) if m.is_dir() => return None,
+            Ok(_) => return Some(dir.to_path_buf()),
+            // Missing (to be created), or below a file (found further up).
+            Err(_) => continue,
+        }
+    }
+    None
+}
+
+/// Checks, before anything is written, every output of a command against every input in
+/// `options.inputs` (and against existing files unless `force`): `files` are files to
+/// write, `dirs` directories to write into (each must be a directory or not exist, and not
+/// be an input). The one check every command makes up front.
+pub fn check_outputs(
+    files: &[&Path],
+    dirs: &[&Path],
+    options: &WriteOptions,
+) -> Result<(), WriteError> {
+    for file in files {
+        check_writable(file, options)?;
+    }
+    for dir in dirs {
+        check_dir(dir, options)?;
+    }
+    Ok(())
+}
+
+/// `dir` may be written into: not an input, a directory or absent, no file in the way.
+fn check_dir(dir: &Path, options: &WriteOptions) -> Result<(), WriteError> {
+    if let Some(input) = options.inputs.iter().find(|i| same_file(i, dir)) {
+        return Err(WriteError::Input {
+            path: input.clone(),
+        });
+    }
+    match std::fs::metadata(dir) {
+        Ok(m) if m.is_dir() => Ok(()),
+        Ok(_) => Err(WriteError::InTheWay {
+            path: dir.to_path_buf(),
+            in_the_way: dir.to_path_buf(),
+        }),
+        Err(_) => match file_in_the_way(dir) {
+            Some(in_the_way) => Err(WriteError::InTheWay {
+                path: dir.to_path_buf(),
+                in_the_way,
+            }),
+            None => Ok(()),
+        },
+    }
+}
+
+/// The prefix of this process's temporary files and staging directories.
+fn temp_prefix() -> String {
+    format!("{TEMP_PREFIX}{}-", std::process::id())
+}
+
+/// Every temporary name starts with this, then the writing process's id and a dash.
+pub const TEMP_PREFIX: &str = ".naocalib-";
+
+/// Whether the process `pid` still runs (unknown: assume it does).
+fn alive(pid: u32) -> bool {
+    #[cfg(unix)]
+    {
+        let Ok(pid) = libc::pid_t::try_from(pid) else {
+            return true;
+        };
+        // SAFETY: signal 0 only checks whether the process exists; nothing is sent.
+        let r = unsafe { libc::kill(pid, 0) };
+        r == 0 || io::Error::last_os_error().raw_os_error() != Some(libc::ESRCH)
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = pid;
+        true
+    }
+}
+
+/// Removes from `dir` the temporary files and staging directories (`.naocalib-<pid>-…`)
+/// left by processes that no longer run (killed part-way); those of running processes are
+/// kept. Each directory is swept once per process. Returns how many were removed.
+pub fn sweep_stale(dir: &Path) -> usize {
+    use std::sync::Mutex;
+    static SWEPT: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+    let key = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
+    if let Ok(mut swept) = SWEPT.lock() {
+        if swept.contains(&key) {
+            return 0;
+        }
+        swept.push(key);
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return 0;
+    };
+    let mut removed = 0;
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(rest) = name.to_str().and_then(|n| n.strip_prefix(TEMP_PREFIX)) else {
+            continue;
+        };
+        let Some(pid) = rest.split('-').next().and_then(|p| p.parse::<u32>().ok()) else {
+            continue;
+        };
+        if pid == std::process::id() || alive(pid) {
+            continue;
+        }
+        let path = entry.path();
+        let gone = match entry.file_type() {
+            Ok(t) if t.is_dir() => std::fs::remove_dir_all(&path),
+            _ => std::fs::remove_file(&path),
+        };
+        if gone.is_ok() {
+            removed += 1;
+        }
+    }
+    removed
+}
+
 fn parent_dir(p: &Path) -> &Path {
     match p.parent() {
         Some(dir) if !dir.as_os_str().is_empty() => dir,
@@ -159,6 +317,12 @@ pub fn check_writable(path: &Path, options: &WriteOptions) -> Result<(), WriteEr
     if let Some(input) = options.inputs.iter().find(|i| same_file(i, path)) {
         return Err(WriteError::Input {
             path: input.clone(),
+        });
+    }
+    if let Some(in_the_way) = file_in_the_way(path) {
+        return Err(WriteError::InTheWay {
+            path: path.to_path_buf(),
+            in_the_way,
         });
     }
     if let Ok(meta) = path.symlink_metadata() {
@@ -208,13 +372,21 @@ pub fn write_atomic_with(
         action,
         error,
     };
-    std::fs::create_dir_all(dir).map_err(|e| io_err("create the directory for", e))?;
+    std::fs::create_dir_all(dir).map_err(|e| match file_in_the_way(path) {
+        Some(in_the_way) => WriteError::InTheWay {
+            path: path.to_path_buf(),
+            in_the_way,
+        },
+        None => io_err("create the directory for", e),
+    })?;
+    sweep_stale(dir);
     let suffix = path
         .extension()
         .map(|e| format!(".{}", e.to_string_lossy()))
         .unwrap_or_else(|| ".tmp".into());
     let mut builder = tempfile::Builder::new();
-    builder.prefix(".naocalib-").suffix(&suffix);
+    let prefix = temp_prefix();
+    builder.prefix(&prefix).suffix(&suffix);
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt;
@@ -238,6 +410,149 @@ pub fn write_atomic_with(
         },
         _ => io_err("write", e.error),
     })
+}
+
+/// A set of files written together (`solve --plots`, `--export`, `batch --out`, a simulated
+/// dataset): written into a staging directory beside `target` (`.naocalib-<pid>-stage-…`
+/// in its parent) and published into `target` by [`Staged::publish`], which checks every
+/// file first (inputs, existing files, a file in the way) and then moves them by renames.
+/// A refusal or an error before that leaves `target` as it was; dropping an unpublished
+/// stage removes it, and the stage of a killed process is removed by the next run
+/// ([`sweep_stale`]). When `target` does not exist, it is created by one rename.
+#[derive(Debug)]
+pub struct Staged {
+    target: PathBuf,
+    stage: Option<tempfile::TempDir>,
+    options: WriteOptions,
+}
+
+impl Staged {
+    /// A stage for the directory `target`, refusing at once what [`check_outputs`] would
+    /// (an input, a file where the directory should be).
+    pub fn new(target: &Path, options: &WriteOptions) -> Result<Self, WriteError> {
+        check_dir(target, options)?;
+        let parent = parent_dir(target);
+        let io_err = |action, error| WriteError::Io {
+            path: target.to_path_buf(),
+            action,
+            error,
+        };
+        std::fs::create_dir_all(parent).map_err(|e| io_err("create the directory for", e))?;
+        sweep_stale(parent);
+        sweep_stale(target);
+        let prefix = format!("{}stage-", temp_prefix());
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix);
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            // Like any new directory: what the umask allows.
+            builder.permissions(std::fs::Permissions::from_mode(0o777));
+        }
+        let stage = builder
+            .tempdir_in(parent)
+            .map_err(|e| io_err("create a staging directory for", e))?;
+        Ok(Staged {
+            target: target.to_path_buf(),
+            stage: Some(stage),
+            options: options.clone(),
+        })
+    }
+
+    /// Where the files are written before they are published.
+    pub fn dir(&self) -> &Path {
+        self.stage.as_ref().map_or(&self.target, |s| s.path())
+    }
+
+    /// The directory the files are published into.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// Options to write into [`Staged::dir`]: the inputs stay protected; existing files
+    /// are judged at [`Staged::publish`].
+    pub fn options(&self) -> WriteOptions {
+        WriteOptions {
+            force: true,
+            inputs: self.options.inputs.clone(),
+        }
+    }
+
+    /// `path` (a file written into [`Staged::dir`]) where it will be after publishing.
+    pub fn published(&self, path: &Path) -> PathBuf {
+        match path.strip_prefix(self.dir()) {
+            Ok(rel) => self.target.join(rel),
+            Err(_) => path.to_path_buf(),
+        }
+    }
+
+    /// Moves every staged file into the target, after checking all of them, and returns
+    /// their final paths (sorted).
+    pub fn publish(mut self) -> Result<Vec<PathBuf>, WriteError> {
+        let Some(stage) = self.stage.take() else {
+            return Ok(Vec::new());
+        };
+        let mut files = Vec::new();
+        list_files(stage.path(), Path::new(""), &mut files).map_err(|e| WriteError::Io {
+            path: self.target.clone(),
+            action: "list the staged files for",
+            error: e,
+        })?;
+        files.sort();
+        let targets: Vec<PathBuf> = files.iter().map(|r| self.target.join(r)).collect();
+        for t in &targets {
+            check_writable(t, &self.options)?;
+        }
+        if self.target.symlink_metadata().is_err() {
+            let kept = stage.keep();
+            return match std::fs::rename(&kept, &self.target) {
+                Ok(()) => Ok(targets),
+                Err(error) => {
+                    let _ = std::fs::remove_dir_all(&kept);
+                    Err(WriteError::Io {
+                        path: self.target.clone(),
+                        action: "create",
+                        error,
+                    })
+                }
+            };
+        }
+        for (rel, t) in files.iter().zip(&targets) {
+            let io_err = |action, error| WriteError::Io {
+                path: t.clone(),
+                action,
+                error,
+            };
+            if let Some(dir) = t.parent() {
+                std::fs::create_dir_all(dir).map_err(|e| io_err("create the directory for", e))?;
+            }
+            let from = stage.path().join(rel);
+            if self.options.force {
+                std::fs::rename(&from, t).map_err(|e| io_err("write", e))?;
+            } else {
+                // A link fails if the file appeared meanwhile: never replaced without force.
+                std::fs::hard_link(&from, t).map_err(|e| match e.kind() {
+                    io::ErrorKind::AlreadyExists => WriteError::Exists { path: t.clone() },
+                    _ => io_err("write", e),
+                })?;
+            }
+        }
+        Ok(targets)
+    }
+}
+
+/// The files under `dir` (recursively), as paths relative to `dir` under `rel`.
+fn list_files(dir: &Path, rel: &Path, out: &mut Vec<PathBuf>) -> io::Result<()> {
+    for entry in std::fs::read_dir(dir.join(rel))? {
+        let entry = entry?;
+        let path = rel.join(entry.file_name());
+        if entry.file_type()?.is_dir() {
+            list_files(dir, &path, out)?;
+        } else {
+            out.push(path);
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -377,11 +692,62 @@ mod tests {
     }
 
     #[test]
-    fn missing_parent_that_is_a_file_is_an_io_error() {
+    fn missing_parent_that_is_a_file_is_in_the_way() {
         let dir = tempfile::tempdir().unwrap();
         std::fs::write(dir.path().join("f"), b"").unwrap();
         let e =
             write_atomic(&dir.path().join("f/a.csv"), b"x", &WriteOptions::default()).unwrap_err();
-        assert!(matches!(e, WriteError::Io { .. }), "{e}");
+        assert!(matches!(e, WriteError::InTheWay { .. }), "{e}");
+    }
+
+    #[test]
+    fn a_stage_publishes_all_or_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("set");
+        // A new directory: one rename.
+        let stage = Staged::new(&target, &WriteOptions::default()).unwrap();
+        write_atomic(&stage.dir().join("a.txt"), b"a", &stage.options()).unwrap();
+        write_atomic(&stage.dir().join("sub/b.txt"), b"b", &stage.options()).unwrap();
+        assert!(!target.exists(), "nothing before publishing");
+        let files = stage.publish().unwrap();
+        assert_eq!(files, [target.join("a.txt"), target.join("sub/b.txt")]);
+        assert_eq!(names(dir.path()), ["set"]);
+        // Into an existing directory with one file already there: refused, nothing moved.
+        let stage = Staged::new(&target, &WriteOptions::default()).unwrap();
+        write_atomic(&stage.dir().join("c.txt"), b"c", &stage.options()).unwrap();
+        write_atomic(&stage.dir().join("sub/b.txt"), b"B", &stage.options()).unwrap();
+        let e = stage.publish().unwrap_err();
+        assert!(matches!(e, WriteError::Exists { .. }), "{e}");
+        assert_eq!(names(&target), ["a.txt", "sub"]);
+        assert_eq!(names(dir.path()), ["set"], "the stage is removed");
+        // With force: replaced.
+        let stage = Staged::new(&target, &WriteOptions::new(true)).unwrap();
+        write_atomic(&stage.dir().join("sub/b.txt"), b"B", &stage.options()).unwrap();
+        stage.publish().unwrap();
+        assert_eq!(std::fs::read(target.join("sub/b.txt")).unwrap(), b"B");
+        // Dropped unpublished (an error part-way): nothing left.
+        let stage = Staged::new(&target, &WriteOptions::new(true)).unwrap();
+        write_atomic(&stage.dir().join("a.txt"), b"x", &stage.options()).unwrap();
+        drop(stage);
+        assert_eq!(std::fs::read(target.join("a.txt")).unwrap(), b"a");
+        assert_eq!(names(dir.path()), ["set"]);
+    }
+
+    #[test]
+    fn a_file_in_the_way_is_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("f");
+        std::fs::write(&file, b"").unwrap();
+        let e = check_writable(&file.join("x/a.csv"), &WriteOptions::default()).unwrap_err();
+        assert!(matches!(e, WriteError::InTheWay { .. }), "{e}");
+        assert!(e.to_string().contains("a file is in the way"), "{e}");
+        let e = Staged::new(&file, &WriteOptions::new(true)).unwrap_err();
+        assert!(
+            e.to_string().starts_with(&format!(
+                "{}: exists and is not a directory",
+                file.display()
+            )),
+            "{e}"
+        );
     }
 }

@@ -296,34 +296,40 @@ impl Batch {
         drift: &DriftOptions,
         options: &WriteOptions,
     ) -> Result<OutputFiles, ExportError> {
-        let mut options = options.clone();
-        for d in self
-            .runs
-            .iter()
-            .map(|r| &r.dataset)
-            .chain(self.failures.iter().map(|f| &f.dataset))
-        {
-            options.inputs.extend(dataset_files(d));
-        }
-        let runs: Vec<PathBuf> = run_file_names(&self.runs)
-            .iter()
-            .map(|n| dir.join(n))
-            .collect();
+        let options = options.clone().protecting(self.input_files());
+        let names = run_file_names(&self.runs);
+        let runs: Vec<PathBuf> = names.iter().map(|n| dir.join(n)).collect();
         let summary = dir.join("summary.json");
         // Check everything first, so that a refusal leaves nothing half-written.
         for path in runs.iter().chain([&summary]) {
             write_atomic_check(path, &options)?;
         }
-        for (run, path) in self.runs.iter().zip(&runs) {
+        // All or nothing: written into a stage beside `dir` and published at the end, so
+        // that a kill or a full disk part-way leaves `dir` as it was.
+        let stage = crate::output::Staged::new(dir, &options)?;
+        let staged = stage.options();
+        for (run, name) in self.runs.iter().zip(&names) {
             let text = pretty(&Batch::run_json(run));
-            write_atomic(path, text.as_bytes(), &options)?;
+            write_atomic(&stage.dir().join(name), text.as_bytes(), &staged)?;
         }
         write_atomic(
-            &summary,
+            &stage.dir().join("summary.json"),
             pretty(&self.summary_json(drift)).as_bytes(),
-            &options,
+            &staged,
         )?;
+        stage.publish()?;
         Ok(OutputFiles { runs, summary })
+    }
+
+    /// The files of every dataset of the batch (solved or failed), which no output may
+    /// replace.
+    pub fn input_files(&self) -> Vec<PathBuf> {
+        self.runs
+            .iter()
+            .map(|r| &r.dataset)
+            .chain(self.failures.iter().map(|f| &f.dataset))
+            .flat_map(|d| dataset_files(d))
+            .collect()
     }
 }
 
@@ -370,29 +376,24 @@ impl Batch {
         options: &WriteOptions,
     ) -> Result<Vec<PathBuf>, crate::report::plot::PlotError> {
         use crate::report::plot;
-        let mut options = options.clone();
-        for run in &self.runs {
-            options.inputs.extend(dataset_files(&run.dataset));
-        }
-        let mut files = Vec::new();
+        let options = options.clone().protecting(self.input_files());
+        // All or nothing: drawn into a stage beside `dir`, published at the end.
+        let stage = crate::output::Staged::new(dir, &options).map_err(ExportError::from)?;
+        let staged = stage.options();
         let solutions: Vec<_> = self.runs.iter().map(|r| &r.solution).collect();
         if !solutions.is_empty() {
-            files.extend(plot::parameter_estimates(
-                &solutions,
-                &dir.join("parameters"),
-                &options,
-            )?);
+            plot::parameter_estimates(&solutions, &stage.dir().join("parameters"), &staged)?;
         }
         for (run, name) in self.runs.iter().zip(run_file_names(&self.runs)) {
             let prefix = name.trim_end_matches(".json");
-            files.extend(plot::solution_plots(
+            plot::solution_plots(
                 &run.solution,
                 Some(&run.sides),
-                dir,
+                stage.dir(),
                 prefix,
-                &options,
-            )?);
+                &staged,
+            )?;
         }
-        Ok(files)
+        Ok(stage.publish().map_err(ExportError::from)?)
     }
 }

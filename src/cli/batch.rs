@@ -1,6 +1,6 @@
 //! `naocalib batch`: calibrate many datasets in parallel and summarise them.
 
-use std::io::{IsTerminal as _, Write as _};
+use std::io::IsTerminal as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -109,6 +109,24 @@ pub fn run(args: &BatchArgs, verbose: bool) -> Result<ExitCode> {
         ..BatchOptions::default()
     }
     .with_uncertainty(args.uncertainty.options());
+    // Every output against every dataset's files, before anything is solved or written.
+    let (found, _) = batch::find_datasets(&args.datasets);
+    let write_options = WriteOptions::new(args.force).protecting(
+        found
+            .iter()
+            .flat_map(|d| naocalib::output::dataset_files(d))
+            .collect::<Vec<_>>(),
+    );
+    naocalib::output::check_outputs(
+        &args.report.as_deref().into_iter().collect::<Vec<_>>(),
+        &args
+            .out
+            .iter()
+            .chain(&args.plots)
+            .map(PathBuf::as_path)
+            .collect::<Vec<_>>(),
+        &write_options,
+    )?;
     let show = !args.no_progress && !verbose && std::io::stderr().is_terminal();
     let bar = show.then(|| super::progress_bar(0, "datasets"));
     let failed = AtomicUsize::new(0);
@@ -125,15 +143,12 @@ pub fn run(args: &BatchArgs, verbose: bool) -> Result<ExitCode> {
     if let Some(bar) = &bar {
         bar.finish_and_clear();
     }
-    let write_options = WriteOptions {
-        force: args.force,
-        inputs: Vec::new(),
-    };
+    let write_options = write_options.protecting(result.input_files());
     if let Some(dir) = &args.out {
         let files = result
             .write(dir, &options.drift, &write_options)
             .context("--out")?;
-        eprintln!(
+        note!(
             "wrote {} run results and {}",
             files.runs.len(),
             files.summary.display()
@@ -141,25 +156,23 @@ pub fn run(args: &BatchArgs, verbose: bool) -> Result<ExitCode> {
     }
     if let Some(dir) = &args.plots {
         let files = result.plots(dir, &write_options).context("--plots")?;
-        eprintln!("wrote {} plot files into {}", files.len(), dir.display());
+        note!("wrote {} plot files into {}", files.len(), dir.display());
     }
     if let Some(path) = &args.report {
         naocalib::report::html::write_batch_report(&result, &options.drift, path, &write_options)
             .context("--report")?;
-        eprintln!("wrote {}", path.display());
+        note!("wrote {}", path.display());
     }
-    let mut stdout = std::io::stdout().lock();
-    if args.json {
-        writeln!(
-            stdout,
-            "{}",
+    super::print_out(if args.json {
+        format!(
+            "{}\n",
             serde_json::to_string_pretty(&result.json(&options.drift))?
-        )?;
+        )
     } else {
-        write!(stdout, "{}", result.table(&options.drift))?;
-    }
+        result.table(&options.drift)
+    })?;
     for f in result.failures.iter().filter(|_| args.json) {
-        eprintln!("naocalib: {}: {}", f.dataset.display(), f.error);
+        note!("naocalib: {}: {}", f.dataset.display(), f.error);
     }
     Ok(if !result.all_solved() {
         ExitCode::from(2)

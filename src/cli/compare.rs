@@ -1,7 +1,6 @@
 //! `naocalib compare`: every solver on the same dataset, side by side.
 
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -48,15 +47,13 @@ pub fn run(args: &CompareArgs) -> Result<ExitCode> {
         .unwrap_or_default();
     let comparison = compare(&problem, &solvers)
         .with_context(|| format!("comparing solvers on {}", args.dataset.display()))?;
-    let mut stdout = std::io::stdout().lock();
-    if args.json {
+    super::print_out(if args.json {
         let mut value = json_report(&comparison);
         value["dataset"] = Value::String(args.dataset.display().to_string());
-        writeln!(stdout, "{}", serde_json::to_string_pretty(&value)?)?;
+        format!("{}\n", serde_json::to_string_pretty(&value)?)
     } else {
-        writeln!(stdout, "{}", args.dataset.display())?;
-        write!(stdout, "{}", table(&comparison))?;
-    }
+        format!("{}\n{}", args.dataset.display(), table(&comparison))
+    })?;
     Ok(if comparison.runs.iter().all(|r| r.converged()) {
         ExitCode::SUCCESS
     } else {

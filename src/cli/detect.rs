@@ -47,9 +47,10 @@ fn parse_pattern(text: &str) -> Result<Grid, String> {
     let (c, r) = text.split_once(['x', 'X']).ok_or_else(err)?;
     let cols: u32 = c.trim().parse().map_err(|_| err())?;
     let rows: u32 = r.trim().parse().map_err(|_| err())?;
-    if cols < 2 || rows < 2 || cols > 100 || rows > 100 {
+    // OpenCV's chessboard finder needs more than 2 inner vertices each way (it asserts).
+    if cols < 3 || rows < 3 || cols > 100 || rows > 100 {
         return Err(format!(
-            "pattern '{text}': 2 … 100 vertices per row and rows"
+            "pattern '{text}': 3 … 100 vertices per row and rows (the minimum is 3x3)"
         ));
     }
     Ok(Grid { cols, rows })

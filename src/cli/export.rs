@@ -7,6 +7,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 
+use naocalib::output::Staged;
 use naocalib::report::export::io::check_writable;
 use naocalib::report::export::{
     Calibration, ExportError, ExportFormat, Posture, WriteOptions, check_fresh, export, export_all,
@@ -131,7 +132,7 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
     };
     let problems = calibration.problems();
     if !problems.is_empty() {
-        eprintln!(
+        note!(
             "warning: {} is not a calibration: {}",
             args.input.display(),
             problems.join("; ")
@@ -176,13 +177,32 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
             .with_context(|| format!("not writing {}", path.display()))?;
         check_writable(path, &options)?;
     }
+    // The --dir set is all or nothing: staged beside DIR, published after the --out files.
+    let stage = match &args.dir {
+        Some(dir) => Some(Staged::new(dir, &options)?),
+        None => None,
+    };
     for (format, path) in targets {
-        write_atomic(&path, format.render(&calibration).as_bytes(), &options)?;
+        let staged = match (&stage, &args.dir) {
+            (Some(stage), Some(dir)) if path.starts_with(dir) && !args.out.contains(&path) => {
+                path.strip_prefix(dir).ok().map(|rel| stage.dir().join(rel))
+            }
+            _ => None,
+        };
+        match &staged {
+            Some(to) => write_atomic(to, format.render(&calibration).as_bytes(), &options)?,
+            None => write_atomic(&path, format.render(&calibration).as_bytes(), &options)?,
+        }
         written.push(path);
     }
-    for path in written {
-        println!("wrote {}", path.display());
+    if let Some(stage) = stage {
+        stage.publish()?;
     }
+    let mut out = String::new();
+    for path in written {
+        out.push_str(&format!("wrote {}\n", path.display()));
+    }
+    super::print_out(out)?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -199,15 +219,28 @@ pub fn solve_outputs(
     force: bool,
 ) -> Result<()> {
     let options = WriteOptions::protecting_dataset(&dataset.dir, force);
+    naocalib::output::check_outputs(
+        &report.into_iter().collect::<Vec<_>>(),
+        &plots.into_iter().chain(export_dir).collect::<Vec<_>>(),
+        &options,
+    )?;
     if let Some(dir) = plots {
+        // All or nothing: staged beside `dir`, published when every plot is drawn.
+        let stage = Staged::new(dir, &options).context("--plots")?;
         let sides = plot::capture_sides(dataset);
-        let mut files = plot::solution_plots(solution, Some(&sides), dir, "solve", &options)
+        let staged = stage.options();
+        plot::solution_plots(solution, Some(&sides), stage.dir(), "solve", &staged)
             .context("--plots")?;
-        files.extend(
-            naocalib::report::misfit_plot::misfit_plots(solution, dataset, dir, "misfit", &options)
-                .context("--plots")?,
-        );
-        eprintln!("wrote {} plot files into {}", files.len(), dir.display());
+        naocalib::report::misfit_plot::misfit_plots(
+            solution,
+            dataset,
+            stage.dir(),
+            "misfit",
+            &staged,
+        )
+        .context("--plots")?;
+        let files = stage.publish().context("--plots")?;
+        note!("wrote {} plot files into {}", files.len(), dir.display());
     }
     if let Some(dir) = export_dir {
         let mut calibration = Calibration::from_solution(solution, Some(&dataset.dir));
@@ -231,27 +264,26 @@ pub fn solve_outputs(
             }
             files
         } else {
-            eprintln!(
+            note!(
                 "warning: not a calibration ({}); --export writes only calibration.toml and \
                  calibration.json, marked so, and no robot files",
                 problems.join("; ")
             );
-            let mut files = Vec::new();
+            let stage = Staged::new(dir, &options).context("--export")?;
             for format in [ExportFormat::Toml, ExportFormat::Json] {
-                let path = dir.join(format!("calibration.{}", format.name()));
-                export(&calibration, format, &path, &options).context("--export")?;
-                files.push(path);
+                let path = stage.dir().join(format!("calibration.{}", format.name()));
+                export(&calibration, format, &path, &stage.options()).context("--export")?;
             }
-            files
+            stage.publish().context("--export")?
         };
         for f in files {
-            eprintln!("wrote {}", f.display());
+            note!("wrote {}", f.display());
         }
     }
     if let Some(path) = report {
         naocalib::report::html::write_report(solution, dataset, path, &options)
             .context("--report")?;
-        eprintln!("wrote {}", path.display());
+        note!("wrote {}", path.display());
     }
     Ok(())
 }

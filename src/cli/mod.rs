@@ -1,4 +1,17 @@
 //! The command line: thin wrappers that parse arguments, call the library and print.
+//!
+//! Nothing here prints with `println!`/`eprintln!`, which panic when the stream is closed
+//! or full: standard output goes through [`print_out`] (a closed pipe ends the command
+//! quietly, a full device is an error), messages on standard error through [`note!`]
+//! (whose failure is ignored: there is nowhere left to report it).
+
+/// Like `eprintln!`, but a closed or full standard error is ignored instead of a panic.
+macro_rules! note {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
 
 mod batch;
 mod compare;
@@ -66,8 +79,44 @@ fn progress_bar(len: usize, what: &str) -> indicatif::ProgressBar {
     bar
 }
 
+/// Writes `text` to standard output and flushes it; a failure is an error saying so (a
+/// closed pipe among them, which [`main`] ends quietly).
+pub(crate) fn print_out(text: impl AsRef<str>) -> Result<()> {
+    use std::io::Write as _;
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_ref().as_bytes())
+        .and_then(|()| out.flush())
+        .map_err(|e| anyhow::Error::new(e).context("cannot write to standard output"))
+}
+
+/// Whether `e` comes from writing into a closed pipe (the reader went away: not an error
+/// worth a message).
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
+/// The error with its causes, `a: b: c`, each said once (an error whose message already
+/// holds its cause's text, such as the operating system's, does not repeat it).
+fn message(e: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if text.is_empty() || out.contains(&text) {
+            continue;
+        }
+        if !out.is_empty() {
+            out.push_str(": ");
+        }
+        out.push_str(&text);
+    }
+    out
+}
+
 /// Parses the command line, runs it, and maps errors (a bad flag included) to a message
-/// and exit code 1.
+/// and exit code 1; output into a closed pipe ends quietly (exit 0).
 pub fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
@@ -79,8 +128,9 @@ pub fn main() -> ExitCode {
     naocalib::solve::retain_freed_memory();
     match run(&cli) {
         Ok(code) => code,
+        Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("naocalib: error: {e:#}");
+            note!("naocalib: error: {}", message(&e));
             ExitCode::from(1)
         }
     }

@@ -36,6 +36,19 @@ pub struct ProblemArgs {
 impl ProblemArgs {
     /// The held parameters for `--fix` and `--free` (family or parameter names).
     pub fn fixed_set(&self) -> Result<FixedSet> {
+        let fix = naocalib::model::parameters::parse_param_list(self.fix.as_deref().unwrap_or(""))
+            .map_err(|e| anyhow::anyhow!("--fix: {e}"))?;
+        for name in self.free.iter().flat_map(|f| f.split(',')).map(str::trim) {
+            let Ok(named) = naocalib::model::parameters::parse_param_list(name) else {
+                continue;
+            };
+            if !named.is_empty() && named.iter().all(|p| fix.contains(p)) {
+                anyhow::bail!(
+                    "--free {name} and --fix hold the same parameters: --fix would undo \
+                     --free {name}; name it in one of them"
+                );
+            }
+        }
         FixedSet::from_lists(
             self.free.as_deref().unwrap_or(""),
             self.fix.as_deref().unwrap_or(""),
@@ -82,11 +95,13 @@ pub struct UncertaintyArgs {
     /// families the misfit tests point to, one at a time, until none is significant).
     #[arg(long, value_enum, default_value = "paper")]
     pub model: ModelArg,
-    /// Pixel noise σ (px) for the noise model; estimated from the residuals if not given.
-    #[arg(long, value_name = "PX", value_parser = positive)]
+    /// Pixel noise σ (px, 0.001 … 100) for the noise model; estimated from the residuals
+    /// if not given.
+    #[arg(long, value_name = "PX", value_parser = px_sigma)]
     pub px_noise: Option<f64>,
-    /// Joint-angle noise σ per joint and capture (deg); estimated if not given.
-    #[arg(long, value_name = "DEG", value_parser = positive)]
+    /// Joint-angle noise σ per joint and capture (deg, above 0 and at most 10); estimated if
+    /// not given.
+    #[arg(long, value_name = "DEG", value_parser = joint_sigma_deg)]
     pub joint_noise_deg: Option<f64>,
     /// Report the plain σ̂²(JᵀJ)⁻¹ instead of the noise model (over-confident under joint
     /// noise).
@@ -117,11 +132,42 @@ impl UncertaintyArgs {
     }
 }
 
-/// A finite number greater than zero.
-pub fn positive(text: &str) -> Result<f64, String> {
+/// The smallest pixel noise σ a flag takes (px): below it, σ² and its inverse leave the
+/// range of floating-point numbers' useful precision (a detector's corners are never better
+/// than a thousandth of a pixel).
+pub const MIN_PX_SIGMA: f64 = 1e-3;
+/// The largest pixel noise σ a flag takes (px): beyond it corners are no measurement.
+pub const MAX_PX_SIGMA: f64 = 100.0;
+/// The largest joint-angle noise σ a flag takes (deg): a NAO's encoders are far better.
+pub const MAX_JOINT_SIGMA_DEG: f64 = 10.0;
+
+/// A pixel noise σ: MIN_PX_SIGMA … MAX_PX_SIGMA px.
+pub fn px_sigma(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        _ => Err(format!("must be a positive number, got '{text}'")),
+        Ok(v) if (MIN_PX_SIGMA..=MAX_PX_SIGMA).contains(&v) => Ok(v),
+        _ => Err(format!(
+            "must be a pixel noise σ from {MIN_PX_SIGMA} to {MAX_PX_SIGMA} px, got '{text}'"
+        )),
+    }
+}
+
+/// A joint-angle noise σ: above 0 and at most MAX_JOINT_SIGMA_DEG degrees.
+pub fn joint_sigma_deg(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(v) if v > 0.0 && v <= MAX_JOINT_SIGMA_DEG => Ok(v),
+        _ => Err(format!(
+            "must be a joint noise σ above 0 and at most {MAX_JOINT_SIGMA_DEG}°, got '{text}'"
+        )),
+    }
+}
+
+/// A joint-angle noise σ that may be zero: 0 … MAX_JOINT_SIGMA_DEG degrees.
+pub fn joint_sigma_deg_or_zero(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(v) if (0.0..=MAX_JOINT_SIGMA_DEG).contains(&v) => Ok(v),
+        _ => Err(format!(
+            "must be a joint noise σ from 0 to {MAX_JOINT_SIGMA_DEG}°, got '{text}'"
+        )),
     }
 }
 

@@ -1,5 +1,6 @@
 //! `naocalib plan`: design a stance schedule and predict what it will determine.
 
+use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -8,10 +9,11 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 
 use naocalib::model::{Family, FixedSet, Model, Param, Unit};
+use naocalib::output::WriteOptions;
 use naocalib::plan::{PlanOptions, Prediction, is_angle_offset};
 use naocalib::solve::noise::NoiseLevels;
 
-use super::options::positive;
+use super::options::{joint_sigma_deg_or_zero, px_sigma};
 
 #[derive(Debug, Args)]
 pub struct PlanArgs {
@@ -25,11 +27,11 @@ pub struct PlanArgs {
     /// links, compliance, play), comma-separated; the plan is made for them.
     #[arg(long, value_name = "FAMILIES", default_value = "paper", value_parser = parse_families)]
     families: Families,
-    /// Pixel noise σ per coordinate the prediction assumes (px).
-    #[arg(long, default_value_t = 0.1, value_parser = positive)]
+    /// Pixel noise σ per coordinate the prediction assumes (px, 0.001 … 100).
+    #[arg(long, default_value_t = 0.1, value_parser = px_sigma)]
     px_noise: f64,
-    /// Joint-angle noise σ per joint and capture the prediction assumes (deg).
-    #[arg(long, default_value_t = 0.1, value_parser = not_negative)]
+    /// Joint-angle noise σ per joint and capture the prediction assumes (deg, 0 … 10).
+    #[arg(long, default_value_t = 0.1, value_parser = joint_sigma_deg_or_zero)]
     joint_noise_deg: f64,
     /// Seed of the random candidate pool.
     #[arg(long, default_value_t = 1)]
@@ -38,9 +40,9 @@ pub struct PlanArgs {
     /// when not given.
     #[arg(long, value_name = "DATASET_TOML")]
     camera: Option<PathBuf>,
-    /// The board must stay in view for every angle offset within ± this (deg) (and sandal
-    /// translations within ± this in mm).
-    #[arg(long, default_value_t = 3.0, value_parser = not_negative)]
+    /// The board must stay in view for every angle offset within ± this (deg, 0 … 30) (and
+    /// sandal translations within ± this in mm).
+    #[arg(long, default_value_t = 3.0, value_parser = offset_deg)]
     offset_deg: f64,
     /// Leg stances drawn into the candidate pool per leg.
     #[arg(long, default_value_t = 300,
@@ -79,11 +81,12 @@ fn parse_families(text: &str) -> Result<Families, String> {
     Ok(Families(out))
 }
 
-/// A finite number not below zero.
-fn not_negative(text: &str) -> Result<f64, String> {
+/// An offset range: 0 … 30 (the physical bound of an angle offset,
+/// [`naocalib::model::bounds`]).
+fn offset_deg(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {
-        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        _ => Err(format!("must be a number not below zero, got '{text}'")),
+        Ok(v) if (0.0..=30.0).contains(&v) => Ok(v),
+        _ => Err(format!("must be a number from 0 to 30, got '{text}'")),
     }
 }
 
@@ -98,6 +101,9 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
     if !args.force && args.out.symlink_metadata().is_ok() {
         bail!("{} exists (use --force to replace it)", args.out.display());
     }
+    // The plan never replaces an input (the --camera file), checked before the planning.
+    let write_options = WriteOptions::new(args.force).protecting(args.camera.clone());
+    naocalib::output::check_outputs(&[&args.out], &[], &write_options)?;
     let model = match &args.camera {
         Some(path) => naocalib::dataset::read_model(path)?,
         None => Model::default(),
@@ -136,12 +142,13 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
     {
         bail!("the directory {} does not exist", dir.display());
     }
-    naocalib::dataset::write_file(
+    naocalib::output::write_atomic(
         &args.out,
         &naocalib::plan::render_csv(&plan.captures),
-        args.force,
+        &write_options,
     )
     .with_context(|| format!("writing the plan {}", args.out.display()))?;
+    let mut out = String::new();
 
     let left = plan
         .captures
@@ -149,7 +156,8 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
         .filter(|c| c.side == naocalib::model::Side::Left)
         .count();
     let f = &options.feasibility;
-    println!(
+    let _ = writeln!(
+        out,
         "wrote {}: {} captures ({} left, {} right) in {} leg stances, chosen from {} feasible \
          captures in {elapsed:.1} s",
         args.out.display(),
@@ -159,7 +167,8 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
         plan.stances,
         plan.pool
     );
-    println!(
+    let _ = writeln!(
+        out,
         "feasible: every angle at least {:.0}° inside its limits, LHipYawPitch = RHipYawPitch, \
          no collision (capsules for thighs and tibias; boxes for feet, sandals and torso; the \
          floor), every vertex in plain sight past the resting leg, the whole board at least \
@@ -171,7 +180,8 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
         args.offset_deg,
         args.offset_deg
     );
-    println!(
+    let _ = writeln!(
+        out,
         "criterion: the worst σ of the 15 camera and leg joint offsets, with every other free \
          parameter (families {}) weighed by its column-scaled variance (Σ (w·var)^16); greedy \
          selection, exchange, and refinement around the picked stances",
@@ -182,18 +192,21 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
             .collect::<Vec<_>>()
             .join(", ")
     );
-    println!(
+    let _ = writeln!(
+        out,
         "\npredicted one-sigma at {} px and {}° joint noise per capture:",
         args.px_noise, args.joint_noise_deg
     );
-    print!("{}", table(&plan.prediction, &plan.baseline));
-    report_rank("plan", &plan.prediction);
-    report_rank("random stances", &plan.baseline);
-    println!(
+    out.push_str(&table(&plan.prediction, &plan.baseline));
+    report_rank(&mut out, "plan", &plan.prediction);
+    report_rank(&mut out, "random stances", &plan.baseline);
+    let _ = writeln!(
+        out,
         "\nmeasurement phase: predicted {:.0} s for the plan ({:.0} s for the random stances in \
          the simulator's order; the paper's took 590 s)",
         plan.duration, plan.baseline_duration
     );
+    super::print_out(out)?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -242,15 +255,17 @@ fn table(plan: &Prediction, random: &Prediction) -> String {
     out
 }
 
-fn report_rank(what: &str, p: &Prediction) {
+fn report_rank(out: &mut String, what: &str, p: &Prediction) {
     if p.undetermined.is_empty() {
-        println!(
+        let _ = writeln!(
+            out,
             "{what}: rank {} of {}, every free parameter determined",
             p.rank,
             p.free.len()
         );
     } else {
-        println!(
+        let _ = writeln!(
+            out,
             "{what}: rank {} of {}; undetermined: {}",
             p.rank,
             p.free.len(),

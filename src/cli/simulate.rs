@@ -7,6 +7,7 @@ use anyhow::{Result, bail};
 use clap::Args;
 
 use naocalib::model::{Family, Model};
+use naocalib::output::{Staged, WriteOptions};
 use naocalib::sim::SimOptions;
 use naocalib::sim::camera::CameraPreset;
 
@@ -145,6 +146,22 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
         }
         None => None,
     };
+    // Every output against every input, and the dataset files against --force, before
+    // anything is simulated or written.
+    let inputs: Vec<PathBuf> = args
+        .truth
+        .iter()
+        .chain(&args.stance_file)
+        .cloned()
+        .collect();
+    let write_options = WriteOptions::new(args.force).protecting(inputs);
+    let dataset_files = naocalib::output::dataset_files(&args.out);
+    let files: Vec<&std::path::Path> = dataset_files.iter().map(PathBuf::as_path).collect();
+    naocalib::output::check_outputs(&files, &[&args.out], &write_options)?;
+    naocalib::dataset::check_writable(&args.out, true, args.force)?;
+    // The dataset is written into a stage beside OUT and published at the end: a failure
+    // (a full disk) or a kill part-way leaves OUT as it was.
+    let stage = Staged::new(&args.out, &write_options)?;
     let options = SimOptions {
         seed: args.seed,
         stances: args.stances,
@@ -156,7 +173,7 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
         noise_seed: None,
         near_border: args.near_border,
         images: args.images.then(|| naocalib::sim::render::ImageOutput {
-            dir: args.out.clone(),
+            dir: stage.dir().to_path_buf(),
             options: naocalib::sim::render::RenderOptions {
                 blur: args.blur,
                 noise: args.grey_noise,
@@ -164,7 +181,7 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
                 seed: args.seed,
                 ..Default::default()
             },
-            force: args.force,
+            force: true,
         }),
         schedule,
     };
@@ -202,11 +219,12 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
         }
     }
     dataset.dir = args.out.clone();
-    dataset.write(&args.out, args.force)?;
+    dataset.write(stage.dir(), true)?;
+    stage.publish()?;
     if args.images {
-        println!(
+        super::print_out(format!(
             "wrote {}: {} captures with images in {} (seed {}, blur {} px, grey noise {}, \
-             vignetting {}, {}° joint noise); corners.csv is empty: run `naocalib detect`",
+             vignetting {}, {}° joint noise); corners.csv is empty: run `naocalib detect`\n",
             args.out.display(),
             dataset.captures.len(),
             args.out.join("images").display(),
@@ -215,21 +233,22 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
             args.grey_noise,
             args.vignetting,
             args.joint_noise_deg
-        );
+        ))?;
     } else {
-        println!(
-            "wrote {}: {} captures, {} vertices (seed {}, {} px, {}° joint noise)",
+        super::print_out(format!(
+            "wrote {}: {} captures, {} vertices (seed {}, {} px, {}° joint noise)\n",
             args.out.display(),
             dataset.captures.len(),
             dataset.corners.len(),
             args.seed,
             args.px_noise,
             args.joint_noise_deg
-        );
+        ))?;
         if outside > 0 {
-            println!(
-                "{outside} vertices fell outside the image at the true offsets and were left out"
-            );
+            super::print_out(format!(
+                "{outside} vertices fell outside the image at the true offsets and were left \
+                 out\n"
+            ))?;
         }
     }
     Ok(ExitCode::SUCCESS)

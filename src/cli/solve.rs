@@ -1,6 +1,6 @@
 //! `naocalib solve`: calibrate one dataset and print the result.
 
-use std::io::Write as _;
+use std::io::IsTerminal as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -76,6 +76,17 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     // The options first: a mistake in them should not wait for a detection run.
     let fixed = args.problem.fixed_set()?;
     let backend = args.solver.backend(verbose)?;
+    // Every output against the dataset's files, before the solve.
+    naocalib::output::check_outputs(
+        &args.report.as_deref().into_iter().collect::<Vec<_>>(),
+        &args
+            .plots
+            .iter()
+            .chain(&args.export)
+            .map(PathBuf::as_path)
+            .collect::<Vec<_>>(),
+        &naocalib::output::WriteOptions::protecting_dataset(&args.dataset, args.force),
+    )?;
     let dataset = if args.detect {
         load_detected(&args.dataset, verbose)?
     } else {
@@ -100,8 +111,19 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
         None => None,
     };
     let options = args.uncertainty.options();
-    let solution = solve::calibrate(&problem, backend.as_ref(), &options)
-        .with_context(|| format!("solving {}", args.dataset.display()))?;
+    let calibrate = || solve::calibrate(&problem, backend.as_ref(), &options);
+    let solution = if options.bootstrap > 0 && std::io::stderr().is_terminal() {
+        // A long bootstrap shows its progress.
+        let bar = super::progress_bar(options.bootstrap, "bootstrap refits");
+        let shown = bar.clone();
+        let hook = Box::new(move |done: usize, _: usize| shown.set_position(done as u64));
+        let solution = solve::uncertainty::with_bootstrap_progress(hook, calibrate);
+        bar.finish_and_clear();
+        solution
+    } else {
+        calibrate()
+    }
+    .with_context(|| format!("solving {}", args.dataset.display()))?;
     super::export::solve_outputs(
         &solution,
         &dataset,

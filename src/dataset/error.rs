@@ -179,7 +179,7 @@ impl From<crate::output::WriteError> for DatasetError {
                 path,
                 reason: "already exists",
             },
-            e @ (W::Input { .. } | W::NotAFile { .. }) => {
+            e @ (W::Input { .. } | W::NotAFile { .. } | W::InTheWay { .. }) => {
                 let path = e.path().to_path_buf();
                 let text = e.to_string();
                 let prefix = format!("{}: ", path.display());

@@ -12,6 +12,15 @@ pub(crate) fn create_dir(dir: &Path) -> Result<(), DatasetError> {
             reason: "exists and is not a directory; a dataset is written into a directory".into(),
         });
     }
+    if let Some(file) = crate::output::file_in_the_way(dir) {
+        return Err(DatasetError::Refused {
+            path: file,
+            reason: format!(
+                "exists and is not a directory: a file is in the way of {}",
+                dir.display()
+            ),
+        });
+    }
     std::fs::create_dir_all(dir).map_err(|e| DatasetError::io(dir, "create the directory", e))
 }
 

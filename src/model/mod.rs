@@ -5,6 +5,7 @@
 //! evaluate the same model on Jets.
 
 pub mod board;
+pub mod bounds;
 pub mod camera;
 pub mod chain;
 pub mod gravity;

@@ -98,6 +98,10 @@ impl Spectrum {
             .map(|j| jacobian.column(j).norm())
             .collect();
         let observed: Vec<usize> = (0..norms.len()).filter(|&j| norms[j] > 0.0).collect();
+        if observed.is_empty() || jacobian.nrows() == 0 {
+            // Nothing observed (rank 0): no decomposition of an empty matrix.
+            return Spectrum::sorted(norms, Vec::new(), Vec::new(), DMatrix::zeros(0, 0));
+        }
         let mut scaled = DMatrix::zeros(jacobian.nrows(), observed.len());
         for (k, &j) in observed.iter().enumerate() {
             scaled.set_column(k, &(jacobian.column(j) / norms[j]));

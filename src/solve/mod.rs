@@ -198,12 +198,19 @@ impl Solution {
     }
 
     /// Whether this is a calibration one may use: the optimiser converged to finite
-    /// values and the residuals are within any plausible noise
-    /// ([`misfit::IMPLAUSIBLE_RMS_PX`]).
+    /// values within the physical bounds ([`Solution::out_of_bounds`]) and the residuals
+    /// are within any plausible noise ([`misfit::IMPLAUSIBLE_RMS_PX`]).
     pub fn is_calibration(&self) -> bool {
         self.summary.converged
             && self.values.iter().all(|v| v.is_finite())
             && self.rms_px.iter().all(|r| *r <= misfit::IMPLAUSIBLE_RMS_PX)
+            && self.out_of_bounds().is_empty()
+    }
+
+    /// The parameters whose value is outside its physical bound
+    /// ([`crate::model::bounds`]): such a fit is no calibration, whatever its residuals.
+    pub fn out_of_bounds(&self) -> Vec<crate::model::bounds::Violation> {
+        crate::model::bounds::violations_internal(&self.values, Some(&self.std), Param::ALL)
     }
 }
 
@@ -407,8 +414,16 @@ fn fit(problem: &Problem, backend: &dyn Backend) -> Result<Fit, SolveError> {
     }
     let values = problem.expand(&result.free_values);
     let mut summary = result.summary;
-    // A NaN gradient can end a search "converged" at non-finite values.
-    summary.converged &= values.iter().all(|v| v.is_finite()) && summary.final_cost.is_finite();
+    if values.iter().any(|v| !v.is_finite()) {
+        // Nothing downstream (residuals, covariance, tests) means anything there, and an
+        // eigen-decomposition of non-finite numbers does not end.
+        return Err(SolveError::Backend {
+            solver: backend.name().into(),
+            message: "the fit diverged to non-finite parameter values".into(),
+        });
+    }
+    // A NaN gradient can end a search "converged" at a non-finite cost.
+    summary.converged &= summary.final_cost.is_finite();
     Ok(Fit { values, summary })
 }
 
@@ -435,18 +450,38 @@ fn select_model(
     let start = Instant::now();
     let mut current = problem.clone();
     let mut chosen: Vec<FamilyTest> = Vec::new();
-    let mut warm = problem.initial;
+    // Families whose fit left the physical bounds (crate::model::bounds): not freed.
+    let mut rejected: Vec<Family> = Vec::new();
     // Screening: a plain fit (warm-started at the last one) and the tests, per step.
+    let (mut tests, mut warm) = screen(&current, &problem.initial, backend, options, &chosen)?;
     while chosen.len() < AUTO_FAMILIES.len() {
-        let (tests, values) = screen(&current, &warm, backend, options, &chosen)?;
-        let Some(test) = next_family(&tests, &chosen).cloned() else {
+        let Some(test) = next_family(&tests, &chosen, &rejected).cloned() else {
             break;
         };
+        let mut trial = current.clone();
         for p in test.family.params() {
-            current.fixed.set(p, false);
+            trial.fixed.set(p, false);
         }
-        chosen.push(test);
-        warm = values;
+        let mut trial_chosen = chosen.clone();
+        trial_chosen.push(test.clone());
+        let within = match screen(&trial, &warm, backend, options, &trial_chosen) {
+            // No σ yet at a screening fit: the widest slack of the bounds.
+            Ok((t, v))
+                if crate::model::bounds::violations_internal(&v, None, trial.free()).is_empty() =>
+            {
+                Some((t, v))
+            }
+            _ => None,
+        };
+        match within {
+            Some((t, v)) => {
+                current = trial;
+                chosen = trial_chosen;
+                tests = t;
+                warm = v;
+            }
+            None => rejected.push(test.family),
+        }
     }
     let solution = calibrate_given(&current, backend, options)?;
     Ok(Solution {
@@ -477,16 +512,21 @@ fn screen(
         posed.initial[u.param.index()] = problem.initial[u.param.index()];
     }
     let first = fit(&posed, backend)?;
-    let settled = |tests: &[FamilyTest]| next_family(tests, chosen).is_some();
+    let settled = |tests: &[FamilyTest]| next_family(tests, chosen, &[]).is_some();
     let points = Linearisations::new(&posed, &held);
     let tests = misfit_tests(&points, &first, &held, backend, options, &settled)?.tests;
     Ok((tests, first.values))
 }
 
-/// The family [`ModelChoice::Auto`] frees next: of those not `chosen` whose test is
+/// The family [`ModelChoice::Auto`] frees next: of those not `chosen` (nor `rejected` for
+/// a fit beyond the physical bounds) whose test is
 /// significant at [`misfit::AUTO_ALPHA`] (Bonferroni over the tests), the one explaining
 /// most of the residuals.
-fn next_family<'t>(tests: &'t [FamilyTest], chosen: &[FamilyTest]) -> Option<&'t FamilyTest> {
+fn next_family<'t>(
+    tests: &'t [FamilyTest],
+    chosen: &[FamilyTest],
+    rejected: &[Family],
+) -> Option<&'t FamilyTest> {
     let level = misfit::AUTO_ALPHA / tests.len().max(1) as f64;
     tests
         .iter()
@@ -494,6 +534,7 @@ fn next_family<'t>(tests: &'t [FamilyTest], chosen: &[FamilyTest]) -> Option<&'t
             t.p_value < level
                 && AUTO_FAMILIES.contains(&t.family)
                 && !chosen.iter().any(|c| c.family == t.family)
+                && !rejected.contains(&t.family)
         })
         .max_by(|a, b| a.explained_px2.total_cmp(&b.explained_px2))
 }
@@ -865,7 +906,7 @@ fn calibrate_given(
         identifiability,
         sandwich,
         residual_variance,
-    } = uncertainty::statistics(fitted, &at_last, variance);
+    } = uncertainty::statistics(fitted, &at_last, variance)?;
     if sandwich_reported {
         // Residuals that may not be noise: the capture-clustered sandwich holds whatever
         // their correlation within a capture.

@@ -117,7 +117,11 @@ pub struct Statistics {
 /// parameters, weighted here by each capture's whitening. The problem's loss must be plain
 /// least squares (a robust loss is not applied: the calibration fits its final problem
 /// without one).
-pub fn statistics(problem: &Problem, at: &Linearisation, variance: Option<f64>) -> Statistics {
+pub fn statistics(
+    problem: &Problem,
+    at: &Linearisation,
+    variance: Option<f64>,
+) -> Result<Statistics, super::SolveError> {
     debug_assert_eq!(problem.loss, super::Loss::Squared);
     let free = problem.free();
     let n = free.len();
@@ -135,6 +139,19 @@ pub fn statistics(problem: &Problem, at: &Linearisation, variance: Option<f64>) 
         rss += slice.residuals.norm_squared();
         rows += slice.residuals.len();
     }
+    if n == 0 {
+        return Err(super::SolveError::Invalid(
+            "no parameter is free at the final fit: no covariance to compute".into(),
+        ));
+    }
+    if !(rss.is_finite() && gram.iter().all(|v| v.is_finite())) {
+        // An eigen-decomposition of non-finite numbers does not end.
+        return Err(super::SolveError::Invalid(
+            "the fit reached non-finite residuals or derivatives: no covariance can be \
+             computed (the data or the start values are degenerate)"
+                .into(),
+        ));
+    }
     let spectrum = Spectrum::of_gram(&gram).unwrap_or_else(|| {
         // Near the rank threshold: decide on the stacked Jacobian itself.
         let mut jac = DMatrix::zeros(rows, n);
@@ -150,12 +167,12 @@ pub fn statistics(problem: &Problem, at: &Linearisation, variance: Option<f64>) 
     let residual_variance = rss / dof as f64;
     let (unscaled, _) = spectrum.pseudo_inverse();
     let covariance = covariance::embed(&free, &unscaled, variance.unwrap_or(residual_variance));
-    Statistics {
+    Ok(Statistics {
         identifiability: identifiability_from(&free, &spectrum, &covariance),
         sandwich: sandwich_of(&free, &slices, &unscaled),
         covariance,
         residual_variance,
-    }
+    })
 }
 
 /// How far a point is from the optimum of a least-squares problem, to first order.
@@ -339,6 +356,11 @@ pub fn sandwich_of(
         let cols: Vec<usize> = (0..n)
             .filter(|&j| j_c.column(j).iter().any(|v| *v != 0.0))
             .collect();
+        if cols.is_empty() {
+            // The capture does not depend on any free parameter: it adds nothing (and an
+            // empty matrix has no eigen-decomposition).
+            continue;
+        }
         let b = j_c.select_columns(&cols);
         let p = h_inv.select_rows(&cols).select_columns(&cols);
         let r_c = leverage_corrected(&b, &p, &capture.residuals);
@@ -360,6 +382,9 @@ pub fn sandwich_of(
 /// small `M = Sᵀ BᵀB S` with `P = S Sᵀ`: `M v = λ v` gives `H_cc u = λ u` for
 /// `u = B S v / √λ`.
 fn leverage_corrected(b: &DMatrix<f64>, p: &DMatrix<f64>, r_c: &DVector<f64>) -> DVector<f64> {
+    if b.ncols() == 0 || b.nrows() == 0 {
+        return r_c.clone();
+    }
     // Any factor `P = S Sᵀ` will do: the Cholesky factor, or (P only semi-definite, for a
     // rank-deficient problem) the symmetric square root.
     let s = p.clone().cholesky().map(|c| c.unpack()).unwrap_or_else(|| {
@@ -380,6 +405,31 @@ fn leverage_corrected(b: &DMatrix<f64>, p: &DMatrix<f64>, r_c: &DVector<f64>) ->
         out.axpy(factor * u.dot(r_c), &u, 1.0);
     }
     out
+}
+
+/// A hook told `(done, total)` after each bootstrap refit.
+pub type ProgressHook = Box<dyn Fn(usize, usize)>;
+
+thread_local! {
+    static BOOTSTRAP_PROGRESS: std::cell::RefCell<Option<ProgressHook>> =
+        const { std::cell::RefCell::new(None) };
+}
+
+/// Runs `f` with `hook` told `(done, total)` after every bootstrap refit that [`bootstrap`]
+/// makes on this thread meanwhile (a long `--bootstrap` shows progress with it).
+pub fn with_bootstrap_progress<R>(hook: Box<dyn Fn(usize, usize)>, f: impl FnOnce() -> R) -> R {
+    let previous = BOOTSTRAP_PROGRESS.with(|p| p.replace(Some(hook)));
+    let result = f();
+    BOOTSTRAP_PROGRESS.with(|p| *p.borrow_mut() = previous);
+    result
+}
+
+fn bootstrap_progress(done: usize, total: usize) {
+    BOOTSTRAP_PROGRESS.with(|p| {
+        if let Some(hook) = p.borrow().as_ref() {
+            hook(done, total);
+        }
+    });
 }
 
 /// The capture bootstrap: `n` refits on captures drawn with replacement (each keeping its
@@ -414,6 +464,7 @@ pub fn bootstrap(
             }
             _ => failed += 1,
         }
+        bootstrap_progress(ok + failed, n);
     }
     if ok < 2 {
         return Err(SolveError::Invalid(format!(

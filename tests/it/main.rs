@@ -28,6 +28,7 @@ mod export_update;
 mod extended;
 mod fuzz_readers;
 mod hostile_inputs;
+mod hostile_outputs;
 mod misfit;
 mod plan;
 mod plan_around;
@@ -35,6 +36,7 @@ mod plot_files;
 mod pure_rust_agreement;
 mod pure_rust_cli;
 mod report_html;
+mod robot_file_bounds;
 mod spec_reference;
 #[cfg(feature = "ceres")]
 mod uncertainty;

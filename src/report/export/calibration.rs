@@ -282,6 +282,24 @@ impl Calibration {
         if !bad.is_empty() {
             out.push(format!("non-finite values or sigmas: {}", bad.join(", ")));
         }
+        if self.converged.is_none() {
+            out.push("it does not say whether the solver converged".to_string());
+        }
+        // Physical bounds (crate::model::bounds) and a determined rank.
+        let outside = crate::model::bounds::violations_of_estimates(
+            self.parameters
+                .iter()
+                .filter(|e| e.value.is_finite())
+                .map(|e| (e.param, e.value, e.std.unwrap_or(0.0))),
+        );
+        if !outside.is_empty() {
+            let list: Vec<String> = outside.iter().map(|v| v.to_string()).collect();
+            out.push(format!("outside the physical bounds: {}", list.join("; ")));
+        }
+        let free: Vec<&Entry> = self.parameters.iter().filter(|e| !e.fixed).collect();
+        if !free.is_empty() && free.iter().all(|e| e.std.is_none()) {
+            out.push("the data determine none of the free parameters (rank 0)".to_string());
+        }
         if let Some(rms) = self.rms_px {
             if rms.iter().any(|r| !r.is_finite()) {
                 out.push("the RMS residual is not finite".to_string());
@@ -358,8 +376,14 @@ impl Calibration {
     /// Reads a calibration JSON written by [`Calibration::to_json`], or the result JSON of
     /// `naocalib solve --json` (a run of `naocalib batch --out`).
     pub fn from_json(text: &str, path: &Path) -> Result<Self, ExportError> {
-        let json_error =
-            |e: serde_json::Error| parse_error(path, format!("line {}: {e}", e.line()));
+        let json_error = |e: serde_json::Error| {
+            // serde says "sequence" and "map" for what a JSON file calls array and object.
+            let text = e
+                .to_string()
+                .replace("invalid type: sequence", "found a JSON array")
+                .replace("invalid type: map", "found a JSON object");
+            parse_error(path, format!("line {}: {text}", e.line()))
+        };
         let probe: Value = serde_json::from_str(text).map_err(json_error)?;
         if probe.get("format").is_some() {
             let file: CalibrationIn = serde_json::from_str(text).map_err(json_error)?;
@@ -471,7 +495,7 @@ struct CalibrationIn {
     compensation: Option<String>,
     angles: Option<AngleKind>,
     corrected_by: Option<String>,
-    parameters: BTreeMap<String, EntryFile>,
+    parameters: UniqueMap<EntryFile>,
     /// Derived from the parameters on writing ([`Calibration::standing_offset`]).
     #[allow(dead_code)]
     standing: Option<BTreeMap<String, f64>>,
@@ -496,6 +520,7 @@ impl CalibrationIn {
         }
         let entries = self
             .parameters
+            .0
             .into_iter()
             .map(|(name, e)| {
                 let determined = !e.undetermined;
@@ -503,6 +528,7 @@ impl CalibrationIn {
             })
             .collect();
         let angles = angle_source(self.angles, self.corrected_by, path)?;
+        check_rms(self.rms_px, path)?;
         Ok(Calibration {
             solver: self.solver,
             dataset: self.dataset,
@@ -541,7 +567,7 @@ struct ResultIn {
     rms_px: Option<[f64; 2]>,
     angles: Option<AngleKind>,
     corrected_by: Option<String>,
-    parameters: BTreeMap<String, ResultEntry>,
+    parameters: UniqueMap<ResultEntry>,
 }
 
 /// One parameter of the result JSON (further keys such as `std_sandwich` and `truth` are
@@ -561,6 +587,7 @@ impl ResultIn {
     fn into_calibration(self, path: &Path) -> Result<Calibration, ExportError> {
         let entries = self
             .parameters
+            .0
             .into_iter()
             .map(|(name, e)| {
                 let determined = e.determined.unwrap_or(true)
@@ -570,6 +597,7 @@ impl ResultIn {
             })
             .collect();
         let angles = angle_source(self.angles, self.corrected_by, path)?;
+        check_rms(self.rms_px, path)?;
         Ok(Calibration {
             solver: self.solver,
             dataset: self.dataset,
@@ -579,6 +607,50 @@ impl ResultIn {
             angles,
             posture: Posture::Standing,
         })
+    }
+}
+
+/// An RMS residual read must be a non-negative number.
+fn check_rms(rms: Option<[f64; 2]>, path: &Path) -> Result<(), ExportError> {
+    if let Some(r) = rms.iter().flatten().find(|r| **r < 0.0) {
+        return Err(parse_error(
+            path,
+            format!("rms_px: {r} is negative; an RMS residual is never below zero"),
+        ));
+    }
+    Ok(())
+}
+
+/// A table whose keys must be unique: serde's maps keep the last of a repeated key, so a
+/// parameter given twice would pass unnoticed.
+struct UniqueMap<V>(BTreeMap<String, V>);
+
+impl<'de, V: Deserialize<'de>> Deserialize<'de> for UniqueMap<V> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visit<V>(std::marker::PhantomData<V>);
+        impl<'de, V: Deserialize<'de>> serde::de::Visitor<'de> for Visit<V> {
+            type Value = UniqueMap<V>;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a table of parameters")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> Result<Self::Value, A::Error> {
+                let mut out = BTreeMap::new();
+                while let Some(key) = map.next_key::<String>()? {
+                    if out.contains_key(&key) {
+                        return Err(serde::de::Error::custom(format!(
+                            "parameters.{key} is given twice"
+                        )));
+                    }
+                    let value = map.next_value()?;
+                    out.insert(key, value);
+                }
+                Ok(UniqueMap(out))
+            }
+        }
+        d.deserialize_map(Visit(std::marker::PhantomData))
     }
 }
 

@@ -28,6 +28,14 @@ impl From<crate::output::WriteError> for ExportError {
                 action: "write",
                 source: io::Error::other("exists and is not a regular file"),
             },
+            W::InTheWay { path, in_the_way } => ExportError::Io {
+                path,
+                action: "create its directory",
+                source: io::Error::other(format!(
+                    "a file is in the way: {} exists and is not a directory",
+                    in_the_way.display()
+                )),
+            },
         }
     }
 }

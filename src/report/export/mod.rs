@@ -714,9 +714,12 @@ pub fn export_all(
     for path in &paths {
         io::check_writable(path, options)?;
     }
-    for ((format, _, _), path) in ExportFormat::ALL.iter().zip(&paths) {
-        export(cal, *format, path, options)?;
+    // All or nothing: written into a stage beside `dir`, published at the end.
+    let stage = crate::output::Staged::new(dir, options)?;
+    for (format, _, name) in ExportFormat::ALL.iter() {
+        export(cal, *format, &stage.dir().join(name), &stage.options())?;
     }
+    stage.publish()?;
     Ok(paths)
 }
 
