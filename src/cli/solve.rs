@@ -133,7 +133,8 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
         args.force,
     )?;
     let truth = dataset.truth.as_ref().map(|t| &t.values[..]);
-    let mut stdout = std::io::stdout().lock();
+    use std::fmt::Write as _;
+    let mut out = String::new();
     let calibration = naocalib::report::export::Calibration::from_solution(&solution, None);
     let changes = previous
         .as_ref()
@@ -156,15 +157,16 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
                 .collect::<serde_json::Map<_, _>>()
                 .into();
         }
-        writeln!(stdout, "{}", serde_json::to_string_pretty(&value)?)?;
+        writeln!(out, "{}", serde_json::to_string_pretty(&value)?)?;
     } else {
-        writeln!(stdout, "{}", args.dataset.display())?;
-        write!(stdout, "{}", naocalib::report::table(&solution, truth))?;
-        write!(stdout, "{}", naocalib::report::standing_table(&calibration))?;
+        writeln!(out, "{}", args.dataset.display())?;
+        write!(out, "{}", naocalib::report::table(&solution, truth))?;
+        write!(out, "{}", naocalib::report::standing_table(&calibration))?;
         if let Some(changes) = &changes {
-            write!(stdout, "{}", naocalib::report::changes_table(changes))?;
+            write!(out, "{}", naocalib::report::changes_table(changes))?;
         }
     }
+    super::print_out(out)?;
     Ok(if solution.is_calibration() {
         ExitCode::SUCCESS
     } else {
