@@ -1113,7 +1113,7 @@ fn unknown_keys_in_dataset_toml() {
         &text,
         Some(15),
         Some("lens"),
-        "unknown key 'lens' at the top level (known keys: camera, board, robot)",
+        "unknown key 'lens' at the top level (known keys: camera, board, robot, joints)",
     );
 }
 

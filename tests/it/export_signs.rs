@@ -35,7 +35,7 @@ fn calibration(rng: &mut impl Rng) -> Calibration {
             .iter()
             .map(|&p| Entry {
                 param: p,
-                value: rng.random_range(-2.0..2.0),
+                value: crate::util::plausible_value(rng, p, 2.0),
                 std: Some(0.05),
                 fixed: false,
             })

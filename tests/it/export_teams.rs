@@ -70,9 +70,10 @@ fn random_calibration(rng: &mut impl Rng, camera_deg: f64) -> Calibration {
                         rng.random_range(-camera_deg..camera_deg)
                     }
                     // Within the physical bounds (naocalib::model::bounds).
-                    Param::K1 | Param::K2 => rng.random_range(-0.5..0.5),
-                    _ if naocalib::model::bounds::bound(p).min == 0.0 => rng.random_range(0.0..1.5),
-                    _ => rng.random_range(-3.0..3.0),
+                    _ if naocalib::model::bounds::bound(p).min == 0.0 => {
+                        crate::util::plausible_value(rng, p, 1.5)
+                    }
+                    _ => crate::util::plausible_value(rng, p, 3.0),
                 };
                 Entry {
                     param: p,

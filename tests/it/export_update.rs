@@ -36,7 +36,7 @@ fn calibration(rng: &mut impl Rng) -> Calibration {
                     Param::CamYaw | Param::CamRoll => (rng.random_range(-2.0..2.0), false),
                     Param::HeadYaw | Param::HeadPitch => (0.0, true),
                     _ if name.ends_with("Play") => (rng.random_range(0.1..1.0), false),
-                    _ => (rng.random_range(-2.0..2.0), false),
+                    _ => (crate::util::plausible_value(rng, p, 2.0), false),
                 };
                 Entry {
                     param: p,

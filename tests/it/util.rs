@@ -107,3 +107,15 @@ pub fn determined_truth(
 ) -> [f64; naocalib::model::PARAMETER_COUNT] {
     naocalib::solve::identify::determined_truth(&solution.undetermined, truth)
 }
+
+/// A random estimate of `param` (report units) of at most `size` that lies within its
+/// physical bounds (`naocalib::model::bounds`): non-negative compliance and play, small
+/// distortion coefficients.
+pub fn plausible_value(rng: &mut impl rand::Rng, param: naocalib::model::Param, size: f64) -> f64 {
+    use naocalib::model::Param;
+    match param {
+        Param::K1 | Param::K2 => rng.random_range(-0.5..0.5),
+        _ if naocalib::model::bounds::bound(param).min == 0.0 => rng.random_range(0.0..size),
+        _ => rng.random_range(-size..size),
+    }
+}

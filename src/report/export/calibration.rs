@@ -88,6 +88,9 @@ impl Entry {
     }
 }
 
+/// How `naocalib import` names itself as a calibration's `solver`.
+pub const IMPORT_SOLVER: &str = "naocalib import";
+
 /// A calibration as exported: every parameter with its one-sigma and unit, and how the
 /// fit went.
 #[derive(Debug, Clone, PartialEq)]
@@ -265,6 +268,18 @@ impl Calibration {
         })
     }
 
+    /// Whether this is a robot's calibration read by `naocalib import` (its `solver` starts
+    /// with [`IMPORT_SOLVER`]) rather than a fit: the values the robot runs with, no RMS,
+    /// nothing converged.
+    pub fn is_import(&self) -> bool {
+        self.converged.is_none()
+            && self.rms_px.is_none()
+            && self
+                .solver
+                .as_deref()
+                .is_some_and(|s| s.starts_with(IMPORT_SOLVER))
+    }
+
     /// Why this result is not a calibration a robot should load (empty when it is one):
     /// the solver did not converge, a value or sigma is not finite, or the residuals are
     /// far beyond any plausible noise ([`MAX_PLAUSIBLE_RMS_PX`]).
@@ -282,7 +297,10 @@ impl Calibration {
         if !bad.is_empty() {
             out.push(format!("non-finite values or sigmas: {}", bad.join(", ")));
         }
-        if self.converged.is_none() {
+        // A robot's imported calibration is not a fit: nothing converged or was determined
+        // by data, and its values are what the robot already runs with (the bounds hold).
+        let imported = self.is_import();
+        if self.converged.is_none() && !imported {
             out.push("it does not say whether the solver converged".to_string());
         }
         // Physical bounds (crate::model::bounds) and a determined rank.
@@ -297,7 +315,7 @@ impl Calibration {
             out.push(format!("outside the physical bounds: {}", list.join("; ")));
         }
         let free: Vec<&Entry> = self.parameters.iter().filter(|e| !e.fixed).collect();
-        if !free.is_empty() && free.iter().all(|e| e.std.is_none()) {
+        if !imported && !free.is_empty() && free.iter().all(|e| e.std.is_none()) {
             out.push("the data determine none of the free parameters (rank 0)".to_string());
         }
         if let Some(rms) = self.rms_px {

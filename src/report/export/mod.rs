@@ -653,7 +653,11 @@ pub fn import_calibration(
         .collect();
     let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
     let cal = Calibration {
-        solver: Some(format!("naocalib import of {}", names.join(", "))),
+        solver: Some(format!(
+            "{} of {}",
+            calibration::IMPORT_SOLVER,
+            names.join(", ")
+        )),
         dataset: None,
         converged: None,
         rms_px: None,
