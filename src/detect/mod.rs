@@ -2,23 +2,35 @@
 //!
 //! For each capture with an image: the image is read as grey levels (`image.rs`: the
 //! header checked before any pixel is decoded), and with the model the board is first
-//! looked for where the nominal model (all offsets zero) and the logged joint angles
-//! predict it, by its pattern of saddles ([`guided`]); its vertices are refined with
-//! `cornerSubPix` and numbered by the prediction. OpenCV's chessboard finder
-//! (`chessboard.rs`, [`find`]) is the fallback: when the guided search finds nothing, in
-//! the predicted region (`predict.rs`) and then the whole image at half resolution
-//! (refined at full); when it finds part of a board, only if the board is wholly in view
-//! and a vertex was missed well inside the image (the finder needs the whole board, and
-//! gives up slowly where it is cut by the border). Its points are numbered by comparing
-//! OpenCV's order with the prediction ([`assign::assign`]). Images whose order is
-//! ambiguous or whose points do not fit one homography are rejected with the reason.
-//! Nothing here stops a run: every image gets an [`Outcome`] (`outcome.rs`).
+//! looked for where the model and the logged joints predict it, by its pattern of saddles
+//! ([`guided`]); its vertices are refined with `cornerSubPix`. Their (row, col) is decided
+//! by the image ([`numbering`]): the vertices found, the pattern's outer squares against
+//! the white plate (no saddle on the ring around the 6 × 4 vertices) fix the numbering up
+//! to the pattern's 180° symmetry, which the prediction resolves only when the board is
+//! turned against it by far less than 90°; a board whose visible part fits several
+//! numberings is rejected with the reason, and the log says how each board was numbered.
+//! OpenCV's chessboard finder (`chessboard.rs`, [`find`]) is the fallback: when the
+//! guided search finds nothing, in the predicted region (`predict.rs`) and then the whole
+//! image at half resolution (refined at full), and with a calibrated prediction also its
+//! full search without the fast check where the board is predicted wholly in view; when
+//! the guided search finds part of a board, only if the board is wholly in view and a
+//! vertex was missed well inside the image. Its whole grid is numbered by comparing
+//! OpenCV's order with the prediction ([`assign::assign`]).
+//!
+//! The prediction is the robot's current calibration when given
+//! ([`DetectOptions::params`], `--start-from`), else the nominal model; then (with
+//! [`DetectOptions::repredict`]) the paper's calibration from the boards found predicts
+//! again, and the images without a whole board are searched again, until nothing
+//! changes. Nothing here stops a run: every image gets an [`Outcome`] (`outcome.rs`);
+//! [`guard`] names the captures whose residuals after a fit stand out.
 
 pub mod assign;
 mod chessboard;
 pub mod find;
+pub mod guard;
 pub mod guided;
 mod image;
+pub mod numbering;
 mod outcome;
 pub mod overlay;
 mod predict;
@@ -52,6 +64,25 @@ pub struct DetectOptions {
     pub subpix_factor: f64,
     /// Images processed at once.
     pub jobs: usize,
+    /// The parameters (internal units) the board is predicted with: the robot's current
+    /// calibration (`--start-from`); `None` for the nominal model (all offsets zero).
+    pub params: Option<[f64; PARAMETER_COUNT]>,
+    /// With the model: calibrate from the boards found (numbered by the image), predict
+    /// again with that calibration and detect again where no whole board was found, until
+    /// nothing changes ([`MAX_PASSES`] at most).
+    pub repredict: bool,
+}
+
+/// Most detection passes of the re-predict loop (the first with the given prediction).
+pub const MAX_PASSES: usize = 4;
+/// Fewest boards found before the re-predict loop calibrates from them.
+pub const MIN_BOARDS_TO_REPREDICT: usize = 6;
+
+impl DetectOptions {
+    /// The parameters the board is predicted with.
+    pub fn prediction(&self) -> [f64; PARAMETER_COUNT] {
+        self.params.unwrap_or([0.0; PARAMETER_COUNT])
+    }
 }
 
 impl Default for DetectOptions {
@@ -65,6 +96,8 @@ impl Default for DetectOptions {
             jobs: std::thread::available_parallelism()
                 .map(|n| n.get())
                 .unwrap_or(1),
+            params: None,
+            repredict: true,
         }
     }
 }
@@ -188,7 +221,7 @@ fn detect_image(
     let mut search = chessboard::Search::Predicted;
     let mut guided_partial = None;
     if options.use_model && options.guided && grid == board_grid(model) {
-        let params = [0.0; PARAMETER_COUNT];
+        let params = options.prediction();
         let pose = model
             .chains(capture.side, &capture.joints)
             .camera_to_board(&params);
@@ -219,6 +252,7 @@ fn detect_image(
                 corners,
                 order: None,
                 whole_image: false,
+                numbered: board.numbered.clone(),
             };
             if complete {
                 return Ok(found);
@@ -241,8 +275,10 @@ fn detect_image(
     })
 }
 
-/// Detects the board in every capture of `dataset`, `options.jobs` images at once, calling
-/// `done` as each finishes (from the worker threads). The results are in capture order.
+/// Detects the board in every capture of `dataset`, `options.jobs` images at once, then
+/// (with `options.repredict`) calibrates from the boards found, predicts again and detects
+/// again where no whole board was found, until nothing changes. `done` is called for every
+/// final result, in capture order. The results are in capture order.
 pub fn detect_dataset(
     dataset: &Dataset,
     options: &DetectOptions,
@@ -253,22 +289,95 @@ pub fn detect_dataset(
     if options.jobs > 1 {
         let _ = opencv::core::set_num_threads(1);
     }
-    let run = || {
-        dataset
-            .captures
-            .par_iter()
-            .map(|c| {
-                let r = detect_capture(dataset, c, options);
-                done(&r);
-                r
-            })
-            .collect()
-    };
-    match rayon::ThreadPoolBuilder::new()
+    let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(options.jobs.clamp(1, max_jobs()))
         .build()
-    {
-        Ok(pool) => pool.install(run),
-        Err(_) => run(),
+        .ok();
+    let run = |options: &DetectOptions, which: &[usize]| -> Vec<ImageResult> {
+        let go = || {
+            which
+                .par_iter()
+                .map(|&i| detect_capture(dataset, &dataset.captures[i], options))
+                .collect()
+        };
+        match &pool {
+            Some(pool) => pool.install(go),
+            None => go(),
+        }
+    };
+    let all: Vec<usize> = (0..dataset.captures.len()).collect();
+    let mut results = run(options, &all);
+    let grid = options.pattern.unwrap_or_else(|| board_grid(&dataset.model));
+    if options.use_model && options.repredict && grid == board_grid(&dataset.model) {
+        let mut options = options.clone();
+        for _ in 1..MAX_PASSES {
+            let Some(params) = calibrate_from(dataset, &results) else {
+                break;
+            };
+            options.params = Some(params);
+            let redo: Vec<usize> = all
+                .iter()
+                .copied()
+                .filter(|&i| !whole(&results[i], grid))
+                .collect();
+            if redo.is_empty() {
+                break;
+            }
+            let mut changed = false;
+            let again = run(&options, &redo);
+            for (i, r) in redo.into_iter().zip(again) {
+                changed |= vertices_of(&results[i]) != vertices_of(&r);
+                results[i] = r;
+            }
+            if !changed {
+                break;
+            }
+        }
     }
+    for r in &results {
+        done(r);
+    }
+    results
+}
+
+/// Whether `result` holds every vertex of the board.
+fn whole(result: &ImageResult, grid: Grid) -> bool {
+    matches!(result.outcome, Outcome::NoImage)
+        || matches!(&result.outcome, Outcome::Found { corners, .. } if corners.len() == grid.len())
+}
+
+/// The vertices of a result and their pixels (nothing when no board was found).
+fn vertices_of(result: &ImageResult) -> Vec<(crate::model::Vertex, [u64; 2])> {
+    match &result.outcome {
+        Outcome::Found { corners, .. } => corners
+            .iter()
+            .map(|c| (c.vertex, [c.pixel[0].to_bits(), c.pixel[1].to_bits()]))
+            .collect(),
+        _ => Vec::new(),
+    }
+}
+
+/// The paper's calibration (plain least squares) from the boards found in `results`, as
+/// the re-predict loop's prediction; `None` when too few were found or the fit is not a
+/// calibration.
+fn calibrate_from(dataset: &Dataset, results: &[ImageResult]) -> Option<[f64; PARAMETER_COUNT]> {
+    let boards = results
+        .iter()
+        .filter(|r| matches!(r.outcome, Outcome::Found { .. }))
+        .count();
+    if boards < MIN_BOARDS_TO_REPREDICT {
+        return None;
+    }
+    let mut found = dataset.clone();
+    found.corners = corners(results);
+    let problem =
+        crate::solve::Problem::from_dataset(&found, crate::model::FixedSet::default()).ok()?;
+    let backend = crate::solve::backend(crate::solve::backend_names()[0], false)?;
+    let solution = crate::solve::calibrate(
+        &problem,
+        backend.as_ref(),
+        &crate::solve::UncertaintyOptions::plain(),
+    )
+    .ok()?;
+    solution.is_calibration().then_some(solution.values)
 }
