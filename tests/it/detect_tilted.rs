@@ -235,3 +235,87 @@ fn solve_from_detected_tilted_robot_recovers_the_truth() {
         );
     }
 }
+
+/// Every board OpenCV's chessboard finder gets with its exhaustive settings (whole image,
+/// no fast check) in the images of `dataset` is found; returns (boards OpenCV got, found).
+fn opencv_boards_are_found(dataset: &Dataset) -> (usize, usize) {
+    let results = detect::detect_dataset(dataset, &DetectOptions::default(), &|_| {});
+    let s = score(dataset, &results);
+    assert_eq!(s.wrong, 0, "{s:?}");
+    let grid = detect::board_grid(&dataset.model);
+    let (mut got, mut found) = (0, 0);
+    for (capture, r) in dataset.captures.iter().zip(&results) {
+        let path = dataset.dir.join(capture.image.as_ref().unwrap());
+        let grey = detect::read_grey(&path).unwrap();
+        let opencv =
+            detect::find::find_board_with(&grey, grid, None, detect::find::EXHAUSTIVE_FLAGS)
+                .unwrap();
+        if opencv.is_some() {
+            got += 1;
+            match &r.outcome {
+                Outcome::Found { corners, .. } if corners.len() >= 20 => found += 1,
+                _ => eprintln!("OpenCV finds the board, naocalib does not: {r}"),
+            }
+        }
+    }
+    (got, found)
+}
+
+#[test]
+fn every_board_opencvs_exhaustive_finder_gets_is_found() {
+    let tmp = tempfile::tempdir().unwrap();
+    // Random robots of the simulator (camera ±3°, joints σ 1°), ordinary 640×480 images.
+    for seed in [281, 282] {
+        let dir = tmp.path().join(seed.to_string());
+        let options = SimOptions {
+            seed,
+            stances: 8,
+            heads: 3,
+            px_noise: 0.0,
+            images: Some(ImageOutput {
+                dir: dir.clone(),
+                options: RenderOptions {
+                    seed,
+                    ..RenderOptions::default()
+                },
+                force: false,
+            }),
+            ..SimOptions::default()
+        };
+        let mut dataset = simulate(&Model::default(), &options).unwrap();
+        dataset.dir = dir;
+        let (got, found) = opencv_boards_are_found(&dataset);
+        eprintln!("640×480 seed {seed}: OpenCV (exhaustive) {got}, naocalib {found} of them");
+        assert!(got >= 40, "{got}");
+        assert_eq!(found, got);
+    }
+}
+
+#[test]
+fn every_board_opencvs_exhaustive_finder_gets_is_found_at_1280x960() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut model = Model::default();
+    model.camera = naocalib::sim::camera::CameraPreset::V6Hd.camera();
+    let options = SimOptions {
+        seed: 291,
+        stances: 4,
+        heads: 2,
+        px_noise: 0.0,
+        truth: Some(robot(-5.0, 2.0, 1.5)),
+        images: Some(ImageOutput {
+            dir: tmp.path().to_path_buf(),
+            options: RenderOptions {
+                seed: 291,
+                ..RenderOptions::default()
+            },
+            force: false,
+        }),
+        ..SimOptions::default()
+    };
+    let mut dataset = simulate(&model, &options).unwrap();
+    dataset.dir = tmp.path().to_path_buf();
+    let (got, found) = opencv_boards_are_found(&dataset);
+    eprintln!("1280×960, tilt −5°: OpenCV (exhaustive) {got}, naocalib {found} of them");
+    assert!(got >= 10, "{got}");
+    assert_eq!(found, got);
+}
