@@ -319,3 +319,35 @@ fn every_board_opencvs_exhaustive_finder_gets_is_found_at_1280x960() {
     assert!(got >= 10, "{got}");
     assert_eq!(found, got);
 }
+
+/// `solve --detect`'s guard: a capture numbered one row and one column off (the issue's
+/// failure: 15 vertices) stands out after the fit and is named; clean data name none.
+#[test]
+fn the_guard_names_a_capture_numbered_wrongly() {
+    let options = SimOptions {
+        seed: 301,
+        px_noise: 0.1,
+        truth: Some(robot(-5.5, 1.0, 1.0)),
+        ..SimOptions::default()
+    };
+    let mut dataset = simulate(&Model::default(), &options).unwrap();
+    let solver = backend(naocalib::solve::backend_names()[0], false).unwrap();
+    let fit = |dataset: &Dataset| {
+        let problem = Problem::from_dataset(dataset, FixedSet::default()).unwrap();
+        solve(&problem, solver.as_ref()).unwrap()
+    };
+    assert!(detect::guard::suspects(&fit(&dataset)).is_empty());
+    let bad = dataset.captures[17].id;
+    dataset.corners.retain(|c| {
+        c.capture != bad || (c.vertex.row + 1 < 4 && c.vertex.col + 1 < 6)
+    });
+    for c in dataset.corners.iter_mut().filter(|c| c.capture == bad) {
+        c.vertex.row += 1;
+        c.vertex.col += 1;
+    }
+    let suspects = detect::guard::suspects(&fit(&dataset));
+    eprintln!("{suspects:?}");
+    assert_eq!(suspects.len(), 1, "{suspects:?}");
+    assert_eq!(suspects[0].capture, bad);
+    assert!(suspects[0].to_string().contains(&format!("capture {bad}")));
+}
