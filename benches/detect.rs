@@ -148,7 +148,10 @@ fn bench_detect(c: &mut Criterion) {
     let sets = [
         ("640x480", rendered(&tmp.path().join("vga"), &vga, false)),
         ("1280x960", rendered(&tmp.path().join("v6"), &v6, false)),
-        ("640x480_tilted", rendered(&tmp.path().join("tilt"), &vga, true)),
+        (
+            "640x480_tilted",
+            rendered(&tmp.path().join("tilt"), &vga, true),
+        ),
     ];
     let guided = DetectOptions::default();
     let chessboard = DetectOptions {

@@ -654,7 +654,9 @@ fn search(
             found.push((k, q));
         }
     }
-    grow(image, integral, camera, predicted, &found, factor, tolerance)
+    grow(
+        image, integral, camera, predicted, &found, factor, tolerance,
+    )
 }
 
 /// Finds the vertices where the homography `h` (board plane to undistorted pixels) puts
@@ -677,7 +679,9 @@ fn search_from(
             found.push((k, q));
         }
     }
-    grow(image, integral, camera, predicted, &found, factor, tolerance)
+    grow(
+        image, integral, camera, predicted, &found, factor, tolerance,
+    )
 }
 
 /// The vertices of `found` that fit one homography, and those that homography predicts
@@ -761,8 +765,11 @@ fn settle(
         };
         if decided.shift == (0, 0) {
             let pixels: Vec<[f64; 2]> = found.kept.iter().map(|(_, q)| *q).collect();
-            let expected: Vec<[f64; 2]> =
-                found.kept.iter().map(|(k, _)| predicted[*k].pixel).collect();
+            let expected: Vec<[f64; 2]> = found
+                .kept
+                .iter()
+                .map(|(k, _)| predicted[*k].pixel)
+                .collect();
             let turn = match numbering::turn_check(&pixels, &expected) {
                 Ok(t) => t,
                 Err(reason) => return Ok(Err(reason)),
@@ -777,7 +784,10 @@ fn settle(
             ));
             return Ok(Ok(found));
         }
-        total_shift = (total_shift.0 + decided.shift.0, total_shift.1 + decided.shift.1);
+        total_shift = (
+            total_shift.0 + decided.shift.0,
+            total_shift.1 + decided.shift.1,
+        );
         let h = numbering::shifted(model, &found.homography, decided.shift);
         match search_from(image, integral, camera, predicted, &h, factor, tolerance)? {
             Some(f) => found = f,

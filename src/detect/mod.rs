@@ -307,7 +307,9 @@ pub fn detect_dataset(
     };
     let all: Vec<usize> = (0..dataset.captures.len()).collect();
     let mut results = run(options, &all);
-    let grid = options.pattern.unwrap_or_else(|| board_grid(&dataset.model));
+    let grid = options
+        .pattern
+        .unwrap_or_else(|| board_grid(&dataset.model));
     if options.use_model && options.repredict && grid == board_grid(&dataset.model) {
         let mut options = options.clone();
         for _ in 1..MAX_PASSES {

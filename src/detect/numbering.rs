@@ -80,7 +80,12 @@ impl Decided {
             s += &format!(", pattern edge seen {}", edges.join("/"));
         }
         match self.runner_up {
-            Some(r) => s += &format!("; every other of {} numberings disagrees at ≥ {r}", self.candidates),
+            Some(r) => {
+                s += &format!(
+                    "; every other of {} numberings disagrees at ≥ {r}",
+                    self.candidates
+                )
+            }
             None => s += "; no other numbering possible",
         }
         if self.shift != (0, 0) {
@@ -135,7 +140,7 @@ fn look(img: &Integral, camera: &Camera, model: &Model, h: &Matrix3<f64>, i: i32
         return Seen::Unknown;
     };
     let square = ax.min(ay);
-    if !(square >= MIN_SQUARE_PX) {
+    if square.is_nan() || square < MIN_SQUARE_PX {
         return Seen::Unknown;
     }
     let patch = ((0.1 * square).round() as i64).clamp(1, 6);
@@ -208,7 +213,10 @@ pub fn decide(
     }
     // What the image shows on every lattice point any candidate looks at.
     let (i0, j0) = (a_lo - 1, b_lo - 1);
-    let (ni, nj) = ((a_hi + cols + 1 - i0) as usize, (b_hi + rows + 1 - j0) as usize);
+    let (ni, nj) = (
+        (a_hi + cols + 1 - i0) as usize,
+        (b_hi + rows + 1 - j0) as usize,
+    );
     let mut seen = vec![Seen::Unknown; ni * nj];
     for jj in 0..nj {
         for ii in 0..ni {
@@ -346,7 +354,9 @@ mod tests {
 
     #[test]
     fn turn_is_measured_about_the_centroid() {
-        let pred: Vec<[f64; 2]> = (0..6).map(|k| [k as f64 * 20.0, (k % 2) as f64 * 10.0]).collect();
+        let pred: Vec<[f64; 2]> = (0..6)
+            .map(|k| [k as f64 * 20.0, (k % 2) as f64 * 10.0])
+            .collect();
         let (s, c) = 30f64.to_radians().sin_cos();
         let found: Vec<[f64; 2]> = pred
             .iter()

@@ -139,7 +139,8 @@ pub fn score(dataset: &Dataset, results: &[ImageResult]) -> Score {
         for c in got {
             s.found += 1;
             let ok = expected.iter().any(|t| {
-                t.vertex == c.vertex && (c.pixel[0] - t.pixel[0]).hypot(c.pixel[1] - t.pixel[1]) < 1.5
+                t.vertex == c.vertex
+                    && (c.pixel[0] - t.pixel[0]).hypot(c.pixel[1] - t.pixel[1]) < 1.5
             });
             if !ok {
                 s.wrong += 1;
@@ -184,7 +185,10 @@ fn tilted_robots_every_visible_board_found_none_misnumbered() {
 fn tilted_robots_near_the_border_none_misnumbered() {
     let tmp = tempfile::tempdir().unwrap();
     let mut total = Score::default();
-    for (k, (pitch, roll, legs)) in [(-5.5, 2.0, 1.5), (-8.0, -3.0, -2.0)].into_iter().enumerate() {
+    for (k, (pitch, roll, legs)) in [(-5.5, 2.0, 1.5), (-8.0, -3.0, -2.0)]
+        .into_iter()
+        .enumerate()
+    {
         let seed = 260 + k as u64;
         let dataset = rendered(
             &tmp.path().join(k.to_string()),
@@ -294,8 +298,10 @@ fn every_board_opencvs_exhaustive_finder_gets_is_found() {
 #[test]
 fn every_board_opencvs_exhaustive_finder_gets_is_found_at_1280x960() {
     let tmp = tempfile::tempdir().unwrap();
-    let mut model = Model::default();
-    model.camera = naocalib::sim::camera::CameraPreset::V6Hd.camera();
+    let model = Model {
+        camera: naocalib::sim::camera::CameraPreset::V6Hd.camera(),
+        ..Model::default()
+    };
     let options = SimOptions {
         seed: 291,
         stances: 4,
@@ -338,9 +344,9 @@ fn the_guard_names_a_capture_numbered_wrongly() {
     };
     assert!(detect::guard::suspects(&fit(&dataset)).is_empty());
     let bad = dataset.captures[17].id;
-    dataset.corners.retain(|c| {
-        c.capture != bad || (c.vertex.row + 1 < 4 && c.vertex.col + 1 < 6)
-    });
+    dataset
+        .corners
+        .retain(|c| c.capture != bad || (c.vertex.row + 1 < 4 && c.vertex.col + 1 < 6));
     for c in dataset.corners.iter_mut().filter(|c| c.capture == bad) {
         c.vertex.row += 1;
         c.vertex.col += 1;
