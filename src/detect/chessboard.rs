@@ -190,30 +190,17 @@ pub(super) fn chessboard(
     let found = match found {
         None if options.use_model
             && options.params.is_some()
+            && search == Search::Predicted
             && wholly_in_view(dataset, capture, grid, options) =>
         {
-            let roi = match search {
-                Search::Predicted => predicted_roi(model, capture, &options.prediction()),
-                Search::Whole => None,
-            };
-            let mut found = match roi {
-                Some(rect) => check(find::find_board_with(
-                    grey,
-                    grid,
-                    Some(rect),
-                    find::EXHAUSTIVE_FLAGS,
-                )?)?,
-                None => None,
-            };
-            if found.is_none() {
-                found = check(find::find_board_with(
-                    grey,
-                    grid,
-                    None,
-                    find::EXHAUSTIVE_FLAGS,
-                )?)?;
-            }
-            found
+            // The calibrated prediction is good to a few pixels: its region suffices.
+            let roi = predicted_roi(model, capture, &options.prediction());
+            check(find::find_board_with(
+                grey,
+                grid,
+                roi,
+                find::EXHAUSTIVE_FLAGS,
+            )?)?
         }
         found => found,
     };

@@ -320,16 +320,20 @@ pub fn detect_dataset(
             let redo: Vec<usize> = all
                 .iter()
                 .copied()
-                .filter(|&i| !whole(&results[i], grid))
+                .filter(|&i| worth_again(dataset, &dataset.captures[i], &results[i], grid, &params))
                 .collect();
             if redo.is_empty() {
                 break;
             }
+            // A result is replaced only by one with more vertices (both are numbered by
+            // the image; the new prediction may find more, never needs fewer).
             let mut changed = false;
             let again = run(&options, &redo);
             for (i, r) in redo.into_iter().zip(again) {
-                changed |= vertices_of(&results[i]) != vertices_of(&r);
-                results[i] = r;
+                if found_count(&r) > found_count(&results[i]) {
+                    changed = true;
+                    results[i] = r;
+                }
             }
             if !changed {
                 break;
@@ -342,20 +346,36 @@ pub fn detect_dataset(
     results
 }
 
-/// Whether `result` holds every vertex of the board.
-fn whole(result: &ImageResult, grid: Grid) -> bool {
-    matches!(result.outcome, Outcome::NoImage)
-        || matches!(&result.outcome, Outcome::Found { corners, .. } if corners.len() == grid.len())
+/// Vertices found in a result.
+fn found_count(result: &ImageResult) -> usize {
+    match &result.outcome {
+        Outcome::Found { corners, .. } => corners.len(),
+        _ => 0,
+    }
 }
 
-/// The vertices of a result and their pixels (nothing when no board was found).
-fn vertices_of(result: &ImageResult) -> Vec<(crate::model::Vertex, [u64; 2])> {
+/// Whether to search `capture` again with the prediction `params`: no board was found
+/// (or it was rejected), or fewer vertices than the prediction puts well inside the image.
+fn worth_again(
+    dataset: &Dataset,
+    capture: &Capture,
+    result: &ImageResult,
+    grid: Grid,
+    params: &[f64; PARAMETER_COUNT],
+) -> bool {
     match &result.outcome {
-        Outcome::Found { corners, .. } => corners
-            .iter()
-            .map(|c| (c.vertex, [c.pixel[0].to_bits(), c.pixel[1].to_bits()]))
-            .collect(),
-        _ => Vec::new(),
+        Outcome::NoImage | Outcome::Failed(_) => false,
+        Outcome::NotFound | Outcome::Rejected { .. } => true,
+        Outcome::Found { corners, .. } => {
+            corners.len() < grid.len()
+                && predict(&dataset.model, capture, params).is_some_and(|points| {
+                    let inside = points
+                        .iter()
+                        .filter(|p| dataset.model.camera.contains(**p, 8.0))
+                        .count();
+                    inside > corners.len()
+                })
+        }
     }
 }
 
