@@ -511,7 +511,8 @@ impl Board {
 /// The vertices of the board found by the model-guided search in `image` (8-bit grey),
 /// with the board predicted in pose `pose` (`T_CB`) for camera `camera`; `Err` with the
 /// reason when fewer than [`MIN_VERTICES`] are found or the alignment is ambiguous.
-/// `factor` is the half-window of `cornerSubPix` in squares.
+/// `factor` is the half-window of `cornerSubPix` in squares; `uncertainty_deg` how far
+/// (as an angle of view) the prediction may be off.
 pub fn detect(
     image: &Mat,
     integral: &Integral,
@@ -519,6 +520,7 @@ pub fn detect(
     camera: &Camera,
     pose: &Pose<f64>,
     factor: f64,
+    uncertainty_deg: f64,
 ) -> opencv::Result<Result<Board, String>> {
     let predicted = predict(model, camera, pose);
     if predicted.len() < MIN_VERTICES {
@@ -527,11 +529,18 @@ pub fn detect(
     let mut squares: Vec<f64> = predicted.iter().map(|p| p.square).collect();
     squares.sort_by(f64::total_cmp);
     let square = squares[squares.len() / 2];
-    // The model's error (a few degrees of camera and joint offsets) moves the board by up
-    // to about a square; the search reaches a little further.
+    // A small error of the prediction moves the board by up to about a square; the search
+    // reaches a little further first, then as far as the prediction's uncertainty
+    // (`uncertainty_deg` of camera angle) can move it. Alignments off by whole squares are
+    // numbered right by the image ([`settle`]).
     let reach = (1.25 * square).max(24.0);
+    let wide = uncertainty_deg.to_radians() * camera.fx.max(camera.fy);
     let candidates = match align(integral, &predicted, reach) {
         Ok(c) => c,
+        Err(_) if wide > reach => match align(integral, &predicted, wide) {
+            Ok(c) => c,
+            Err(reason) => return Ok(Err(reason)),
+        },
         Err(reason) => return Ok(Err(reason)),
     };
     let tolerance = (0.04 * square).max(0.75);
@@ -548,10 +557,24 @@ pub fn detect(
             "too few vertices found where the model predicts the board".into(),
         ));
     }
-    // The image decides each alignment's numbering; one it cannot decide is dropped.
-    let mut settled = Vec::new();
+    // The image decides each alignment's numbering; one it cannot decide is dropped. An
+    // alignment sharing a vertex's pixel with one already settled is on the same lattice,
+    // which the image numbers the same way: not settled again.
+    outcomes.sort_by_key(|f| std::cmp::Reverse(f.support()));
+    let mut settled: Vec<Found> = Vec::new();
     let mut undecided = None;
     for found in outcomes {
+        let same_lattice = settled.iter().any(|s| {
+            s.kept.iter().any(|(_, q)| {
+                found
+                    .kept
+                    .iter()
+                    .any(|(_, r)| (q[0] - r[0]).hypot(q[1] - r[1]) < 1.0)
+            })
+        });
+        if same_lattice {
+            continue;
+        }
         match settle(
             image, integral, model, camera, &predicted, found, factor, tolerance,
         )? {

@@ -78,10 +78,25 @@ pub const MAX_PASSES: usize = 4;
 /// Fewest boards found before the re-predict loop calibrates from them.
 pub const MIN_BOARDS_TO_REPREDICT: usize = 6;
 
+/// How far (deg, as an angle of view) the nominal model's prediction may be off for a
+/// real robot: lower-camera tilt corrections down to −8°, with leg offsets of up to 2°.
+pub const NOMINAL_UNCERTAINTY_DEG: f64 = 10.0;
+/// How far a calibrated prediction (`--start-from`, the re-predict loop) may be off.
+pub const CALIBRATED_UNCERTAINTY_DEG: f64 = 2.0;
+
 impl DetectOptions {
     /// The parameters the board is predicted with.
     pub fn prediction(&self) -> [f64; PARAMETER_COUNT] {
         self.params.unwrap_or([0.0; PARAMETER_COUNT])
+    }
+
+    /// How far (deg) the prediction may be off: it sets the guided search's widest window.
+    pub fn uncertainty_deg(&self) -> f64 {
+        if self.params.is_some() {
+            CALIBRATED_UNCERTAINTY_DEG
+        } else {
+            NOMINAL_UNCERTAINTY_DEG
+        }
     }
 }
 
@@ -234,6 +249,7 @@ fn detect_image(
             &camera,
             &pose,
             options.subpix_factor,
+            options.uncertainty_deg(),
         )
         .map_err(cv)?;
         if let Ok(board) = found {
@@ -313,6 +329,10 @@ pub fn detect_dataset(
     if options.use_model && options.repredict && grid == board_grid(&dataset.model) {
         let mut options = options.clone();
         for _ in 1..MAX_PASSES {
+            // Nothing to look for again: every image holds a whole board (or none).
+            if results.iter().all(|r| whole(r, grid)) {
+                break;
+            }
             let Some(params) = calibrate_from(dataset, &results) else {
                 break;
             };
@@ -344,6 +364,16 @@ pub fn detect_dataset(
         done(r);
     }
     results
+}
+
+/// Whether `result` leaves nothing to search again: a whole board, no image, or an image
+/// that cannot be used.
+fn whole(result: &ImageResult, grid: Grid) -> bool {
+    match &result.outcome {
+        Outcome::NoImage | Outcome::Failed(_) => true,
+        Outcome::Found { corners, .. } => corners.len() == grid.len(),
+        Outcome::NotFound | Outcome::Rejected { .. } => false,
+    }
 }
 
 /// Vertices found in a result.
