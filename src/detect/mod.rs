@@ -191,9 +191,29 @@ pub fn detect_capture(
     capture: &Capture,
     options: &DetectOptions,
 ) -> ImageResult {
+    detect_capture_in(dataset, capture, options, Mode::Full)
+}
+
+/// How thoroughly one image is searched.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    /// The re-predict loop's first pass: only the guided search near the prediction; what
+    /// it misses is searched again with the calibrated prediction, or in full at the end.
+    Quick,
+    /// Every search: the guided one as far as the prediction's uncertainty reaches, then
+    /// OpenCV's chessboard finder.
+    Full,
+}
+
+fn detect_capture_in(
+    dataset: &Dataset,
+    capture: &Capture,
+    options: &DetectOptions,
+    mode: Mode,
+) -> ImageResult {
     let outcome = match &capture.image {
         None => Outcome::NoImage,
-        Some(image) => match detect_image(dataset, capture, image, options) {
+        Some(image) => match detect_image(dataset, capture, image, options, mode) {
             Ok(outcome) => outcome,
             Err(e) => Outcome::Failed(e),
         },
@@ -210,6 +230,7 @@ fn detect_image(
     capture: &Capture,
     image: &Path,
     options: &DetectOptions,
+    mode: Mode,
 ) -> Result<Outcome, DetectError> {
     let model = &dataset.model;
     let path = resolve_image(&dataset.dir, image)?;
@@ -249,9 +270,32 @@ fn detect_image(
             &camera,
             &pose,
             options.subpix_factor,
-            options.uncertainty_deg(),
+            match mode {
+                Mode::Quick => 0.0,
+                Mode::Full => options.uncertainty_deg(),
+            },
         )
         .map_err(cv)?;
+        if mode == Mode::Quick {
+            return Ok(match found {
+                Ok(board) => Outcome::Found {
+                    corners: board
+                        .vertices
+                        .iter()
+                        .map(|&(vertex, pixel)| Corner {
+                            capture: capture.id,
+                            vertex,
+                            pixel,
+                            line: 0,
+                        })
+                        .collect(),
+                    order: None,
+                    whole_image: false,
+                    numbered: board.numbered,
+                },
+                Err(_) => Outcome::NotFound,
+            });
+        }
         if let Ok(board) = found {
             let complete = board.vertices.len() == grid.len();
             let corners: Vec<Corner> = board
@@ -309,11 +353,11 @@ pub fn detect_dataset(
         .num_threads(options.jobs.clamp(1, max_jobs()))
         .build()
         .ok();
-    let run = |options: &DetectOptions, which: &[usize]| -> Vec<ImageResult> {
+    let run = |options: &DetectOptions, which: &[usize], mode: Mode| -> Vec<ImageResult> {
         let go = || {
             which
                 .par_iter()
-                .map(|&i| detect_capture(dataset, &dataset.captures[i], options))
+                .map(|&i| detect_capture_in(dataset, &dataset.captures[i], options, mode))
                 .collect()
         };
         match &pool {
@@ -322,11 +366,19 @@ pub fn detect_dataset(
         }
     };
     let all: Vec<usize> = (0..dataset.captures.len()).collect();
-    let mut results = run(options, &all);
     let grid = options
         .pattern
         .unwrap_or_else(|| board_grid(&dataset.model));
-    if options.use_model && options.repredict && grid == board_grid(&dataset.model) {
+    let repredict = options.use_model
+        && options.guided
+        && options.repredict
+        && grid == board_grid(&dataset.model);
+    // With the re-predict loop, the first pass is quick: what it misses, the calibrated
+    // prediction finds near where it says, and the rest gets the full search at the end.
+    let first = if repredict { Mode::Quick } else { Mode::Full };
+    let mut results = run(options, &all, first);
+    let mut quick = vec![first == Mode::Quick; results.len()];
+    if repredict {
         let mut options = options.clone();
         for _ in 1..MAX_PASSES {
             // Nothing to look for again: every image holds a whole board (or none).
@@ -348,15 +400,34 @@ pub fn detect_dataset(
             // A result is replaced only by one with more vertices (both are numbered by
             // the image; the new prediction may find more, never needs fewer).
             let mut changed = false;
-            let again = run(&options, &redo);
+            let again = run(&options, &redo, Mode::Full);
             for (i, r) in redo.into_iter().zip(again) {
                 if found_count(&r) > found_count(&results[i]) {
                     changed = true;
                     results[i] = r;
+                } else if found_count(&results[i]) == 0 {
+                    // Why the full search found nothing.
+                    results[i] = r;
                 }
+                quick[i] = false;
             }
             if !changed {
                 break;
+            }
+        }
+        // What only the quick pass looked at and it did not find whole: the full search,
+        // with the best prediction there is.
+        let rest: Vec<usize> = all
+            .iter()
+            .copied()
+            .filter(|&i| quick[i] && !whole(&results[i], grid))
+            .collect();
+        if !rest.is_empty() {
+            let again = run(&options, &rest, Mode::Full);
+            for (i, r) in rest.into_iter().zip(again) {
+                if found_count(&r) > found_count(&results[i]) || found_count(&results[i]) == 0 {
+                    results[i] = r;
+                }
             }
         }
     }
