@@ -40,6 +40,43 @@ pub struct DetectArgs {
     /// Images processed at once (default: the number of cores).
     #[arg(long, short = 'j', value_name = "N")]
     jobs: Option<usize>,
+    /// Predict the board with the robot's current calibration (a calibration.toml or
+    /// .json from `naocalib solve --export`/`export`) instead of the nominal model.
+    #[arg(long, value_name = "CAL.toml")]
+    start_from: Option<PathBuf>,
+    /// Detect once with the given prediction: do not calibrate from the boards found,
+    /// predict again and detect again.
+    #[arg(long)]
+    no_repredict: bool,
+}
+
+/// The parameters (internal units) of the calibration file `path`.
+pub fn read_start(path: &Path) -> Result<[f64; PARAMETER_COUNT]> {
+    let calibration = naocalib::report::export::read_calibration(path)?;
+    let mut values = [0.0; PARAMETER_COUNT];
+    for e in &calibration.parameters {
+        values[e.param.index()] = e.param.unit().from_report(e.value);
+    }
+    Ok(values)
+}
+
+/// For `naocalib solve --detect`: names the captures whose residuals after the fit are
+/// many times the others' ([`detect::guard::suspects`]) on stderr; `true` when there are.
+pub fn guard(solution: &naocalib::solve::Solution) -> bool {
+    let suspects = detect::guard::suspects(solution);
+    for s in &suspects {
+        eprintln!("naocalib: warning: {s}");
+    }
+    if !suspects.is_empty() {
+        eprintln!(
+            "naocalib: warning: {} capture(s) with residuals more than {}× the median \
+             capture's: this run is marked (exit code 3); look at their images, or leave \
+             them out",
+            suspects.len(),
+            detect::guard::SUSPECT_RATIO
+        );
+    }
+    !suspects.is_empty()
 }
 
 fn parse_pattern(text: &str) -> Result<Grid, String> {
@@ -111,6 +148,20 @@ fn progress_bar(images: usize) -> Option<indicatif::ProgressBar> {
 /// written). Prints the images that gave no vertices (every image with `verbose`) and the
 /// summary line on stderr.
 pub fn detect_for_solve(dataset: &mut Dataset, verbose: bool) -> Result<()> {
+    detect_for_solve_from(dataset, verbose, None)
+}
+
+/// [`detect_for_solve`], predicting the board with the calibration in `start_from`
+/// (`--start-from CAL.toml`) when given.
+pub fn detect_for_solve_from(
+    dataset: &mut Dataset,
+    verbose: bool,
+    start_from: Option<&Path>,
+) -> Result<()> {
+    let options = DetectOptions {
+        params: start_from.map(read_start).transpose()?,
+        ..DetectOptions::default()
+    };
     let start = std::time::Instant::now();
     let bar = progress_bar(dataset.captures.len());
     let done = |_: &ImageResult| {
@@ -118,7 +169,7 @@ pub fn detect_for_solve(dataset: &mut Dataset, verbose: bool) -> Result<()> {
             bar.inc(1);
         }
     };
-    let detection = detect::detect_into(dataset, &DetectOptions::default(), &done);
+    let detection = detect::detect_into(dataset, &options, &done);
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
@@ -168,6 +219,8 @@ pub fn run(args: &DetectArgs) -> Result<ExitCode> {
     let mut options = DetectOptions {
         pattern: args.pattern,
         use_model: !args.no_model,
+        params: args.start_from.as_deref().map(read_start).transpose()?,
+        repredict: !args.no_repredict,
         ..DetectOptions::default()
     };
     if let Some(jobs) = args.jobs {

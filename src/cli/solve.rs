@@ -71,6 +71,17 @@ fn load_detected(_: &Path, _: bool) -> Result<Dataset> {
     )
 }
 
+/// `solve --detect`'s guard (see `naocalib::detect::guard`): `true` when captures stand out.
+#[cfg(feature = "detect")]
+fn detect_guard(solution: &solve::Solution) -> bool {
+    super::detect::guard(solution)
+}
+
+#[cfg(not(feature = "detect"))]
+fn detect_guard(_: &solve::Solution) -> bool {
+    false
+}
+
 /// Runs `naocalib solve`.
 pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     // The options first: a mistake in them should not wait for a detection run.
@@ -132,6 +143,8 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
         args.report.as_deref(),
         args.force,
     )?;
+    // A capture whose residuals are many times the others' is named, and the run marked.
+    let marked = args.detect && detect_guard(&solution);
     let truth = dataset.truth.as_ref().map(|t| &t.values[..]);
     use std::fmt::Write as _;
     let mut out = String::new();
@@ -166,8 +179,14 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
             write!(out, "{}", naocalib::report::changes_table(changes))?;
         }
     }
+    if marked && !args.json {
+        writeln!(
+            out,
+            "MARKED: captures with residuals many times the others' (see the warnings above)"
+        )?;
+    }
     super::print_out(out)?;
-    Ok(if solution.is_calibration() {
+    Ok(if solution.is_calibration() && !marked {
         ExitCode::SUCCESS
     } else {
         ExitCode::from(3)

@@ -58,11 +58,38 @@ pub(super) fn worth_trying(board: &Board, camera: &Camera, factor: f64) -> bool 
 
 /// The median side of a square (px) where the nominal model puts the board, or `None`
 /// when it cannot.
-fn predicted_square(dataset: &Dataset, capture: &Capture, grid: Grid) -> Option<f64> {
-    let points = predict(&dataset.model, capture, &[0.0; PARAMETER_COUNT])?;
+fn predicted_square(
+    dataset: &Dataset,
+    capture: &Capture,
+    grid: Grid,
+    params: &[f64; PARAMETER_COUNT],
+) -> Option<f64> {
+    let points = predict(&dataset.model, capture, params)?;
     let mut sides = find::local_square(&points, grid);
     sides.sort_by(f64::total_cmp);
     sides.get(sides.len() / 2).copied()
+}
+
+/// Whether the prediction puts every vertex of the board at least a square inside the
+/// image (where a board a person can see is one the finder must get).
+fn wholly_in_view(
+    dataset: &Dataset,
+    capture: &Capture,
+    grid: Grid,
+    options: &DetectOptions,
+) -> bool {
+    let Some(points) = predict(&dataset.model, capture, &options.prediction()) else {
+        return false;
+    };
+    let mut sides = find::local_square(&points, grid);
+    sides.sort_by(f64::total_cmp);
+    let Some(&square) = sides.get(sides.len() / 2) else {
+        return false;
+    };
+    square >= MIN_SQUARE
+        && points
+            .iter()
+            .all(|p| dataset.model.camera.contains(*p, square))
 }
 
 /// Points refined at full resolution that fit one homography, or why they do not.
@@ -130,7 +157,7 @@ pub(super) fn chessboard(
         Search::Whole => check(find::find_board(grey, grid, None)?)?,
         Search::Predicted => {
             let roi = if options.use_model {
-                predicted_roi(model, capture)
+                predicted_roi(model, capture, &options.prediction())
             } else {
                 None
             };
@@ -142,7 +169,7 @@ pub(super) fn chessboard(
                 whole_image = roi.is_some();
                 let half = options.use_model
                     && grid == board_grid(model)
-                    && predicted_square(dataset, capture, grid)
+                    && predicted_square(dataset, capture, grid, &options.prediction())
                         .is_some_and(|s| s >= 2.0 * MIN_SQUARE);
                 if half {
                     found = check(find::find_board_half(grey, grid)?)?;
@@ -156,13 +183,34 @@ pub(super) fn chessboard(
             found
         }
     };
+    // Nothing found quickly, but a calibrated prediction (the re-predict loop's, or
+    // `--start-from`) puts the whole board well inside the image: the finder's full search
+    // (without its fast check) finds oblique boards the quick one gives up on. It is slow
+    // where there is no board, so not tried on the nominal model's word.
+    let found = match found {
+        None if options.use_model
+            && options.params.is_some()
+            && search == Search::Predicted
+            && wholly_in_view(dataset, capture, grid, options) =>
+        {
+            // The calibrated prediction is good to a few pixels: its region suffices.
+            let roi = predicted_roi(model, capture, &options.prediction());
+            check(find::find_board_with(
+                grey,
+                grid,
+                roi,
+                find::EXHAUSTIVE_FLAGS,
+            )?)?
+        }
+        found => found,
+    };
     let points = match found {
         None => return Ok(Outcome::NotFound),
         Some(Err(reason)) => return Ok(Outcome::Rejected { reason }),
         Some(Ok(points)) => points,
     };
 
-    let (vertices, order) = if options.use_model {
+    let (vertices, order, numbered) = if options.use_model {
         if grid != board_grid(model) {
             return Ok(Outcome::Rejected {
                 reason: format!(
@@ -174,7 +222,7 @@ pub(super) fn chessboard(
                 ),
             });
         }
-        let Some(predicted) = predict(model, capture, &[0.0; PARAMETER_COUNT]) else {
+        let Some(predicted) = predict(model, capture, &options.prediction()) else {
             return Ok(Outcome::Rejected {
                 reason: "the model puts the board behind the camera".into(),
             });
@@ -185,14 +233,25 @@ pub(super) fn chessboard(
             grid,
             [camera[0] as f64, camera[1] as f64],
         ) {
-            Ok(a) => (a.vertices, a.order),
+            Ok(a) => {
+                let numbered = format!(
+                    "numbered by OpenCV's whole {}×{} grid, its 180° turn ruled out by the \
+                     prediction (turned {:.0}° against it)",
+                    grid.cols, grid.rows, a.rotation_deg
+                );
+                (a.vertices, a.order, numbered)
+            }
             Err(reason) => return Ok(Outcome::Rejected { reason }),
         }
     } else {
         let order = (0..grid.len() as u32)
             .map(|k| (k / grid.cols, k % grid.cols))
             .collect();
-        (order, assign::Order::Same)
+        (
+            order,
+            assign::Order::Same,
+            "in OpenCV's order (no model)".to_string(),
+        )
     };
     let order = Some(order);
     let mut corners: Vec<Corner> = vertices
@@ -210,6 +269,7 @@ pub(super) fn chessboard(
         corners,
         order,
         whole_image,
+        numbered,
     })
 }
 
@@ -236,7 +296,11 @@ mod tests {
             .filter(|(v, _)| !missed.contains(&(v.row, v.col)))
             .map(|(v, p)| (*v, p.unwrap()))
             .collect();
-        Board { vertices, fitted }
+        Board {
+            vertices,
+            fitted,
+            numbered: String::new(),
+        }
     }
 
     #[test]

@@ -13,6 +13,11 @@ pub const FIND_FLAGS: i32 = calib3d::CALIB_CB_ADAPTIVE_THRESH
     | calib3d::CALIB_CB_NORMALIZE_IMAGE
     | calib3d::CALIB_CB_FAST_CHECK;
 
+/// Flags for the exhaustive `findChessboardCorners`: as [`FIND_FLAGS`] without the fast
+/// check, which gives up on some oblique boards that the full search finds.
+pub const EXHAUSTIVE_FLAGS: i32 =
+    calib3d::CALIB_CB_ADAPTIVE_THRESH | calib3d::CALIB_CB_NORMALIZE_IMAGE;
+
 /// Runs `findChessboardCorners` on `image` (8-bit greyscale), or on the part `roi` of it;
 /// the points are in full-image pixels, in OpenCV's order.
 pub fn find_board(
@@ -20,18 +25,28 @@ pub fn find_board(
     grid: Grid,
     roi: Option<Rect>,
 ) -> opencv::Result<Option<Vec<[f64; 2]>>> {
+    find_board_with(image, grid, roi, FIND_FLAGS)
+}
+
+/// [`find_board`] with the finder's `flags` (e.g. [`EXHAUSTIVE_FLAGS`]).
+pub fn find_board_with(
+    image: &Mat,
+    grid: Grid,
+    roi: Option<Rect>,
+    flags: i32,
+) -> opencv::Result<Option<Vec<[f64; 2]>>> {
     let size = Size::new(grid.cols as i32, grid.rows as i32);
     let mut corners = Vector::<Point2f>::new();
     let (found, offset) = match roi {
         Some(rect) => {
             let view = Mat::roi(image, rect)?;
             (
-                calib3d::find_chessboard_corners(&view, size, &mut corners, FIND_FLAGS)?,
+                calib3d::find_chessboard_corners(&view, size, &mut corners, flags)?,
                 [rect.x as f64, rect.y as f64],
             )
         }
         None => (
-            calib3d::find_chessboard_corners(image, size, &mut corners, FIND_FLAGS)?,
+            calib3d::find_chessboard_corners(image, size, &mut corners, flags)?,
             [0.0, 0.0],
         ),
     };

@@ -31,7 +31,7 @@ use opencv::prelude::*;
 
 use crate::model::{Camera, Model, Pose, Vertex};
 
-use super::assign;
+use super::{assign, numbering};
 
 /// Vertices by index, with their pixels.
 type Indexed = Vec<(usize, [f64; 2])>;
@@ -85,7 +85,7 @@ impl Integral {
 
     /// The mean grey level of the square of half-size `h` ≥ 1 around pixel `(x, y)`
     /// (rounded), or `None` when it is not wholly in the image.
-    fn mean(&self, x: f64, y: f64, h: i64) -> Option<f64> {
+    pub(super) fn mean(&self, x: f64, y: f64, h: i64) -> Option<f64> {
         // Rounded as `round` does for x, y ≥ -0.5 (below, a square of half-size h ≥ 1
         // leaves the image either way), without a call into libm.
         let (x, y) = ((x + 0.5) as i64, (y + 0.5) as i64);
@@ -477,6 +477,8 @@ pub struct Board {
     /// Where the homography of the vertices found puts every vertex of the board (row-major;
     /// `None` for one it cannot place in the image plane): which of them are in view.
     pub fitted: Vec<(Vertex, Option<[f64; 2]>)>,
+    /// How the numbering was decided (for the log).
+    pub numbered: String,
 }
 
 impl Board {
@@ -509,7 +511,8 @@ impl Board {
 /// The vertices of the board found by the model-guided search in `image` (8-bit grey),
 /// with the board predicted in pose `pose` (`T_CB`) for camera `camera`; `Err` with the
 /// reason when fewer than [`MIN_VERTICES`] are found or the alignment is ambiguous.
-/// `factor` is the half-window of `cornerSubPix` in squares.
+/// `factor` is the half-window of `cornerSubPix` in squares; `uncertainty_deg` how far
+/// (as an angle of view) the prediction may be off.
 pub fn detect(
     image: &Mat,
     integral: &Integral,
@@ -517,6 +520,7 @@ pub fn detect(
     camera: &Camera,
     pose: &Pose<f64>,
     factor: f64,
+    uncertainty_deg: f64,
 ) -> opencv::Result<Result<Board, String>> {
     let predicted = predict(model, camera, pose);
     if predicted.len() < MIN_VERTICES {
@@ -525,11 +529,18 @@ pub fn detect(
     let mut squares: Vec<f64> = predicted.iter().map(|p| p.square).collect();
     squares.sort_by(f64::total_cmp);
     let square = squares[squares.len() / 2];
-    // The model's error (a few degrees of camera and joint offsets) moves the board by up
-    // to about a square; the search reaches a little further.
+    // A small error of the prediction moves the board by up to about a square; the search
+    // reaches a little further first, then as far as the prediction's uncertainty
+    // (`uncertainty_deg` of camera angle) can move it. Alignments off by whole squares are
+    // numbered right by the image ([`settle`]).
     let reach = (1.25 * square).max(24.0);
+    let wide = uncertainty_deg.to_radians() * camera.fx.max(camera.fy);
     let candidates = match align(integral, &predicted, reach) {
         Ok(c) => c,
+        Err(_) if wide > reach => match align(integral, &predicted, wide) {
+            Ok(c) => c,
+            Err(reason) => return Ok(Err(reason)),
+        },
         Err(reason) => return Ok(Err(reason)),
     };
     let tolerance = (0.04 * square).max(0.75);
@@ -541,13 +552,45 @@ pub fn detect(
             outcomes.push(found);
         }
     }
+    if outcomes.is_empty() {
+        return Ok(Err(
+            "too few vertices found where the model predicts the board".into(),
+        ));
+    }
+    // The image decides each alignment's numbering; one it cannot decide is dropped. An
+    // alignment sharing a vertex's pixel with one already settled is on the same lattice,
+    // which the image numbers the same way: not settled again.
+    outcomes.sort_by_key(|f| std::cmp::Reverse(f.support()));
+    let mut settled: Vec<Found> = Vec::new();
+    let mut undecided = None;
+    for found in outcomes {
+        let same_lattice = settled.iter().any(|s| {
+            s.kept.iter().any(|(_, q)| {
+                found
+                    .kept
+                    .iter()
+                    .any(|(_, r)| (q[0] - r[0]).hypot(q[1] - r[1]) < 1.0)
+            })
+        });
+        if same_lattice {
+            continue;
+        }
+        match settle(
+            image, integral, model, camera, &predicted, found, factor, tolerance,
+        )? {
+            Ok(f) => settled.push(f),
+            Err(reason) => undecided = undecided.or(Some(reason)),
+        }
+    }
+    let mut outcomes = settled;
     // Alignments that end in the same vertices at the same pixels are one; of different
     // numberings, one must be clearly better supported, else nothing is numbered.
     outcomes.sort_by_key(|f| std::cmp::Reverse(f.support()));
     let Some(best) = outcomes.first() else {
-        return Ok(Err(
-            "too few vertices found where the model predicts the board".into(),
-        ));
+        return Ok(Err(format!(
+            "numbering not decided: {}",
+            undecided.unwrap_or_default()
+        )));
     };
     for other in &outcomes[1..] {
         if !best.agrees(other) && other.support() + CLEARLY > best.support() {
@@ -573,6 +616,7 @@ pub fn detect(
         })
         .collect();
     Ok(Ok(Board {
+        numbered: best.numbered.clone().unwrap_or_default(),
         vertices: kept
             .into_iter()
             .map(|(k, q)| (predicted[k].vertex, q))
@@ -590,6 +634,8 @@ struct Found {
     missing: usize,
     /// That homography: board plane (mm) to undistorted pixels.
     homography: Matrix3<f64>,
+    /// How the numbering was decided, once it is.
+    numbered: Option<String>,
 }
 
 /// How much more support one alignment needs than another that numbers differently.
@@ -631,7 +677,48 @@ fn search(
             found.push((k, q));
         }
     }
-    let Some((mut h, mut kept)) = consistent(camera, predicted, &found, tolerance) else {
+    grow(
+        image, integral, camera, predicted, &found, factor, tolerance,
+    )
+}
+
+/// Finds the vertices where the homography `h` (board plane to undistorted pixels) puts
+/// them, as [`search`] does from a shifted prediction.
+fn search_from(
+    image: &Mat,
+    integral: &Integral,
+    camera: &Camera,
+    predicted: &[Predicted],
+    h: &Matrix3<f64>,
+    factor: f64,
+    tolerance: f64,
+) -> opencv::Result<Option<Found>> {
+    let Some(seen) = reshape(predicted, h, camera) else {
+        return Ok(None);
+    };
+    let mut found: Vec<(usize, [f64; 2])> = Vec::new();
+    for (k, p) in seen.iter().enumerate() {
+        if let Some(q) = locate(image, integral, p, p.pixel, factor)? {
+            found.push((k, q));
+        }
+    }
+    grow(
+        image, integral, camera, predicted, &found, factor, tolerance,
+    )
+}
+
+/// The vertices of `found` that fit one homography, and those that homography predicts
+/// (twice over); `None` when too few are left.
+fn grow(
+    image: &Mat,
+    integral: &Integral,
+    camera: &Camera,
+    predicted: &[Predicted],
+    found: &[(usize, [f64; 2])],
+    factor: f64,
+    tolerance: f64,
+) -> opencv::Result<Option<Found>> {
+    let Some((mut h, mut kept)) = consistent(camera, predicted, found, tolerance) else {
         return Ok(None);
     };
     // The homography of the vertices found predicts the others, and how each looks (the
@@ -665,7 +752,78 @@ fn search(
         kept,
         missing,
         homography: h,
+        numbered: None,
     }))
+}
+
+/// Lets the image decide the numbering of `found` ([`numbering::decide`]); when it is off
+/// by whole squares, searches again where the corrected numbering puts the vertices.
+/// Then the prediction must rule out the 180° turn ([`numbering::turn_check`]). `Err`
+/// with the reason when the numbering cannot be decided.
+#[allow(clippy::too_many_arguments)]
+fn settle(
+    image: &Mat,
+    integral: &Integral,
+    model: &Model,
+    camera: &Camera,
+    predicted: &[Predicted],
+    mut found: Found,
+    factor: f64,
+    tolerance: f64,
+) -> opencv::Result<Result<Found, String>> {
+    let mut total_shift = (0, 0);
+    for _ in 0..3 {
+        let lattice: Vec<(i32, i32)> = found
+            .kept
+            .iter()
+            .map(|(k, _)| {
+                let v = predicted[*k].vertex;
+                (v.col as i32, v.row as i32)
+            })
+            .collect();
+        let decided = match numbering::decide(integral, camera, model, &found.homography, &lattice)
+        {
+            Ok(d) => d,
+            Err(reason) => return Ok(Err(reason)),
+        };
+        if decided.shift == (0, 0) {
+            let pixels: Vec<[f64; 2]> = found.kept.iter().map(|(_, q)| *q).collect();
+            let expected: Vec<[f64; 2]> = found
+                .kept
+                .iter()
+                .map(|(k, _)| predicted[*k].pixel)
+                .collect();
+            let turn = match numbering::turn_check(&pixels, &expected) {
+                Ok(t) => t,
+                Err(reason) => return Ok(Err(reason)),
+            };
+            let decided = numbering::Decided {
+                shift: total_shift,
+                ..decided
+            };
+            found.numbered = Some(format!(
+                "{}; 180° turn ruled out by the prediction (turned {turn:.0}° against it)",
+                decided.describe()
+            ));
+            return Ok(Ok(found));
+        }
+        total_shift = (
+            total_shift.0 + decided.shift.0,
+            total_shift.1 + decided.shift.1,
+        );
+        let h = numbering::shifted(model, &found.homography, decided.shift);
+        match search_from(image, integral, camera, predicted, &h, factor, tolerance)? {
+            Some(f) => found = f,
+            None => {
+                return Ok(Err(format!(
+                    "the image puts the board {} column(s), {} row(s) from the prediction's \
+                     alignment, but too few vertices are found there",
+                    decided.shift.0, decided.shift.1
+                )));
+            }
+        }
+    }
+    Ok(Err("the numbering does not settle".into()))
 }
 
 /// The prediction redone with the homography `h` (board plane to undistorted pixels) of

@@ -2,23 +2,35 @@
 //!
 //! For each capture with an image: the image is read as grey levels (`image.rs`: the
 //! header checked before any pixel is decoded), and with the model the board is first
-//! looked for where the nominal model (all offsets zero) and the logged joint angles
-//! predict it, by its pattern of saddles ([`guided`]); its vertices are refined with
-//! `cornerSubPix` and numbered by the prediction. OpenCV's chessboard finder
-//! (`chessboard.rs`, [`find`]) is the fallback: when the guided search finds nothing, in
-//! the predicted region (`predict.rs`) and then the whole image at half resolution
-//! (refined at full); when it finds part of a board, only if the board is wholly in view
-//! and a vertex was missed well inside the image (the finder needs the whole board, and
-//! gives up slowly where it is cut by the border). Its points are numbered by comparing
-//! OpenCV's order with the prediction ([`assign::assign`]). Images whose order is
-//! ambiguous or whose points do not fit one homography are rejected with the reason.
-//! Nothing here stops a run: every image gets an [`Outcome`] (`outcome.rs`).
+//! looked for where the model and the logged joints predict it, by its pattern of saddles
+//! ([`guided`]); its vertices are refined with `cornerSubPix`. Their (row, col) is decided
+//! by the image ([`numbering`]): the vertices found, the pattern's outer squares against
+//! the white plate (no saddle on the ring around the 6 × 4 vertices) fix the numbering up
+//! to the pattern's 180° symmetry, which the prediction resolves only when the board is
+//! turned against it by far less than 90°; a board whose visible part fits several
+//! numberings is rejected with the reason, and the log says how each board was numbered.
+//! OpenCV's chessboard finder (`chessboard.rs`, [`find`]) is the fallback: when the
+//! guided search finds nothing, in the predicted region (`predict.rs`) and then the whole
+//! image at half resolution (refined at full), and with a calibrated prediction also its
+//! full search without the fast check where the board is predicted wholly in view; when
+//! the guided search finds part of a board, only if the board is wholly in view and a
+//! vertex was missed well inside the image. Its whole grid is numbered by comparing
+//! OpenCV's order with the prediction ([`assign::assign`]).
+//!
+//! The prediction is the robot's current calibration when given
+//! ([`DetectOptions::params`], `--start-from`), else the nominal model; then (with
+//! [`DetectOptions::repredict`]) the paper's calibration from the boards found predicts
+//! again, and the images without a whole board are searched again, until nothing
+//! changes. Nothing here stops a run: every image gets an [`Outcome`] (`outcome.rs`);
+//! [`guard`] names the captures whose residuals after a fit stand out.
 
 pub mod assign;
 mod chessboard;
 pub mod find;
+pub mod guard;
 pub mod guided;
 mod image;
+pub mod numbering;
 mod outcome;
 pub mod overlay;
 mod predict;
@@ -52,6 +64,40 @@ pub struct DetectOptions {
     pub subpix_factor: f64,
     /// Images processed at once.
     pub jobs: usize,
+    /// The parameters (internal units) the board is predicted with: the robot's current
+    /// calibration (`--start-from`); `None` for the nominal model (all offsets zero).
+    pub params: Option<[f64; PARAMETER_COUNT]>,
+    /// With the model: calibrate from the boards found (numbered by the image), predict
+    /// again with that calibration and detect again where no whole board was found, until
+    /// nothing changes ([`MAX_PASSES`] at most).
+    pub repredict: bool,
+}
+
+/// Most detection passes of the re-predict loop (the first with the given prediction).
+pub const MAX_PASSES: usize = 4;
+/// Fewest boards found before the re-predict loop calibrates from them.
+pub const MIN_BOARDS_TO_REPREDICT: usize = 6;
+
+/// How far (deg, as an angle of view) the nominal model's prediction may be off for a
+/// real robot: lower-camera tilt corrections down to −8°, with leg offsets of up to 2°.
+pub const NOMINAL_UNCERTAINTY_DEG: f64 = 10.0;
+/// How far a calibrated prediction (`--start-from`, the re-predict loop) may be off.
+pub const CALIBRATED_UNCERTAINTY_DEG: f64 = 2.0;
+
+impl DetectOptions {
+    /// The parameters the board is predicted with.
+    pub fn prediction(&self) -> [f64; PARAMETER_COUNT] {
+        self.params.unwrap_or([0.0; PARAMETER_COUNT])
+    }
+
+    /// How far (deg) the prediction may be off: it sets the guided search's widest window.
+    pub fn uncertainty_deg(&self) -> f64 {
+        if self.params.is_some() {
+            CALIBRATED_UNCERTAINTY_DEG
+        } else {
+            NOMINAL_UNCERTAINTY_DEG
+        }
+    }
 }
 
 impl Default for DetectOptions {
@@ -65,6 +111,8 @@ impl Default for DetectOptions {
             jobs: std::thread::available_parallelism()
                 .map(|n| n.get())
                 .unwrap_or(1),
+            params: None,
+            repredict: true,
         }
     }
 }
@@ -143,9 +191,29 @@ pub fn detect_capture(
     capture: &Capture,
     options: &DetectOptions,
 ) -> ImageResult {
+    detect_capture_in(dataset, capture, options, Mode::Full)
+}
+
+/// How thoroughly one image is searched.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    /// The re-predict loop's first pass: only the guided search near the prediction; what
+    /// it misses is searched again with the calibrated prediction, or in full at the end.
+    Quick,
+    /// Every search: the guided one as far as the prediction's uncertainty reaches, then
+    /// OpenCV's chessboard finder.
+    Full,
+}
+
+fn detect_capture_in(
+    dataset: &Dataset,
+    capture: &Capture,
+    options: &DetectOptions,
+    mode: Mode,
+) -> ImageResult {
     let outcome = match &capture.image {
         None => Outcome::NoImage,
-        Some(image) => match detect_image(dataset, capture, image, options) {
+        Some(image) => match detect_image(dataset, capture, image, options, mode) {
             Ok(outcome) => outcome,
             Err(e) => Outcome::Failed(e),
         },
@@ -162,6 +230,7 @@ fn detect_image(
     capture: &Capture,
     image: &Path,
     options: &DetectOptions,
+    mode: Mode,
 ) -> Result<Outcome, DetectError> {
     let model = &dataset.model;
     let path = resolve_image(&dataset.dir, image)?;
@@ -188,7 +257,7 @@ fn detect_image(
     let mut search = chessboard::Search::Predicted;
     let mut guided_partial = None;
     if options.use_model && options.guided && grid == board_grid(model) {
-        let params = [0.0; PARAMETER_COUNT];
+        let params = options.prediction();
         let pose = model
             .chains(capture.side, &capture.joints)
             .camera_to_board(&params);
@@ -201,8 +270,32 @@ fn detect_image(
             &camera,
             &pose,
             options.subpix_factor,
+            match mode {
+                Mode::Quick => 0.0,
+                Mode::Full => options.uncertainty_deg(),
+            },
         )
         .map_err(cv)?;
+        if mode == Mode::Quick {
+            return Ok(match found {
+                Ok(board) => Outcome::Found {
+                    corners: board
+                        .vertices
+                        .iter()
+                        .map(|&(vertex, pixel)| Corner {
+                            capture: capture.id,
+                            vertex,
+                            pixel,
+                            line: 0,
+                        })
+                        .collect(),
+                    order: None,
+                    whole_image: false,
+                    numbered: board.numbered,
+                },
+                Err(_) => Outcome::NotFound,
+            });
+        }
         if let Ok(board) = found {
             let complete = board.vertices.len() == grid.len();
             let corners: Vec<Corner> = board
@@ -219,6 +312,7 @@ fn detect_image(
                 corners,
                 order: None,
                 whole_image: false,
+                numbered: board.numbered.clone(),
             };
             if complete {
                 return Ok(found);
@@ -241,8 +335,10 @@ fn detect_image(
     })
 }
 
-/// Detects the board in every capture of `dataset`, `options.jobs` images at once, calling
-/// `done` as each finishes (from the worker threads). The results are in capture order.
+/// Detects the board in every capture of `dataset`, `options.jobs` images at once, then
+/// (with `options.repredict`) calibrates from the boards found, predicts again and detects
+/// again where no whole board was found, until nothing changes. `done` is called for every
+/// final result, in capture order. The results are in capture order.
 pub fn detect_dataset(
     dataset: &Dataset,
     options: &DetectOptions,
@@ -253,22 +349,158 @@ pub fn detect_dataset(
     if options.jobs > 1 {
         let _ = opencv::core::set_num_threads(1);
     }
-    let run = || {
-        dataset
-            .captures
-            .par_iter()
-            .map(|c| {
-                let r = detect_capture(dataset, c, options);
-                done(&r);
-                r
-            })
-            .collect()
-    };
-    match rayon::ThreadPoolBuilder::new()
+    let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(options.jobs.clamp(1, max_jobs()))
         .build()
-    {
-        Ok(pool) => pool.install(run),
-        Err(_) => run(),
+        .ok();
+    let run = |options: &DetectOptions, which: &[usize], mode: Mode| -> Vec<ImageResult> {
+        let go = || {
+            which
+                .par_iter()
+                .map(|&i| detect_capture_in(dataset, &dataset.captures[i], options, mode))
+                .collect()
+        };
+        match &pool {
+            Some(pool) => pool.install(go),
+            None => go(),
+        }
+    };
+    let all: Vec<usize> = (0..dataset.captures.len()).collect();
+    let grid = options
+        .pattern
+        .unwrap_or_else(|| board_grid(&dataset.model));
+    let repredict = options.use_model
+        && options.guided
+        && options.repredict
+        && grid == board_grid(&dataset.model);
+    // With the re-predict loop, the first pass is quick: what it misses, the calibrated
+    // prediction finds near where it says, and the rest gets the full search at the end.
+    let first = if repredict { Mode::Quick } else { Mode::Full };
+    let mut results = run(options, &all, first);
+    let mut quick = vec![first == Mode::Quick; results.len()];
+    if repredict {
+        let mut options = options.clone();
+        for _ in 1..MAX_PASSES {
+            // Nothing to look for again: every image holds a whole board (or none).
+            if results.iter().all(|r| whole(r, grid)) {
+                break;
+            }
+            let Some(params) = calibrate_from(dataset, &results) else {
+                break;
+            };
+            options.params = Some(params);
+            let redo: Vec<usize> = all
+                .iter()
+                .copied()
+                .filter(|&i| worth_again(dataset, &dataset.captures[i], &results[i], grid, &params))
+                .collect();
+            if redo.is_empty() {
+                break;
+            }
+            // A result is replaced only by one with more vertices (both are numbered by
+            // the image; the new prediction may find more, never needs fewer).
+            let mut changed = false;
+            let again = run(&options, &redo, Mode::Full);
+            for (i, r) in redo.into_iter().zip(again) {
+                if found_count(&r) > found_count(&results[i]) {
+                    changed = true;
+                    results[i] = r;
+                } else if found_count(&results[i]) == 0 {
+                    // Why the full search found nothing.
+                    results[i] = r;
+                }
+                quick[i] = false;
+            }
+            if !changed {
+                break;
+            }
+        }
+        // What only the quick pass looked at and it did not find whole: the full search,
+        // with the best prediction there is.
+        let rest: Vec<usize> = all
+            .iter()
+            .copied()
+            .filter(|&i| quick[i] && !whole(&results[i], grid))
+            .collect();
+        if !rest.is_empty() {
+            let again = run(&options, &rest, Mode::Full);
+            for (i, r) in rest.into_iter().zip(again) {
+                if found_count(&r) > found_count(&results[i]) || found_count(&results[i]) == 0 {
+                    results[i] = r;
+                }
+            }
+        }
     }
+    for r in &results {
+        done(r);
+    }
+    results
+}
+
+/// Whether `result` leaves nothing to search again: a whole board, no image, or an image
+/// that cannot be used.
+fn whole(result: &ImageResult, grid: Grid) -> bool {
+    match &result.outcome {
+        Outcome::NoImage | Outcome::Failed(_) => true,
+        Outcome::Found { corners, .. } => corners.len() == grid.len(),
+        Outcome::NotFound | Outcome::Rejected { .. } => false,
+    }
+}
+
+/// Vertices found in a result.
+fn found_count(result: &ImageResult) -> usize {
+    match &result.outcome {
+        Outcome::Found { corners, .. } => corners.len(),
+        _ => 0,
+    }
+}
+
+/// Whether to search `capture` again with the prediction `params`: no board was found
+/// (or it was rejected), or fewer vertices than the prediction puts well inside the image.
+fn worth_again(
+    dataset: &Dataset,
+    capture: &Capture,
+    result: &ImageResult,
+    grid: Grid,
+    params: &[f64; PARAMETER_COUNT],
+) -> bool {
+    match &result.outcome {
+        Outcome::NoImage | Outcome::Failed(_) => false,
+        Outcome::NotFound | Outcome::Rejected { .. } => true,
+        Outcome::Found { corners, .. } => {
+            corners.len() < grid.len()
+                && predict(&dataset.model, capture, params).is_some_and(|points| {
+                    let inside = points
+                        .iter()
+                        .filter(|p| dataset.model.camera.contains(**p, 8.0))
+                        .count();
+                    inside > corners.len()
+                })
+        }
+    }
+}
+
+/// The paper's calibration (plain least squares) from the boards found in `results`, as
+/// the re-predict loop's prediction; `None` when too few were found or the fit is not a
+/// calibration.
+fn calibrate_from(dataset: &Dataset, results: &[ImageResult]) -> Option<[f64; PARAMETER_COUNT]> {
+    let boards = results
+        .iter()
+        .filter(|r| matches!(r.outcome, Outcome::Found { .. }))
+        .count();
+    if boards < MIN_BOARDS_TO_REPREDICT {
+        return None;
+    }
+    let mut found = dataset.clone();
+    found.corners = corners(results);
+    let problem =
+        crate::solve::Problem::from_dataset(&found, crate::model::FixedSet::default()).ok()?;
+    let backend = crate::solve::backend(crate::solve::backend_names()[0], false)?;
+    let solution = crate::solve::calibrate(
+        &problem,
+        backend.as_ref(),
+        &crate::solve::UncertaintyOptions::plain(),
+    )
+    .ok()?;
+    solution.is_calibration().then_some(solution.values)
 }

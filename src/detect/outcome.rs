@@ -102,6 +102,8 @@ pub enum Outcome {
         order: Option<assign::Order>,
         /// Whether the board was found only in the whole image, not where predicted.
         whole_image: bool,
+        /// How the vertices got their (row, col).
+        numbered: String,
     },
     /// No board was found.
     NotFound,
@@ -138,6 +140,7 @@ impl fmt::Display for ImageResult {
                 corners,
                 order,
                 whole_image,
+                numbered,
             } => {
                 write!(f, ": found {} vertices", corners.len())?;
                 match order {
@@ -147,6 +150,9 @@ impl fmt::Display for ImageResult {
                 }
                 if *whole_image {
                     write!(f, " (not where predicted; found in the whole image)")?;
+                }
+                if !numbered.is_empty() {
+                    write!(f, "; {numbered}")?;
                 }
                 Ok(())
             }

@@ -23,7 +23,11 @@ pub fn predict(model: &Model, capture: &Capture, params: &[f64]) -> Option<Vec<[
 /// The part of the image where the board (with a square's border and a margin for the
 /// model's error) is predicted, or `None` when it cannot be predicted or fills most of the
 /// image anyway.
-pub(super) fn predicted_roi(model: &Model, capture: &Capture) -> Option<Rect> {
+pub(super) fn predicted_roi(
+    model: &Model,
+    capture: &Capture,
+    params: &[f64; PARAMETER_COUNT],
+) -> Option<Rect> {
     let b = &model.board;
     let (hx, hy) = (
         (b.squares_x as f64 / 2.0 + 1.0) * b.square,
@@ -31,11 +35,12 @@ pub(super) fn predicted_roi(model: &Model, capture: &Capture) -> Option<Rect> {
     );
     let pose = model
         .chains(capture.side, &capture.joints)
-        .camera_to_board(&[0.0; PARAMETER_COUNT]);
+        .camera_to_board(params);
+    let camera = model.camera_at(params);
     let mut lo = [f64::INFINITY; 2];
     let mut hi = [f64::NEG_INFINITY; 2];
     for (x, y) in [(-hx, -hy), (hx, -hy), (-hx, hy), (hx, hy)] {
-        let p = model.camera.project(&pose.apply(&[x, y, 0.0]))?;
+        let p = camera.project(&pose.apply(&[x, y, 0.0]))?;
         for i in 0..2 {
             lo[i] = lo[i].min(p[i]);
             hi[i] = hi[i].max(p[i]);

@@ -18,6 +18,8 @@ mod detect_files;
 mod detect_render;
 #[cfg(feature = "detect")]
 mod detect_robust;
+#[cfg(feature = "detect")]
+mod detect_tilted;
 mod export_posture;
 mod export_robustness;
 mod export_roundtrip;

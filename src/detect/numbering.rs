@@ -1,0 +1,370 @@
+//! Which (row, col) the vertices of a found board get: decided by the image, not by the
+//! prediction.
+//!
+//! The vertices found lie on a lattice of the board plane, given by a homography from
+//! their tentative numbering. The pattern's 6 × 4 inner vertices are saddles; the ring of
+//! lattice points just outside them (on the pattern's edge, where the outer squares meet
+//! the white plate) are not. Every numbering that keeps all vertices found inside the
+//! pattern (the tentative one shifted by whole squares) is scored against what the image
+//! shows at each lattice point: a saddle of the expected colours, no saddle, or unknown
+//! (out of view, too small, unclear). A numbering is accepted only when it agrees with the
+//! image and every other disagrees clearly more; a board whose visible part fits several
+//! is rejected with the reason (nothing is numbered by guesswork).
+//!
+//! The 7 × 5 pattern (odd by odd, black corners) looks the same turned by 180°: that turn
+//! alone is resolved by the prediction, and only when the board appears turned against
+//! the prediction by far less than 90° (the two candidates are 180° apart), see
+//! [`turn_check`].
+
+use nalgebra::Matrix3;
+
+use super::assign;
+use super::guided::Integral;
+use crate::model::{Camera, Model};
+
+/// What the image shows at one lattice point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Seen {
+    /// A saddle with the colours of the tentative numbering (`true`) or the opposite.
+    Saddle(bool),
+    /// No saddle: a plain area or a straight edge.
+    Plain,
+    /// Out of view, too small or unclear.
+    Unknown,
+}
+
+/// Smallest local square (px) at which a lattice point is judged.
+const MIN_SQUARE_PX: f64 = 5.0;
+/// Smallest saddle contrast (grey levels) that counts as a saddle.
+const MIN_CONTRAST: f64 = 12.0;
+/// How many more disagreements every other numbering must have than the accepted one.
+pub const MARGIN: usize = 3;
+/// Most disagreements the accepted numbering may have (a vertex blurred or occluded).
+const MAX_DISAGREE: usize = 1;
+/// Largest in-image turn (deg) of a board against the prediction for the prediction to
+/// decide between a numbering and its 180° turn.
+pub const MAX_TURN_DEG: f64 = 45.0;
+
+/// How a board's numbering was decided.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Decided {
+    /// The shift (columns, rows) of the lattice from the tentative numbering to the
+    /// accepted one: the accepted vertex (row, col) is tentative (row − rows, col − cols).
+    pub shift: (i32, i32),
+    /// Lattice points whose look agrees with the accepted numbering.
+    pub agree: usize,
+    /// Lattice points whose look contradicts it.
+    pub disagree: usize,
+    /// Numberings considered (all keeping the vertices found inside the pattern).
+    pub candidates: usize,
+    /// The fewest disagreements of any other numbering (`None` when there was none).
+    pub runner_up: Option<usize>,
+    /// Pattern edges (left, right, top, bottom) seen as edges (no saddle on the ring).
+    pub edges: [bool; 4],
+}
+
+impl Decided {
+    /// One line for the log.
+    pub fn describe(&self) -> String {
+        let names = ["left", "right", "top", "bottom"];
+        let edges: Vec<&str> = names
+            .iter()
+            .zip(self.edges)
+            .filter_map(|(n, e)| e.then_some(*n))
+            .collect();
+        let mut s = format!(
+            "numbered by the image: {} lattice points agree, {} disagree",
+            self.agree, self.disagree
+        );
+        if !edges.is_empty() {
+            s += &format!(", pattern edge seen {}", edges.join("/"));
+        }
+        match self.runner_up {
+            Some(r) => {
+                s += &format!(
+                    "; every other of {} numberings disagrees at ≥ {r}",
+                    self.candidates
+                )
+            }
+            None => s += "; no other numbering possible",
+        }
+        if self.shift != (0, 0) {
+            s += &format!(
+                "; the prediction's alignment was {} column(s), {} row(s) off",
+                self.shift.0, self.shift.1
+            );
+        }
+        s
+    }
+}
+
+/// Board-plane position (mm) of lattice point (col `i`, row `j`) of `model`'s board (the
+/// inner vertices are `0 ≤ i < cols`, `0 ≤ j < rows`).
+fn lattice(model: &Model, i: i32, j: i32) -> [f64; 2] {
+    let b = &model.board;
+    [
+        (i as f64 - (b.squares_x as f64 - 2.0) / 2.0) * b.square,
+        (j as f64 - (b.squares_y as f64 - 2.0) / 2.0) * b.square,
+    ]
+}
+
+/// Whether the square at board position `(x, y)` (mm) is black on the checkerboard
+/// extended beyond the pattern (the four corner squares are black).
+fn is_black(model: &Model, x: f64, y: f64) -> bool {
+    let b = &model.board;
+    let ix = (x / b.square + b.squares_x as f64 / 2.0).floor() as i64;
+    let iy = (y / b.square + b.squares_y as f64 / 2.0).floor() as i64;
+    (ix + iy).rem_euclid(2) == 0
+}
+
+/// The (distorted) pixel of undistorted pixel `p`.
+fn distorted(camera: &Camera, p: [f64; 2]) -> Option<[f64; 2]> {
+    let a = (p[0] - camera.cx) / camera.fx;
+    let b = (p[1] - camera.cy) / camera.fy;
+    camera
+        .project(&[1.0, -a, -b])
+        .filter(|q| q[0].is_finite() && q[1].is_finite())
+}
+
+/// What the image shows at lattice point `(i, j)` of the board mapped by `h` (board plane
+/// to undistorted pixels), with the colours of that numbering.
+fn look(img: &Integral, camera: &Camera, model: &Model, h: &Matrix3<f64>, i: i32, j: i32) -> Seen {
+    let sq = model.board.square;
+    let [x, y] = lattice(model, i, j);
+    let at = |dx: f64, dy: f64| distorted(camera, assign::apply(h, [x + dx, y + dy]));
+    let Some(p) = at(0.0, 0.0) else {
+        return Seen::Unknown;
+    };
+    let side = |q: Option<[f64; 2]>| q.map(|q| (q[0] - p[0]).hypot(q[1] - p[1]));
+    let (Some(ax), Some(ay)) = (side(at(sq, 0.0)), side(at(0.0, sq))) else {
+        return Seen::Unknown;
+    };
+    let square = ax.min(ay);
+    if square.is_nan() || square < MIN_SQUARE_PX {
+        return Seen::Unknown;
+    }
+    let patch = ((0.1 * square).round() as i64).clamp(1, 6);
+    let (mut black, mut white) = (Vec::with_capacity(2), Vec::with_capacity(2));
+    for (sx, sy) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)] {
+        let (dx, dy) = (0.3 * sq * sx, 0.3 * sq * sy);
+        let Some(q) = at(dx, dy) else {
+            return Seen::Unknown;
+        };
+        let Some(m) = img.mean(q[0], q[1], patch) else {
+            return Seen::Unknown;
+        };
+        if is_black(model, x + dx, y + dy) {
+            black.push(m);
+        } else {
+            white.push(m);
+        }
+    }
+    if black.len() != 2 || white.len() != 2 {
+        return Seen::Unknown;
+    }
+    let max = |v: &[f64]| v[0].max(v[1]);
+    let min = |v: &[f64]| v[0].min(v[1]);
+    let range = max(&black).max(max(&white)) - min(&black).min(min(&white));
+    let same = min(&white) - max(&black);
+    let opposite = min(&black) - max(&white);
+    let strong = MIN_CONTRAST.max(0.4 * range);
+    if same >= strong {
+        Seen::Saddle(true)
+    } else if opposite >= strong {
+        Seen::Saddle(false)
+    } else if range < 0.5 * MIN_CONTRAST || same.max(opposite) <= 0.15 * range {
+        Seen::Plain
+    } else {
+        Seen::Unknown
+    }
+}
+
+/// Decides the numbering of a board whose vertices were found at lattice points `found`
+/// (col, row of the tentative numbering) with homography `h` (board plane of the
+/// tentative numbering, mm, to undistorted pixels): the shift to the numbering the image
+/// supports, or why it cannot be decided.
+pub fn decide(
+    img: &Integral,
+    camera: &Camera,
+    model: &Model,
+    h: &Matrix3<f64>,
+    found: &[(i32, i32)],
+) -> Result<Decided, String> {
+    let (cols, rows) = (model.board.cols() as i32, model.board.rows() as i32);
+    if found.is_empty() {
+        return Err("no vertex found".into());
+    }
+    let (min_i, max_i) = found
+        .iter()
+        .fold((i32::MAX, i32::MIN), |(a, b), v| (a.min(v.0), b.max(v.0)));
+    let (min_j, max_j) = found
+        .iter()
+        .fold((i32::MAX, i32::MIN), |(a, b), v| (a.min(v.1), b.max(v.1)));
+    // Shifts (a, b): the accepted vertex (row r, col c) is at tentative lattice point
+    // (c + a, r + b); every vertex found must stay an inner vertex.
+    let (a_lo, a_hi) = (max_i - (cols - 1), min_i);
+    let (b_lo, b_hi) = (max_j - (rows - 1), min_j);
+    if a_lo > a_hi || b_lo > b_hi {
+        return Err(format!(
+            "the vertices found span {} columns and {} rows, more than the pattern's {cols} × {rows}",
+            max_i - min_i + 1,
+            max_j - min_j + 1
+        ));
+    }
+    // What the image shows on every lattice point any candidate looks at.
+    let (i0, j0) = (a_lo - 1, b_lo - 1);
+    let (ni, nj) = (
+        (a_hi + cols + 1 - i0) as usize,
+        (b_hi + rows + 1 - j0) as usize,
+    );
+    let mut seen = vec![Seen::Unknown; ni * nj];
+    for jj in 0..nj {
+        for ii in 0..ni {
+            seen[jj * ni + ii] = look(img, camera, model, h, i0 + ii as i32, j0 + jj as i32);
+        }
+    }
+    let at = |i: i32, j: i32| seen[(j - j0) as usize * ni + (i - i0) as usize];
+    let mut scored = Vec::new();
+    for b in b_lo..=b_hi {
+        for a in a_lo..=a_hi {
+            let parity = (a + b).rem_euclid(2) == 0;
+            let (mut agree, mut disagree) = (0, 0);
+            let mut edges = [false; 4];
+            for j in b - 1..=b + rows {
+                for i in a - 1..=a + cols {
+                    let inner = i >= a && i < a + cols && j >= b && j < b + rows;
+                    let ring = !inner;
+                    // The ring's corners touch a single square: not looked at.
+                    if ring && (i == a - 1 || i == a + cols) && (j == b - 1 || j == b + rows) {
+                        continue;
+                    }
+                    let s = at(i, j);
+                    let ok = match (inner, s) {
+                        (_, Seen::Unknown) => None,
+                        (true, Seen::Saddle(p)) => Some(p == parity),
+                        (true, Seen::Plain) => Some(false),
+                        (false, Seen::Plain) => Some(true),
+                        (false, Seen::Saddle(_)) => Some(false),
+                    };
+                    match ok {
+                        Some(true) => agree += 1,
+                        Some(false) => disagree += 1,
+                        None => {}
+                    }
+                    if ring && ok == Some(true) {
+                        let side = if i == a - 1 {
+                            0
+                        } else if i == a + cols {
+                            1
+                        } else if j == b - 1 {
+                            2
+                        } else {
+                            3
+                        };
+                        edges[side] = true;
+                    }
+                }
+            }
+            scored.push(((a, b), agree, disagree, edges));
+        }
+    }
+    scored.sort_by_key(|s| (s.2, std::cmp::Reverse(s.1)));
+    let (shift, agree, disagree, edges) = scored[0];
+    let runner_up = scored.get(1).map(|s| s.2);
+    if disagree > MAX_DISAGREE {
+        return Err(format!(
+            "no numbering fits the image: the best disagrees at {disagree} lattice points"
+        ));
+    }
+    if let Some(r) = runner_up
+        && r < disagree + MARGIN
+    {
+        let close = scored.iter().filter(|s| s.2 < disagree + MARGIN).count();
+        return Err(format!(
+            "the visible part fits {close} numberings (shifted by whole squares): the \
+             pattern's edges are not seen on enough sides"
+        ));
+    }
+    Ok(Decided {
+        shift,
+        agree,
+        disagree,
+        candidates: scored.len(),
+        runner_up,
+        edges,
+    })
+}
+
+/// The homography of the numbering shifted by `shift` (see [`Decided::shift`]) from that of
+/// the tentative one, `h`.
+pub fn shifted(model: &Model, h: &Matrix3<f64>, shift: (i32, i32)) -> Matrix3<f64> {
+    let sq = model.board.square;
+    let t = Matrix3::new(
+        1.0,
+        0.0,
+        shift.0 as f64 * sq,
+        0.0,
+        1.0,
+        shift.1 as f64 * sq,
+        0.0,
+        0.0,
+        1.0,
+    );
+    h * t
+}
+
+/// The in-image turn (deg) of the `found` pixels against the `predicted` ones of the same
+/// vertices (least squares about their centroids), or `None` for fewer than two.
+pub fn turn_deg(found: &[[f64; 2]], predicted: &[[f64; 2]]) -> Option<f64> {
+    let n = found.len();
+    if n < 2 || predicted.len() != n {
+        return None;
+    }
+    let mean = |v: &[[f64; 2]]| {
+        let s = v.iter().fold([0.0, 0.0], |a, p| [a[0] + p[0], a[1] + p[1]]);
+        [s[0] / n as f64, s[1] / n as f64]
+    };
+    let (mf, mp) = (mean(found), mean(predicted));
+    let (mut cross, mut dot) = (0.0, 0.0);
+    for (f, p) in found.iter().zip(predicted) {
+        let (d, q) = ([f[0] - mf[0], f[1] - mf[1]], [p[0] - mp[0], p[1] - mp[1]]);
+        cross += q[0] * d[1] - q[1] * d[0];
+        dot += q[0] * d[0] + q[1] * d[1];
+    }
+    Some(cross.atan2(dot).to_degrees())
+}
+
+/// Whether the prediction decides between a numbering and its 180° turn: the board must
+/// appear turned by at most [`MAX_TURN_DEG`] against it (the turned numbering then by at
+/// least 180° − that). Returns the turn, or why it cannot decide.
+pub fn turn_check(found: &[[f64; 2]], predicted: &[[f64; 2]]) -> Result<f64, String> {
+    match turn_deg(found, predicted) {
+        None => Err("too few vertices to compare with the prediction".into()),
+        Some(t) if t.abs() <= MAX_TURN_DEG => Ok(t),
+        Some(t) => Err(format!(
+            "the board appears turned by {t:.0}° against the prediction: its 180° symmetry \
+             cannot be resolved"
+        )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn turn_is_measured_about_the_centroid() {
+        let pred: Vec<[f64; 2]> = (0..6)
+            .map(|k| [k as f64 * 20.0, (k % 2) as f64 * 10.0])
+            .collect();
+        let (s, c) = 30f64.to_radians().sin_cos();
+        let found: Vec<[f64; 2]> = pred
+            .iter()
+            .map(|p| [100.0 + c * p[0] - s * p[1], 50.0 + s * p[0] + c * p[1]])
+            .collect();
+        assert!((turn_deg(&found, &pred).unwrap() - 30.0).abs() < 1e-9);
+        let turned: Vec<[f64; 2]> = found.iter().rev().copied().collect();
+        assert!(turn_check(&turned, &pred).is_err());
+        assert!(turn_check(&found, &pred).is_ok());
+    }
+}
