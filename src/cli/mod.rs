@@ -1,6 +1,7 @@
 //! The command line: thin wrappers that parse arguments, call the library and print.
 
 mod batch;
+mod capture;
 mod compare;
 #[cfg(feature = "detect")]
 mod detect;
@@ -8,6 +9,7 @@ mod export;
 mod options;
 mod plan;
 mod simulate;
+mod simulate_robot;
 mod solve;
 
 use std::process::ExitCode;
@@ -44,6 +46,12 @@ enum Command {
     Batch(batch::BatchArgs),
     /// Write a result as calibration files: TOML/JSON and B-Human style .cfg.
     Export(export::ExportArgs),
+    /// Run a plan's stances on a NAO V6 over LoLA and write the dataset: the measurement
+    /// phase (needs neither Ceres nor OpenCV; docs/CAPTURE.md).
+    Capture(capture::CaptureArgs),
+    /// A simulated NAO lying on its back that serves LoLA (for testing capture), and
+    /// `snap`, its lower camera.
+    SimulateRobot(simulate_robot::SimulateRobotArgs),
     /// Find the sandal's vertices in a dataset's images with OpenCV; write corners.csv.
     #[cfg(feature = "detect")]
     Detect(detect::DetectArgs),
@@ -91,6 +99,8 @@ pub fn run(cli: &Cli) -> Result<ExitCode> {
         Command::Compare(args) => compare::run(args),
         Command::Batch(args) => batch::run(args, cli.verbose),
         Command::Export(args) => export::run(args),
+        Command::Capture(args) => capture::run(args),
+        Command::SimulateRobot(args) => simulate_robot::run(args),
         #[cfg(feature = "detect")]
         Command::Detect(args) => detect::run(args),
     }
