@@ -867,10 +867,12 @@ pub fn run(
             .move_to(&rest, false)
             .and_then(|_| runner.ramp_down());
         if let Err(Halt::Link(LolaError::Parse(_))) = back {
-            blind_ramp_down(runner.link, runner.message(), &options.motion);
+            let last = runner.message();
+            blind_ramp_down(runner.link, last, &options.motion);
         }
     } else if let End::Stopped(CaptureError::Lola(LolaError::Parse(_))) = end {
-        blind_ramp_down(runner.link, runner.message(), &options.motion);
+        let last = runner.message();
+        blind_ramp_down(runner.link, last, &options.motion);
     }
     report.cycles = runner.cycles;
     let mut end = end;

@@ -354,7 +354,12 @@ mod tests {
         let e = decode_from::<SensorMessage>(&mut &bytes[..], 1, CYCLE).unwrap_err();
         assert!(matches!(e, LolaError::Parse(_)), "{e}");
         let mut frame = encode(&v6_frame());
-        frame[40] = 0xc1; // never used in MessagePack
+        let at = frame
+            .windows(9)
+            .position(|w| w == b"\xa8Position")
+            .unwrap();
+        assert_eq!(frame[at + 9], 0xdc, "an array of 25");
+        frame[at + 9] = 0xc1; // never used in MessagePack
         let e = decode_from::<SensorMessage>(&mut &frame[..], 1, CYCLE).unwrap_err();
         assert!(matches!(e, LolaError::Parse(_)), "{e}");
     }

@@ -241,8 +241,8 @@ impl Body {
             };
             let rise = if self.overheat == Some(k) {
                 // The faulty motor: 2 °C/s while it holds a load, cooling in 20 s.
-                if s > 0.0 && torque[k] > 0.05 { 2.0 } else { 0.0 }
-                    - (self.temperature[k] - AMBIENT) / 20.0
+                let heat = if s > 0.0 && torque[k] > 0.05 { 2.0 } else { 0.0 };
+                heat - (self.temperature[k] - AMBIENT) / 20.0
             } else {
                 // 0.05 °C/s per A², cooling in 300 s.
                 0.05 * self.current[k].powi(2) - (self.temperature[k] - AMBIENT) / 300.0
