@@ -107,6 +107,13 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     bar.set_position(out.len() as u64);
     let predicted = |from: usize| predicted_seconds(&todo[from.min(todo.len())..], &options.motion);
     bar.set_message(format!(", {:.0} s of robot time planned", predicted(0)));
+    let say = |line: String| {
+        if bar.is_hidden() {
+            eprintln!("{line}");
+        } else {
+            bar.println(line);
+        }
+    };
     let mut visited = 0usize;
     let mut events = |event: Event| match event {
         Event::Started => {}
@@ -117,9 +124,9 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         }
         Event::Skipped { id, reason } => {
             visited += 1;
-            bar.println(format!("capture {id} skipped: {reason}; the leg returns to rest"));
+            say(format!("capture {id} skipped: {reason}; the leg returns to rest"));
         }
-        Event::Cooling { joint, temperature } => bar.println(format!(
+        Event::Cooling { joint, temperature } => say(format!(
             "{} at {temperature:.1} °C: resting until the motors cool",
             joint.name()
         )),

@@ -27,7 +27,8 @@ pub struct CaptureOptions {
     pub safety: SafetyLimits,
     /// Planned angles must stay this far inside the joints' mechanical limits (rad).
     pub joint_margin: f64,
-    /// The posture the robot starts from and returns to (lying on its back: all zero).
+    /// The posture the robot returns to: lying on its back, legs straight and spread by
+    /// 0.15 rad of HipRoll (as the plan's resting leg, so that the sandals do not touch).
     pub rest: JointAngles,
     /// How many times a stance is tried again after the motors had to cool.
     pub hot_retries: u32,
@@ -35,16 +36,24 @@ pub struct CaptureOptions {
 
 impl Default for CaptureOptions {
     /// The defaults of [`MotionOptions`] and [`SafetyLimits`], a margin of 2° from the
-    /// limits, rest with every joint at zero, two retries after cooling.
+    /// limits, [`rest_posture`], two retries after cooling.
     fn default() -> Self {
         CaptureOptions {
             motion: MotionOptions::default(),
             safety: SafetyLimits::default(),
             joint_margin: 2f64.to_radians(),
-            rest: JointAngles::default(),
+            rest: rest_posture(),
             hot_retries: 2,
         }
     }
+}
+
+/// Lying on its back, every head and leg joint at 0 but the hips rolled out by 0.15 rad.
+pub fn rest_posture() -> JointAngles {
+    let mut rest = JointAngles::default();
+    rest.set(Joint::LHipRoll, 0.15);
+    rest.set(Joint::RHipRoll, -0.15);
+    rest
 }
 
 /// One row of the plan: what to capture.
@@ -635,14 +644,19 @@ impl Runner<'_> {
                 .max()
                 .unwrap_or(0)
                 .max(1);
+            // Parts that touch at the start (the feet of a robot put down with its legs
+            // together) may go on touching until they part; after that nothing may.
+            let mut parted = false;
             (0..=n).all(|k| {
                 let t = k as f64 / n as f64;
                 let mut a = *from;
                 for j in Joint::ALL {
                     a.set(j, from.get(j) + t * (to.get(j) - from.get(j)));
                 }
-                collision::collision(&model.robot, &BodyModel::default(), &a).is_none()
-            })
+                let free = collision::collision(&model.robot, &BodyModel::default(), &a).is_none();
+                parted |= free;
+                free || !parted
+            }) && parted
         };
         let rest = self.options.rest;
         if free(&self.command, target) {
@@ -766,7 +780,8 @@ pub fn run(
     options.safety.validate().map_err(CaptureError::Options)?;
     if let Some((field, message)) = unsafe_posture(model, &options.rest, 0.0) {
         return Err(CaptureError::Options(format!(
-            "the rest posture is unsafe: {field} {message}"
+            "the rest posture is unsafe: {}",
+            [field, message.as_str()].join(" ").trim()
         )));
     }
     let already = out.len();
