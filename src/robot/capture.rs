@@ -754,11 +754,14 @@ fn blind_ramp_down(link: &mut dyn Link, last: ActuatorMessage, options: &MotionO
         for (s, s0) in message.stiffness.iter_mut().zip(from) {
             *s = s0 * f;
         }
+        link.drain();
         if link.send(&message).is_err() {
             return;
         }
         std::thread::sleep(lola::CYCLE);
     }
+    std::thread::sleep(lola::CYCLE);
+    link.drain();
 }
 
 /// Runs the plan `rows` on the robot behind `link`, writing into `out`: ramps the

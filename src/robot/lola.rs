@@ -22,7 +22,7 @@
 //! There is one HipYawPitch motor (LoLA index 7, `LHipYawPitch`); naocalib's
 //! `RHipYawPitch` reads and commands the same motor.
 
-use std::io::{BufReader, Read, Write};
+use std::io::{BufRead, BufReader, Read, Write};
 use std::os::unix::net::UnixStream;
 use std::path::Path;
 use std::time::Duration;
@@ -246,6 +246,10 @@ pub trait Link {
     fn receive(&mut self) -> Result<SensorMessage, LolaError>;
     /// Answers the last sensor message.
     fn send(&mut self, message: &ActuatorMessage) -> Result<(), LolaError>;
+    /// Reads and drops whatever the robot has sent without waiting (when its messages
+    /// cannot be trusted any more, so that closing leaves nothing unread: an unread
+    /// message would make the robot's end of a Unix socket see a reset).
+    fn drain(&mut self) {}
 }
 
 /// A connection to LoLA over its Unix socket.
@@ -289,6 +293,17 @@ impl Link for Connection {
             Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(LolaError::Closed),
             Err(e) => Err(e.into()),
         }
+    }
+
+    fn drain(&mut self) {
+        let stream = self.reader.get_ref();
+        if stream.set_nonblocking(true).is_err() {
+            return;
+        }
+        let _ = self.reader.fill_buf().map(|b| b.len()).map(|n| self.reader.consume(n));
+        let mut scratch = [0u8; 4096];
+        while matches!(self.reader.get_mut().read(&mut scratch), Ok(n) if n > 0) {}
+        let _ = self.reader.get_ref().set_nonblocking(false);
     }
 }
 

@@ -240,9 +240,9 @@ impl Body {
                 0.0
             };
             let rise = if self.overheat == Some(k) {
-                // The faulty motor: 2 °C/s while it holds a load, cooling in 20 s.
-                let heat = if s > 0.0 && torque[k] > 0.05 { 2.0 } else { 0.0 };
-                heat - (self.temperature[k] - AMBIENT) / 20.0
+                // The faulty motor: 3 °C/s while it holds a load, cooling in 30 s.
+                let heat = if s > 0.0 && torque[k] > 0.05 { 3.0 } else { 0.0 };
+                heat - (self.temperature[k] - AMBIENT) / 30.0
             } else {
                 // 0.05 °C/s per A², cooling in 300 s.
                 0.05 * self.current[k].powi(2) - (self.temperature[k] - AMBIENT) / 300.0
@@ -414,12 +414,15 @@ fn session(
         None
     };
     stream.set_read_timeout(Some(Duration::from_secs(2)))?;
-    stream.set_write_timeout(Some(Duration::from_secs(2)))?;
+    stream.set_write_timeout(Some(Duration::from_millis(100)))?;
     let mut writer = stream.try_clone()?;
     let mut reader = BufReader::new(stream);
     let mut next = Instant::now();
     let mut last_state = body.joints();
     let mut silent = false;
+    // A client that stopped reading (after a message that did not parse it ramps the
+    // stiffness down blind): the robot only listens.
+    let mut deaf = false;
     loop {
         if options.faults.drop_after.is_some_and(|n| body.cycle >= n)
             || dropped.load(std::sync::atomic::Ordering::Relaxed)
@@ -430,14 +433,23 @@ fn session(
             silent = true;
         }
         let frame = body.frame();
-        if !silent {
+        if !silent && !deaf {
             let bytes = if options.faults.garbage_at == Some(body.cycle) {
                 vec![0xc1; 64]
             } else {
                 lola::encode(&frame)
             };
-            if writer.write_all(&bytes).is_err() {
-                return Ok(Session::Gone);
+            match writer.write_all(&bytes) {
+                Ok(()) => {}
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                    ) =>
+                {
+                    deaf = true
+                }
+                Err(_) => return Ok(Session::Gone),
             }
         }
         match lola::decode_from::<ActuatorMessage>(&mut reader, 1, Duration::from_secs(2)) {
@@ -449,7 +461,7 @@ fn session(
                 }
             }
             Err(LolaError::Closed) => return Ok(Session::Gone),
-            Err(LolaError::Silent { .. }) if silent => return Ok(Session::Gone),
+            Err(LolaError::Silent { .. }) if silent || deaf => return Ok(Session::Gone),
             // A late answer: LoLA goes on with the last command.
             Err(LolaError::Silent { .. }) => {}
             Err(_) => return Ok(Session::Gone),

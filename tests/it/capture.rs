@@ -143,6 +143,20 @@ fn plan_file(path: &Path, n: usize, seed: u64) -> Vec<PlannedCapture> {
     rows
 }
 
+/// `naocalib plan --captures n` for the bench's robot into `path`.
+fn designed_plan(b: &Bench, path: &Path, n: usize, seed: u64) -> Vec<PlannedCapture> {
+    let out = naocalib()
+        .arg("plan")
+        .arg(path)
+        .args(["--captures", &n.to_string(), "--pool", "80", "--seed", &seed.to_string()])
+        .arg("--camera")
+        .arg(b.config())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "plan: {}", stderr(&out));
+    naocalib::plan::read_csv(path).unwrap()
+}
+
 /// The motors capture moves (LoLA indices, HipYawPitch once) with their speed limits.
 fn moved_motors() -> Vec<(usize, f64)> {
     let o = MotionOptions::default();
@@ -292,7 +306,7 @@ fn assert_recovers(result: &serde_json::Value, truth: &[f64]) {
 fn capture_resume_and_solve_recover_the_robots_truth() {
     let b = Bench::new();
     let plan = b.path("plan.csv");
-    let rows = plan_file(&plan, 48, 11);
+    let rows = designed_plan(&b, &plan, 48, 11);
     let robot = b.robot("a.sock", "a.csv", &["--speed", "0", "--seed", "5", "--drop-on-sigusr1"]);
     let child = b
         .capture(&plan, "ds", "a.sock", &b.snap_camera(), &[])
@@ -350,7 +364,7 @@ fn capture_resume_and_solve_recover_the_robots_truth() {
 fn capture_of_a_robot_with_compliance_and_play_solves_with_model_auto() {
     let b = Bench::new();
     let plan = b.path("plan.csv");
-    plan_file(&plan, 48, 12);
+    designed_plan(&b, &plan, 48, 12);
     let args = ["--speed", "0", "--seed", "8", "--effects", "compliance,play"];
     let robot = b.robot("a.sock", "a.csv", &args);
     let out = b
