@@ -36,7 +36,8 @@ pub struct MotionOptions {
 
 impl Default for MotionOptions {
     /// Legs 30°/s, head 90°/s (as the plan's timing), stiffness 0.8, ramps of 100 cycles
-    /// (1.2 s), settled when no joint's readings spread more than 0.2° over 30 cycles
+    /// (1.2 s), settled when no joint's readings spread more than 0.3° (3 encoder steps:
+    /// the readings of a joint at rest flicker by a step) over 30 cycles
     /// (0.36 s) within 250 cycles (3 s), obstructed when a joint stays more than 4° from
     /// its command for 25 cycles (0.3 s), readings taken 2 cycles behind the picture, at
     /// least 10 of them.
@@ -46,7 +47,7 @@ impl Default for MotionOptions {
             head_speed: 90f64.to_radians(),
             stiffness: 0.8,
             ramp_cycles: 100,
-            settle_threshold: 0.2f64.to_radians(),
+            settle_threshold: 0.3f64.to_radians(),
             settle_cycles: 30,
             settle_timeout_cycles: 250,
             obstruction: 4f64.to_radians(),

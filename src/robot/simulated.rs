@@ -37,6 +37,9 @@ pub const LAG_S: f64 = 0.03;
 pub const MAX_SPEED: f64 = 5.0;
 /// One encoder step: 4096 per turn (0.088°).
 pub const ENCODER_STEP: f64 = std::f64::consts::TAU / 4096.0;
+/// The encoder's noise before quantisation, σ in encoder steps: a joint at rest reads
+/// one of two or three neighbouring steps, as a NAO's do.
+pub const ENCODER_NOISE_STEPS: f64 = 0.35;
 /// Temperature the motors cool towards (°C).
 pub const AMBIENT: f64 = 30.0;
 /// A leg whose HipPitch is within this of zero (rad) lies flat on the floor.
@@ -154,6 +157,9 @@ struct Body {
     block: Option<(usize, f64, bool)>,
     overheat: Option<usize>,
     cycle: u64,
+    /// This cycle's readings.
+    readings: [f32; JOINTS],
+    rng: rand_chacha::ChaCha8Rng,
 }
 
 impl Body {
@@ -183,6 +189,24 @@ impl Body {
             block,
             overheat,
             cycle: 0,
+            readings: pos.map(|p| p as f32),
+            rng: rand::SeedableRng::seed_from_u64(options.seed ^ 0x5eed),
+        }
+        .read()
+    }
+
+    /// Takes this cycle's readings: the joints with encoder noise, in encoder steps.
+    fn read(mut self) -> Body {
+        self.sample();
+        self
+    }
+
+    fn sample(&mut self) {
+        use rand_distr::Distribution;
+        let noise = rand_distr::Normal::new(0.0, ENCODER_NOISE_STEPS).expect("valid σ");
+        for k in 0..JOINTS {
+            let steps = self.pos[k] / ENCODER_STEP + noise.sample(&mut self.rng);
+            self.readings[k] = (steps.round() * ENCODER_STEP) as f32;
         }
     }
 
@@ -195,7 +219,7 @@ impl Body {
     }
 
     fn reading(&self, k: usize) -> f32 {
-        ((self.pos[k] / ENCODER_STEP).round() * ENCODER_STEP) as f32
+        self.readings[k]
     }
 
     /// One cycle of 12 ms.
@@ -250,6 +274,7 @@ impl Body {
             self.temperature[k] += rise * dt;
         }
         self.cycle += 1;
+        self.sample();
     }
 
     fn frame(&self) -> SensorFrame {
@@ -622,9 +647,16 @@ mod tests {
             body.step(&o.model, &motors);
         }
         assert!((body.pos[k] - 0.5).abs() < 1e-3, "{}", body.pos[k]);
-        let r = body.reading(k) as f64;
-        assert!((r / ENCODER_STEP - (r / ENCODER_STEP).round()).abs() < 1e-3);
-        assert!((r - body.pos[k]).abs() <= ENCODER_STEP / 2.0 + 1e-6);
+        let mut sum = 0.0;
+        for _ in 0..400 {
+            body.step(&o.model, &motors);
+            let r = body.reading(k) as f64;
+            assert!((r / ENCODER_STEP - (r / ENCODER_STEP).round()).abs() < 1e-3);
+            assert!((r - body.pos[k]).abs() <= 3.5 * ENCODER_STEP);
+            sum += r;
+        }
+        // Dithered: the mean of the readings finds the joint between the steps.
+        assert!((sum / 400.0 - body.pos[k]).abs() < 0.1 * ENCODER_STEP);
     }
 
     #[test]
