@@ -577,7 +577,6 @@ impl Runner<'_> {
             self.stiffness = m.ramp_up(k);
             self.cycle()?;
         }
-        self.command = self.reading();
         Ok(())
     }
 

@@ -143,12 +143,19 @@ fn plan_file(path: &Path, n: usize, seed: u64) -> Vec<PlannedCapture> {
     rows
 }
 
-/// `naocalib plan --captures n` for the bench's robot into `path`.
-fn designed_plan(b: &Bench, path: &Path, n: usize, seed: u64) -> Vec<PlannedCapture> {
+/// `naocalib plan --captures n --families FAMILIES` for the bench's robot into `path`.
+fn designed_plan(
+    b: &Bench,
+    path: &Path,
+    n: usize,
+    seed: u64,
+    families: &str,
+) -> Vec<PlannedCapture> {
     let out = naocalib()
         .arg("plan")
         .arg(path)
         .args(["--captures", &n.to_string(), "--pool", "80", "--seed", &seed.to_string()])
+        .args(["--families", families])
         .arg("--camera")
         .arg(b.config())
         .output()
@@ -306,7 +313,7 @@ fn assert_recovers(result: &serde_json::Value, truth: &[f64]) {
 fn capture_resume_and_solve_recover_the_robots_truth() {
     let b = Bench::new();
     let plan = b.path("plan.csv");
-    let rows = designed_plan(&b, &plan, 48, 11);
+    let rows = designed_plan(&b, &plan, 48, 11, "paper");
     let robot = b.robot("a.sock", "a.csv", &["--speed", "0", "--seed", "5", "--drop-on-sigusr1"]);
     let child = b
         .capture(&plan, "ds", "a.sock", &b.snap_camera(), &[])
@@ -358,13 +365,14 @@ fn capture_resume_and_solve_recover_the_robots_truth() {
     assert_recovers(&solve_json(&b.path("ds"), &[]), &state.truth);
 }
 
-/// A robot with compliance and play: `solve --detect --model auto` recovers its truth.
+/// A robot with compliance and play, a plan made for them: `solve --detect --model auto`
+/// frees them and recovers the robot's truth.
 #[cfg(feature = "detect")]
 #[test]
 fn capture_of_a_robot_with_compliance_and_play_solves_with_model_auto() {
     let b = Bench::new();
     let plan = b.path("plan.csv");
-    designed_plan(&b, &plan, 48, 12);
+    designed_plan(&b, &plan, 48, 12, "paper,compliance,play");
     let args = ["--speed", "0", "--seed", "8", "--effects", "compliance,play"];
     let robot = b.robot("a.sock", "a.csv", &args);
     let out = b
@@ -376,6 +384,16 @@ fn capture_of_a_robot_with_compliance_and_play_solves_with_model_auto() {
     check_safety(&read_record(&b.path("a.csv")).unwrap(), true);
     let state = read_state(&b.path("state.json")).unwrap();
     let result = solve_json(&b.path("ds"), &["--model", "auto"]);
+    let chosen: Vec<&str> = result["chosen"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|c| c["family"].as_str())
+        .collect();
+    assert!(
+        chosen.contains(&"compliance") && chosen.contains(&"play"),
+        "{chosen:?}"
+    );
     assert_recovers(&result, &state.truth);
 }
 
