@@ -77,7 +77,9 @@ fn capture(c: &mut Criterion) {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
     let cfg = dir.join("cfg");
-    Dataset::new(&cfg, Model::default()).write(&cfg, false).unwrap();
+    Dataset::new(&cfg, Model::default())
+        .write(&cfg, false)
+        .unwrap();
     let config = cfg.join("dataset.toml");
     let plan = dir.join("plan.csv");
     ok(

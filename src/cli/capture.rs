@@ -84,15 +84,15 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     };
     // Every row checked before anything is written or moved.
     check_plan(&args.plan, &model, &rows, options.joint_margin)?;
-    if let Some(out) = &out {
-        if let Some(id) = out.ids().find(|id| !rows.iter().any(|r| r.id == *id)) {
-            bail!(
-                "{}: capture {id} is not in the plan {}; --resume needs the plan the run \
-                 began with",
-                args.out.display(),
-                args.plan.display()
-            );
-        }
+    if let Some(out) = &out
+        && let Some(id) = out.ids().find(|id| !rows.iter().any(|r| r.id == *id))
+    {
+        bail!(
+            "{}: capture {id} is not in the plan {}; --resume needs the plan the run began \
+             with",
+            args.out.display(),
+            args.plan.display()
+        );
     }
     let camera = spec.open(Duration::from_secs_f64(args.camera_timeout))?;
     let stop = capture::stop_on_signals().context("cannot watch for Ctrl-C / SIGTERM")?;
@@ -124,7 +124,9 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         }
         Event::Skipped { id, reason } => {
             visited += 1;
-            say(format!("capture {id} skipped: {reason}; the leg returns to rest"));
+            say(format!(
+                "capture {id} skipped: {reason}; the leg returns to rest"
+            ));
         }
         Event::Cooling { joint, temperature } => say(format!(
             "{} at {temperature:.1} °C: resting until the motors cool",
@@ -158,7 +160,11 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     match report.end {
         End::Completed => Ok(ExitCode::SUCCESS),
         End::Interrupted => {
-            let signal = if stop.load(Ordering::Relaxed) { "a signal" } else { "a stop" };
+            let signal = if stop.load(Ordering::Relaxed) {
+                "a signal"
+            } else {
+                "a stop"
+            };
             eprintln!(
                 "naocalib: stopped by {signal}: the robot is at rest with its stiffness off; \
                  {} is a valid dataset; go on with --resume",

@@ -242,7 +242,8 @@ impl DatasetOut {
     pub fn resume(dir: &Path) -> Result<(DatasetOut, Model), CaptureError> {
         let ds = Dataset::load_without_corners(dir)?;
         let path = dir.join(dataset::CAPTURES_CSV);
-        let text = std::fs::read_to_string(&path).map_err(|e| DatasetError::io(&path, "read", e))?;
+        let text =
+            std::fs::read_to_string(&path).map_err(|e| DatasetError::io(&path, "read", e))?;
         let mut lines = text.lines();
         if lines.next().map(str::trim) != Some(captures_header().as_str()) {
             return Err(CaptureError::Dataset(DatasetError::invalid(
@@ -467,10 +468,10 @@ impl Worker {
     }
 
     fn send(&mut self, job: Job) {
-        if let Some(jobs) = &self.jobs {
-            if jobs.send(job).is_ok() {
-                self.pending += 1;
-            }
+        if let Some(jobs) = &self.jobs
+            && jobs.send(job).is_ok()
+        {
+            self.pending += 1;
         }
     }
 
@@ -602,10 +603,8 @@ impl Runner<'_> {
         for k in 0..path.len() + timeout {
             self.command = *path.get(k).unwrap_or(target);
             self.cycle()?;
-            if watch_hot {
-                if let Some((j, t)) = self.hot {
-                    return Ok(Some(Stance::Hot(j, t)));
-                }
+            if watch_hot && let Some((j, t)) = self.hot {
+                return Ok(Some(Stance::Hot(j, t)));
             }
             let reading = self.reading();
             match settle.push(&m, &self.command, &reading) {
@@ -768,6 +767,7 @@ fn blind_ramp_down(link: &mut dyn Link, last: ActuatorMessage, options: &MotionO
 /// obstructed stances, resting while motors are hot), and at the end, on `stop` and on any
 /// fault it can still command, returns to rest and ramps the stiffness down.
 /// `events` hears of each capture written and each stance skipped.
+#[allow(clippy::too_many_arguments)] // the robot, the plan, the output and the run's settings
 pub fn run(
     model: &Model,
     rows: &[PlanRow],
@@ -836,7 +836,8 @@ pub fn run(
         for row in &todo {
             let mut tries = 0;
             loop {
-                let outcome = runner.stance(model, row, &mut worker, &mut |d| on_done(d, events))?;
+                let outcome =
+                    runner.stance(model, row, &mut worker, &mut |d| on_done(d, events))?;
                 match outcome {
                     Stance::Taken => break,
                     Stance::Skipped(reason) => {
@@ -894,10 +895,10 @@ pub fn run(
     report.cycles = runner.cycles;
     let mut end = end;
     for done in worker.finish() {
-        if let Err(Halt::Fault(e)) = on_done(done, events) {
-            if matches!(end, End::Completed) {
-                end = End::Stopped(e);
-            }
+        if let Err(Halt::Fault(e)) = on_done(done, events)
+            && matches!(end, End::Completed)
+        {
+            end = End::Stopped(e);
         }
     }
     report.taken = taken_ids;

@@ -300,7 +300,11 @@ impl Link for Connection {
         if stream.set_nonblocking(true).is_err() {
             return;
         }
-        let _ = self.reader.fill_buf().map(|b| b.len()).map(|n| self.reader.consume(n));
+        let _ = self
+            .reader
+            .fill_buf()
+            .map(|b| b.len())
+            .map(|n| self.reader.consume(n));
         let mut scratch = [0u8; 4096];
         while matches!(self.reader.get_mut().read(&mut scratch), Ok(n) if n > 0) {}
         let _ = self.reader.get_ref().set_nonblocking(false);
@@ -349,7 +353,10 @@ mod tests {
         for _ in 0..2 {
             let m: SensorMessage = decode_from(&mut reader, 1, CYCLE).unwrap();
             assert_eq!(m.position, frame.position);
-            assert_eq!(m.joints().get(Joint::RHipYawPitch), frame.position[7] as f64);
+            assert_eq!(
+                m.joints().get(Joint::RHipYawPitch),
+                frame.position[7] as f64
+            );
             assert_eq!(m.joints().get(Joint::RAnkleRoll), frame.position[17] as f64);
         }
         let end = decode_from::<SensorMessage>(&mut reader, 1, CYCLE).unwrap_err();
@@ -369,10 +376,7 @@ mod tests {
         let e = decode_from::<SensorMessage>(&mut &bytes[..], 1, CYCLE).unwrap_err();
         assert!(matches!(e, LolaError::Parse(_)), "{e}");
         let mut frame = encode(&v6_frame());
-        let at = frame
-            .windows(9)
-            .position(|w| w == b"\xa8Position")
-            .unwrap();
+        let at = frame.windows(9).position(|w| w == b"\xa8Position").unwrap();
         assert_eq!(frame[at + 9], 0xdc, "an array of 25");
         frame[at + 9] = 0xc1; // never used in MessagePack
         let e = decode_from::<SensorMessage>(&mut &frame[..], 1, CYCLE).unwrap_err();

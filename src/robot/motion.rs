@@ -339,7 +339,11 @@ mod tests {
         let states: Vec<_> = (0..o.obstruction_cycles)
             .map(|_| s.push(&o, &command, &reading))
             .collect();
-        assert!(states[..states.len() - 1].iter().all(|x| *x == SettleState::Moving));
+        assert!(
+            states[..states.len() - 1]
+                .iter()
+                .all(|x| *x == SettleState::Moving)
+        );
         assert!(matches!(
             states.last().unwrap(),
             SettleState::Obstructed(Joint::LKneePitch, _)

@@ -69,7 +69,11 @@ impl SafetyLimits {
         {
             return Err("temperatures must be resume < pause ≤ stop".into());
         }
-        if !(self.max_current > 0.0) || self.current_cycles == 0 || self.silent_cycles == 0 {
+        if self.max_current.is_nan()
+            || self.max_current <= 0.0
+            || self.current_cycles == 0
+            || self.silent_cycles == 0
+        {
             return Err("the current limit and the cycle counts must be above 0".into());
         }
         Ok(())

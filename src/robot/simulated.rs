@@ -232,12 +232,17 @@ impl Body {
                 continue;
             }
             let alpha = 1.0 - (-dt * s / LAG_S).exp();
-            let step = ((self.command[k] - self.pos[k]) * alpha).clamp(-MAX_SPEED * dt, MAX_SPEED * dt);
+            let step =
+                ((self.command[k] - self.pos[k]) * alpha).clamp(-MAX_SPEED * dt, MAX_SPEED * dt);
             let mut next = self.pos[k] + step;
-            if let Some((b, barrier, above)) = self.block {
-                if b == k {
-                    next = if above { next.min(barrier) } else { next.max(barrier) };
-                }
+            if let Some((b, barrier, above)) = self.block
+                && b == k
+            {
+                next = if above {
+                    next.min(barrier)
+                } else {
+                    next.max(barrier)
+                };
             }
             speed[k] = (next - self.pos[k]) / dt;
             self.pos[k] = next;
@@ -265,7 +270,11 @@ impl Body {
             };
             let rise = if self.overheat == Some(k) {
                 // The faulty motor: 3 °C/s while it holds a load, cooling in 30 s.
-                let heat = if s > 0.0 && torque[k] > 0.05 { 3.0 } else { 0.0 };
+                let heat = if s > 0.0 && torque[k] > 0.05 {
+                    3.0
+                } else {
+                    0.0
+                };
                 heat - (self.temperature[k] - AMBIENT) / 30.0
             } else {
                 // 0.05 °C/s per A², cooling in 300 s.
@@ -345,7 +354,11 @@ impl Record {
             text.push_str(r);
             text.push('\n');
         }
-        Ok(write_atomic(path, text.as_bytes(), &WriteOptions::new(true))?)
+        Ok(write_atomic(
+            path,
+            text.as_bytes(),
+            &WriteOptions::new(true),
+        )?)
     }
 }
 
@@ -496,7 +509,7 @@ fn session(
         let moved = Joint::ALL
             .iter()
             .any(|&j| (joints.get(j) - last_state.get(j)).abs() > 1e-6);
-        if moved || body.cycle % 50 == 0 {
+        if moved || body.cycle.is_multiple_of(50) {
             write_state(options, body)?;
             last_state = joints;
         }
@@ -547,7 +560,10 @@ pub fn snap(state: &State, out: &Path, options: &RenderOptions) -> Result<(), Ro
     for (k, j) in Joint::ALL.iter().enumerate() {
         joints.set(*j, state.joints[k]);
     }
-    let (cx, cy) = (model.camera.width as f64 / 2.0, model.camera.height as f64 / 2.0);
+    let (cx, cy) = (
+        model.camera.width as f64 / 2.0,
+        model.camera.height as f64 / 2.0,
+    );
     let side = Side::BOTH
         .into_iter()
         .filter_map(|side| {
@@ -601,7 +617,8 @@ pub fn read_record(path: &Path) -> Result<Vec<RecordRow>, RobotError> {
         if values.len() != 1 + 3 * JOINTS {
             return Err(bad(n + 1));
         }
-        let part = |k: usize| -> [f64; JOINTS] { std::array::from_fn(|i| values[1 + k * JOINTS + i]) };
+        let part =
+            |k: usize| -> [f64; JOINTS] { std::array::from_fn(|i| values[1 + k * JOINTS + i]) };
         out.push(RecordRow {
             cycle: values[0] as u64,
             reading: part(0),
@@ -678,6 +695,9 @@ mod tests {
     #[test]
     fn the_robots_frame_is_a_v6_message() {
         let body = Body::new(&options());
-        assert_eq!(lola::encode(&body.frame()).len(), lola::SENSOR_MESSAGE_BYTES);
+        assert_eq!(
+            lola::encode(&body.frame()).len(),
+            lola::SENSOR_MESSAGE_BYTES
+        );
     }
 }

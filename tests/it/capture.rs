@@ -31,7 +31,9 @@ impl Bench {
         let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path().to_path_buf();
         let cfg = dir.join("cfg");
-        Dataset::new(&cfg, Model::default()).write(&cfg, false).unwrap();
+        Dataset::new(&cfg, Model::default())
+            .write(&cfg, false)
+            .unwrap();
         Bench { _tmp: tmp, dir }
     }
 
@@ -154,7 +156,14 @@ fn designed_plan(
     let out = naocalib()
         .arg("plan")
         .arg(path)
-        .args(["--captures", &n.to_string(), "--pool", "80", "--seed", &seed.to_string()])
+        .args([
+            "--captures",
+            &n.to_string(),
+            "--pool",
+            "80",
+            "--seed",
+            &seed.to_string(),
+        ])
         .args(["--families", families])
         .arg("--camera")
         .arg(b.config())
@@ -234,7 +243,10 @@ fn check_safety(record: &[RecordRow], ends_at_rest: bool) {
             .rev()
             .position(|r| (r.stiffness[10] - top).abs() < 1e-6)
             .expect("full stiffness before the end");
-        assert!(ramp as u32 >= MIN_RAMP_CYCLES, "ramp down over {ramp} cycles");
+        assert!(
+            ramp as u32 >= MIN_RAMP_CYCLES,
+            "ramp down over {ramp} cycles"
+        );
         let rest = naocalib::robot::capture::rest_posture();
         for r in &record[record.len() - ramp..] {
             for j in Joint::ALL {
@@ -256,7 +268,10 @@ fn wait_for_captures(dir: &Path, n: usize) {
         if csv.lines().count() > n {
             return;
         }
-        assert!(start.elapsed() < Duration::from_secs(120), "no {n} captures taken");
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "no {n} captures taken"
+        );
         std::thread::sleep(Duration::from_millis(10));
     }
 }
@@ -314,7 +329,11 @@ fn capture_resume_and_solve_recover_the_robots_truth() {
     let b = Bench::new();
     let plan = b.path("plan.csv");
     let rows = designed_plan(&b, &plan, 48, 11, "paper");
-    let robot = b.robot("a.sock", "a.csv", &["--speed", "0", "--seed", "5", "--drop-on-sigusr1"]);
+    let robot = b.robot(
+        "a.sock",
+        "a.csv",
+        &["--speed", "0", "--seed", "5", "--drop-on-sigusr1"],
+    );
     let child = b
         .capture(&plan, "ds", "a.sock", &b.snap_camera(), &[])
         .stdout(Stdio::null())
@@ -373,7 +392,14 @@ fn capture_of_a_robot_with_compliance_and_play_solves_with_model_auto() {
     let b = Bench::new();
     let plan = b.path("plan.csv");
     designed_plan(&b, &plan, 48, 12, "paper,compliance,play");
-    let args = ["--speed", "0", "--seed", "8", "--effects", "compliance,play"];
+    let args = [
+        "--speed",
+        "0",
+        "--seed",
+        "8",
+        "--effects",
+        "compliance,play",
+    ];
     let robot = b.robot("a.sock", "a.csv", &args);
     let out = b
         .capture(&plan, "ds", "a.sock", &b.snap_camera(), &[])
@@ -450,7 +476,11 @@ fn an_overheating_motor_pauses_the_run_at_rest() {
     let b = Bench::new();
     let plan = b.path("plan.csv");
     plan_file(&plan, 4, 4);
-    let robot = b.robot("a.sock", "a.csv", &["--speed", "0", "--overheat", "LHipPitch"]);
+    let robot = b.robot(
+        "a.sock",
+        "a.csv",
+        &["--speed", "0", "--overheat", "LHipPitch"],
+    );
     let out = b
         .capture(&plan, "ds", "a.sock", &b.fixed_camera(), &[])
         .output()
@@ -479,7 +509,11 @@ fn a_message_that_does_not_parse_stops_cleanly() {
     finish(robot);
     let record = read_record(&b.path("a.csv")).unwrap();
     let after: Vec<&RecordRow> = record.iter().filter(|r| r.cycle >= 300).collect();
-    assert!(after.len() as u32 >= MIN_RAMP_CYCLES, "{} messages after", after.len());
+    assert!(
+        after.len() as u32 >= MIN_RAMP_CYCLES,
+        "{} messages after",
+        after.len()
+    );
     for w in after.windows(2) {
         assert!(w[1].stiffness[10] <= w[0].stiffness[10]);
     }
@@ -493,7 +527,11 @@ fn a_silent_robot_stops_the_run() {
     let b = Bench::new();
     let plan = b.path("plan.csv");
     plan_file(&plan, 2, 6);
-    let robot = b.robot("a.sock", "a.csv", &["--speed", "0", "--silent-after", "200"]);
+    let robot = b.robot(
+        "a.sock",
+        "a.csv",
+        &["--speed", "0", "--silent-after", "200"],
+    );
     let out = b
         .capture(&plan, "ds", "a.sock", &b.fixed_camera(), &[])
         .output()
@@ -539,7 +577,15 @@ fn unsafe_plan_rows_are_refused_before_the_robot_moves() {
         .capture(&plan, "ds", "nobody.sock", &b.fixed_camera(), &[])
         .output()
         .unwrap();
-    assert_clean_failure(&out, &["plan.csv line 3", "LKneePitch", "outside", "nothing was moved"]);
+    assert_clean_failure(
+        &out,
+        &[
+            "plan.csv line 3",
+            "LKneePitch",
+            "outside",
+            "nothing was moved",
+        ],
+    );
     assert!(!b.path("ds").exists(), "an output was written");
 
     // The left foot through the right leg.
@@ -550,7 +596,10 @@ fn unsafe_plan_rows_are_refused_before_the_robot_moves() {
     crossing.set(Joint::RHipPitch, -0.6);
     let model = Model::default();
     let why = unsafe_posture(&model, &crossing, 2f64.to_radians());
-    assert!(why.as_ref().is_some_and(|w| w.1.contains("collision")), "{why:?}");
+    assert!(
+        why.as_ref().is_some_and(|w| w.1.contains("collision")),
+        "{why:?}"
+    );
     rows[1].joints = crossing;
     std::fs::write(&plan, naocalib::plan::render_csv(&rows)).unwrap();
     let out = b
