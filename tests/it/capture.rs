@@ -7,14 +7,14 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use crate::util::{assert_clean_failure, naocalib, stderr};
+use crate::util::{assert_clean_failure, stderr};
 use naocalib::dataset::Dataset;
 use naocalib::model::{Joint, JointAngles, Model, Side};
 use naocalib::plan::PlannedCapture;
 use naocalib::robot::capture::unsafe_posture;
 use naocalib::robot::lola::{self, CYCLE_S, JOINTS};
 use naocalib::robot::motion::{MIN_RAMP_CYCLES, MotionOptions};
-use naocalib::robot::simulated::{RecordRow, read_record, read_state};
+use naocalib::robot::simulated::{RecordRow, read_record};
 
 fn bin() -> PathBuf {
     assert_cmd::cargo::cargo_bin("naocalib")
@@ -146,6 +146,7 @@ fn plan_file(path: &Path, n: usize, seed: u64) -> Vec<PlannedCapture> {
 }
 
 /// `naocalib plan --captures n --families FAMILIES` for the bench's robot into `path`.
+#[cfg(feature = "detect")]
 fn designed_plan(
     b: &Bench,
     path: &Path,
@@ -153,7 +154,7 @@ fn designed_plan(
     seed: u64,
     families: &str,
 ) -> Vec<PlannedCapture> {
-    let out = naocalib()
+    let out = crate::util::naocalib()
         .arg("plan")
         .arg(path)
         .args([
@@ -287,7 +288,7 @@ fn captures_of(dir: &Path) -> Vec<u64> {
 
 #[cfg(feature = "detect")]
 fn solve_json(dir: &Path, extra: &[&str]) -> serde_json::Value {
-    let out = naocalib()
+    let out = crate::util::naocalib()
         .args(["solve", "--detect", "--json"])
         .args(extra)
         .arg(dir)
@@ -380,7 +381,7 @@ fn capture_resume_and_solve_recover_the_robots_truth() {
             assert!((c.joints.get(j) - planned.get(j)).abs() < 1f64.to_radians());
         }
     }
-    let state = read_state(&b.path("state.json")).unwrap();
+    let state = naocalib::robot::simulated::read_state(&b.path("state.json")).unwrap();
     assert_recovers(&solve_json(&b.path("ds"), &[]), &state.truth);
 }
 
@@ -408,7 +409,7 @@ fn capture_of_a_robot_with_compliance_and_play_solves_with_model_auto() {
     assert!(out.status.success(), "capture: {}", stderr(&out));
     finish(robot);
     check_safety(&read_record(&b.path("a.csv")).unwrap(), true);
-    let state = read_state(&b.path("state.json")).unwrap();
+    let state = naocalib::robot::simulated::read_state(&b.path("state.json")).unwrap();
     let result = solve_json(&b.path("ds"), &["--model", "auto"]);
     let chosen: Vec<&str> = result["chosen"]
         .as_array()
@@ -607,4 +608,40 @@ fn unsafe_plan_rows_are_refused_before_the_robot_moves() {
         .output()
         .unwrap();
     assert_clean_failure(&out, &["plan.csv line 3", "collision", "nothing was moved"]);
+}
+
+/// The pure-Rust build's path: capture with the simulated robot's rendered camera writes
+/// 640×480 greyscale PNGs with the sandal in them, and the logged angles are the readings
+/// near the plan's.
+#[test]
+fn capture_with_the_rendered_camera_writes_pictures_of_the_sandal() {
+    let b = Bench::new();
+    let plan = b.path("plan.csv");
+    let rows = plan_file(&plan, 2, 9);
+    let robot = b.robot("a.sock", "a.csv", &["--speed", "0"]);
+    let out = b
+        .capture(&plan, "ds", "a.sock", &b.snap_camera(), &[])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    finish(robot);
+    let ds = Dataset::load_without_corners(&b.path("ds")).unwrap();
+    assert_eq!(ds.captures.len(), 2);
+    for c in &ds.captures {
+        let png = std::fs::read(ds.image_path(c).unwrap()).unwrap();
+        let mut reader = png::Decoder::new(std::io::Cursor::new(png))
+            .read_info()
+            .unwrap();
+        let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
+        let info = reader.next_frame(&mut pixels).unwrap();
+        assert_eq!((info.width, info.height), (640, 480));
+        // The sandal's black and white squares: dark and bright pixels both plenty.
+        let dark = pixels.iter().filter(|&&g| g < 60).count();
+        let bright = pixels.iter().filter(|&&g| g > 180).count();
+        assert!(dark > 2000 && bright > 2000, "{dark} dark, {bright} bright");
+        for j in Joint::ALL {
+            let planned = rows[c.id as usize].joints.get(j);
+            assert!((c.joints.get(j) - planned).abs() < 0.2f64.to_radians());
+        }
+    }
 }
