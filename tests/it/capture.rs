@@ -480,7 +480,7 @@ fn an_overheating_motor_pauses_the_run_at_rest() {
     let robot = b.robot(
         "a.sock",
         "a.csv",
-        &["--speed", "0", "--overheat", "LHipPitch"],
+        &["--speed", "5", "--overheat", "LHipPitch"],
     );
     let out = b
         .capture(&plan, "ds", "a.sock", &b.fixed_camera(), &[])
