@@ -37,5 +37,6 @@ pub mod model;
 pub mod output;
 pub mod plan;
 pub mod report;
+pub mod robot;
 pub mod sim;
 pub mod solve;

@@ -14,6 +14,7 @@ macro_rules! note {
 }
 
 mod batch;
+mod capture;
 mod compare;
 #[cfg(feature = "detect")]
 mod detect;
@@ -22,6 +23,7 @@ mod import;
 mod options;
 mod plan;
 mod simulate;
+mod simulate_robot;
 mod solve;
 
 use std::process::ExitCode;
@@ -61,6 +63,12 @@ enum Command {
     Export(export::ExportArgs),
     /// Read a robot's current team calibration files into naocalib's calibration TOML.
     Import(import::ImportArgs),
+    /// Run a plan's stances on a NAO V6 over LoLA and write the dataset: the measurement
+    /// phase (needs neither Ceres nor OpenCV; docs/CAPTURE.md).
+    Capture(capture::CaptureArgs),
+    /// A simulated NAO lying on its back that serves LoLA (for testing capture), and
+    /// `snap`, its lower camera.
+    SimulateRobot(simulate_robot::SimulateRobotArgs),
     /// Find the sandal's vertices in a dataset's images with OpenCV; write corners.csv.
     #[cfg(feature = "detect")]
     Detect(detect::DetectArgs),
@@ -146,6 +154,8 @@ pub fn run(cli: &Cli) -> Result<ExitCode> {
         Command::Batch(args) => batch::run(args, cli.verbose),
         Command::Export(args) => export::run(args),
         Command::Import(args) => import::run(args),
+        Command::Capture(args) => capture::run(args),
+        Command::SimulateRobot(args) => simulate_robot::run(args),
         #[cfg(feature = "detect")]
         Command::Detect(args) => detect::run(args),
     }

@@ -4,6 +4,7 @@
 mod util;
 
 mod batch_solve;
+mod capture;
 #[cfg(feature = "ceres")]
 mod ceres_agreement;
 #[cfg(feature = "detect")]

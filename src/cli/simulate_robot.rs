@@ -1,0 +1,165 @@
+//! `naocalib simulate-robot`: a simulated NAO V6 lying on its back that serves LoLA, and
+//! `simulate-robot snap`, its lower camera (for `capture --camera 'command:…'`).
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{Result, bail};
+use clap::{Args, Subcommand};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use naocalib::model::{Family, Joint, JointAngles, Model, PARAMETER_COUNT};
+use naocalib::robot::simulated::{self, Faults, RobotOptions};
+use naocalib::sim::render::RenderOptions;
+
+#[derive(Debug, Args)]
+#[command(args_conflicts_with_subcommands = true)]
+pub struct SimulateRobotArgs {
+    #[command(subcommand)]
+    snap: Option<SnapCommand>,
+    /// The socket to serve LoLA on.
+    #[arg(long, value_name = "SOCKET")]
+    lola: Option<PathBuf>,
+    /// The robot's dataset.toml (camera, sandals, geometry); the defaults when not given.
+    #[arg(long, value_name = "DATASET_TOML")]
+    config: Option<PathBuf>,
+    /// Seed of the true offsets drawn (camera ±3°, leg joints σ 1°, sandals).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Also give the robot these effects beyond the paper's model (e.g. compliance,play).
+    #[arg(long, value_name = "FAMILIES", value_delimiter = ',')]
+    effects: Vec<String>,
+    /// Take the true parameters from this truth.toml instead of drawing them.
+    #[arg(long, value_name = "TRUTH_TOML", conflicts_with_all = ["seed", "effects"])]
+    truth: Option<PathBuf>,
+    /// Speed relative to real time (10: cycles of 1.2 ms); 0 runs as fast as the client
+    /// answers.
+    #[arg(long, default_value_t = 1.0)]
+    speed: f64,
+    /// Write the robot's state here (true parameters and joints) for `snap`.
+    #[arg(long, value_name = "FILE")]
+    state: Option<PathBuf>,
+    /// Write every actuator message received (CSV, LoLA's joint order) here at exit.
+    #[arg(long, value_name = "FILE")]
+    record: Option<PathBuf>,
+    /// Fault: JOINT cannot move beyond DEG degrees (e.g. LKneePitch=40).
+    #[arg(long, value_name = "JOINT=DEG")]
+    block: Option<String>,
+    /// Fault: this joint's motor heats up fast under load.
+    #[arg(long, value_name = "JOINT")]
+    overheat: Option<String>,
+    /// Fault: close the connection and exit after this many cycles.
+    #[arg(long, value_name = "CYCLES")]
+    drop_after: Option<u64>,
+    /// Fault: close the connection and exit on SIGUSR1.
+    #[arg(long)]
+    drop_on_sigusr1: bool,
+    /// Fault: stop sending (connection kept open) after this many cycles.
+    #[arg(long, value_name = "CYCLES")]
+    silent_after: Option<u64>,
+    /// Fault: send a message that does not parse in this cycle.
+    #[arg(long, value_name = "CYCLE")]
+    garbage_at: Option<u64>,
+    /// Serve this many clients one after the other before exiting.
+    #[arg(long, default_value_t = 1)]
+    clients: usize,
+}
+
+#[derive(Debug, Subcommand)]
+enum SnapCommand {
+    /// Render the lower camera's view of a simulated robot into PATH (PNG).
+    Snap {
+        /// The picture to write.
+        path: PathBuf,
+        /// The state file the robot writes (`--state`).
+        #[arg(long, value_name = "FILE")]
+        state: PathBuf,
+    },
+}
+
+fn joint(name: &str) -> Result<Joint> {
+    Joint::ALL
+        .into_iter()
+        .find(|j| j.name() == name)
+        .ok_or_else(|| anyhow::anyhow!("unknown joint '{name}' (e.g. LKneePitch, HeadYaw)"))
+}
+
+/// Runs `naocalib simulate-robot`.
+pub fn run(args: &SimulateRobotArgs) -> Result<ExitCode> {
+    if let Some(SnapCommand::Snap { path, state }) = &args.snap {
+        let state = simulated::read_state(state)?;
+        simulated::snap(&state, path, &RenderOptions::default())?;
+        return Ok(ExitCode::SUCCESS);
+    }
+    let Some(socket) = &args.lola else {
+        bail!("--lola SOCKET is needed (or `simulate-robot snap PATH --state FILE`)");
+    };
+    if !(args.speed.is_finite() && args.speed >= 0.0 && args.speed <= 1000.0) {
+        bail!("--speed must be 0 … 1000, got {}", args.speed);
+    }
+    let model = match &args.config {
+        Some(path) => naocalib::dataset::read_model(path)?,
+        None => Model::default(),
+    };
+    let truth: [f64; PARAMETER_COUNT] = match &args.truth {
+        Some(path) => naocalib::dataset::read_truth(path)?.values,
+        None => {
+            let mut families = Vec::new();
+            for name in &args.effects {
+                let Some(f) = Family::from_name(name.trim()) else {
+                    bail!("--effects: unknown family '{name}'");
+                };
+                families.push(f);
+            }
+            let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
+            let mut truth = naocalib::sim::draw_truth(&mut rng);
+            naocalib::sim::draw_effects(&mut rng, &families, &mut truth);
+            truth
+        }
+    };
+    let block = match &args.block {
+        Some(text) => {
+            let Some((name, deg)) = text.split_once('=') else {
+                bail!("--block: expected JOINT=DEG, got '{text}'");
+            };
+            let deg: f64 = deg
+                .trim()
+                .parse()
+                .map_err(|_| anyhow::anyhow!("--block: '{deg}' is not a number of degrees"))?;
+            Some((joint(name.trim())?, deg.to_radians()))
+        }
+        None => None,
+    };
+    let overheat = args.overheat.as_deref().map(joint).transpose()?;
+    // Lying on its back, legs nearly straight, as a robot is put down.
+    let mut start = JointAngles::default();
+    start.set(Joint::LKneePitch, 0.03);
+    start.set(Joint::RKneePitch, 0.02);
+    start.set(Joint::HeadPitch, -0.05);
+    let options = RobotOptions {
+        model,
+        config: args
+            .config
+            .as_ref()
+            .map(|p| std::path::absolute(p).unwrap_or_else(|_| p.clone())),
+        truth,
+        speed: args.speed,
+        start,
+        state: args.state.clone(),
+        record: args.record.clone(),
+        faults: Faults {
+            block,
+            overheat,
+            drop_after: args.drop_after,
+            silent_after: args.silent_after,
+            garbage_at: args.garbage_at,
+            drop_on_signal: args.drop_on_sigusr1,
+        },
+        clients: args.clients,
+        seed: args.seed,
+    };
+    let cycles = simulated::serve(socket, &options)?;
+    eprintln!("simulated robot: {cycles} cycles served");
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,408 @@
+//! LoLA, the NAO V6's low-level interface: its messages, its joint order, and the framing.
+//!
+//! LoLA serves a Unix stream socket (`/tmp/robocup`). In every 12 ms cycle it writes one
+//! MessagePack map of sensor readings ([`SensorFrame`], 896 bytes on a V6), and the client
+//! answers with one map of actuator commands ([`ActuatorMessage`]: `Position` and
+//! `Stiffness`, 25 values each). The layout below was checked against two public clients:
+//!
+//! - HULKs, `tools/hula/src/lola.rs` lines 5–33 (`LoLAStateMessage`: the keys and `[f32; N]`
+//!   arrays, `RobotConfig` four strings) and lines 35–59 (`LoLAControlMessage`), and
+//!   `tools/hula/src/proxy.rs` (`read_lola_message` reads 896 bytes; the answer is written
+//!   with `rmp_serde::encode::write_named`, a map with string keys);
+//! - ijnek/nao_lola, `include/nao_lola/lola_enums.hpp` lines 25–53 (the 25 joints in LoLA's
+//!   order), `include/nao_lola/connection.hpp` line 23 (`MSGPACK_READ_LENGTH 896`),
+//!   `src/connection.cpp` line 18 (`/tmp/robocup`) and `src/msgpack_packer.cpp` lines
+//!   31–37 (the answer holds only the keys it sets, e.g. `Position` and `Stiffness`).
+//!
+//! With every array at its length, `Status` as small integers and the four `RobotConfig`
+//! strings of a V6 (20-character ids, `6.0.0` versions), the sensor map is exactly 896
+//! bytes ([`SENSOR_MESSAGE_BYTES`], checked by a test). naocalib does not rely on the size:
+//! it decodes one MessagePack value after the other from the stream.
+//!
+//! There is one HipYawPitch motor (LoLA index 7, `LHipYawPitch`); naocalib's
+//! `RHipYawPitch` reads and commands the same motor.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::os::unix::net::UnixStream;
+use std::path::Path;
+use std::time::Duration;
+
+use serde::{Deserialize, Serialize};
+
+use crate::model::{Joint, JointAngles};
+
+/// The socket LoLA serves on a NAO V6.
+pub const DEFAULT_SOCKET: &str = "/tmp/robocup";
+
+/// One LoLA cycle: 12 ms (83 Hz).
+pub const CYCLE: Duration = Duration::from_millis(12);
+
+/// Seconds per LoLA cycle.
+pub const CYCLE_S: f64 = 0.012;
+
+/// Number of joints in LoLA's arrays.
+pub const JOINTS: usize = 25;
+
+/// The size of a V6's sensor message in bytes (see the module documentation).
+pub const SENSOR_MESSAGE_BYTES: usize = 896;
+
+/// LoLA's joints in the order of its `Position`, `Stiffness`, `Temperature`, `Current` and
+/// `Status` arrays (nao_lola `lola_enums.hpp` lines 25–53; HULKs `lola.rs` `JointsArray`).
+pub const JOINT_NAMES: [&str; JOINTS] = [
+    "HeadYaw",
+    "HeadPitch",
+    "LShoulderPitch",
+    "LShoulderRoll",
+    "LElbowYaw",
+    "LElbowRoll",
+    "LWristYaw",
+    "LHipYawPitch",
+    "LHipRoll",
+    "LHipPitch",
+    "LKneePitch",
+    "LAnklePitch",
+    "LAnkleRoll",
+    "RHipRoll",
+    "RHipPitch",
+    "RKneePitch",
+    "RAnklePitch",
+    "RAnkleRoll",
+    "RShoulderPitch",
+    "RShoulderRoll",
+    "RElbowYaw",
+    "RElbowRoll",
+    "RWristYaw",
+    "LHand",
+    "RHand",
+];
+
+/// LoLA's index of a measured joint (`RHipYawPitch` is the one HipYawPitch motor, index 7).
+pub fn index(joint: Joint) -> usize {
+    match joint {
+        Joint::RHipYawPitch => 7,
+        j => JOINT_NAMES
+            .iter()
+            .position(|n| *n == j.name())
+            .expect("every measured joint but RHipYawPitch is a LoLA joint"),
+    }
+}
+
+/// The measured joints' angles from one of LoLA's 25-value arrays.
+pub fn to_joint_angles(values: &[f32; JOINTS]) -> JointAngles {
+    let mut out = JointAngles::default();
+    for j in Joint::ALL {
+        out.set(j, values[index(j)] as f64);
+    }
+    out
+}
+
+/// A LoLA sensor message as the robot writes it, every key of the V6 (HULKs `lola.rs`
+/// lines 5–33). naocalib's simulated robot writes it; the client reads [`SensorMessage`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SensorFrame {
+    /// Stiffness of each joint, 0 … 1.
+    #[serde(rename = "Stiffness")]
+    pub stiffness: [f32; JOINTS],
+    /// Joint angle readings (rad), raw: no calibration applied.
+    #[serde(rename = "Position")]
+    pub position: [f32; JOINTS],
+    /// Motor temperatures (°C).
+    #[serde(rename = "Temperature")]
+    pub temperature: [f32; JOINTS],
+    /// Motor currents (A).
+    #[serde(rename = "Current")]
+    pub current: [f32; JOINTS],
+    /// Battery: charge, status, current, temperature.
+    #[serde(rename = "Battery")]
+    pub battery: [f32; 4],
+    /// Accelerometer (m/s²).
+    #[serde(rename = "Accelerometer")]
+    pub accelerometer: [f32; 3],
+    /// Gyroscope (rad/s).
+    #[serde(rename = "Gyroscope")]
+    pub gyroscope: [f32; 3],
+    /// Torso angles x, y (rad).
+    #[serde(rename = "Angles")]
+    pub angles: [f32; 2],
+    /// Sonar distances (m).
+    #[serde(rename = "Sonar")]
+    pub sonar: [f32; 2],
+    /// Foot pressure sensors (kg).
+    #[serde(rename = "FSR")]
+    pub fsr: [f32; 8],
+    /// Buttons and touch sensors.
+    #[serde(rename = "Touch")]
+    pub touch: [f32; 14],
+    /// Temperature status of each motor (0 normal … 3 critical).
+    #[serde(rename = "Status")]
+    pub status: [i32; JOINTS],
+    /// Body id, body version, head id, head version.
+    #[serde(rename = "RobotConfig")]
+    pub robot_config: [String; 4],
+}
+
+/// What naocalib reads of a sensor message: the joint arrays (required, 25 values each);
+/// other keys are ignored.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+pub struct SensorMessage {
+    /// Stiffness of each joint, 0 … 1.
+    #[serde(rename = "Stiffness")]
+    pub stiffness: [f32; JOINTS],
+    /// Joint angle readings (rad), raw.
+    #[serde(rename = "Position")]
+    pub position: [f32; JOINTS],
+    /// Motor temperatures (°C).
+    #[serde(rename = "Temperature")]
+    pub temperature: [f32; JOINTS],
+    /// Motor currents (A).
+    #[serde(rename = "Current")]
+    pub current: [f32; JOINTS],
+}
+
+impl SensorMessage {
+    /// The measured joints' readings (rad).
+    pub fn joints(&self) -> JointAngles {
+        to_joint_angles(&self.position)
+    }
+}
+
+/// The client's answer in a cycle: target angle and stiffness of every joint (a map with
+/// the keys `Position` and `Stiffness`; LoLA keeps its LEDs as they are).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ActuatorMessage {
+    /// Target joint angles (rad).
+    #[serde(rename = "Position")]
+    pub position: [f32; JOINTS],
+    /// Stiffness, 0 … 1.
+    #[serde(rename = "Stiffness")]
+    pub stiffness: [f32; JOINTS],
+}
+
+/// Why talking to LoLA failed.
+#[derive(Debug, thiserror::Error)]
+pub enum LolaError {
+    /// The socket could not be opened.
+    #[error("cannot connect to LoLA at {path}: {source} (is LoLA running, and no other client?)")]
+    Connect {
+        /// The socket path.
+        path: String,
+        /// The operating system's error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The robot closed the connection.
+    #[error("LoLA closed the connection")]
+    Closed,
+    /// No message came for the given number of cycles.
+    #[error("no message from LoLA for {cycles} cycles ({ms} ms)")]
+    Silent {
+        /// Cycles waited.
+        cycles: u32,
+        /// Milliseconds waited.
+        ms: u64,
+    },
+    /// A message did not parse.
+    #[error("a LoLA message does not parse: {0}")]
+    Parse(String),
+    /// Reading or writing the socket failed.
+    #[error("LoLA socket: {0}")]
+    Io(#[from] std::io::Error),
+}
+
+/// Encodes an actuator or sensor message as LoLA does: a MessagePack map with string keys.
+pub fn encode<T: Serialize>(message: &T) -> Vec<u8> {
+    rmp_serde::to_vec_named(message).expect("LoLA messages always encode")
+}
+
+/// Reads one MessagePack value of type `T` from `reader`.
+pub fn decode_from<T: serde::de::DeserializeOwned>(
+    reader: &mut impl Read,
+    silent_cycles: u32,
+    timeout: Duration,
+) -> Result<T, LolaError> {
+    use rmp_serde::decode::Error as E;
+    rmp_serde::from_read(reader).map_err(|e| {
+        let io = match &e {
+            E::InvalidMarkerRead(io) | E::InvalidDataRead(io) => Some(io.kind()),
+            _ => None,
+        };
+        match io {
+            Some(std::io::ErrorKind::UnexpectedEof) => LolaError::Closed,
+            Some(std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {
+                LolaError::Silent {
+                    cycles: silent_cycles,
+                    ms: timeout.as_millis() as u64,
+                }
+            }
+            Some(std::io::ErrorKind::ConnectionReset) => LolaError::Closed,
+            _ => LolaError::Parse(e.to_string()),
+        }
+    })
+}
+
+/// The robot, cycle by cycle: what a capture run talks to.
+pub trait Link {
+    /// The next sensor message (blocks until it comes).
+    fn receive(&mut self) -> Result<SensorMessage, LolaError>;
+    /// Answers the last sensor message.
+    fn send(&mut self, message: &ActuatorMessage) -> Result<(), LolaError>;
+    /// Reads and drops whatever the robot has sent without waiting (when its messages
+    /// cannot be trusted any more, so that closing leaves nothing unread: an unread
+    /// message would make the robot's end of a Unix socket see a reset).
+    fn drain(&mut self) {}
+}
+
+/// A connection to LoLA over its Unix socket.
+#[derive(Debug)]
+pub struct Connection {
+    reader: BufReader<UnixStream>,
+    writer: UnixStream,
+    silent_cycles: u32,
+    timeout: Duration,
+}
+
+impl Connection {
+    /// Connects to LoLA at `path`; a message that does not come within `silent_cycles`
+    /// cycles of 12 ms is an error ([`LolaError::Silent`]).
+    pub fn connect(path: &Path, silent_cycles: u32) -> Result<Connection, LolaError> {
+        let stream = UnixStream::connect(path).map_err(|source| LolaError::Connect {
+            path: path.display().to_string(),
+            source,
+        })?;
+        let timeout = CYCLE * silent_cycles.max(1);
+        stream.set_read_timeout(Some(timeout))?;
+        stream.set_write_timeout(Some(timeout))?;
+        let writer = stream.try_clone()?;
+        Ok(Connection {
+            reader: BufReader::with_capacity(4 * SENSOR_MESSAGE_BYTES, stream),
+            writer,
+            silent_cycles,
+            timeout,
+        })
+    }
+}
+
+impl Link for Connection {
+    fn receive(&mut self) -> Result<SensorMessage, LolaError> {
+        decode_from(&mut self.reader, self.silent_cycles, self.timeout)
+    }
+
+    fn send(&mut self, message: &ActuatorMessage) -> Result<(), LolaError> {
+        match self.writer.write_all(&encode(message)) {
+            Ok(()) => Ok(()),
+            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(LolaError::Closed),
+            Err(e) => Err(e.into()),
+        }
+    }
+
+    fn drain(&mut self) {
+        let stream = self.reader.get_ref();
+        if stream.set_nonblocking(true).is_err() {
+            return;
+        }
+        let _ = self
+            .reader
+            .fill_buf()
+            .map(|b| b.len())
+            .map(|n| self.reader.consume(n));
+        let mut scratch = [0u8; 4096];
+        while matches!(self.reader.get_mut().read(&mut scratch), Ok(n) if n > 0) {}
+        let _ = self.reader.get_ref().set_nonblocking(false);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn v6_frame() -> SensorFrame {
+        SensorFrame {
+            stiffness: [0.0; JOINTS],
+            position: std::array::from_fn(|k| 0.01 * k as f32),
+            temperature: [35.0; JOINTS],
+            current: [0.01; JOINTS],
+            battery: [0.9, 0.0, -0.5, 30.0],
+            accelerometer: [0.0, 0.0, 9.81],
+            gyroscope: [0.0; 3],
+            angles: [0.0, -1.5],
+            sonar: [2.5, 2.5],
+            fsr: [0.0; 8],
+            touch: [0.0; 14],
+            status: [0; JOINTS],
+            robot_config: [
+                "P0000074A05S94700015".into(),
+                "6.0.0".into(),
+                "P0000073A07S9BA00035".into(),
+                "6.0.0".into(),
+            ],
+        }
+    }
+
+    #[test]
+    fn a_v6_sensor_message_has_the_size_lola_writes() {
+        let bytes = encode(&v6_frame());
+        assert_eq!(bytes.len(), SENSOR_MESSAGE_BYTES);
+    }
+
+    #[test]
+    fn the_client_reads_what_the_robot_writes() {
+        let frame = v6_frame();
+        let mut bytes = encode(&frame);
+        bytes.extend(encode(&frame));
+        let mut reader = &bytes[..];
+        for _ in 0..2 {
+            let m: SensorMessage = decode_from(&mut reader, 1, CYCLE).unwrap();
+            assert_eq!(m.position, frame.position);
+            assert_eq!(
+                m.joints().get(Joint::RHipYawPitch),
+                frame.position[7] as f64
+            );
+            assert_eq!(m.joints().get(Joint::RAnkleRoll), frame.position[17] as f64);
+        }
+        let end = decode_from::<SensorMessage>(&mut reader, 1, CYCLE).unwrap_err();
+        assert!(matches!(end, LolaError::Closed), "{end}");
+    }
+
+    #[test]
+    fn a_message_without_positions_or_with_short_arrays_does_not_parse() {
+        #[derive(Serialize)]
+        struct Partial {
+            #[serde(rename = "Stiffness")]
+            stiffness: Vec<f32>,
+        }
+        let bytes = encode(&Partial {
+            stiffness: vec![0.0; JOINTS],
+        });
+        let e = decode_from::<SensorMessage>(&mut &bytes[..], 1, CYCLE).unwrap_err();
+        assert!(matches!(e, LolaError::Parse(_)), "{e}");
+        let mut frame = encode(&v6_frame());
+        let at = frame.windows(9).position(|w| w == b"\xa8Position").unwrap();
+        assert_eq!(frame[at + 9], 0xdc, "an array of 25");
+        frame[at + 9] = 0xc1; // never used in MessagePack
+        let e = decode_from::<SensorMessage>(&mut &frame[..], 1, CYCLE).unwrap_err();
+        assert!(matches!(e, LolaError::Parse(_)), "{e}");
+    }
+
+    #[test]
+    fn the_answer_is_a_map_of_position_and_stiffness() {
+        let m = ActuatorMessage {
+            position: [0.5; JOINTS],
+            stiffness: [1.0; JOINTS],
+        };
+        let bytes = encode(&m);
+        assert_eq!(bytes[0], 0x82, "a map of two entries");
+        assert_eq!(&bytes[1..10], b"\xa8Position");
+        let back: ActuatorMessage = decode_from(&mut &bytes[..], 1, CYCLE).unwrap();
+        assert_eq!(back, m);
+    }
+
+    #[test]
+    fn joint_indices_follow_lola() {
+        assert_eq!(index(Joint::HeadYaw), 0);
+        assert_eq!(index(Joint::LHipYawPitch), 7);
+        assert_eq!(index(Joint::RHipYawPitch), 7);
+        assert_eq!(index(Joint::LAnkleRoll), 12);
+        assert_eq!(index(Joint::RHipRoll), 13);
+        assert_eq!(index(Joint::RAnkleRoll), 17);
+    }
+}

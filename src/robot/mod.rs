@@ -1,0 +1,13 @@
+//! The measurement phase on a NAO V6 (docs/CAPTURE.md): `naocalib capture` drives a plan's
+//! stances over LoLA ([`lola`]), safely ([`motion`], [`safety`]), photographs the sandals
+//! ([`camera`]) and writes the dataset capture by capture ([`capture`]); [`simulated`] is a
+//! simulated robot that serves LoLA for tests.
+
+pub mod camera;
+pub mod capture;
+pub mod lola;
+pub mod motion;
+pub mod safety;
+pub mod simulated;
+
+pub use capture::{CaptureError, CaptureOptions, DatasetOut, End, Event, PlanRow, Report};

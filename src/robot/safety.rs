@@ -1,0 +1,178 @@
+//! Watching the motors: temperatures and currents that LoLA reports every cycle
+//! (docs/CAPTURE.md §3).
+
+use crate::model::Joint;
+
+use super::lola::{self, SensorMessage};
+
+/// The limits on what the motors report.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SafetyLimits {
+    /// At this temperature (°C) of a head or leg motor the legs go to rest and wait …
+    pub pause_temperature: f64,
+    /// … until every one is at or below this (°C) …
+    pub resume_temperature: f64,
+    /// … for at most this many cycles; then the run stops.
+    pub max_pause_cycles: u32,
+    /// At this temperature (°C) the run stops at once (rest, stiffness ramped down).
+    pub stop_temperature: f64,
+    /// A head or leg motor drawing more than this (A) …
+    pub max_current: f64,
+    /// … for this many cycles in a row stops the run.
+    pub current_cycles: u32,
+    /// A message that does not come within this many cycles stops the run.
+    pub silent_cycles: u32,
+}
+
+impl Default for SafetyLimits {
+    /// Pause at 70 °C until 60 °C (at most 10 minutes), stop at 80 °C (the V6 reports
+    /// temperature status 1 "hot" from about 70 °C and cuts motor power near 90 °C),
+    /// stop on more than 2.5 A for 50 cycles (0.6 s: a stalled motor, the leg pushing
+    /// against something), and on 25 cycles (0.3 s) without a message.
+    fn default() -> Self {
+        SafetyLimits {
+            pause_temperature: 70.0,
+            resume_temperature: 60.0,
+            max_pause_cycles: 50_000,
+            stop_temperature: 80.0,
+            max_current: 2.5,
+            current_cycles: 50,
+            silent_cycles: 25,
+        }
+    }
+}
+
+/// What the watch concludes from one message.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Verdict {
+    /// Everything within the limits.
+    Fine,
+    /// A motor is hot: pause at rest until it cools (the joint, °C).
+    Hot(Joint, f64),
+    /// Stop the run: too hot (the joint, °C).
+    Overheated(Joint, f64),
+    /// Stop the run: a motor drew too much current for too long (the joint, A).
+    Overcurrent(Joint, f64),
+}
+
+/// The motor watch, one message per cycle.
+#[derive(Debug, Clone, Default)]
+pub struct Watch {
+    over_current: u32,
+}
+
+impl SafetyLimits {
+    /// Checks the limits' order; the message names the limit.
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.resume_temperature < self.pause_temperature
+            && self.pause_temperature <= self.stop_temperature)
+        {
+            return Err("temperatures must be resume < pause ≤ stop".into());
+        }
+        if self.max_current.is_nan()
+            || self.max_current <= 0.0
+            || self.current_cycles == 0
+            || self.silent_cycles == 0
+        {
+            return Err("the current limit and the cycle counts must be above 0".into());
+        }
+        Ok(())
+    }
+
+    /// The hottest head or leg motor and its temperature (°C).
+    pub fn hottest(message: &SensorMessage) -> (Joint, f64) {
+        Joint::ALL
+            .iter()
+            .map(|&j| (j, message.temperature[lola::index(j)] as f64))
+            .fold((Joint::HeadYaw, f64::NEG_INFINITY), |a, b| {
+                if b.1 > a.1 { b } else { a }
+            })
+    }
+}
+
+impl Watch {
+    /// Checks one message against `limits`.
+    pub fn check(&mut self, limits: &SafetyLimits, message: &SensorMessage) -> Verdict {
+        let (joint, temperature) = SafetyLimits::hottest(message);
+        if !temperature.is_finite() || temperature >= limits.stop_temperature {
+            return Verdict::Overheated(joint, temperature);
+        }
+        let (cjoint, current) = Joint::ALL
+            .iter()
+            .map(|&j| (j, (message.current[lola::index(j)] as f64).abs()))
+            .fold((Joint::HeadYaw, f64::NEG_INFINITY), |a, b| {
+                if b.1 > a.1 { b } else { a }
+            });
+        if current > limits.max_current || !current.is_finite() {
+            self.over_current += 1;
+            if self.over_current >= limits.current_cycles {
+                return Verdict::Overcurrent(cjoint, current);
+            }
+        } else {
+            self.over_current = 0;
+        }
+        if temperature >= limits.pause_temperature {
+            return Verdict::Hot(joint, temperature);
+        }
+        Verdict::Fine
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::lola::JOINTS;
+
+    fn message(temperature: f32, current: f32) -> SensorMessage {
+        SensorMessage {
+            stiffness: [0.0; JOINTS],
+            position: [0.0; JOINTS],
+            temperature: [40.0; JOINTS],
+            current: [0.1; JOINTS],
+        }
+        .with(10, temperature, current)
+    }
+
+    impl SensorMessage {
+        fn with(mut self, k: usize, temperature: f32, current: f32) -> Self {
+            self.temperature[k] = temperature;
+            self.current[k] = current;
+            self
+        }
+    }
+
+    #[test]
+    fn temperatures_pause_then_stop() {
+        let limits = SafetyLimits::default();
+        let mut w = Watch::default();
+        assert_eq!(w.check(&limits, &message(50.0, 0.1)), Verdict::Fine);
+        assert_eq!(
+            w.check(&limits, &message(72.0, 0.1)),
+            Verdict::Hot(Joint::LKneePitch, 72.0)
+        );
+        assert_eq!(
+            w.check(&limits, &message(81.0, 0.1)),
+            Verdict::Overheated(Joint::LKneePitch, 81.0)
+        );
+        // An arm's temperature is not watched (its stiffness stays 0).
+        let arm = message(40.0, 0.1).with(3, 95.0, 0.1);
+        assert_eq!(w.check(&limits, &arm), Verdict::Fine);
+    }
+
+    #[test]
+    fn currents_stop_only_when_they_last() {
+        let limits = SafetyLimits::default();
+        let mut w = Watch::default();
+        for _ in 0..limits.current_cycles - 1 {
+            assert_eq!(w.check(&limits, &message(40.0, 3.0)), Verdict::Fine);
+        }
+        assert_eq!(w.check(&limits, &message(40.0, 0.5)), Verdict::Fine);
+        for _ in 0..limits.current_cycles - 1 {
+            assert_eq!(w.check(&limits, &message(40.0, 3.0)), Verdict::Fine);
+        }
+        assert!(matches!(
+            w.check(&limits, &message(40.0, 3.0)),
+            Verdict::Overcurrent(Joint::LKneePitch, _)
+        ));
+    }
+}

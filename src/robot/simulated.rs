@@ -1,0 +1,703 @@
+//! A simulated NAO V6 lying on its back, serving LoLA on a Unix socket: for testing
+//! `naocalib capture` end to end without a robot.
+//!
+//! Each cycle it writes a [`SensorFrame`] and reads the client's [`ActuatorMessage`]
+//! (it waits for the answer: a client that answers every message, as capture does, sees
+//! exactly LoLA's cycle; it may run faster than real time, [`RobotOptions::speed`]). The
+//! joints follow their commands under stiffness (a first-order lag, time constant
+//! [`LAG_S`]/stiffness, at most [`MAX_SPEED`]); the readings are the joints quantised to
+//! encoder steps of 0.088°; the physical joint is the reading plus the true offsets, the
+//! compliance under the gravity torques and the play (the simulator's model with
+//! [`RobotOptions::truth`]). The motor currents follow the holding torques and the
+//! temperatures rise with the square of the current and cool towards 30 °C.
+//!
+//! The camera: the robot writes its state (true parameters, joints) to a file
+//! ([`RobotOptions::state`]), from which [`snap`] renders the lower camera's view
+//! (`naocalib simulate-robot snap {path} --state FILE`, for `--camera 'command:…'`).
+//!
+//! Faults on request ([`Faults`]): a blocked joint, an overheating motor, a connection
+//! dropped, the robot falling silent, a message that does not parse. Every actuator
+//! message received can be recorded ([`RobotOptions::record`]) so that tests check the
+//! safety rules on what the robot was told.
+
+use std::io::{BufReader, Write as _};
+use std::os::unix::net::{UnixListener, UnixStream};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use crate::model::{Joint, JointAngles, Model, PARAMETER_COUNT, Side, gravity};
+use crate::output::{WriteOptions, write_atomic, write_atomic_with};
+use crate::sim::render::{self, RenderOptions};
+
+use super::lola::{self, ActuatorMessage, JOINT_NAMES, JOINTS, LolaError, SensorFrame};
+
+/// Time constant of a joint following its command at stiffness 1 (s).
+pub const LAG_S: f64 = 0.03;
+/// Fastest a joint moves (rad/s).
+pub const MAX_SPEED: f64 = 5.0;
+/// One encoder step: 4096 per turn (0.088°).
+pub const ENCODER_STEP: f64 = std::f64::consts::TAU / 4096.0;
+/// The encoder's noise before quantisation, σ in encoder steps: a joint at rest reads
+/// one of two or three neighbouring steps, as a NAO's do.
+pub const ENCODER_NOISE_STEPS: f64 = 0.35;
+/// Temperature the motors cool towards (°C).
+pub const AMBIENT: f64 = 30.0;
+/// A leg whose HipPitch is within this of zero (rad) lies flat on the floor.
+pub const FLAT: f64 = 0.1;
+
+/// Faults the simulated robot can play.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Faults {
+    /// A joint that cannot move beyond an angle (rad) away from where it starts (an
+    /// obstruction: a cable, the other leg, a hand).
+    pub block: Option<(Joint, f64)>,
+    /// A motor that heats up fast while it holds a load.
+    pub overheat: Option<Joint>,
+    /// Close the connection and exit after this many cycles.
+    pub drop_after: Option<u64>,
+    /// Stop writing (but keep the connection) after this many cycles.
+    pub silent_after: Option<u64>,
+    /// Write a message that does not parse in this cycle.
+    pub garbage_at: Option<u64>,
+    /// Close the connection and exit on SIGUSR1 (a test's request mid-run).
+    pub drop_on_signal: bool,
+}
+
+/// The simulated robot.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobotOptions {
+    /// Geometry, camera and sandals.
+    pub model: Model,
+    /// The `dataset.toml` the model came from (named in the state file for [`snap`]).
+    pub config: Option<PathBuf>,
+    /// The true parameters (internal units).
+    pub truth: [f64; PARAMETER_COUNT],
+    /// Speed relative to real time (1: 12 ms cycles; 10: 1.2 ms); 0 runs as fast as the
+    /// client answers.
+    pub speed: f64,
+    /// The posture it lies in at the start (readings frame, rad).
+    pub start: JointAngles,
+    /// Where to write the state for [`snap`].
+    pub state: Option<PathBuf>,
+    /// Where to write every actuator message received (CSV) when the robot exits.
+    pub record: Option<PathBuf>,
+    /// Faults to play.
+    pub faults: Faults,
+    /// How many clients to serve one after the other before exiting.
+    pub clients: usize,
+    /// Seed of the rendering noise.
+    pub seed: u64,
+}
+
+/// What a simulated robot's state file holds (JSON), for [`snap`].
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct State {
+    /// The `dataset.toml` of the model (the default model when absent).
+    pub config: Option<PathBuf>,
+    /// True parameters, internal units, in registry order.
+    pub truth: Vec<f64>,
+    /// The joints now (readings frame before quantisation, rad), in `captures.csv` order.
+    pub joints: Vec<f64>,
+    /// The cycle.
+    pub cycle: u64,
+    /// Seed of the rendering noise.
+    pub seed: u64,
+}
+
+/// Why the simulated robot stopped with an error.
+#[derive(Debug, thiserror::Error)]
+pub enum RobotError {
+    /// The socket could not be made.
+    #[error("{}: cannot serve LoLA here: {source}", path.display())]
+    Bind {
+        /// The socket path.
+        path: PathBuf,
+        /// The operating system's error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A file could not be written.
+    #[error(transparent)]
+    Write(#[from] crate::output::WriteError),
+    /// A file could not be read.
+    #[error("{}: {message}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+    /// The camera view could not be rendered.
+    #[error(transparent)]
+    Render(#[from] render::RenderError),
+    /// The model could not be read.
+    #[error(transparent)]
+    Dataset(#[from] crate::dataset::DatasetError),
+    /// The socket failed.
+    #[error("LoLA socket: {0}")]
+    Io(#[from] std::io::Error),
+}
+
+/// The LoLA motors naocalib measures (HipYawPitch once).
+fn motors() -> Vec<usize> {
+    let mut out: Vec<usize> = Joint::ALL.iter().map(|&j| lola::index(j)).collect();
+    out.sort();
+    out.dedup();
+    out
+}
+
+/// The body: joints, commands, temperatures.
+struct Body {
+    pos: [f64; JOINTS],
+    command: [f64; JOINTS],
+    stiffness: [f64; JOINTS],
+    temperature: [f64; JOINTS],
+    current: [f64; JOINTS],
+    /// The blocked motor, its barrier and whether the barrier is above the start.
+    block: Option<(usize, f64, bool)>,
+    overheat: Option<usize>,
+    cycle: u64,
+    /// This cycle's readings.
+    readings: [f32; JOINTS],
+    rng: rand_chacha::ChaCha8Rng,
+}
+
+impl Body {
+    fn new(options: &RobotOptions) -> Body {
+        let mut pos = [0.0; JOINTS];
+        for j in Joint::ALL {
+            pos[lola::index(j)] = options.start.get(j);
+        }
+        // Arms lying beside the body.
+        pos[2] = 1.5;
+        pos[18] = 1.5;
+        let mut temperature: [f64; JOINTS] = std::array::from_fn(|k| 34.0 + (k % 5) as f64);
+        let overheat = options.faults.overheat.map(lola::index);
+        if let Some(k) = overheat {
+            temperature[k] = 62.0;
+        }
+        let block = options.faults.block.map(|(j, b)| {
+            let k = lola::index(j);
+            (k, b, b > pos[k])
+        });
+        Body {
+            pos,
+            command: pos,
+            stiffness: [0.0; JOINTS],
+            temperature,
+            current: [0.0; JOINTS],
+            block,
+            overheat,
+            cycle: 0,
+            readings: pos.map(|p| p as f32),
+            rng: rand::SeedableRng::seed_from_u64(options.seed ^ 0x5eed),
+        }
+        .read()
+    }
+
+    /// Takes this cycle's readings: the joints with encoder noise, in encoder steps.
+    fn read(mut self) -> Body {
+        self.sample();
+        self
+    }
+
+    fn sample(&mut self) {
+        use rand_distr::Distribution;
+        let noise = rand_distr::Normal::new(0.0, ENCODER_NOISE_STEPS).expect("valid σ");
+        for k in 0..JOINTS {
+            let steps = self.pos[k] / ENCODER_STEP + noise.sample(&mut self.rng);
+            self.readings[k] = (steps.round() * ENCODER_STEP) as f32;
+        }
+    }
+
+    fn joints(&self) -> JointAngles {
+        let mut out = JointAngles::default();
+        for j in Joint::ALL {
+            out.set(j, self.pos[lola::index(j)]);
+        }
+        out
+    }
+
+    fn reading(&self, k: usize) -> f32 {
+        self.readings[k]
+    }
+
+    /// One cycle of 12 ms.
+    fn step(&mut self, model: &Model, motors: &[usize]) {
+        let dt = lola::CYCLE_S;
+        let mut speed = [0.0; JOINTS];
+        for &k in motors {
+            let s = self.stiffness[k].clamp(0.0, 1.0);
+            if s <= 0.0 {
+                continue;
+            }
+            let alpha = 1.0 - (-dt * s / LAG_S).exp();
+            let step =
+                ((self.command[k] - self.pos[k]) * alpha).clamp(-MAX_SPEED * dt, MAX_SPEED * dt);
+            let mut next = self.pos[k] + step;
+            if let Some((b, barrier, above)) = self.block
+                && b == k
+            {
+                next = if above {
+                    next.min(barrier)
+                } else {
+                    next.max(barrier)
+                };
+            }
+            speed[k] = (next - self.pos[k]) / dt;
+            self.pos[k] = next;
+        }
+        let joints = self.joints();
+        let mut torque = [0.0; JOINTS];
+        for side in Side::BOTH {
+            // A leg lying flat rests on the floor: nothing to hold.
+            if joints.get(side.leg_joints()[2]).abs() < FLAT {
+                continue;
+            }
+            let t = gravity::leg_torques(&model.robot, &model.board, side, &joints);
+            for (j, t) in side.leg_joints().iter().zip(t) {
+                torque[lola::index(*j)] += t.abs();
+            }
+        }
+        for &k in motors {
+            let s = self.stiffness[k].clamp(0.0, 1.0);
+            let blocked = matches!(self.block, Some((b, _, _)) if b == k)
+                && (self.command[k] - self.pos[k]).abs() > 0.02;
+            self.current[k] = if s > 0.0 {
+                0.03 + 0.4 * torque[k] + 0.05 * speed[k].abs() + if blocked { 1.0 * s } else { 0.0 }
+            } else {
+                0.0
+            };
+            let rise = if self.overheat == Some(k) {
+                // The faulty motor: 3 °C/s while it holds a load, cooling in 30 s.
+                let heat = if s > 0.0 && torque[k] > 0.05 {
+                    3.0
+                } else {
+                    0.0
+                };
+                heat - (self.temperature[k] - AMBIENT) / 30.0
+            } else {
+                // 0.05 °C/s per A², cooling in 300 s.
+                0.05 * self.current[k].powi(2) - (self.temperature[k] - AMBIENT) / 300.0
+            };
+            self.temperature[k] += rise * dt;
+        }
+        self.cycle += 1;
+        self.sample();
+    }
+
+    fn frame(&self) -> SensorFrame {
+        SensorFrame {
+            stiffness: self.stiffness.map(|s| s as f32),
+            position: std::array::from_fn(|k| self.reading(k)),
+            temperature: self.temperature.map(|t| t as f32),
+            current: self.current.map(|c| c as f32),
+            battery: [0.9, 0.0, -0.4, 30.0],
+            accelerometer: [0.0, 0.0, 9.81],
+            gyroscope: [0.0; 3],
+            angles: [0.0, -std::f32::consts::FRAC_PI_2],
+            sonar: [2.5, 2.5],
+            fsr: [0.0; 8],
+            touch: [0.0; 14],
+            status: self.temperature.map(|t| {
+                if t >= 85.0 {
+                    3
+                } else if t >= 75.0 {
+                    2
+                } else if t >= 70.0 {
+                    1
+                } else {
+                    0
+                }
+            }),
+            robot_config: [
+                "P0000074A05S94700015".into(),
+                "6.0.0".into(),
+                "P0000073A07S9BA00035".into(),
+                "6.0.0".into(),
+            ],
+        }
+    }
+}
+
+/// The record of what the robot was told: per cycle, the readings it sent and the answer.
+#[derive(Debug, Clone, Default)]
+struct Record {
+    rows: Vec<String>,
+}
+
+impl Record {
+    fn header() -> String {
+        let mut out = String::from("cycle");
+        for prefix in ["reading", "position", "stiffness"] {
+            for name in JOINT_NAMES {
+                out.push_str(&format!(",{prefix}_{name}"));
+            }
+        }
+        out
+    }
+
+    fn push(&mut self, cycle: u64, readings: &[f32; JOINTS], answer: &ActuatorMessage) {
+        let mut row = cycle.to_string();
+        for values in [readings, &answer.position, &answer.stiffness] {
+            for v in values {
+                row.push_str(&format!(",{v}"));
+            }
+        }
+        self.rows.push(row);
+    }
+
+    fn write(&self, path: &Path) -> Result<(), RobotError> {
+        let mut text = Record::header();
+        text.push('\n');
+        for r in &self.rows {
+            text.push_str(r);
+            text.push('\n');
+        }
+        Ok(write_atomic(
+            path,
+            text.as_bytes(),
+            &WriteOptions::new(true),
+        )?)
+    }
+}
+
+/// Writes the state file (atomically, without syncing: it is read at once by [`snap`]).
+fn write_state(options: &RobotOptions, body: &Body) -> Result<(), RobotError> {
+    let Some(path) = &options.state else {
+        return Ok(());
+    };
+    let state = State {
+        config: options.config.clone(),
+        truth: options.truth.to_vec(),
+        joints: body.joints().0.to_vec(),
+        cycle: body.cycle,
+        seed: options.seed,
+    };
+    let bytes = serde_json::to_vec(&state).expect("a state always encodes");
+    Ok(write_atomic_with(path, &WriteOptions::new(true), |tmp| {
+        std::fs::write(tmp, &bytes)
+    })?)
+}
+
+/// How a client's session ended.
+enum Session {
+    /// The client went away.
+    Gone,
+    /// The robot dropped the connection (fault): exit.
+    Dropped,
+}
+
+/// Serves LoLA at `socket` until the clients are served (or a dropped-connection fault);
+/// returns the cycles run.
+pub fn serve(socket: &Path, options: &RobotOptions) -> Result<u64, RobotError> {
+    if let Ok(meta) = socket.symlink_metadata() {
+        use std::os::unix::fs::FileTypeExt;
+        if meta.file_type().is_socket() {
+            let _ = std::fs::remove_file(socket);
+        }
+    }
+    let listener = UnixListener::bind(socket).map_err(|source| RobotError::Bind {
+        path: socket.to_path_buf(),
+        source,
+    })?;
+    let motors = motors();
+    let dropped = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    if options.faults.drop_on_signal {
+        signal_hook::flag::register(signal_hook::consts::SIGUSR1, dropped.clone())?;
+    }
+    let mut body = Body::new(options);
+    let mut record = Record::default();
+    write_state(options, &body)?;
+    let mut result = Ok(());
+    for _ in 0..options.clients.max(1) {
+        let (stream, _) = match listener.accept() {
+            Ok(s) => s,
+            Err(e) => {
+                result = Err(e.into());
+                break;
+            }
+        };
+        match session(stream, options, &motors, &mut body, &mut record, &dropped) {
+            Ok(Session::Gone) => {}
+            Ok(Session::Dropped) => break,
+            Err(e) => {
+                result = Err(e);
+                break;
+            }
+        }
+        // LoLA without a client: the motors go limp.
+        body.stiffness = [0.0; JOINTS];
+    }
+    let _ = std::fs::remove_file(socket);
+    if let Some(path) = &options.record {
+        record.write(path)?;
+    }
+    write_state(options, &body)?;
+    result.map(|()| body.cycle)
+}
+
+/// One client's session, cycle by cycle.
+fn session(
+    stream: UnixStream,
+    options: &RobotOptions,
+    motors: &[usize],
+    body: &mut Body,
+    record: &mut Record,
+    dropped: &std::sync::atomic::AtomicBool,
+) -> Result<Session, RobotError> {
+    let period = if options.speed > 0.0 {
+        Some(lola::CYCLE.div_f64(options.speed))
+    } else {
+        None
+    };
+    stream.set_read_timeout(Some(Duration::from_secs(2)))?;
+    stream.set_write_timeout(Some(Duration::from_millis(100)))?;
+    let mut writer = stream.try_clone()?;
+    let mut reader = BufReader::new(stream);
+    let mut next = Instant::now();
+    let mut last_state = body.joints();
+    let mut silent = false;
+    // A client that stopped reading (after a message that did not parse it ramps the
+    // stiffness down blind): the robot only listens.
+    let mut deaf = false;
+    loop {
+        if options.faults.drop_after.is_some_and(|n| body.cycle >= n)
+            || dropped.load(std::sync::atomic::Ordering::Relaxed)
+        {
+            return Ok(Session::Dropped);
+        }
+        if options.faults.silent_after.is_some_and(|n| body.cycle >= n) {
+            silent = true;
+        }
+        let frame = body.frame();
+        if !silent && !deaf {
+            let bytes = if options.faults.garbage_at == Some(body.cycle) {
+                vec![0xc1; 64]
+            } else {
+                lola::encode(&frame)
+            };
+            match writer.write_all(&bytes) {
+                Ok(()) => {}
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                    ) =>
+                {
+                    deaf = true
+                }
+                Err(_) => return Ok(Session::Gone),
+            }
+        }
+        match lola::decode_from::<ActuatorMessage>(&mut reader, 1, Duration::from_secs(2)) {
+            Ok(answer) => {
+                record.push(body.cycle, &frame.position, &answer);
+                for k in 0..JOINTS {
+                    body.command[k] = answer.position[k] as f64;
+                    body.stiffness[k] = answer.stiffness[k] as f64;
+                }
+            }
+            Err(LolaError::Closed) => return Ok(Session::Gone),
+            Err(LolaError::Silent { .. }) if silent || deaf => return Ok(Session::Gone),
+            // A late answer: LoLA goes on with the last command.
+            Err(LolaError::Silent { .. }) => {}
+            Err(_) => return Ok(Session::Gone),
+        }
+        body.step(&options.model, motors);
+        let joints = body.joints();
+        let moved = Joint::ALL
+            .iter()
+            .any(|&j| (joints.get(j) - last_state.get(j)).abs() > 1e-6);
+        if moved || body.cycle.is_multiple_of(50) {
+            write_state(options, body)?;
+            last_state = joints;
+        }
+        if let Some(period) = period {
+            next += period;
+            let now = Instant::now();
+            if next > now {
+                std::thread::sleep(next - now);
+            } else {
+                next = now;
+            }
+        }
+    }
+}
+
+/// Reads a state file written by a simulated robot.
+pub fn read_state(path: &Path) -> Result<State, RobotError> {
+    let bytes = std::fs::read(path).map_err(|e| RobotError::Read {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    let state: State = serde_json::from_slice(&bytes).map_err(|e| RobotError::Read {
+        path: path.to_path_buf(),
+        message: format!("not a simulated robot's state: {e}"),
+    })?;
+    if state.truth.len() != PARAMETER_COUNT || state.joints.len() != crate::model::JOINT_COUNT {
+        return Err(RobotError::Read {
+            path: path.to_path_buf(),
+            message: "not a simulated robot's state: wrong number of values".into(),
+        });
+    }
+    Ok(state)
+}
+
+/// Renders what the lower camera of the robot in `state` sees (the sandal in view, the one
+/// whose centre is nearest the image centre) and writes it as PNG to `out`.
+pub fn snap(state: &State, out: &Path, options: &RenderOptions) -> Result<(), RobotError> {
+    let model = match &state.config {
+        Some(path) => crate::dataset::read_model(path)?,
+        None => Model::default(),
+    };
+    let truth: [f64; PARAMETER_COUNT] = std::array::from_fn(|k| state.truth[k]);
+    let model = Model {
+        camera: model.camera_at(&truth),
+        ..model
+    };
+    let mut joints = JointAngles::default();
+    for (k, j) in Joint::ALL.iter().enumerate() {
+        joints.set(*j, state.joints[k]);
+    }
+    let (cx, cy) = (
+        model.camera.width as f64 / 2.0,
+        model.camera.height as f64 / 2.0,
+    );
+    let side = Side::BOTH
+        .into_iter()
+        .filter_map(|side| {
+            let pose = model.chains(side, &joints).camera_to_board(&truth);
+            let uv = model.camera.project(&pose.translation)?;
+            model
+                .camera
+                .contains(uv, 0.0)
+                .then(|| (side, (uv[0] - cx).hypot(uv[1] - cy)))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map_or(Side::Left, |(s, _)| s);
+    let pose = model.chains(side, &joints).camera_to_board(&truth);
+    let seed = state.seed ^ state.cycle.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    let image = render::render(&model, &pose, options, seed)?;
+    image.write_png(out)?;
+    Ok(())
+}
+
+/// The record a robot wrote ([`RobotOptions::record`]): per cycle, the readings it sent,
+/// and the positions and stiffnesses it was told, in LoLA's joint order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordRow {
+    /// The cycle.
+    pub cycle: u64,
+    /// Readings sent (rad).
+    pub reading: [f64; JOINTS],
+    /// Positions commanded (rad).
+    pub position: [f64; JOINTS],
+    /// Stiffness commanded.
+    pub stiffness: [f64; JOINTS],
+}
+
+/// Reads a record file.
+pub fn read_record(path: &Path) -> Result<Vec<RecordRow>, RobotError> {
+    let text = std::fs::read_to_string(path).map_err(|e| RobotError::Read {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    let bad = |line: usize| RobotError::Read {
+        path: path.to_path_buf(),
+        message: format!("line {line}: not a record row"),
+    };
+    let mut out = Vec::new();
+    for (n, line) in text.lines().enumerate().skip(1) {
+        let values: Vec<f64> = line
+            .split(',')
+            .map(|v| v.parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| bad(n + 1))?;
+        if values.len() != 1 + 3 * JOINTS {
+            return Err(bad(n + 1));
+        }
+        let part =
+            |k: usize| -> [f64; JOINTS] { std::array::from_fn(|i| values[1 + k * JOINTS + i]) };
+        out.push(RecordRow {
+            cycle: values[0] as u64,
+            reading: part(0),
+            position: part(1),
+            stiffness: part(2),
+        });
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn options() -> RobotOptions {
+        RobotOptions {
+            model: Model::default(),
+            config: None,
+            truth: [0.0; PARAMETER_COUNT],
+            speed: 0.0,
+            start: JointAngles::default(),
+            state: None,
+            record: None,
+            faults: Faults::default(),
+            clients: 1,
+            seed: 1,
+        }
+    }
+
+    #[test]
+    fn joints_follow_commands_under_stiffness_and_read_in_encoder_steps() {
+        let o = options();
+        let motors = motors();
+        let mut body = Body::new(&o);
+        let k = lola::index(Joint::LKneePitch);
+        body.command[k] = 0.5;
+        for _ in 0..50 {
+            body.step(&o.model, &motors);
+        }
+        assert_eq!(body.pos[k], 0.0, "no stiffness, no motion");
+        body.stiffness[k] = 1.0;
+        for _ in 0..50 {
+            body.step(&o.model, &motors);
+        }
+        assert!((body.pos[k] - 0.5).abs() < 1e-3, "{}", body.pos[k]);
+        let mut sum = 0.0;
+        for _ in 0..400 {
+            body.step(&o.model, &motors);
+            let r = body.reading(k) as f64;
+            assert!((r / ENCODER_STEP - (r / ENCODER_STEP).round()).abs() < 1e-3);
+            assert!((r - body.pos[k]).abs() <= 3.5 * ENCODER_STEP);
+            sum += r;
+        }
+        // Dithered: the mean of the readings finds the joint between the steps.
+        assert!((sum / 400.0 - body.pos[k]).abs() < 0.1 * ENCODER_STEP);
+    }
+
+    #[test]
+    fn a_blocked_joint_stops_at_its_barrier() {
+        let mut o = options();
+        o.faults.block = Some((Joint::LKneePitch, 0.3));
+        let motors = motors();
+        let mut body = Body::new(&o);
+        let k = lola::index(Joint::LKneePitch);
+        body.command[k] = 1.0;
+        body.stiffness[k] = 1.0;
+        for _ in 0..100 {
+            body.step(&o.model, &motors);
+        }
+        assert_eq!(body.pos[k], 0.3);
+        assert!(body.current[k] > 0.5);
+    }
+
+    #[test]
+    fn the_robots_frame_is_a_v6_message() {
+        let body = Body::new(&options());
+        assert_eq!(
+            lola::encode(&body.frame()).len(),
+            lola::SENSOR_MESSAGE_BYTES
+        );
+    }
+}
