@@ -13,7 +13,7 @@ use naocalib::robot::capture::{self, check_plan, predicted_seconds, read_plan};
 use naocalib::robot::lola::{self, Connection};
 use naocalib::robot::{CaptureOptions, DatasetOut, End, Event};
 
-use super::options::positive;
+use super::options::within;
 
 #[derive(Debug, Args)]
 pub struct CaptureArgs {
@@ -35,17 +35,17 @@ pub struct CaptureArgs {
     /// Go on with the dataset in OUT at the first capture of the plan not yet taken.
     #[arg(long)]
     resume: bool,
-    /// Leg joint speed limit (deg/s).
-    #[arg(long, default_value_t = 30.0, value_parser = positive)]
+    /// Leg joint speed limit (deg/s, 1 … 60).
+    #[arg(long, default_value_t = 30.0, value_parser = within(1.0, 60.0, " deg/s"))]
     leg_speed: f64,
-    /// Head joint speed limit (deg/s).
-    #[arg(long, default_value_t = 90.0, value_parser = positive)]
+    /// Head joint speed limit (deg/s, 1 … 180).
+    #[arg(long, default_value_t = 90.0, value_parser = within(1.0, 180.0, " deg/s"))]
     head_speed: f64,
-    /// Stiffness of the head and leg joints while measuring (0 … 1).
-    #[arg(long, default_value_t = 0.8, value_parser = positive)]
+    /// Stiffness of the head and leg joints while measuring (0.1 … 1).
+    #[arg(long, default_value_t = 0.8, value_parser = within(0.1, 1.0, ""))]
     stiffness: f64,
-    /// Longest a picture may take (s).
-    #[arg(long, default_value_t = 10.0, value_parser = positive)]
+    /// Longest a picture may take (s, 0.1 … 120).
+    #[arg(long, default_value_t = 10.0, value_parser = within(0.1, 120.0, " s"))]
     camera_timeout: f64,
 }
 

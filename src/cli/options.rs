@@ -198,3 +198,15 @@ pub fn parse_loss(text: &str) -> Result<Loss, String> {
         _ => Err(format!("unknown loss '{name}' (huber or cauchy)")),
     }
 }
+
+/// A number from `lo` to `hi` (inclusive), in `unit`: a flag's physical range.
+pub fn within(
+    lo: f64,
+    hi: f64,
+    unit: &'static str,
+) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
+    move |text: &str| match text.parse::<f64>() {
+        Ok(v) if (lo..=hi).contains(&v) => Ok(v),
+        _ => Err(format!("must be from {lo} to {hi}{unit}, got '{text}'")),
+    }
+}
