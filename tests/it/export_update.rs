@@ -512,7 +512,11 @@ fn solve_start_from_reports_the_change_since_the_previous_calibration() {
         .arg(&previous)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let cal = previous.join("calibration.toml");
     // The same data again: nothing changed, every z near zero.
     let out = naocalib()
@@ -523,7 +527,11 @@ fn solve_start_from_reports_the_change_since_the_previous_calibration() {
         .arg("--json")
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let result: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let changes = result["changes"].as_object().unwrap();
     assert_eq!(changes.len(), 21, "every parameter of the paper's set");
@@ -539,5 +547,8 @@ fn solve_start_from_reports_the_change_since_the_previous_calibration() {
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains("Change since the previous calibration"), "{text}");
+    assert!(
+        text.contains("Change since the previous calibration"),
+        "{text}"
+    );
 }
