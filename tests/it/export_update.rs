@@ -498,3 +498,57 @@ fn solve_records_corrected_angles_and_update_composes_with_the_robots_file() {
     }
     assert_eq!(checked, 12, "every leg joint");
 }
+
+#[test]
+fn solve_start_from_reports_the_change_since_the_previous_calibration() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("robot");
+    crate::util::simulate_small(&data, 8);
+    let previous = dir.path().join("previous");
+    let out = naocalib()
+        .arg("solve")
+        .arg(&data)
+        .arg("--export")
+        .arg(&previous)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let cal = previous.join("calibration.toml");
+    // The same data again: nothing changed, every z near zero.
+    let out = naocalib()
+        .arg("solve")
+        .arg(&data)
+        .arg("--start-from")
+        .arg(&cal)
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let result: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let changes = result["changes"].as_object().unwrap();
+    assert_eq!(changes.len(), 21, "every parameter of the paper's set");
+    for (name, c) in changes {
+        let z = c["z"].as_f64().unwrap();
+        assert!(z.abs() < 0.01, "{name}: z = {z}");
+    }
+    let out = naocalib()
+        .arg("solve")
+        .arg(&data)
+        .arg("--start-from")
+        .arg(&cal)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("Change since the previous calibration"),
+        "{text}"
+    );
+}

@@ -171,8 +171,13 @@ pub fn bhuman_joint_cfg(cal: &Calibration) -> String {
         }
         let entry = param.and_then(|p| cal.get(p));
         let value = param.and_then(|p| cal.robot_value(p)).map_or(0.0, |a| -a);
+        let standing = param
+            .and_then(|p| cal.standing_offset(p))
+            .filter(|_| cal.posture == super::Posture::Standing)
+            .map(|s| format!("; standing alpha = {s} deg"))
+            .unwrap_or_default();
         let note = match entry {
-            Some(e) if e.is_determined() => format!(" // alpha = {}", e.describe()),
+            Some(e) if e.is_determined() => format!(" // alpha = {}{standing}", e.describe()),
             Some(e) => format!(" // {}: written as 0", e.describe()),
             None => " // not calibrated".to_string(),
         };

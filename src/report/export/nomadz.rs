@@ -102,6 +102,12 @@ pub fn joint_calibration_cfg(cal: &Calibration) -> String {
             Some(e) => notes.push(format!("alpha {}", e.describe())),
             None => notes.push("offset not calibrated".into()),
         }
+        if let Some(s) = param
+            .and_then(|p| cal.standing_offset(p))
+            .filter(|_| cal.posture == super::Posture::Standing)
+        {
+            notes.push(format!("standing alpha {s} deg"));
+        }
         if let Some(p) = play_param.and_then(|p| cal.get(p)) {
             notes.push(format!("play {}", p.describe()));
         }
