@@ -56,6 +56,46 @@ impl Bound {
     }
 }
 
+impl Bound {
+    /// Whether an intermediate estimate (a screening fit of `--model auto`, before the
+    /// families that would explain the rest are free) is consistent with the bound: within
+    /// it widened by [`SIGMAS`] σ at both limits, without a cap. A parameter the fit
+    /// cannot determine yet (an ankle roll's compliance lying down, before play is free)
+    /// may wander far; one the data pin down beyond the bound (a focal length fitted to
+    /// zero) may not. The final calibration is held to [`Bound::admits`].
+    pub fn admits_at_screening(&self, value: f64, sigma: f64) -> bool {
+        let slack = if sigma.is_finite() && sigma > 0.0 {
+            SIGMAS * sigma
+        } else {
+            0.0
+        };
+        value.is_finite() && (self.min - slack..=self.max + slack).contains(&value)
+    }
+}
+
+/// The parameters of `params` whose screening estimate in `values` with one-sigma `std`
+/// (internal units) is not consistent with its bound ([`Bound::admits_at_screening`]).
+pub fn violations_at_screening(
+    values: &[f64; super::PARAMETER_COUNT],
+    std: &[f64; super::PARAMETER_COUNT],
+    params: impl IntoIterator<Item = Param>,
+) -> Vec<Violation> {
+    params
+        .into_iter()
+        .filter_map(|param| {
+            let unit = param.unit();
+            let value = unit.to_report(values[param.index()]);
+            let sigma = unit.to_report(std[param.index()]);
+            let bound = bound(param);
+            (!bound.admits_at_screening(value, sigma)).then_some(Violation {
+                param,
+                value,
+                bound,
+            })
+        })
+        .collect()
+}
+
 /// How many standard deviations an estimate may lie beyond its bound ([`Bound::admits`]).
 pub const SIGMAS: f64 = 3.0;
 

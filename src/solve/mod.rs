@@ -453,7 +453,11 @@ fn select_model(
     // Families whose fit left the physical bounds (crate::model::bounds): not freed.
     let mut rejected: Vec<Family> = Vec::new();
     // Screening: a plain fit (warm-started at the last one) and the tests, per step.
-    let (mut tests, mut warm) = screen(&current, &problem.initial, backend, options, &chosen)?;
+    let Screening {
+        mut tests,
+        values: mut warm,
+        ..
+    } = screen(&current, &problem.initial, backend, options, &chosen)?;
     while chosen.len() < AUTO_FAMILIES.len() {
         let Some(test) = next_family(&tests, &chosen, &rejected).cloned() else {
             break;
@@ -464,12 +468,17 @@ fn select_model(
         }
         let mut trial_chosen = chosen.clone();
         trial_chosen.push(test.clone());
+        // A family is not freed when its screening fit leaves the physical bounds by more
+        // than 3 σ (the larger of the plain and the sandwich σ at that fit: a compliance
+        // the data cannot pin down before play is free may lie far out and be noise);
+        // the final calibration is held to the bounds themselves.
+        // A screening fit that fails (diverges) frees nothing either.
         let within = match screen(&trial, &warm, backend, options, &trial_chosen) {
-            // No σ yet at a screening fit: the widest slack of the bounds.
-            Ok((t, v))
-                if crate::model::bounds::violations_internal(&v, None, trial.free()).is_empty() =>
+            Ok(Screening { tests, values, std })
+                if crate::model::bounds::violations_at_screening(&values, &std, trial.free())
+                    .is_empty() =>
             {
-                Some((t, v))
+                Some((tests, values))
             }
             _ => None,
         };
@@ -491,16 +500,27 @@ fn select_model(
     })
 }
 
+/// What one screening step of [`ModelChoice::Auto`] finds.
+struct Screening {
+    /// The misfit tests at the screening fit.
+    tests: Vec<FamilyTest>,
+    /// The screening fit's values.
+    values: [f64; PARAMETER_COUNT],
+    /// Their σ there: the larger of the plain and the capture-clustered sandwich σ.
+    std: [f64; PARAMETER_COUNT],
+}
+
 /// One screening step of [`ModelChoice::Auto`]: the plain fit of `problem` (undetermined
-/// parameters held, outliers left out with a loss) started at `warm`, and the misfit tests
-/// at it — with the noise model on, also on the whitened residuals at the whitened fit.
+/// parameters held, outliers left out with a loss) started at `warm`, the misfit tests
+/// at it — with the noise model on, also on the whitened residuals at the whitened fit —
+/// and the fit's σ.
 fn screen(
     problem: &Problem,
     warm: &[f64; PARAMETER_COUNT],
     backend: &dyn Backend,
     options: &UncertaintyOptions,
     chosen: &[FamilyTest],
-) -> Result<(Vec<FamilyTest>, [f64; PARAMETER_COUNT]), SolveError> {
+) -> Result<Screening, SolveError> {
     let undetermined = identify::undetermined(problem)?;
     let held = identify::mask(&undetermined);
     let mut posed = identify::hold(problem, &undetermined);
@@ -515,7 +535,18 @@ fn screen(
     let settled = |tests: &[FamilyTest]| next_family(tests, chosen, &[]).is_some();
     let points = Linearisations::new(&posed, &held);
     let tests = misfit_tests(&points, &first, &held, backend, options, &settled)?.tests;
-    Ok((tests, first.values))
+    let stats = uncertainty::statistics(&posed, &*points.at(&first.values)?, None)?;
+    let std = std::array::from_fn(|i| {
+        stats.covariance[(i, i)]
+            .max(stats.sandwich[(i, i)])
+            .max(0.0)
+            .sqrt()
+    });
+    Ok(Screening {
+        tests,
+        values: first.values,
+        std,
+    })
 }
 
 /// The family [`ModelChoice::Auto`] frees next: of those not `chosen` (nor `rejected` for
