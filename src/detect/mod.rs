@@ -397,7 +397,9 @@ pub fn detect_dataset(
                 .iter()
                 .copied()
                 .filter(|&i| {
-                    quick[i]
+                    // A board found in part is searched in full once; an image without a
+                    // board again with every better prediction.
+                    (quick[i] || found_count(&results[i]) == 0)
                         && worth_again(dataset, &dataset.captures[i], &results[i], grid, &params)
                 })
                 .collect();
