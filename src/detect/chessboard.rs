@@ -17,7 +17,11 @@ pub(super) enum Search {
     /// In the whole image at full resolution: the model-guided search found part of the
     /// board and says where ([`worth_trying`]). OpenCV's finder misses boards in small
     /// regions (its adaptive threshold's block is a fraction of the region's size).
-    Whole,
+    Whole {
+        /// At half resolution (refined at full): the board's squares are large enough,
+        /// and the finder gives up four times sooner where it cannot get the board.
+        half: bool,
+    },
     /// Where the nominal model predicts the board, then in the whole image (at half
     /// resolution when the predicted squares are large enough; at full resolution without
     /// the model).
@@ -26,7 +30,7 @@ pub(super) enum Search {
 
 /// Smallest side of a square (px) the chessboard finder is given: the whole image is
 /// searched at half resolution only when the model predicts squares of twice this.
-const MIN_SQUARE: f64 = 8.0;
+pub(super) const MIN_SQUARE: f64 = 8.0;
 
 /// Whether OpenCV's chessboard finder may add to a board the model-guided search found in
 /// part: only when the homography of the vertices found puts every vertex of the board in
@@ -154,7 +158,11 @@ pub(super) fn chessboard(
     };
     let mut whole_image = false;
     let found = match search {
-        Search::Whole => check(find::find_board(grey, grid, None)?)?,
+        Search::Whole { half: true } => match check(find::find_board_half(grey, grid)?)? {
+            Some(Ok(points)) => Some(Ok(points)),
+            _ => None,
+        },
+        Search::Whole { half: false } => check(find::find_board(grey, grid, None)?)?,
         Search::Predicted => {
             let roi = if options.use_model {
                 predicted_roi(model, capture, &options.prediction())

@@ -322,7 +322,11 @@ fn detect_image(
             if !chessboard::worth_trying(&board, &model.camera, options.subpix_factor) {
                 return Ok(found);
             }
-            search = chessboard::Search::Whole;
+            search = chessboard::Search::Whole {
+                half: board
+                    .square()
+                    .is_some_and(|s| s >= 2.0 * chessboard::MIN_SQUARE),
+            };
             guided_partial = Some(found);
         }
     }
@@ -392,7 +396,12 @@ pub fn detect_dataset(
             let redo: Vec<usize> = all
                 .iter()
                 .copied()
-                .filter(|&i| worth_again(dataset, &dataset.captures[i], &results[i], grid, &params))
+                .filter(|&i| {
+                    // A board found in part is searched in full once; an image without a
+                    // board again with every better prediction.
+                    (quick[i] || found_count(&results[i]) == 0)
+                        && worth_again(dataset, &dataset.captures[i], &results[i], grid, &params)
+                })
                 .collect();
             if redo.is_empty() {
                 break;
