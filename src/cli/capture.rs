@@ -109,7 +109,7 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     bar.set_message(format!(", {:.0} s of robot time planned", predicted(0)));
     let say = |line: String| {
         if bar.is_hidden() {
-            eprintln!("{line}");
+            note!("{line}");
         } else {
             bar.println(line);
         }
@@ -145,7 +145,7 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     )?;
     bar.finish_and_clear();
     let done = report.already + report.taken.len();
-    eprintln!(
+    note!(
         "{} captures taken in this run ({} before), {} skipped, {done} of {total} in {} \
          ({:.1} s of robot time)",
         report.taken.len(),
@@ -155,7 +155,7 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         capture::cycles_to_seconds(report.cycles)
     );
     for (id, reason) in &report.skipped {
-        eprintln!("  skipped capture {id}: {reason}");
+        note!("  skipped capture {id}: {reason}");
     }
     match report.end {
         End::Completed => Ok(ExitCode::SUCCESS),
@@ -165,7 +165,7 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
             } else {
                 "a stop"
             };
-            eprintln!(
+            note!(
                 "naocalib: stopped by {signal}: the robot is at rest with its stiffness off; \
                  {} is a valid dataset; go on with --resume",
                 args.out.display()

@@ -51,13 +51,25 @@ pub struct DetectArgs {
 }
 
 /// The parameters (internal units) of the calibration file `path`.
-pub fn read_start(path: &Path) -> Result<[f64; PARAMETER_COUNT]> {
-    let calibration = naocalib::report::export::read_calibration(path)?;
-    let mut values = [0.0; PARAMETER_COUNT];
+///
+/// With `corrected` angles (`[joints] angles = "corrected"`) the robot's joint offsets are
+/// already in the logged angles, and the prediction keeps them at zero.
+pub fn read_start(path: &Path, corrected: bool) -> Result<[f64; PARAMETER_COUNT]> {
+    let calibration = naocalib::report::export::read_calibration(path)
+        .with_context(|| format!("--start-from {}", path.display()))?;
+    let mut problem_values = [0.0; PARAMETER_COUNT];
     for e in &calibration.parameters {
-        values[e.param.index()] = e.param.unit().from_report(e.value);
+        let joint = naocalib::solve::problem::is_joint_offset(e.param);
+        if !(corrected && joint) {
+            problem_values[e.param.index()] = e.param.unit().from_report(e.value);
+        }
     }
-    Ok(values)
+    Ok(problem_values)
+}
+
+/// Whether `dataset`'s joint angles are already corrected by the robot's calibration.
+fn corrected(dataset: &Dataset) -> bool {
+    dataset.angles.kind == naocalib::dataset::AngleKind::Corrected
 }
 
 /// For `naocalib solve --detect`: names the captures whose residuals after the fit are
@@ -65,10 +77,10 @@ pub fn read_start(path: &Path) -> Result<[f64; PARAMETER_COUNT]> {
 pub fn guard(solution: &naocalib::solve::Solution) -> bool {
     let suspects = detect::guard::suspects(solution);
     for s in &suspects {
-        eprintln!("naocalib: warning: {s}");
+        note!("naocalib: warning: {s}");
     }
     if !suspects.is_empty() {
-        eprintln!(
+        note!(
             "naocalib: warning: {} capture(s) with residuals more than {}× the median \
              capture's: this run is marked (exit code 3); look at their images, or leave \
              them out",
@@ -147,19 +159,17 @@ fn progress_bar(images: usize) -> Option<indicatif::ProgressBar> {
 /// defaults of `naocalib detect` and puts them in place of its corners (nothing is
 /// written). Prints the images that gave no vertices (every image with `verbose`) and the
 /// summary line on stderr.
-pub fn detect_for_solve(dataset: &mut Dataset, verbose: bool) -> Result<()> {
-    detect_for_solve_from(dataset, verbose, None)
-}
-
-/// [`detect_for_solve`], predicting the board with the calibration in `start_from`
-/// (`--start-from CAL.toml`) when given.
-pub fn detect_for_solve_from(
+/// The board is predicted with the calibration in `start_from` (`solve --start-from
+/// CAL.toml`) when given.
+pub fn detect_for_solve(
     dataset: &mut Dataset,
     verbose: bool,
     start_from: Option<&Path>,
 ) -> Result<()> {
     let options = DetectOptions {
-        params: start_from.map(read_start).transpose()?,
+        params: start_from
+            .map(|p| read_start(p, corrected(dataset)))
+            .transpose()?,
         ..DetectOptions::default()
     };
     let start = std::time::Instant::now();
@@ -176,10 +186,10 @@ pub fn detect_for_solve_from(
     let detection = detection?;
     for r in &detection.results {
         if verbose || !matches!(r.outcome, detect::Outcome::Found { .. }) {
-            eprintln!("{r}");
+            note!("{r}");
         }
     }
-    eprintln!(
+    note!(
         "{}: {} images: {}; {} vertices detected in {:.2} s (corners.csv not used)",
         dataset.dir.display(),
         detection.results.len(),
@@ -219,7 +229,11 @@ pub fn run(args: &DetectArgs) -> Result<ExitCode> {
     let mut options = DetectOptions {
         pattern: args.pattern,
         use_model: !args.no_model,
-        params: args.start_from.as_deref().map(read_start).transpose()?,
+        params: args
+            .start_from
+            .as_deref()
+            .map(|p| read_start(p, corrected(&dataset)))
+            .transpose()?,
         repredict: !args.no_repredict,
         ..DetectOptions::default()
     };
@@ -229,17 +243,20 @@ pub fn run(args: &DetectArgs) -> Result<ExitCode> {
         }
         let cap = detect::max_jobs();
         if jobs > cap {
-            eprintln!("naocalib: note: --jobs {jobs} capped at {cap} (4 per core, at most 64)");
+            note!("naocalib: note: --jobs {jobs} capped at {cap} (4 per core, at most 64)");
         }
         options.jobs = jobs.min(cap);
     }
     if let Some(p) = args.pattern {
         let board = detect::board_grid(&dataset.model);
         if p != board {
-            eprintln!(
+            note!(
                 "naocalib: note: pattern {}x{} differs from the board in dataset.toml ({}x{}); \
                  corners.csv will only load with a matching [board]",
-                p.cols, p.rows, board.cols, board.rows
+                p.cols,
+                p.rows,
+                board.cols,
+                board.rows
             );
         }
     }
@@ -274,10 +291,10 @@ pub fn run(args: &DetectArgs) -> Result<ExitCode> {
         bar.finish_and_clear();
     }
     for r in &results {
-        eprintln!("{r}");
+        note!("{r}");
     }
     for e in overlay_errors.into_inner().unwrap_or_default() {
-        eprintln!("naocalib: overlay: {e}");
+        note!("naocalib: overlay: {e}");
     }
     let summary = Summary::of(&results);
     let corners = detect::corners(&results);
@@ -292,7 +309,7 @@ pub fn run(args: &DetectArgs) -> Result<ExitCode> {
         );
     }
     naocalib::dataset::write_corners(&args.dataset, &corners, replace)?;
-    eprintln!(
+    note!(
         "{}: {} images: {summary}; wrote {} vertices to {}",
         args.dataset.display(),
         results.len(),

@@ -90,7 +90,7 @@ fn run_update(
     };
     if !format.spec().joints {
         let head = |p: naocalib::model::Param| calibration.value(p);
-        eprintln!(
+        note!(
             "note: the lower camera's correction holds for head offsets HeadYaw {} deg, \
              HeadPitch {} deg (as this calibration had them); if the robot's joint \
              calibration holds others, solve with --start-from (naocalib import) first",
@@ -104,12 +104,12 @@ fn run_update(
         file,
         std::slice::from_ref(&args.input),
     )?;
-    println!(
-        "updated {} ({}); previous file kept as {}",
+    super::print_out(format!(
+        "updated {} ({}); previous file kept as {}\n",
         file.display(),
         format.name(),
         backup.display()
-    );
+    ))?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -249,7 +249,7 @@ pub fn solve_outputs(
         let files: Vec<PathBuf> = if problems.is_empty() && !calibration.corrected_angles() {
             export_all(&calibration, dir, &options).context("--export")?
         } else if problems.is_empty() {
-            eprintln!(
+            note!(
                 "warning: the dataset's joint angles were already corrected by the robot's \
                  joint calibration: --export writes no joint files (their offsets are changes \
                  to the robot's file: use `naocalib export --update FILE`)"

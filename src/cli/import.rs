@@ -50,8 +50,8 @@ pub fn run(args: &ImportArgs) -> Result<ExitCode> {
     };
     export(&calibration, out_format, &args.out, &options)?;
     for (file, format, count) in read {
-        eprintln!("read {} ({format}): {count} values", file.display());
+        note!("read {} ({format}): {count} values", file.display());
     }
-    println!("wrote {}", args.out.display());
+    super::print_out(format!("wrote {}\n", args.out.display()))?;
     Ok(ExitCode::SUCCESS)
 }

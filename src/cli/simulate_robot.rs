@@ -160,6 +160,6 @@ pub fn run(args: &SimulateRobotArgs) -> Result<ExitCode> {
         seed: args.seed,
     };
     let cycles = simulated::serve(socket, &options)?;
-    eprintln!("simulated robot: {cycles} cycles served");
+    note!("simulated robot: {cycles} cycles served");
     Ok(ExitCode::SUCCESS)
 }

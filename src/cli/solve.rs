@@ -56,14 +56,14 @@ fn load(path: &Path) -> Result<Dataset> {
 
 /// The dataset with the vertices detected in its images instead of its corners.csv.
 #[cfg(feature = "detect")]
-fn load_detected(path: &Path, verbose: bool) -> Result<Dataset> {
+fn load_detected(path: &Path, verbose: bool, start_from: Option<&Path>) -> Result<Dataset> {
     let mut dataset = Dataset::load_without_corners(path)?;
-    super::detect::detect_for_solve(&mut dataset, verbose)?;
+    super::detect::detect_for_solve(&mut dataset, verbose, start_from)?;
     Ok(dataset)
 }
 
 #[cfg(not(feature = "detect"))]
-fn load_detected(_: &Path, _: bool) -> Result<Dataset> {
+fn load_detected(_: &Path, _: bool, _: Option<&Path>) -> Result<Dataset> {
     anyhow::bail!(
         "--detect needs naocalib built with the `detect` feature (OpenCV), which this build \
          lacks; rebuild with default features, or run `naocalib detect` elsewhere and solve \
@@ -99,7 +99,7 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
         &naocalib::output::WriteOptions::protecting_dataset(&args.dataset, args.force),
     )?;
     let dataset = if args.detect {
-        load_detected(&args.dataset, verbose)?
+        load_detected(&args.dataset, verbose, args.start_from.as_deref())?
     } else {
         load(&args.dataset)?
     };
