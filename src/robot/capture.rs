@@ -401,6 +401,8 @@ impl From<LolaError> for Halt {
 /// How one stance ended.
 enum Stance {
     Taken,
+    /// Skipped before anything moved.
+    Unreachable(String),
     Skipped(String),
     Hot(Joint, f64),
 }
@@ -632,8 +634,10 @@ impl Runner<'_> {
         ))))
     }
 
-    /// Moves to `target` along a collision-free way: directly, or through the rest posture
-    /// when the straight path would make parts collide. `Some(reason)` when neither is free.
+    /// A collision-free way to `target` (checked every 0.03 rad against the plan's
+    /// collision model): directly; else moving the HipYawPitch motor first or last, or one
+    /// leg (with the head) first; else through the rest posture, or through both legs
+    /// raised (hips −0.8, knees 1.4, ankles −0.6 rad). `Err(reason)` when none is free.
     fn route(&self, model: &Model, target: &JointAngles) -> Result<Vec<JointAngles>, String> {
         let free = |from: &JointAngles, to: &JointAngles| {
             let n = Joint::ALL
@@ -656,14 +660,54 @@ impl Runner<'_> {
                 free || !parted
             }) && parted
         };
+        let here = self.command;
         let rest = self.options.rest;
-        if free(&self.command, target) {
-            Ok(vec![*target])
-        } else if free(&self.command, &rest) && free(&rest, target) {
-            Ok(vec![rest, *target])
-        } else {
-            Err("no collision-free way there (directly or through rest)".into())
+        let mut tucked = rest;
+        for side in Side::BOTH {
+            let [_, _, hip, knee, ankle, _] = side.leg_joints();
+            tucked.set(hip, -0.8);
+            tucked.set(knee, 1.4);
+            tucked.set(ankle, -0.6);
         }
+        // `base` with the joints `joints` taken from `from`.
+        let with = |base: &JointAngles, from: &JointAngles, joints: &[Joint]| {
+            let mut a = *base;
+            for &j in joints {
+                a.set(j, from.get(j));
+            }
+            a
+        };
+        use Joint::{HeadPitch, HeadYaw, LHipYawPitch, RHipYawPitch};
+        let hyp = [LHipYawPitch, RHipYawPitch];
+        let leg = |side: Side| {
+            let mut joints = side.leg_joints().to_vec();
+            joints.extend([LHipYawPitch, RHipYawPitch, HeadYaw, HeadPitch]);
+            joints
+        };
+        let ways: [Vec<JointAngles>; 8] = [
+            vec![*target],
+            vec![with(&here, target, &hyp), *target],
+            vec![with(target, &here, &hyp), *target],
+            vec![with(&here, target, &leg(Side::Left)), *target],
+            vec![with(&here, target, &leg(Side::Right)), *target],
+            vec![rest, *target],
+            vec![tucked, *target],
+            vec![rest, tucked, *target],
+        ];
+        ways.into_iter()
+            .find(|way| {
+                let mut from = here;
+                way.iter().all(|to| {
+                    let ok = unsafe_posture(model, to, 0.0).is_none() && free(&from, to);
+                    from = *to;
+                    ok
+                })
+            })
+            .ok_or_else(|| {
+                "no collision-free way there (directly, joint group by joint group, or \
+                 through rest or legs raised)"
+                    .into()
+            })
     }
 
     /// One stance: move, settle, picture, readings.
@@ -677,7 +721,7 @@ impl Runner<'_> {
         let m = self.options.motion;
         let way = match self.route(model, &row.joints) {
             Ok(way) => way,
-            Err(reason) => return Ok(Stance::Skipped(reason)),
+            Err(reason) => return Ok(Stance::Unreachable(reason)),
         };
         for target in &way {
             if let Some(outcome) = self.move_to(target, true)? {
@@ -840,6 +884,14 @@ pub fn run(
                     runner.stance(model, row, &mut worker, &mut |d| on_done(d, events))?;
                 match outcome {
                     Stance::Taken => break,
+                    Stance::Unreachable(reason) => {
+                        events(Event::Skipped {
+                            id: row.id,
+                            reason: reason.clone(),
+                        });
+                        report.skipped.push((row.id, reason));
+                        break;
+                    }
                     Stance::Skipped(reason) => {
                         events(Event::Skipped {
                             id: row.id,
@@ -918,10 +970,12 @@ pub fn predicted_seconds(rows: &[PlanRow], options: &MotionOptions) -> f64 {
     timing.duration(&postures)
 }
 
-/// A handle for the stop flag set by SIGINT and SIGTERM.
+/// The stop flag, set by SIGINT and SIGTERM (the run then returns to rest and ramps the
+/// stiffness down); a second signal ends the process at once (exit code 1).
 pub fn stop_on_signals() -> std::io::Result<std::sync::Arc<AtomicBool>> {
     let flag = std::sync::Arc::new(AtomicBool::new(false));
     for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register_conditional_shutdown(signal, 1, flag.clone())?;
         signal_hook::flag::register(signal, flag.clone())?;
     }
     Ok(flag)
