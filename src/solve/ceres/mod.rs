@@ -1,4 +1,4 @@
-//! The Ceres backend, over the `cxx` bridge ([`bridge`]) to the C++ shim in
+//! The Ceres backend, over the `cxx` bridge (`bridge.rs`) to the C++ shim in
 //! `cpp/ceres_shim.{h,cc}`.
 //!
 //! Rust ships each capture's chains as data (elementary transforms, with the held parameters
