@@ -304,6 +304,17 @@ fn section(out: &mut String, s: &Section<'_>) -> Result<(), ReportError> {
     let _ = writeln!(out, "<h2>{}</h2>", escape(&s.title));
     out.push_str("<h3>Parameters</h3>\n");
     parameter_table(out, s.solution, s.truth);
+    // With compliance or play estimated: the leg offsets the robot needs standing (what the
+    // team files carry), beside the lying ones.
+    let standing =
+        super::standing_table(&super::export::Calibration::from_solution(s.solution, None));
+    if !standing.is_empty() {
+        let _ = writeln!(
+            out,
+            "<h3>Standing leg offsets</h3>\n<pre>{}</pre>",
+            escape(standing.trim())
+        );
+    }
     out.push_str("<h3>Diagnosis</h3>\n<div class=\"diag\">");
     for line in super::diagnosis(s.solution) {
         let class = if line.contains("NOT") {

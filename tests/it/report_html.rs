@@ -201,3 +201,43 @@ fn element_ids_are_unique() {
     ids.dedup();
     assert_eq!(ids.len(), n, "duplicate ids");
 }
+
+#[test]
+fn standing_offsets_are_in_the_report_when_compliance_and_play_are_estimated() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("robot");
+    let out = naocalib()
+        .args(["simulate", "--effects", "compliance,play", "--seed", "5"])
+        .args(["--stances", "12"])
+        .arg(&data)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let page = |name: &str, free: &[&str]| {
+        let path = tmp.path().join(name);
+        let out = naocalib()
+            .args(["solve"])
+            .arg(&data)
+            .args(free)
+            .arg("--report")
+            .arg(&path)
+            .output()
+            .unwrap();
+        let text =
+            std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{e}: {}", stderr(&out)));
+        let options = roxmltree::ParsingOptions {
+            allow_dtd: true,
+            ..Default::default()
+        };
+        roxmltree::Document::parse_with_options(&text, options).expect("well-formed");
+        text
+    };
+    let with = page("with.html", &["--free", "compliance,play"]);
+    assert!(
+        with.contains("Standing leg offsets"),
+        "missing in the report"
+    );
+    assert!(with.contains("LKneePitch") && with.contains("tau_stand"));
+    let without = page("without.html", &[]);
+    assert!(!without.contains("Standing leg offsets"));
+}
