@@ -23,9 +23,9 @@ pub struct ProblemArgs {
     /// Parameters or families to hold fixed at zero, comma-separated (CamYaw,LBoardRotZ).
     #[arg(long, value_name = "NAMES")]
     pub fix: Option<String>,
-    /// Parameters or families to estimate beyond the paper's, comma-separated
-    /// (head, intrinsics, distortion, links, compliance, play, or names such as Fx).
-    #[arg(long, value_name = "NAMES")]
+    /// Parameters or families to estimate beyond the paper's, comma-separated (the help
+    /// lists the families of the registry).
+    #[arg(long, value_name = "NAMES", help = free_help())]
     pub free: Option<String>,
     /// Robust first fit: huber or cauchy, optionally with a scale in px (huber:2);
     /// outlier vertices are listed and left out of the final fit.
@@ -209,4 +209,19 @@ pub fn within(
         Ok(v) if (lo..=hi).contains(&v) => Ok(v),
         _ => Err(format!("must be from {lo} to {hi}{unit}, got '{text}'")),
     }
+}
+
+/// The families of the registry beyond the paper's, comma-separated, for help texts.
+pub fn extended_families() -> String {
+    use naocalib::model::Family;
+    Family::names(Family::ALL.into_iter().filter(|f| *f != Family::Paper))
+}
+
+/// `--free`'s help, with the registry's families.
+fn free_help() -> String {
+    format!(
+        "Parameters or families to estimate beyond the paper's, comma-separated ({}, or names \
+         such as Fx)",
+        extended_families()
+    )
 }

@@ -23,9 +23,10 @@ pub struct PlanArgs {
     #[arg(long, default_value_t = 144,
           value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(2..=5000))]
     captures: usize,
-    /// Parameter families the calibration will free (paper, head, intrinsics, distortion,
-    /// links, compliance, play), comma-separated; the plan is made for them.
-    #[arg(long, value_name = "FAMILIES", default_value = "paper", value_parser = parse_families)]
+    /// Parameter families the calibration will free, comma-separated; the plan is made for
+    /// them (the help lists the registry's families).
+    #[arg(long, value_name = "FAMILIES", default_value = "paper", value_parser = parse_families,
+          help = families_help())]
     families: Families,
     /// Pixel noise σ per coordinate the prediction assumes (px, 0.001 … 100).
     #[arg(long, default_value_t = 0.1, value_parser = px_sigma)]
@@ -59,6 +60,15 @@ pub struct PlanArgs {
     around: Option<PathBuf>,
 }
 
+/// `--families`' help, with the registry's families.
+fn families_help() -> String {
+    format!(
+        "Parameter families the calibration will free (paper, {}), comma-separated; the \
+         plan is made for them",
+        super::options::extended_families()
+    )
+}
+
 /// The families of `--families`.
 #[derive(Debug, Clone)]
 struct Families(Vec<Family>);
@@ -68,8 +78,10 @@ fn parse_families(text: &str) -> Result<Families, String> {
     let mut out = Vec::new();
     for name in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
         let family = Family::from_name(name).ok_or_else(|| {
-            let names: Vec<_> = Family::ALL.iter().map(|f| f.name()).collect();
-            format!("unknown family '{name}' (families: {})", names.join(", "))
+            format!(
+                "unknown family '{name}' (families: {})",
+                Family::names(Family::ALL)
+            )
         })?;
         if !out.contains(&family) {
             out.push(family);

@@ -33,10 +33,10 @@ pub struct SimulateArgs {
     /// Take the true parameters from this truth.toml instead of drawing them.
     #[arg(long)]
     truth: Option<PathBuf>,
-    /// Give the drawn robot effects the paper's model lacks, as families (head,intrinsics,
-    /// distortion,links,compliance,play, or `realistic` for head,intrinsics,links,
-    /// compliance,play); their true values go into truth.toml.
-    #[arg(long, value_name = "FAMILIES", value_parser = parse_effects, conflicts_with = "truth")]
+    /// Give the drawn robot effects the paper's model lacks, as families (the help lists
+    /// the registry's); their true values go into truth.toml.
+    #[arg(long, value_name = "FAMILIES", value_parser = parse_effects, conflicts_with = "truth",
+          help = effects_help())]
     effects: Option<Effects>,
     /// Replace files of an existing dataset in OUT.
     #[arg(long)]
@@ -254,6 +254,16 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// `--effects`' help, with the registry's families.
+fn effects_help() -> String {
+    format!(
+        "Give the drawn robot effects the paper's model lacks, as families ({}, or `realistic` \
+         for {}); their true values go into truth.toml",
+        super::options::extended_families(),
+        Family::names(Family::realistic())
+    )
+}
+
 /// The families of `--effects`.
 #[derive(Debug, Clone)]
 struct Effects(Vec<Family>);
@@ -263,17 +273,12 @@ fn parse_effects(text: &str) -> Result<Effects, String> {
     let mut out = Vec::new();
     for name in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
         let named: Vec<Family> = match (name, Family::from_name(name)) {
-            ("realistic", _) => vec![
-                Family::Head,
-                Family::Intrinsics,
-                Family::Links,
-                Family::Compliance,
-                Family::Play,
-            ],
+            ("realistic", _) => Family::realistic(),
             (_, Some(Family::Paper)) | (_, None) => {
                 return Err(format!(
-                    "unknown effect '{name}' (head, intrinsics, distortion, links, compliance, \
-                     play, realistic)"
+                    "unknown effect '{name}' ({}, realistic = {})",
+                    super::options::extended_families(),
+                    Family::names(Family::realistic())
                 ));
             }
             (_, Some(f)) => vec![f],

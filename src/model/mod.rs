@@ -18,7 +18,8 @@ pub use board::{Board, Vertex};
 pub use camera::{Camera, Projection};
 pub use chain::{Affine, Chain, Step};
 pub use parameters::{
-    Family, FixedSet, PAPER_PARAMETERS, PARAMETER_COUNT, Param, ParamGroup, Unit,
+    FAMILIES, Family, FamilyInfo, FixedSet, PAPER_PARAMETERS, PARAMETER_COUNT, Param, ParamGroup,
+    Unit,
 };
 pub use pose::{Axis, Pose};
 pub use robot::{JOINT_COUNT, Joint, JointAngles, RobotGeometry, Side};

@@ -74,29 +74,100 @@ pub enum Family {
     Play,
 }
 
+/// One row of the family registry: what a family is and where the tools use it. Adding a
+/// family is one [`Family`] variant, one row of [`FAMILIES`], its parameters in the
+/// parameter registry below and its place in the model; the CLI's help and lists, `--model
+/// auto`, `simulate --effects realistic` and the tests read these rows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FamilyInfo {
+    /// The family.
+    pub family: Family,
+    /// Its name in `--free`, `--effects`, the result JSON (`compliance`, …).
+    pub name: &'static str,
+    /// One line on what it models (help texts, docs/MODEL.md §5).
+    pub about: &'static str,
+    /// Whether `--model auto` may free it. Distortion is not: it belongs to the a-priori
+    /// intrinsic calibration (`[camera] distortion`), and its K1/K2 take up what the held
+    /// principal point leaves (freeing it raised rms(err/σ) of the paper's parameters from
+    /// 1.0 to 4.8 on realistic robots); free it with `--free distortion`.
+    pub auto: bool,
+    /// Whether `simulate --effects realistic` draws it.
+    pub realistic: bool,
+}
+
+/// The family registry, in [`Family`] order.
+pub const FAMILIES: [FamilyInfo; 7] = [
+    FamilyInfo {
+        family: Family::Paper,
+        name: "paper",
+        about: "the paper's 21: camera rotation, leg joint offsets, sandal mounting",
+        auto: false,
+        realistic: false,
+    },
+    FamilyInfo {
+        family: Family::Head,
+        name: "head",
+        about: "head joint offsets",
+        auto: true,
+        realistic: true,
+    },
+    FamilyInfo {
+        family: Family::Intrinsics,
+        name: "intrinsics",
+        about: "corrections of the focal lengths and the principal point",
+        auto: true,
+        realistic: true,
+    },
+    FamilyInfo {
+        family: Family::Distortion,
+        name: "distortion",
+        about: "corrections of the radial distortion k1, k2",
+        auto: false,
+        realistic: false,
+    },
+    FamilyInfo {
+        family: Family::Links,
+        name: "links",
+        about: "corrections of link lengths and the camera position",
+        auto: true,
+        realistic: true,
+    },
+    FamilyInfo {
+        family: Family::Compliance,
+        name: "compliance",
+        about: "joint elasticity under the gravity torque",
+        auto: true,
+        realistic: true,
+    },
+    FamilyInfo {
+        family: Family::Play,
+        name: "play",
+        about: "joint play (backlash) held at one end by gravity",
+        auto: true,
+        realistic: true,
+    },
+];
+
 impl Family {
     /// Every family, in registry order.
-    pub const ALL: [Family; 7] = [
-        Family::Paper,
-        Family::Head,
-        Family::Intrinsics,
-        Family::Distortion,
-        Family::Links,
-        Family::Compliance,
-        Family::Play,
-    ];
+    pub const ALL: [Family; FAMILIES.len()] = {
+        let mut out = [Family::Paper; FAMILIES.len()];
+        let mut i = 0;
+        while i < FAMILIES.len() {
+            out[i] = FAMILIES[i].family;
+            i += 1;
+        }
+        out
+    };
+
+    /// The family's row of [`FAMILIES`].
+    pub fn info(self) -> &'static FamilyInfo {
+        &FAMILIES[self as usize]
+    }
 
     /// The family's name (`paper`, `compliance`, …).
     pub fn name(self) -> &'static str {
-        match self {
-            Family::Paper => "paper",
-            Family::Head => "head",
-            Family::Intrinsics => "intrinsics",
-            Family::Distortion => "distortion",
-            Family::Links => "links",
-            Family::Compliance => "compliance",
-            Family::Play => "play",
-        }
+        self.info().name
     }
 
     /// Looks a family up by name.
@@ -107,6 +178,28 @@ impl Family {
     /// The family's parameters, in registry order.
     pub fn params(self) -> impl Iterator<Item = Param> {
         Param::ALL.into_iter().filter(move |p| p.family() == self)
+    }
+
+    /// The families `--model auto` may free, in registry order.
+    pub fn auto() -> Vec<Family> {
+        Family::ALL.into_iter().filter(|f| f.info().auto).collect()
+    }
+
+    /// The families `simulate --effects realistic` draws, in registry order.
+    pub fn realistic() -> Vec<Family> {
+        Family::ALL
+            .into_iter()
+            .filter(|f| f.info().realistic)
+            .collect()
+    }
+
+    /// The names of `families`, comma-separated (for help texts and messages).
+    pub fn names(families: impl IntoIterator<Item = Family>) -> String {
+        families
+            .into_iter()
+            .map(Family::name)
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 }
 
@@ -423,5 +516,19 @@ mod tests {
                 .unwrap_err()
                 .contains("elasticity")
         );
+    }
+
+    #[test]
+    fn the_family_registry_is_in_family_order_with_unique_names() {
+        for (i, row) in FAMILIES.iter().enumerate() {
+            assert_eq!(row.family as usize, i, "{}", row.name);
+            assert_eq!(Family::from_name(row.name), Some(row.family));
+            assert!(
+                row.family.params().count() > 0,
+                "{} has no parameters",
+                row.name
+            );
+        }
+        assert!(!Family::Paper.info().auto && !Family::Paper.info().realistic);
     }
 }

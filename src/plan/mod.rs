@@ -322,8 +322,11 @@ pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
 /// Whether `p` is one of the paper's 15 angle offsets: the camera rotation and the 12 leg
 /// joints.
 pub fn is_angle_offset(p: Param) -> bool {
-    use crate::model::{Family, Unit};
-    p.family() == Family::Paper && p.unit() == Unit::Deg && !p.name().contains("Board")
+    use crate::model::ParamGroup;
+    matches!(
+        p.group(),
+        ParamGroup::Camera | ParamGroup::LeftLeg | ParamGroup::RightLeg
+    )
 }
 
 /// [`design::capture_information`] on two threads.

@@ -346,7 +346,7 @@ pub fn verdict(tests: Vec<FamilyTest>, rms_px: [f64; 2], joint_noise_deg: Option
              angles"
         )
     } else if !suggest.is_empty() {
-        let auto = if suggest.iter().any(|f| super::AUTO_FAMILIES.contains(f)) {
+        let auto = if suggest.iter().any(|f| f.info().auto) {
             " (or --model auto)"
         } else {
             ""

@@ -324,19 +324,6 @@ const MISFIT_RMS_LIMIT: f64 = 1.1;
 /// set aside (measured on misfitting robots without this cap: 37–101 iterations).
 const MISFIT_NOISE_ITERATIONS: usize = 10;
 
-/// The families [`ModelChoice::Auto`] may free. The lens distortion is not among them: it
-/// belongs to the a-priori intrinsic calibration (`[camera] distortion`), and its
-/// corrections take up what the held principal point leaves (measured: freeing it raised
-/// rms(err/σ) of the paper's parameters from 1.0 to 4.8 on realistic robots); free it
-/// with `--free distortion`.
-pub const AUTO_FAMILIES: [Family; 5] = [
-    Family::Head,
-    Family::Intrinsics,
-    Family::Links,
-    Family::Compliance,
-    Family::Play,
-];
-
 /// Which families are fitted.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum ModelChoice {
@@ -458,7 +445,8 @@ fn select_model(
         values: mut warm,
         ..
     } = screen(&current, &problem.initial, backend, options, &chosen)?;
-    while chosen.len() < AUTO_FAMILIES.len() {
+    let auto = Family::auto();
+    while chosen.len() < auto.len() {
         let Some(test) = next_family(&tests, &chosen, &rejected).cloned() else {
             break;
         };
@@ -563,7 +551,7 @@ fn next_family<'t>(
         .iter()
         .filter(|t| {
             t.p_value < level
-                && AUTO_FAMILIES.contains(&t.family)
+                && t.family.info().auto
                 && !chosen.iter().any(|c| c.family == t.family)
                 && !rejected.contains(&t.family)
         })

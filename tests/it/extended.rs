@@ -253,3 +253,66 @@ fn unknown_family_is_refused_by_name() {
         .expect("ran");
     assert_clean_failure(&out, &["paper"]);
 }
+
+/// docs/MODEL.md §5's tables are the registries': every family row (name, what it models,
+/// auto, realistic) and every parameter's name, family and unit, in order.
+#[test]
+fn model_md_tables_match_the_registries() {
+    use naocalib::model::{FAMILIES, Param};
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/MODEL.md"),
+    )
+    .unwrap();
+    let cells = |line: &str| -> Vec<String> {
+        line.trim()
+            .trim_matches('|')
+            .split('|')
+            .map(|c| c.trim().to_string())
+            .collect()
+    };
+    let yes = |b: bool| if b { "yes" } else { "no" };
+    let families: Vec<Vec<String>> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("| family | models | auto | realistic |"))
+        .skip(2)
+        .take_while(|l| l.starts_with('|'))
+        .map(cells)
+        .collect();
+    let expected: Vec<Vec<String>> = FAMILIES
+        .iter()
+        .map(|f| {
+            vec![
+                f.name.to_string(),
+                f.about.to_string(),
+                yes(f.auto).to_string(),
+                yes(f.realistic).to_string(),
+            ]
+        })
+        .collect();
+    assert_eq!(families, expected, "MODEL.md §5's family table");
+    let params: Vec<Vec<String>> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("| # | name | family | unit |"))
+        .skip(2)
+        .take_while(|l| l.starts_with('|'))
+        .map(cells)
+        .collect();
+    assert_eq!(params.len(), Param::ALL.len(), "one row per parameter");
+    for (row, p) in params.iter().zip(Param::ALL) {
+        assert_eq!(
+            (
+                row[0].as_str(),
+                row[1].as_str(),
+                row[2].as_str(),
+                row[3].as_str()
+            ),
+            (
+                p.index().to_string().as_str(),
+                p.name(),
+                p.family().name(),
+                p.unit().name()
+            ),
+            "MODEL.md §5 row of {p}"
+        );
+    }
+}
