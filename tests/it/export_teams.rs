@@ -128,6 +128,38 @@ fn bhuman_camera_convention() {
 }
 
 #[test]
+fn nomadz_camera_convention() {
+    // NomadZ, Src/Representations/Perception/CameraMatrix.cpp, lines 589–591: rotateY(
+    // headTiltToCameraTilt + cameraTiltCorrection); rotateX(cameraRollCorrection);
+    // rotateZ(cameraPanCorrection), radians (Src/Representations/Configuration/
+    // CameraCalibration.h); camera frame x forward, y left, z up. The keys are read from the
+    // text here, not through naocalib's importer.
+    for cal in calibrations() {
+        let text = nomadz::camera_calibration_cfg(&cal);
+        let key = |name: &str| -> f64 {
+            let line = text
+                .lines()
+                .find(|l| l.trim_start().starts_with(&format!("{name} =")))
+                .unwrap_or_else(|| panic!("no {name} in {text}"));
+            line.split('=')
+                .nth(1)
+                .unwrap()
+                .trim()
+                .trim_end_matches(';')
+                .parse()
+                .unwrap()
+        };
+        let (tilt, roll, pan) = (
+            key("cameraTiltCorrection"),
+            key("cameraRollCorrection"),
+            key("cameraPanCorrection"),
+        );
+        let team = mul(&mul(&ry(TILT_DEG.to_radians() + tilt), &rx(roll)), &rz(pan));
+        assert_close(&team, &naocalib_camera(&cal, 0.0), "NomadZ");
+    }
+}
+
+#[test]
 fn naoth_camera_convention() {
     // NaoTH, NaoTHSoccer/Source/Tools/CameraGeometry.cpp, CameraGeometry::
     // calculateCameraMatrix: chest.translate(offset); chest.rotateZ(cam_rot.z)
