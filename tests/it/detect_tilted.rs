@@ -7,7 +7,7 @@ use std::path::Path;
 use crate::util::solve;
 use naocalib::dataset::{Corner, Dataset};
 use naocalib::detect::{self, DetectOptions, ImageResult, Outcome};
-use naocalib::model::{FixedSet, Model, PARAMETER_COUNT, Param, Unit};
+use naocalib::model::{FixedSet, Model, PARAMETER_COUNT, Param, Side, Unit};
 use naocalib::sim::render::{ImageOutput, RenderOptions};
 use naocalib::sim::{SimOptions, simulate};
 use naocalib::solve::{Problem, backend};
@@ -21,21 +21,11 @@ pub fn robot(pitch: f64, roll: f64, legs: f64) -> [f64; PARAMETER_COUNT] {
     set(Param::CamRoll, roll);
     set(Param::CamYaw, 0.7);
     use Param::*;
-    let joints = [
-        LHipYawPitch,
-        LHipRoll,
-        LHipPitch,
-        LKneePitch,
-        LAnklePitch,
-        LAnkleRoll,
-        RHipYawPitch,
-        RHipRoll,
-        RHipPitch,
-        RKneePitch,
-        RAnklePitch,
-        RAnkleRoll,
-    ];
-    for (k, p) in joints.into_iter().enumerate() {
+    let joints = [Side::Left, Side::Right]
+        .into_iter()
+        .flat_map(Side::leg_joints)
+        .map(|j| j.offset());
+    for (k, p) in joints.enumerate() {
         let sign = if k % 3 == 1 { -1.0 } else { 1.0 };
         set(p, sign * legs * (0.5 + 0.5 * ((k % 4) as f64 / 3.0)));
     }
