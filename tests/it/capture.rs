@@ -387,6 +387,92 @@ fn capture_resume_and_solve_recover_the_robots_truth() {
     assert_recovers(&solve_json(&b.path("ds"), &[]), &state.truth);
 }
 
+/// A robot as the teams' files show them (lower-camera tilt −6°, roll 3°, leg offsets up to
+/// 2°; hidden from capture and solve): the team's current calibration (tilt −5°, legs
+/// zero) is imported, the plan is made around it, capture runs, and `solve --detect
+/// --start-from` recovers the robot's truth.
+#[cfg(feature = "detect")]
+#[test]
+fn a_robot_as_the_teams_files_show_it_is_captured_and_calibrated() {
+    use naocalib::model::Param;
+    use naocalib::report::export::{self, Calibration, Entry, ExportFormat, WriteOptions};
+    let b = Bench::new();
+    let truth = crate::detect_tilted::robot(-6.0, 3.0, 2.0);
+    let mut toml = String::from("[parameters]\n");
+    for p in Param::ALL {
+        toml += &format!("{} = {}\n", p.name(), p.unit().to_report(truth[p.index()]));
+    }
+    std::fs::write(b.path("truth.toml"), toml).unwrap();
+    // The robot's calibration as its team last had it: close, not the truth.
+    let current = Calibration {
+        solver: Some("naocalib import of the robot's files".into()),
+        dataset: None,
+        converged: None,
+        rms_px: None,
+        parameters: Param::ALL
+            .iter()
+            .take(naocalib::model::PAPER_PARAMETERS)
+            .map(|&p| Entry {
+                param: p,
+                value: if p == Param::CamPitch { -5.0 } else { 0.0 },
+                std: Some(0.0),
+                fixed: true,
+            })
+            .collect(),
+        angles: None,
+        posture: export::Posture::Standing,
+    };
+    let cal = b.path("robot.toml");
+    export::export(&current, ExportFormat::Toml, &cal, &WriteOptions::default()).unwrap();
+    let plan = b.path("plan.csv");
+    let out = crate::util::naocalib()
+        .arg("plan")
+        .arg(&plan)
+        .args([
+            "--captures",
+            "48",
+            "--pool",
+            "80",
+            "--seed",
+            "13",
+            "--around",
+        ])
+        .arg(&cal)
+        .arg("--camera")
+        .arg(b.config())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "plan: {}", stderr(&out));
+    let robot = b.robot(
+        "a.sock",
+        "a.csv",
+        &[
+            "--speed",
+            "0",
+            "--truth",
+            b.path("truth.toml").to_str().unwrap(),
+        ],
+    );
+    let out = b
+        .capture(&plan, "ds", "a.sock", &b.snap_camera(), &[])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "capture: {}", stderr(&out));
+    finish(robot);
+    check_safety(&read_record(&b.path("a.csv")).unwrap(), true);
+    let state = naocalib::robot::simulated::read_state(&b.path("state.json")).unwrap();
+    for (played, given) in state.truth.iter().zip(truth) {
+        assert!(
+            (played - given).abs() < 1e-12,
+            "the robot plays the given truth"
+        );
+    }
+    let cal_arg = cal.to_str().unwrap().to_string();
+    let result = solve_json(&b.path("ds"), &["--start-from", &cal_arg]);
+    assert!(captures_of(&b.path("ds")).len() >= 36, "most stances taken");
+    assert_recovers(&result, &state.truth);
+}
+
 /// A robot with compliance and play, a plan made for them: `solve --detect --model auto`
 /// frees them and recovers the robot's truth.
 #[cfg(feature = "detect")]
