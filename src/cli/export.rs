@@ -138,6 +138,11 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
             problems.join("; ")
         );
     }
+    if calibration.posture == Posture::Standing {
+        for caveat in calibration.standing_caveats() {
+            note!("warning: standing leg offset {caveat}");
+        }
+    }
     if let Some(file) = &args.update {
         return run_update(args, file, format, &calibration);
     }
@@ -216,6 +221,7 @@ pub fn solve_outputs(
     plots: Option<&Path>,
     export_dir: Option<&Path>,
     report: Option<&Path>,
+    changes: Option<&[naocalib::report::Change]>,
     force: bool,
 ) -> Result<()> {
     let options = WriteOptions::protecting_dataset(&dataset.dir, force);
@@ -243,9 +249,13 @@ pub fn solve_outputs(
         note!("wrote {} plot files into {}", files.len(), dir.display());
     }
     if let Some(dir) = export_dir {
-        let mut calibration = Calibration::from_solution(solution, Some(&dataset.dir));
+        let mut calibration =
+            Calibration::from_solution(solution, Some(&dataset.dir)).with_lying_torques(dataset);
         calibration.angles = Some(dataset.angles.clone());
         let problems = calibration.problems();
+        for caveat in calibration.standing_caveats() {
+            note!("warning: standing leg offset {caveat}");
+        }
         let files: Vec<PathBuf> = if problems.is_empty() && !calibration.corrected_angles() {
             export_all(&calibration, dir, &options).context("--export")?
         } else if problems.is_empty() {
@@ -281,8 +291,10 @@ pub fn solve_outputs(
         }
     }
     if let Some(path) = report {
-        naocalib::report::html::write_report(solution, dataset, path, &options)
-            .context("--report")?;
+        naocalib::report::html::write_report_with_changes(
+            solution, dataset, changes, path, &options,
+        )
+        .context("--report")?;
         note!("wrote {}", path.display());
     }
     Ok(())

@@ -135,12 +135,16 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
         calibrate()
     }
     .with_context(|| format!("solving {}", args.dataset.display()))?;
+    let changes = previous
+        .as_ref()
+        .map(|p| naocalib::report::changes(&solution, p, corrected));
     super::export::solve_outputs(
         &solution,
         &dataset,
         args.plots.as_deref(),
         args.export.as_deref(),
         args.report.as_deref(),
+        changes.as_deref(),
         args.force,
     )?;
     // A capture whose residuals are many times the others' is named, and the run marked.
@@ -148,10 +152,8 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     let truth = dataset.truth.as_ref().map(|t| &t.values[..]);
     use std::fmt::Write as _;
     let mut out = String::new();
-    let calibration = naocalib::report::export::Calibration::from_solution(&solution, None);
-    let changes = previous
-        .as_ref()
-        .map(|p| naocalib::report::changes(&solution, p, corrected));
+    let calibration = naocalib::report::export::Calibration::from_solution(&solution, None)
+        .with_lying_torques(&dataset);
     if args.json {
         let mut value = naocalib::report::json(&solution, truth);
         value["dataset"] = serde_json::Value::String(args.dataset.display().to_string());
@@ -162,13 +164,8 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
         if let Some(changes) = &changes {
             value["changes"] = naocalib::report::changes_json(changes);
         }
-        let standing = naocalib::report::standing_offsets(&calibration);
-        if !standing.is_empty() {
-            value["standing"] = standing
-                .iter()
-                .map(|(p, _, s)| (p.name().to_string(), serde_json::json!(s)))
-                .collect::<serde_json::Map<_, _>>()
-                .into();
+        if !naocalib::report::standing_offsets(&calibration).is_empty() {
+            value["standing"] = naocalib::report::standing_json(&calibration);
         }
         writeln!(out, "{}", serde_json::to_string_pretty(&value)?)?;
     } else {

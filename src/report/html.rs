@@ -109,6 +109,42 @@ pub struct Section<'a> {
     pub overlays: bool,
     /// Appended to the section's element ids, to keep them unique on a page of several.
     pub id_suffix: String,
+    /// What changed since the robot's previous calibration (`solve --start-from`).
+    pub changes: Option<&'a [super::Change]>,
+}
+
+/// The change since the robot's previous calibration as a table: previous, now, change
+/// and `z = change/σ`, rows with |z| > 3 marked.
+fn change_table(out: &mut String, changes: &[super::Change], id_suffix: &str) {
+    let _ = writeln!(
+        out,
+        "<h3>Change since the previous calibration</h3>\n<table id=\"changes{id_suffix}\">\n\
+         <tr><th class=\"name\">parameter</th><th>previous</th><th>now</th><th>change</th>\
+         <th>z = change/σ</th><th class=\"name\">unit</th></tr>"
+    );
+    for c in changes {
+        let z = if c.z.is_finite() {
+            format!("{:+.2}", c.z)
+        } else {
+            "–".into()
+        };
+        let z = if c.z.abs() > 3.0 {
+            format!("<span class=\"bad\">{z}</span>")
+        } else {
+            z
+        };
+        let _ = writeln!(
+            out,
+            "<tr><td class=\"name\">{}</td><td>{:.4}</td><td>{:.4}</td><td>{:+.4}</td>\
+             <td>{z}</td><td class=\"name\">{}</td></tr>",
+            c.param.name(),
+            c.previous,
+            c.value,
+            c.change,
+            escape(c.param.unit().name())
+        );
+    }
+    out.push_str("</table>\n");
 }
 
 fn page_start(out: &mut String, title: &str) {
@@ -304,10 +340,16 @@ fn section(out: &mut String, s: &Section<'_>) -> Result<(), ReportError> {
     let _ = writeln!(out, "<h2>{}</h2>", escape(&s.title));
     out.push_str("<h3>Parameters</h3>\n");
     parameter_table(out, s.solution, s.truth);
+    if let Some(changes) = s.changes {
+        change_table(out, changes, &s.id_suffix);
+    }
     // With compliance or play estimated: the leg offsets the robot needs standing (what the
-    // team files carry), beside the lying ones.
-    let standing =
-        super::standing_table(&super::export::Calibration::from_solution(s.solution, None));
+    // team files carry), beside the lying ones, with their one-sigma and caveats.
+    let mut calibration = super::export::Calibration::from_solution(s.solution, None);
+    if let Some(dataset) = s.dataset {
+        calibration = calibration.with_lying_torques(dataset);
+    }
+    let standing = super::standing_table(&calibration);
     if !standing.is_empty() {
         let _ = writeln!(
             out,
@@ -364,6 +406,16 @@ fn section(out: &mut String, s: &Section<'_>) -> Result<(), ReportError> {
 /// The report of one solve: parameters, diagnosis, plots, per-capture RMS and overlays of
 /// the [`OVERLAYS`] worst captures.
 pub fn solve_page(solution: &Solution, dataset: &Dataset) -> Result<String, ReportError> {
+    solve_page_with_changes(solution, dataset, None)
+}
+
+/// [`solve_page`] with the table of what changed since the robot's previous calibration
+/// (`solve --start-from`, [`super::changes`]) when `changes` is given.
+pub fn solve_page_with_changes(
+    solution: &Solution,
+    dataset: &Dataset,
+    changes: Option<&[super::Change]>,
+) -> Result<String, ReportError> {
     let title = format!("naocalib calibration of {}", dataset.dir.display());
     let mut out = String::new();
     page_start(&mut out, &title);
@@ -378,6 +430,7 @@ pub fn solve_page(solution: &Solution, dataset: &Dataset) -> Result<String, Repo
             truth,
             overlays: true,
             id_suffix: String::new(),
+            changes,
         },
     )?;
     page_end(&mut out);
@@ -419,6 +472,7 @@ pub fn batch_page(batch: &Batch, drift: &DriftOptions) -> Result<String, ReportE
                 truth: run.truth.as_ref().map(|t| &t[..]),
                 overlays: false,
                 id_suffix: format!("-{}", k + 1),
+                changes: None,
             },
         )?;
     }
@@ -434,6 +488,18 @@ pub fn write_report(
     options: &WriteOptions,
 ) -> Result<(), ReportError> {
     let page = solve_page(solution, dataset)?;
+    Ok(write_atomic(path, page.as_bytes(), options)?)
+}
+
+/// Writes [`solve_page_with_changes`] to `path` (atomically; never over an input).
+pub fn write_report_with_changes(
+    solution: &Solution,
+    dataset: &Dataset,
+    changes: Option<&[super::Change]>,
+    path: &Path,
+    options: &WriteOptions,
+) -> Result<(), ReportError> {
+    let page = solve_page_with_changes(solution, dataset, changes)?;
     Ok(write_atomic(path, page.as_bytes(), options)?)
 }
 

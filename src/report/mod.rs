@@ -479,16 +479,43 @@ pub fn changes_json(changes: &[Change]) -> Value {
 }
 
 /// The leg offsets for a robot in the standard stand beside the lying ones (when compliance
-/// or play have values; empty otherwise): `α + κ·τ_stand + ½π·sgn τ_stand`
-/// ([`export::Calibration::standing_offset`]).
-pub fn standing_offsets(cal: &export::Calibration) -> Vec<(Param, f64, f64)> {
+/// or play have values; empty otherwise): `(offset, lying α, standing α + κ·τ_stand +
+/// ½π·sgn τ_stand, its one-sigma)` ([`export::Calibration::standing_offset`],
+/// [`export::Calibration::standing_std`]).
+pub fn standing_offsets(cal: &export::Calibration) -> Vec<(Param, f64, f64, Option<f64>)> {
     cal.parameters
         .iter()
-        .filter_map(|e| cal.standing_offset(e.param).map(|s| (e.param, e.value, s)))
+        .filter_map(|e| {
+            let s = cal.standing_offset(e.param)?;
+            Some((e.param, e.value, s, cal.standing_std(e.param)))
+        })
         .collect()
 }
 
-/// [`standing_offsets`] as a text table (empty when there are none).
+/// [`standing_offsets`] as JSON: `{offset: {value, std, tau_stand, tau_lying_max}}` (the
+/// `[standing]` entries of the calibration file).
+pub fn standing_json(cal: &export::Calibration) -> Value {
+    let mut map = Map::new();
+    for (p, _, value, std) in standing_offsets(cal) {
+        let mut entry = Map::new();
+        entry.insert("value".into(), json!(value));
+        if let Some(s) = std {
+            entry.insert("std".into(), json!(s));
+        }
+        if let Some(t) = export::calibration::stand_torque(p) {
+            entry.insert("tau_stand".into(), json!(t));
+        }
+        if let Some(m) = cal.standing.get(&p).and_then(|s| s.lying_torque) {
+            entry.insert("tau_lying_max".into(), json!(m));
+        }
+        map.insert(p.name().to_string(), Value::Object(entry));
+    }
+    Value::Object(map)
+}
+
+/// [`standing_offsets`] as a text table (empty when there are none), with the joints
+/// whose standing offset is uncertain beyond the target or extrapolated named below it
+/// ([`export::Calibration::standing_caveats`]).
 pub fn standing_table(cal: &export::Calibration) -> String {
     let rows = standing_offsets(cal);
     if rows.is_empty() {
@@ -498,20 +525,39 @@ pub fn standing_table(cal: &export::Calibration) -> String {
     let _ = writeln!(
         out,
         "\nLeg offsets lying (as calibrated) and standing (alpha + kappa*tau_stand + \
-         play/2*sgn tau_stand; team files carry the standing ones unless --posture lying):"
+         play/2*sgn tau_stand, sigma of alpha, kappa, play jointly; team files carry the \
+         standing ones unless --posture lying):"
     );
     let _ = writeln!(
         out,
-        "{:<24} {:>10} {:>10} {:>10}  unit",
-        "parameter", "lying", "standing", "tau_stand"
+        "{:<24} {:>10} {:>10} {:>8} {:>10} {:>10}  unit",
+        "parameter", "lying", "standing", "sigma", "tau_stand", "tau_lying"
     );
-    for (p, lying, standing) in rows {
+    for (p, lying, standing, std) in rows {
         let tau = export::calibration::stand_torque(p).unwrap_or(f64::NAN);
+        let sigma = std.map_or_else(|| "-".to_string(), |s| format!("{s:.4}"));
+        let lying_tau = cal
+            .standing
+            .get(&p)
+            .and_then(|s| s.lying_torque)
+            .map_or_else(|| "-".to_string(), |m| format!("{m:.4}"));
         let _ = writeln!(
             out,
-            "{:<24} {lying:>10.4} {standing:>10.4} {tau:>+10.4}  deg, N·m",
+            "{:<24} {lying:>10.4} {standing:>10.4} {sigma:>8} {tau:>+10.4} {lying_tau:>10}  deg, N·m",
             p.name()
         );
+    }
+    let caveats = cal.standing_caveats();
+    if !caveats.is_empty() {
+        let _ = writeln!(
+            out,
+            "Standing offsets less certain than {}° (one sigma) or resting on an extrapolated \
+             compliance:",
+            export::calibration::STANDING_TARGET_DEG
+        );
+        for c in caveats {
+            let _ = writeln!(out, "  {c}");
+        }
     }
     out
 }

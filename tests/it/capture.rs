@@ -421,6 +421,7 @@ fn a_robot_as_the_teams_files_show_it_is_captured_and_calibrated() {
             .collect(),
         angles: None,
         posture: export::Posture::Standing,
+        standing: Default::default(),
     };
     let cal = b.path("robot.toml");
     export::export(&current, ExportFormat::Toml, &cal, &WriteOptions::default()).unwrap();

@@ -43,6 +43,7 @@ fn calibration(rng: &mut impl Rng) -> Calibration {
         angles: None,
         // The lying offsets themselves (the standing ones are tested in export_posture.rs).
         posture: export::Posture::Lying,
+        standing: Default::default(),
     }
 }
 

@@ -86,6 +86,7 @@ fn random_calibration(rng: &mut impl Rng, camera_deg: f64) -> Calibration {
         angles: None,
         // The lying offsets themselves (the standing ones are tested in export_posture.rs).
         posture: export::Posture::Lying,
+        standing: Default::default(),
     }
 }
 

@@ -48,6 +48,7 @@ fn calibration(rng: &mut impl Rng) -> Calibration {
             .collect(),
         angles: None,
         posture: export::Posture::Standing,
+        standing: Default::default(),
     }
 }
 

@@ -241,3 +241,88 @@ fn standing_offsets_are_in_the_report_when_compliance_and_play_are_estimated() {
     let without = page("without.html", &[]);
     assert!(!without.contains("Standing leg offsets"));
 }
+
+/// `solve --start-from CAL.toml --report`: the report shows what changed since that
+/// calibration (previous, now, change, z) as the text report does; without `--start-from`
+/// it has no such table.
+#[test]
+fn change_table_is_in_the_report_with_start_from_only() {
+    let tmp = tempfile::tempdir().unwrap();
+    // The robot's previous calibration: another robot's (its offsets differ by degrees).
+    let simulate = |name: &str, seed: &str| {
+        let data = tmp.path().join(name);
+        let out = naocalib()
+            .args(["simulate", "--seed", seed, "--stances", "12"])
+            .arg(&data)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", stderr(&out));
+        data
+    };
+    let before = simulate("before", "21");
+    let robot = simulate("robot", "22");
+    let export = tmp.path().join("previous");
+    let out = naocalib()
+        .arg("solve")
+        .arg(&before)
+        .arg("--export")
+        .arg(&export)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let previous_toml = export.join("calibration.toml");
+    let previous = naocalib::report::export::read_calibration(&previous_toml).unwrap();
+    let page = |name: &str, start_from: bool| {
+        let path = tmp.path().join(name);
+        let mut cmd = naocalib();
+        cmd.arg("solve").arg(&robot).arg("--report").arg(&path);
+        if start_from {
+            cmd.arg("--start-from").arg(&previous_toml);
+        }
+        let out = cmd.output().unwrap();
+        let text =
+            std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{e}: {}", stderr(&out)));
+        let options = roxmltree::ParsingOptions {
+            allow_dtd: true,
+            ..Default::default()
+        };
+        let doc = roxmltree::Document::parse_with_options(&text, options).expect("well-formed");
+        // The rows of the change table: parameter → its cells.
+        doc.descendants()
+            .find(|n| n.attribute("id") == Some("changes"))
+            .map(|table| {
+                table
+                    .children()
+                    .filter(|r| r.has_tag_name("tr"))
+                    .skip(1)
+                    .map(|r| {
+                        r.children()
+                            .filter(|c| c.has_tag_name("td"))
+                            .map(|c| {
+                                c.descendants()
+                                    .filter(|t| t.is_text())
+                                    .map(|t| t.text().unwrap())
+                                    .collect::<String>()
+                            })
+                            .collect::<Vec<String>>()
+                    })
+                    .collect::<Vec<_>>()
+            })
+    };
+    let rows = page("with.html", true).expect("a change table with --start-from");
+    assert!(page("without.html", false).is_none(), "a change table without --start-from");
+    let row = rows
+        .iter()
+        .find(|r| r[0] == "CamPitch")
+        .unwrap_or_else(|| panic!("no CamPitch row: {rows:?}"));
+    let number = |s: &str| s.trim_start_matches('+').parse::<f64>().unwrap();
+    let (was, now, change) = (number(&row[1]), number(&row[2]), number(&row[3]));
+    assert!((was - previous.value(naocalib::model::Param::CamPitch)).abs() < 1e-4);
+    assert!((now - was - change).abs() < 2e-4, "{row:?}");
+    // Two robots' cameras differ by far more than their one-sigma: |z| > 3 and marked.
+    let marked = rows
+        .iter()
+        .filter(|r| r[4].trim_start_matches(['+', '-']).parse::<f64>().unwrap_or(0.0) > 3.0)
+        .count();
+    assert!(marked > 0, "{rows:?}");
+}

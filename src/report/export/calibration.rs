@@ -111,7 +111,30 @@ pub struct Calibration {
     /// The posture whose leg offsets robot files carry (standing unless asked otherwise);
     /// it matters only when compliance or play have values.
     pub posture: Posture,
+    /// What each standing leg offset rests on (its one-sigma, the lying torques its
+    /// compliance was estimated from), by leg offset; empty when not known.
+    pub standing: BTreeMap<Param, Standing>,
 }
+
+/// What a standing leg offset ([`Calibration::standing_offset`]) rests on.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Standing {
+    /// Its one-sigma (deg): `√(gᵀ C g)` with `g = (1, τ_stand, ½·sgn τ_stand)` and `C` the
+    /// covariance of `α`, `κ` and `π` of the joint, correlations included; `None` when
+    /// not known.
+    pub std: Option<f64>,
+    /// The largest |gravity torque| (N·m) about the joint in the lying captures its
+    /// compliance was estimated from; `None` when not known.
+    pub lying_torque: Option<f64>,
+}
+
+/// The accuracy a standing leg offset should reach (deg, one sigma): beyond it the report
+/// and `export` name the joint and the reason.
+pub const STANDING_TARGET_DEG: f64 = 0.05;
+
+/// A compliance applied at more than this many times the largest torque it was estimated
+/// from is an extrapolation the report names.
+pub const EXTRAPOLATION_LIMIT: f64 = 3.0;
 
 /// The posture a robot file's leg offsets are for (`naocalib export --posture`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -139,10 +162,32 @@ pub fn stand_torque(param: Param) -> Option<f64> {
     Some(torques[k])
 }
 
+/// The one-sigma (deg) of the standing offset of `param` in `cal` from the covariance of
+/// `solution`: `√(gᵀ C g)` over the offset, and the compliance and play `cal` estimated
+/// (held or undetermined ones enter with zero weight, as in the offset itself).
+fn standing_std_of(solution: &Solution, cal: &Calibration, param: Param) -> Option<f64> {
+    cal.standing_offset(param)?;
+    let tau = stand_torque(param)?;
+    let estimated = |suffix: &str| {
+        Param::from_name(&format!("{}{suffix}", param.name()))
+            .filter(|p| cal.get(*p).is_some_and(|e| !e.fixed && e.std.is_some()))
+    };
+    let mut g = vec![(param, 1.0)];
+    g.extend(estimated("Compliance").map(|p| (p, tau)));
+    let sign = if tau == 0.0 { 0.0 } else { tau.signum() };
+    g.extend(estimated("Play").map(|p| (p, 0.5 * sign)));
+    let c = &solution.covariance;
+    let variance: f64 = g
+        .iter()
+        .flat_map(|&(a, ga)| g.iter().map(move |&(b, gb)| ga * gb * c[(a.index(), b.index())]))
+        .sum();
+    Some(param.unit().to_report(variance.max(0.0).sqrt()))
+}
+
 impl Calibration {
     /// The calibration of `solution` (from the dataset at `dataset`, if given).
     pub fn from_solution(solution: &Solution, dataset: Option<&Path>) -> Self {
-        Calibration {
+        let mut cal = Calibration {
             solver: Some(solution.summary.solver.clone()),
             dataset: dataset.map(|d| d.display().to_string()),
             converged: Some(solution.summary.converged),
@@ -168,7 +213,93 @@ impl Calibration {
                 .collect(),
             angles: None,
             posture: Posture::Standing,
+            standing: BTreeMap::new(),
+        };
+        let sigmas: Vec<(Param, f64)> = cal
+            .parameters
+            .iter()
+            .filter_map(|e| Some((e.param, standing_std_of(solution, &cal, e.param)?)))
+            .collect();
+        for (p, std) in sigmas {
+            cal.standing.entry(p).or_default().std = Some(std);
         }
+        cal
+    }
+
+    /// Records, for every leg offset, the largest |gravity torque| about its joint in the
+    /// captures of `dataset` (lying, the board of that leg in view): how far the standing
+    /// torque extrapolates the compliance estimated from them.
+    pub fn with_lying_torques(mut self, dataset: &crate::dataset::Dataset) -> Self {
+        use crate::model::{Side, gravity};
+        for side in [Side::Left, Side::Right] {
+            let mut largest = [0.0f64; 6];
+            for c in dataset.captures.iter().filter(|c| c.side == side) {
+                let tau = gravity::leg_torques(
+                    &dataset.model.robot,
+                    &dataset.model.board,
+                    side,
+                    &c.joints,
+                );
+                for (m, t) in largest.iter_mut().zip(tau) {
+                    *m = m.max(t.abs());
+                }
+            }
+            for (joint, m) in side.leg_joints().into_iter().zip(largest) {
+                if self.standing_offset(joint.offset()).is_some() {
+                    self.standing.entry(joint.offset()).or_default().lying_torque = Some(m);
+                }
+            }
+        }
+        self
+    }
+
+    /// The one-sigma (deg) of [`Calibration::standing_offset`] of `param`, when known.
+    pub fn standing_std(&self, param: Param) -> Option<f64> {
+        self.standing_offset(param)?;
+        self.standing.get(&param)?.std
+    }
+
+    /// Why the standing offset of `param` is less certain than [`STANDING_TARGET_DEG`], or
+    /// rests on a compliance extrapolated beyond [`EXTRAPOLATION_LIMIT`] times its lying
+    /// torques (`None` when neither): the joint, the reason and its one-sigma.
+    pub fn standing_caveat(&self, param: Param) -> Option<String> {
+        self.standing_offset(param)?;
+        let tau = stand_torque(param)?;
+        let info = self.standing.get(&param).copied().unwrap_or_default();
+        let compliance = Param::from_name(&format!("{}Compliance", param.name()))
+            .and_then(|p| self.get(p))
+            .is_some_and(|e| !e.fixed && e.std.is_some());
+        let sigma = info
+            .std
+            .map_or_else(|| "σ unknown".to_string(), |s| format!("±{s:.3}°"));
+        let extrapolated = info
+            .lying_torque
+            .filter(|&m| compliance && tau.abs() > EXTRAPOLATION_LIMIT * m);
+        if let Some(m) = extrapolated {
+            let factor = if m > 0.0 {
+                format!("×{:.0}", tau.abs() / m)
+            } else {
+                "from no torque at all".to_string()
+            };
+            return Some(format!(
+                "{param}: compliance determined only up to {m:.3} N·m lying, extrapolated                  {factor} to the stand's {:.2} N·m: standing offset {sigma}",
+                tau.abs()
+            ));
+        }
+        match info.std {
+            Some(s) if s > STANDING_TARGET_DEG => Some(format!(
+                "{param}: standing offset {sigma}, beyond the {STANDING_TARGET_DEG}° target"
+            )),
+            _ => None,
+        }
+    }
+
+    /// [`Calibration::standing_caveat`] of every leg offset that has one.
+    pub fn standing_caveats(&self) -> Vec<String> {
+        self.parameters
+            .iter()
+            .filter_map(|e| self.standing_caveat(e.param))
+            .collect()
     }
 
     /// The effective offset (deg) of the leg joint whose offset is `param` for a robot in
@@ -353,7 +484,19 @@ impl Calibration {
             standing: self
                 .parameters
                 .iter()
-                .filter_map(|e| self.standing_offset(e.param).map(|v| (e.param.name(), v)))
+                .filter_map(|e| {
+                    let value = self.standing_offset(e.param)?;
+                    let info = self.standing.get(&e.param).copied().unwrap_or_default();
+                    Some((
+                        e.param.name(),
+                        StandingFile {
+                            value,
+                            std: info.std,
+                            tau_stand: stand_torque(e.param),
+                            tau_lying_max: info.lying_torque,
+                        },
+                    ))
+                })
                 .collect(),
         }
     }
@@ -457,7 +600,68 @@ struct CalibrationOut<'a> {
     corrected_by: Option<&'a str>,
     parameters: Entries<'a>,
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
-    standing: BTreeMap<&'a str, f64>,
+    standing: BTreeMap<&'a str, StandingFile>,
+}
+
+/// One standing leg offset as written (`[standing.<offset>]`): its value (derived from the
+/// parameters, deg), one-sigma (deg), the stand's torque and the largest lying torque its
+/// compliance was estimated from (N·m).
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StandingFile {
+    value: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    std: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    tau_stand: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    tau_lying_max: Option<f64>,
+}
+
+/// A standing offset as read: a table, or a bare value (files of earlier versions).
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum StandingIn {
+    Table(StandingFile),
+    Value(#[allow(dead_code)] f64),
+}
+
+/// The [`Standing`] entries of a `standing` table read (values are derived from the
+/// parameters and not kept); unknown offsets or bad numbers are errors.
+fn standing_from(
+    table: Option<BTreeMap<String, StandingIn>>,
+    path: &Path,
+) -> Result<BTreeMap<Param, Standing>, ExportError> {
+    let mut out = BTreeMap::new();
+    for (name, entry) in table.unwrap_or_default() {
+        let Some(p) = Param::from_name(&name).filter(|p| stand_torque(*p).is_some()) else {
+            return Err(parse_error(
+                path,
+                format!("standing.{name}: not a leg joint offset"),
+            ));
+        };
+        let StandingIn::Table(t) = entry else {
+            continue;
+        };
+        for (key, x) in [("std", t.std), ("tau_lying_max", t.tau_lying_max)] {
+            if let Some(x) = x
+                && !(x.is_finite() && x >= 0.0)
+            {
+                return Err(parse_error(
+                    path,
+                    format!("standing.{name}.{key}: {x} is not a finite, non-negative number"),
+                ));
+            }
+        }
+        out.insert(
+            p,
+            Standing {
+                std: t.std,
+                lying_torque: t.tau_lying_max,
+            },
+        );
+    }
+    Ok(out)
 }
 
 /// The parameters as a map in registry order.
@@ -514,9 +718,9 @@ struct CalibrationIn {
     angles: Option<AngleKind>,
     corrected_by: Option<String>,
     parameters: UniqueMap<EntryFile>,
-    /// Derived from the parameters on writing ([`Calibration::standing_offset`]).
-    #[allow(dead_code)]
-    standing: Option<BTreeMap<String, f64>>,
+    /// Values derived from the parameters on writing ([`Calibration::standing_offset`]);
+    /// their one-sigma and lying torques are kept.
+    standing: Option<BTreeMap<String, StandingIn>>,
 }
 
 impl CalibrationIn {
@@ -555,6 +759,7 @@ impl CalibrationIn {
             parameters: entries_from(entries, path)?,
             angles,
             posture: Posture::Standing,
+            standing: standing_from(self.standing, path)?,
         })
     }
 }
@@ -586,6 +791,8 @@ struct ResultIn {
     angles: Option<AngleKind>,
     corrected_by: Option<String>,
     parameters: UniqueMap<ResultEntry>,
+    /// `solve --json`'s standing leg offsets (as [`CalibrationIn::standing`]).
+    standing: Option<BTreeMap<String, StandingIn>>,
 }
 
 /// One parameter of the result JSON (further keys such as `std_sandwich` and `truth` are
@@ -624,6 +831,7 @@ impl ResultIn {
             parameters: entries_from(entries, path)?,
             angles,
             posture: Posture::Standing,
+            standing: standing_from(self.standing, path)?,
         })
     }
 }

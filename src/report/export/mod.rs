@@ -664,6 +664,7 @@ pub fn import_calibration(
         parameters,
         angles: None,
         posture: Posture::Standing,
+        standing: Default::default(),
     };
     Ok((cal, read))
 }
