@@ -320,3 +320,81 @@ fn every_format_is_written_by_export_all_and_says_its_units() {
         }
     }
 }
+
+/// NaoTH's whole head → camera rotation, through the head keys as well
+/// (NaoTHSoccer/Source/Tools/CameraGeometry.cpp lines 324–334, commit 79e1e750b):
+/// `Rz(HeadYaw + head_rot.z) · Ry(HeadPitch + head_rot.y) · Rx(head_rot.x) · Rz(z) ·
+/// Ry(y + tilt) · Rx(x)`. A robot's file (the fixture, with a head roll `head_rot.x` of
+/// 1.2° as real files have) updated with calibrations that estimated the head offsets
+/// gives naocalib's chain, head offsets included; and importing that file gives back the
+/// calibration's camera and head offsets. Keys read from the text, not by the importer.
+#[test]
+fn naoth_head_keys_through_naoths_camera_matrix() {
+    let fixture = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/teams/naoth/CameraMatrixOffset.cfg");
+    let dir = tempfile::tempdir().unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(91);
+    for k in 0..20 {
+        let cal = random_calibration(&mut rng, if k % 2 == 0 { 4.0 } else { 25.0 });
+        let path = dir.path().join(format!("CameraMatrixOffset{k}.cfg"));
+        std::fs::copy(&fixture, &path).unwrap();
+        export::update(&cal, ExportFormat::NaothCamera, &path, &[]).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let key = |name: &str| -> f64 {
+            text.lines()
+                .find_map(|l| l.strip_prefix(&format!("{name}=")))
+                .unwrap_or_else(|| panic!("no {name} in {text}"))
+                .parse()
+                .unwrap()
+        };
+        assert_eq!(key("head_rot.x"), 0.0213, "the head roll is kept");
+        for head_pitch in [-0.4, 0.0, 0.3] {
+            let team = [
+                rz(key("head_rot.z")),
+                ry(head_pitch + key("head_rot.y")),
+                rx(key("head_rot.x")),
+                rz(key("cam_rot.bottom.z")),
+                ry(key("cam_rot.bottom.y") + TILT_DEG.to_radians()),
+                rx(key("cam_rot.bottom.x")),
+            ]
+            .iter()
+            .fold(rx(0.0), |m, r| mul(&m, r));
+            // naocalib's chain with its head offsets (q = θ + α).
+            let mut params = vec![0.0; Param::ALL.len()];
+            for p in [
+                Param::CamYaw,
+                Param::CamPitch,
+                Param::CamRoll,
+                Param::HeadYaw,
+                Param::HeadPitch,
+            ] {
+                params[p.index()] = cal.value(p).to_radians();
+            }
+            let mut joints = JointAngles::default();
+            joints.set(naocalib::model::Joint::HeadPitch, head_pitch);
+            let ours = RobotGeometry::default()
+                .camera_chain(&joints)
+                .eval(&params)
+                .rotation;
+            for i in 0..3 {
+                for j in 0..3 {
+                    assert!(
+                        (team[i][j] - ours[i][j]).abs() < 1e-9,
+                        "NaoTH: {team:?} != {ours:?}"
+                    );
+                }
+            }
+        }
+        let (_, imported) = export::import(&path, Some(ExportFormat::NaothCamera)).unwrap();
+        for p in [
+            Param::CamYaw,
+            Param::CamPitch,
+            Param::CamRoll,
+            Param::HeadYaw,
+            Param::HeadPitch,
+        ] {
+            let v = imported.iter().find(|(q, _)| *q == p).unwrap().1;
+            assert!((v - cal.value(p)).abs() < 1e-9, "{p}: {v} vs {}", cal.value(p));
+        }
+    }
+}

@@ -282,7 +282,8 @@ impl Calibration {
                 "from no torque at all".to_string()
             };
             return Some(format!(
-                "{param}: compliance determined only up to {m:.3} N·m lying, extrapolated                  {factor} to the stand's {:.2} N·m: standing offset {sigma}",
+                "{param}: compliance determined only up to {m:.3} N·m lying, extrapolated \
+                 {factor} to the stand's {:.2} N·m: standing offset {sigma}",
                 tau.abs()
             ));
         }
