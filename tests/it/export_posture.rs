@@ -103,7 +103,12 @@ fn standing_offsets_predict_the_standing_robots_joint_angles() {
     // The one-sigma and the lying torques survive the file, and with them the caveats.
     assert_eq!(back.standing, cal.standing);
     assert_eq!(back.standing_caveats(), cal.standing_caveats());
-    assert_eq!(cal.standing_caveats().len(), 2, "{:?}", cal.standing_caveats());
+    assert_eq!(
+        cal.standing_caveats().len(),
+        2,
+        "{:?}",
+        cal.standing_caveats()
+    );
 }
 
 /// The standing offsets' one-sigma is honest, and the extrapolated compliance is worth
@@ -144,8 +149,7 @@ fn standing_sigma_is_honest_over_twenty_robots() {
                     truth[Param::from_name(&format!("{p}{suffix}")).unwrap().index()].to_degrees()
                 };
                 let sign = if tau[k] == 0.0 { 0.0 } else { tau[k].signum() };
-                let true_offset =
-                    at("") + at("Compliance") * tau[k] + 0.5 * at("Play") * sign;
+                let true_offset = at("") + at("Compliance") * tau[k] + 0.5 * at("Play") * sign;
                 let error = cal.standing_offset(p).unwrap() - true_offset;
                 z2 += (error / cal.standing_std(p).unwrap()).powi(2);
                 n += 1.0;

@@ -310,7 +310,10 @@ fn change_table_is_in_the_report_with_start_from_only() {
             })
     };
     let rows = page("with.html", true).expect("a change table with --start-from");
-    assert!(page("without.html", false).is_none(), "a change table without --start-from");
+    assert!(
+        page("without.html", false).is_none(),
+        "a change table without --start-from"
+    );
     let row = rows
         .iter()
         .find(|r| r[0] == "CamPitch")
@@ -322,7 +325,12 @@ fn change_table_is_in_the_report_with_start_from_only() {
     // Two robots' cameras differ by far more than their one-sigma: |z| > 3 and marked.
     let marked = rows
         .iter()
-        .filter(|r| r[4].trim_start_matches(['+', '-']).parse::<f64>().unwrap_or(0.0) > 3.0)
+        .filter(|r| {
+            r[4].trim_start_matches(['+', '-'])
+                .parse::<f64>()
+                .unwrap_or(0.0)
+                > 3.0
+        })
         .count();
     assert!(marked > 0, "{rows:?}");
 }

@@ -179,7 +179,10 @@ fn standing_std_of(solution: &Solution, cal: &Calibration, param: Param) -> Opti
     let c = &solution.covariance;
     let variance: f64 = g
         .iter()
-        .flat_map(|&(a, ga)| g.iter().map(move |&(b, gb)| ga * gb * c[(a.index(), b.index())]))
+        .flat_map(|&(a, ga)| {
+            g.iter()
+                .map(move |&(b, gb)| ga * gb * c[(a.index(), b.index())])
+        })
         .sum();
     Some(param.unit().to_report(variance.max(0.0).sqrt()))
 }
@@ -246,7 +249,10 @@ impl Calibration {
             }
             for (joint, m) in side.leg_joints().into_iter().zip(largest) {
                 if self.standing_offset(joint.offset()).is_some() {
-                    self.standing.entry(joint.offset()).or_default().lying_torque = Some(m);
+                    self.standing
+                        .entry(joint.offset())
+                        .or_default()
+                        .lying_torque = Some(m);
                 }
             }
         }

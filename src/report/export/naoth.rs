@@ -18,8 +18,8 @@
 //! torso · `rotateZ(HeadYaw + head_rot.z) · rotateY(HeadPitch + head_rot.y) ·
 //! rotateX(head_rot.x)` · translate(camera offset) · `rotateZ(z) · rotateY(y + tilt) ·
 //! rotateX(x)` in a camera frame with x along the optical axis, y left, z up. So
-//! `head_rot.z` and `head_rot.y` are head joint offsets in naocalib's sense (true = sensor
-//! + head_rot: α = +head_rot, not −stored), and `head_rot.x`, a roll between the head and
+//! `head_rot.z` and `head_rot.y` are head joint offsets in naocalib's sense (true angle =
+//! sensor + head_rot: α = +head_rot, not −stored), and `head_rot.x`, a roll between the head and
 //! the camera, is folded into the camera rotation on import (exact for the rotation; the
 //! camera position moves by `head_rot.x` × the 5 cm camera offset, which naocalib's import
 //! leaves out). An update writes the bottom camera's `x, y, z` so that, with the file's
@@ -114,9 +114,8 @@ pub fn import(text: &str, path: &Path) -> Result<Imported, ExportError> {
     use super::camera::{offsets_deg_of, rot_x, rot_y, rot_z};
     let ([x, y, z], [head_x, head_y, head_z]) = values(text, path)?;
     let tilt = super::camera::NOMINAL_TILT_DEG.to_radians();
-    let [yaw, pitch, roll] = offsets_deg_of(
-        &(rot_x(head_x.unwrap_or(0.0)) * rot_z(z) * rot_y(tilt + y) * rot_x(x)),
-    );
+    let [yaw, pitch, roll] =
+        offsets_deg_of(&(rot_x(head_x.unwrap_or(0.0)) * rot_z(z) * rot_y(tilt + y) * rot_x(x)));
     let mut out = vec![
         (Param::CamYaw, yaw),
         (Param::CamPitch, pitch),
@@ -144,7 +143,10 @@ pub fn update(text: &str, path: &Path, cal: &Calibration) -> Result<String, Expo
         let new = [x, b - super::camera::NOMINAL_TILT_DEG.to_radians(), z];
         values.extend(KEYS.iter().zip(new).map(|(k, x)| (*k, num(x))));
     }
-    for (key, p) in [(HEAD_KEYS[1], Param::HeadPitch), (HEAD_KEYS[2], Param::HeadYaw)] {
+    for (key, p) in [
+        (HEAD_KEYS[1], Param::HeadPitch),
+        (HEAD_KEYS[2], Param::HeadYaw),
+    ] {
         if let Some(a) = cal.determined_here(p) {
             values.push((key, num(a.to_radians())));
         }
