@@ -139,6 +139,11 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
         );
     }
     if calibration.posture == Posture::Standing {
+        if let Some(summary) = naocalib::report::standing_summary(&calibration) {
+            note!(
+                "standing leg offsets for the team files (α + κ·τ_stand + ½π·sgn τ_stand): {summary}"
+            );
+        }
         for caveat in calibration.standing_caveats() {
             note!("warning: standing leg offset {caveat}");
         }
@@ -253,6 +258,11 @@ pub fn solve_outputs(
             Calibration::from_solution(solution, Some(&dataset.dir)).with_lying_torques(dataset);
         calibration.angles = Some(dataset.angles.clone());
         let problems = calibration.problems();
+        if let Some(summary) = naocalib::report::standing_summary(&calibration) {
+            note!(
+                "standing leg offsets for the team files (α + κ·τ_stand + ½π·sgn τ_stand): {summary}"
+            );
+        }
         for caveat in calibration.standing_caveats() {
             note!("warning: standing leg offset {caveat}");
         }

@@ -492,6 +492,21 @@ pub fn standing_offsets(cal: &export::Calibration) -> Vec<(Param, f64, f64, Opti
         .collect()
 }
 
+/// [`standing_offsets`] in one line, `LHipPitch 0.1234 ± 0.0100°, …` (`None` when there
+/// are none): what `export` and `solve --export` log for the team files.
+pub fn standing_summary(cal: &export::Calibration) -> Option<String> {
+    let rows = standing_offsets(cal);
+    (!rows.is_empty()).then(|| {
+        rows.iter()
+            .map(|(p, _, v, s)| match s {
+                Some(s) => format!("{p} {v:.4} ± {s:.4}°"),
+                None => format!("{p} {v:.4}°"),
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    })
+}
+
 /// [`standing_offsets`] as JSON: `{offset: {value, std, tau_stand, tau_lying_max}}` (the
 /// `[standing]` entries of the calibration file).
 pub fn standing_json(cal: &export::Calibration) -> Value {

@@ -171,3 +171,60 @@ fn standing_sigma_is_honest_over_twenty_robots() {
         "ankle rolls: extrapolated {extrapolated}° vs without compliance {without}°"
     );
 }
+
+/// From the command line: `solve --export` and `export` log every standing offset with its
+/// one-sigma and name the ankle rolls' extrapolated compliance; the text report's table
+/// carries σ and the same caveats; the TOML written keeps them for a later `export`.
+#[test]
+fn solve_and_export_name_the_extrapolated_ankle_rolls() {
+    use crate::util::{naocalib, stderr};
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("robot");
+    let out = naocalib()
+        .args(["simulate", "--effects", "compliance,play", "--seed", "31"])
+        .args(["--stances", "16"])
+        .arg(&data)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let export = tmp.path().join("export");
+    let out = naocalib()
+        .arg("solve")
+        .arg(&data)
+        .args(["--free", "compliance,play", "--solver", "lm", "--export"])
+        .arg(&export)
+        .output()
+        .unwrap();
+    let (text, log) = (String::from_utf8_lossy(&out.stdout), stderr(&out));
+    assert!(out.status.success(), "{log}");
+    for side in ["L", "R"] {
+        let caveat = format!("{side}AnkleRoll: compliance determined only up to");
+        assert!(log.contains(&caveat), "solve --export: {log}");
+        assert!(text.contains(&caveat), "solve's table: {text}");
+        assert!(log.contains(&format!("{side}KneePitch ")), "{log}");
+    }
+    assert!(log.contains(" ± ") && text.contains("sigma"), "{log}\n{text}");
+    assert!(!log.contains("KneePitch: compliance"), "{log}");
+    let out = naocalib()
+        .arg("export")
+        .arg(export.join("calibration.toml"))
+        .args(["--format", "bhuman-joints", "--out"])
+        .arg(tmp.path().join("jointCalibration.cfg"))
+        .output()
+        .unwrap();
+    let log = stderr(&out);
+    assert!(out.status.success(), "{log}");
+    assert!(
+        log.contains("LAnkleRoll: compliance determined only up to") && log.contains(" ± "),
+        "export: {log}"
+    );
+    // Lying offsets asked for: nothing standing to warn about.
+    let out = naocalib()
+        .arg("export")
+        .arg(export.join("calibration.toml"))
+        .args(["--format", "bhuman-joints", "--posture", "lying", "--out"])
+        .arg(tmp.path().join("lying.cfg"))
+        .output()
+        .unwrap();
+    assert!(out.status.success() && !stderr(&out).contains("AnkleRoll"));
+}
