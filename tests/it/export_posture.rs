@@ -203,7 +203,10 @@ fn solve_and_export_name_the_extrapolated_ankle_rolls() {
         assert!(text.contains(&caveat), "solve's table: {text}");
         assert!(log.contains(&format!("{side}KneePitch ")), "{log}");
     }
-    assert!(log.contains(" ± ") && text.contains("sigma"), "{log}\n{text}");
+    assert!(
+        log.contains(" ± ") && text.contains("sigma"),
+        "{log}\n{text}"
+    );
     assert!(!log.contains("KneePitch: compliance"), "{log}");
     let out = naocalib()
         .arg("export")
