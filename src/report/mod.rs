@@ -13,6 +13,13 @@ use serde_json::{Map, Value, json};
 use crate::model::{PAPER_PARAMETERS, Param};
 use crate::solve::Solution;
 
+/// The HTML report's files are written by the one writer, [`crate::output`].
+impl From<crate::output::WriteError> for html::ReportError {
+    fn from(e: crate::output::WriteError) -> Self {
+        html::ReportError::Write(e.into())
+    }
+}
+
 /// Parameters shown in reports: the paper's 21, plus any further one that was estimated.
 pub fn shown_parameters(solution: &Solution) -> Vec<Param> {
     Param::ALL
