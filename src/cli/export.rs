@@ -9,8 +9,7 @@ use clap::Args;
 
 use naocalib::output::Staged;
 use naocalib::report::export::{
-    self, Calibration, ExportError, ExportFormat, Posture, WriteOptions, Withheld,
-    read_calibration,
+    self, Calibration, ExportError, ExportFormat, Posture, Withheld, WriteOptions, read_calibration,
 };
 use naocalib::report::plot;
 use naocalib::solve::Solution;

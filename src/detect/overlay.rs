@@ -124,9 +124,7 @@ pub fn write(
     Some(
         draw(&grey, &detected, before.as_deref(), after.as_deref())
             .map_err(cv)
-            .and_then(|png| {
-                write_atomic(&out, &png, options).map_err(DetectError::from)
-            })
+            .and_then(|png| write_atomic(&out, &png, options).map_err(DetectError::from))
             .map(|()| out.clone()),
     )
 }

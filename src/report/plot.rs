@@ -32,9 +32,9 @@ use std::sync::Once;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::output::{WriteError, WriteOptions, write_atomic, write_atomic_with};
 use crate::dataset::Dataset;
 use crate::model::{PAPER_PARAMETERS, Param, Side};
+use crate::output::{WriteError, WriteOptions, write_atomic, write_atomic_with};
 use crate::solve::{Solution, VertexResidual};
 
 /// Why a plot could not be made.

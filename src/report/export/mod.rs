@@ -74,8 +74,8 @@ pub use calibration::{
 };
 // `WriteOptions` belongs to the export API; `write_atomic` is re-exported for the HTML
 // report, which writes through it.
-pub use crate::output::{WriteOptions, write_atomic};
 use crate::output::check_writable;
+pub use crate::output::{WriteOptions, write_atomic};
 
 /// Everything that can go wrong exporting or reading an export.
 #[derive(Debug, thiserror::Error)]
