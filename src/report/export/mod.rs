@@ -59,6 +59,7 @@ pub mod jsonedit;
 pub mod naoth;
 pub mod nomadz;
 pub mod runswift;
+pub mod tree;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
