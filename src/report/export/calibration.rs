@@ -40,6 +40,7 @@ use serde_json::Value;
 use super::{ExportError, parse_error};
 use crate::dataset::{AngleKind, AngleSource};
 use crate::model::{PAPER_PARAMETERS, Param};
+use crate::report::ResultJson;
 use crate::solve::Solution;
 
 /// The `format` key of the TOML and JSON calibration files.
@@ -407,8 +408,8 @@ impl Calibration {
             let file: CalibrationIn = serde_json::from_str(text).map_err(json_error)?;
             file.into_calibration(path)
         } else {
-            let file: ResultIn = serde_json::from_str(text).map_err(json_error)?;
-            file.into_calibration(path)
+            let result: ResultJson = serde_json::from_str(text).map_err(json_error)?;
+            Calibration::from_result(result, path)
         }
     }
 }
@@ -576,51 +577,26 @@ fn angle_source(
     }
 }
 
-/// The result JSON of `naocalib solve --json`, as far as a calibration needs it.
-#[derive(Deserialize)]
-struct ResultIn {
-    solver: Option<String>,
-    dataset: Option<String>,
-    converged: Option<bool>,
-    rms_px: Option<[f64; 2]>,
-    angles: Option<AngleKind>,
-    corrected_by: Option<String>,
-    parameters: UniqueMap<ResultEntry>,
-}
-
-/// One parameter of the result JSON (further keys such as `std_sandwich` and `truth` are
-/// ignored).
-#[derive(Deserialize)]
-struct ResultEntry {
-    value: f64,
-    std: Option<f64>,
-    unit: Option<String>,
-    #[serde(default)]
-    fixed: bool,
-    determined: Option<bool>,
-    undetermined: Option<bool>,
-}
-
-impl ResultIn {
-    fn into_calibration(self, path: &Path) -> Result<Calibration, ExportError> {
-        let entries = self
+impl Calibration {
+    /// The calibration a result JSON ([`ResultJson`]) holds; `path` names the source in
+    /// errors.
+    pub fn from_result(result: ResultJson, path: &Path) -> Result<Self, ExportError> {
+        let entries = result
             .parameters
             .0
             .into_iter()
             .map(|(name, e)| {
-                let determined = e.determined.unwrap_or(true)
-                    && !e.undetermined.unwrap_or(false)
-                    && (e.fixed || e.std.is_some());
+                let determined = e.is_determined();
                 (name, e.value, e.std, e.unit, e.fixed, determined)
             })
             .collect();
-        let angles = angle_source(self.angles, self.corrected_by, path)?;
-        check_rms(self.rms_px, path)?;
+        let angles = angle_source(result.angles, result.corrected_by, path)?;
+        check_rms(result.rms_px, path)?;
         Ok(Calibration {
-            solver: self.solver,
-            dataset: self.dataset,
-            converged: self.converged,
-            rms_px: self.rms_px,
+            solver: result.solver,
+            dataset: result.dataset,
+            converged: result.converged,
+            rms_px: result.rms_px,
             parameters: entries_from(entries, path)?,
             angles,
             posture: Posture::Standing,
@@ -639,9 +615,12 @@ fn check_rms(rms: Option<[f64; 2]>, path: &Path) -> Result<(), ExportError> {
     Ok(())
 }
 
-/// A table whose keys must be unique: serde's maps keep the last of a repeated key, so a
-/// parameter given twice would pass unnoticed.
-struct UniqueMap<V>(BTreeMap<String, V>);
+/// The `parameters` table of a calibration or result file, by name: read, its keys must be
+/// unique (serde's maps keep the last of a repeated key, so a parameter given twice would
+/// pass unnoticed); written, in alphabetical order.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(transparent)]
+pub struct UniqueMap<V>(pub BTreeMap<String, V>);
 
 impl<'de, V: Deserialize<'de>> Deserialize<'de> for UniqueMap<V> {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {

@@ -113,11 +113,13 @@ pub enum ExportError {
     },
     /// A joint file from a calibration of corrected angles needs the robot's file.
     #[error(
-        "{format}: the calibration was fitted to joint angles already corrected by the \
-             robot's joint calibration, so its offsets are changes to that file: give the \
-             robot's file with --update FILE"
+        "not writing {}: {format}: the calibration was fitted to joint angles already \
+             corrected by the robot's joint calibration, so its offsets are changes to that \
+             file: give the robot's file with --update FILE", path.display()
     )]
     NeedsUpdate {
+        /// The file not written.
+        path: PathBuf,
         /// The format's name.
         format: &'static str,
     },
@@ -521,12 +523,17 @@ impl ExportFormat {
     }
 }
 
-/// Refuses a fresh joint file for a calibration fitted to angles the robot's joint
-/// calibration had already corrected: its offsets are changes to that calibration, which
-/// only `--update` of the robot's file can compose (stored_new = stored_old − α).
-pub fn check_fresh(cal: &Calibration, format: ExportFormat) -> Result<(), ExportError> {
+/// Refuses a fresh joint file (at `path`) for a calibration fitted to angles the robot's
+/// joint calibration had already corrected: its offsets are changes to that calibration,
+/// which only `--update` of the robot's file can compose (stored_new = stored_old − α).
+pub fn check_fresh(
+    cal: &Calibration,
+    format: ExportFormat,
+    path: &Path,
+) -> Result<(), ExportError> {
     if format.spec().joints && cal.corrected_angles() {
         Err(ExportError::NeedsUpdate {
+            path: path.to_path_buf(),
             format: format.name(),
         })
     } else {
@@ -566,7 +573,7 @@ pub fn check_files(
         check_usable(cal, || path.display().to_string())?;
     }
     for (format, path) in files {
-        check_fresh(cal, *format)?;
+        check_fresh(cal, *format, path)?;
         check_writable(path, options)?;
     }
     Ok(())
@@ -643,7 +650,7 @@ pub fn dir_files(cal: &Calibration, dir: &Path) -> (Vec<(ExportFormat, PathBuf)>
         .iter()
         .filter(|(format, _, _)| match withheld {
             Withheld::Nothing => true,
-            Withheld::JointFiles => check_fresh(cal, *format).is_ok(),
+            Withheld::JointFiles => !format.spec().joints,
             Withheld::RobotFiles(_) => !format.is_robot_format(),
         })
         .map(|(format, _, name)| (*format, dir.join(name)))
