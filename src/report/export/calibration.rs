@@ -537,27 +537,47 @@ impl CalibrationIn {
                 ),
             ));
         }
-        let entries = self
-            .parameters
-            .0
-            .into_iter()
-            .map(|(name, e)| {
-                let determined = !e.undetermined;
-                (name, e.value, e.std, e.unit, e.fixed, determined)
-            })
-            .collect();
-        let angles = angle_source(self.angles, self.corrected_by, path)?;
-        check_rms(self.rms_px, path)?;
-        Ok(Calibration {
-            solver: self.solver,
-            dataset: self.dataset,
-            converged: self.converged,
-            rms_px: self.rms_px,
-            parameters: entries_from(entries, path)?,
-            angles,
-            posture: Posture::Standing,
-        })
+        let entries = self.parameters.0.into_iter().map(|(name, e)| {
+            let determined = !e.undetermined;
+            (name, e.value, e.std, e.unit, e.fixed, determined)
+        });
+        let fit = (self.solver, self.dataset, self.converged, self.rms_px);
+        assemble(
+            fit,
+            (self.angles, self.corrected_by),
+            entries.collect(),
+            path,
+        )
     }
+}
+
+/// What a calibration or result file says of the fit: solver, dataset, converged, RMS.
+type FitRead = (
+    Option<String>,
+    Option<String>,
+    Option<bool>,
+    Option<[f64; 2]>,
+);
+
+/// The calibration a file holds: its fit, its `angles`/`corrected_by` and its parameters,
+/// each checked.
+fn assemble(
+    (solver, dataset, converged, rms_px): FitRead,
+    (kind, corrected_by): (Option<AngleKind>, Option<String>),
+    entries: Vec<RawEntry>,
+    path: &Path,
+) -> Result<Calibration, ExportError> {
+    let angles = angle_source(kind, corrected_by, path)?;
+    check_rms(rms_px, path)?;
+    Ok(Calibration {
+        solver,
+        dataset,
+        converged,
+        rms_px,
+        parameters: entries_from(entries, path)?,
+        angles,
+        posture: Posture::Standing,
+    })
 }
 
 /// The `angles` / `corrected_by` keys as an [`AngleSource`] (`None` when absent).
@@ -581,26 +601,18 @@ impl Calibration {
     /// The calibration a result JSON ([`ResultJson`]) holds; `path` names the source in
     /// errors.
     pub fn from_result(result: ResultJson, path: &Path) -> Result<Self, ExportError> {
-        let entries = result
-            .parameters
-            .0
-            .into_iter()
-            .map(|(name, e)| {
-                let determined = e.is_determined();
-                (name, e.value, e.std, e.unit, e.fixed, determined)
-            })
-            .collect();
-        let angles = angle_source(result.angles, result.corrected_by, path)?;
-        check_rms(result.rms_px, path)?;
-        Ok(Calibration {
-            solver: result.solver,
-            dataset: result.dataset,
-            converged: result.converged,
-            rms_px: result.rms_px,
-            parameters: entries_from(entries, path)?,
-            angles,
-            posture: Posture::Standing,
-        })
+        let entries = result.parameters.0.into_iter().map(|(name, e)| {
+            let determined = e.is_determined();
+            (name, e.value, e.std, e.unit, e.fixed, determined)
+        });
+        let fit = (
+            result.solver,
+            result.dataset,
+            result.converged,
+            result.rms_px,
+        );
+        let angles = (result.angles, result.corrected_by);
+        assemble(fit, angles, entries.collect(), path)
     }
 }
 
