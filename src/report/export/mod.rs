@@ -26,8 +26,9 @@
 //!
 //! A result that is not a calibration — not converged, non-finite, or with residuals far
 //! beyond any plausible noise ([`Calibration::problems`]) — is never written into a file a
-//! robot loads: [`export`] and [`export_all`] refuse it with
-//! [`ExportError::NotACalibration`]. naocalib's own TOML/JSON carry `converged` and
+//! robot loads: one policy, [`check_files`] (through [`write_files`], which [`export`],
+//! [`export_all`], `naocalib export` and `solve --export` ([`dir_files`]) all use), refuses
+//! it with [`ExportError::NotACalibration`]. naocalib's own TOML/JSON carry `converged` and
 //! `rms_px`, so they say what the result is; and the rendered team files of such a result
 //! (for those who insist, `naocalib export --allow-unconverged`) start with a
 //! `NOT A CALIBRATION` marker.
