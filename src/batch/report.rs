@@ -8,7 +8,8 @@ use serde_json::{Map, Value, json};
 
 use super::drift::{DriftMode, DriftOptions, DriftPair, Grouping};
 use super::{Batch, Run};
-use crate::report::export::{ExportError, WriteOptions, dataset_files, write_atomic};
+use crate::output::{WriteOptions, dataset_files, write_atomic};
+use crate::report::export::ExportError;
 
 /// Most runs shown as columns of the text table; with more, only the summary columns are
 /// shown (every run is in the JSON).
@@ -302,7 +303,7 @@ impl Batch {
         let summary = dir.join("summary.json");
         // Check everything first, so that a refusal leaves nothing half-written.
         for path in runs.iter().chain([&summary]) {
-            write_atomic_check(path, &options)?;
+            crate::output::check_writable(path, &options)?;
         }
         // All or nothing: written into a stage beside `dir` and published at the end, so
         // that a kill or a full disk part-way leaves `dir` as it was.
@@ -331,10 +332,6 @@ impl Batch {
             .flat_map(|d| dataset_files(d))
             .collect()
     }
-}
-
-fn write_atomic_check(path: &Path, options: &WriteOptions) -> Result<(), ExportError> {
-    Ok(crate::output::check_writable(path, options)?)
 }
 
 fn pretty(value: &Value) -> String {
@@ -378,7 +375,7 @@ impl Batch {
         use crate::report::plot;
         let options = options.clone().protecting(self.input_files());
         // All or nothing: drawn into a stage beside `dir`, published at the end.
-        let stage = crate::output::Staged::new(dir, &options).map_err(ExportError::from)?;
+        let stage = crate::output::Staged::new(dir, &options)?;
         let staged = stage.options();
         let solutions: Vec<_> = self.runs.iter().map(|r| &r.solution).collect();
         if !solutions.is_empty() {
@@ -394,6 +391,6 @@ impl Batch {
                 &staged,
             )?;
         }
-        Ok(stage.publish().map_err(ExportError::from)?)
+        Ok(stage.publish()?)
     }
 }

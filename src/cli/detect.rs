@@ -220,7 +220,7 @@ pub fn run(args: &DetectArgs) -> Result<ExitCode> {
     let overlay_options = overlay_write_options(&dataset, args);
     if let Some(dir) = &args.overlay {
         for capture in dataset.captures.iter().filter(|c| c.image.is_some()) {
-            detect::overlay::check_writable(
+            naocalib::output::check_writable(
                 &detect::overlay::path(dir, capture.id),
                 &overlay_options,
             )?;

@@ -8,10 +8,8 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 
 use naocalib::output::Staged;
-use naocalib::report::export::io::check_writable;
 use naocalib::report::export::{
-    Calibration, ExportError, ExportFormat, Posture, WriteOptions, check_fresh, export, export_all,
-    read_calibration, write_atomic,
+    self, Calibration, ExportError, ExportFormat, Posture, Withheld, WriteOptions, read_calibration,
 };
 use naocalib::report::plot;
 use naocalib::solve::Solution;
@@ -113,18 +111,21 @@ fn run_update(
     Ok(ExitCode::SUCCESS)
 }
 
+/// The `--format NAME` of `export` and `import`, if given.
+pub(super) fn format_arg(name: Option<&str>) -> Result<Option<ExportFormat>> {
+    name.map(|name| {
+        ExportFormat::from_name(name)
+            .with_context(|| format!("unknown --format '{name}' ({})", ExportFormat::names()))
+    })
+    .transpose()
+}
+
 /// Runs `naocalib export`.
 pub fn run(args: &ExportArgs) -> Result<ExitCode> {
     if args.out.is_empty() && args.dir.is_none() && args.update.is_none() {
         bail!("nothing to write: give --out FILE, --dir DIR or --update FILE");
     }
-    let format =
-        match &args.format {
-            Some(name) => Some(ExportFormat::from_name(name).with_context(|| {
-                format!("unknown --format '{name}' ({})", ExportFormat::names())
-            })?),
-            None => None,
-        };
+    let format = format_arg(args.format.as_deref())?;
     let mut calibration = read_calibration(&args.input)?;
     calibration.posture = match args.posture {
         PostureArg::Standing => Posture::Standing,
@@ -155,7 +156,6 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
         force: args.force,
         inputs: vec![args.input.clone()],
     };
-    let mut written = Vec::new();
     let mut targets: Vec<(ExportFormat, PathBuf)> = Vec::new();
     for path in &args.out {
         let format = match format.or_else(|| ExportFormat::from_path(path)) {
@@ -171,43 +171,21 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
                 .map(|(format, _, name)| (*format, dir.join(name))),
         );
     }
-    if !args.allow_unconverged
-        && !problems.is_empty()
-        && let Some((_, path)) = targets.iter().find(|(f, _)| f.is_robot_format())
-    {
-        return Err(anyhow::Error::new(ExportError::NotACalibration {
-            what: path.display().to_string(),
-            reasons: problems,
-        })
-        .context("give --allow-unconverged to write it anyway, marked NOT A CALIBRATION"));
-    }
-    // Every path is checked before any file is written.
-    for (format, path) in &targets {
-        check_fresh(&calibration, *format)
-            .with_context(|| format!("not writing {}", path.display()))?;
-        check_writable(path, &options)?;
-    }
-    // The --dir set is all or nothing: staged beside DIR, published after the --out files.
-    let stage = match &args.dir {
-        Some(dir) => Some(Staged::new(dir, &options)?),
-        None => None,
-    };
-    for (format, path) in targets {
-        let staged = match (&stage, &args.dir) {
-            (Some(stage), Some(dir)) if path.starts_with(dir) && !args.out.contains(&path) => {
-                path.strip_prefix(dir).ok().map(|rel| stage.dir().join(rel))
-            }
-            _ => None,
-        };
-        match &staged {
-            Some(to) => write_atomic(to, format.render(&calibration).as_bytes(), &options)?,
-            None => write_atomic(&path, format.render(&calibration).as_bytes(), &options)?,
-        }
-        written.push(path);
-    }
-    if let Some(stage) = stage {
-        stage.publish()?;
-    }
+    // The library's outputs policy: every path is checked before any file is written, a
+    // result that is not a calibration becomes no robot file without --allow-unconverged,
+    // and the --dir set is all or nothing.
+    let written = export::write_files(
+        &calibration,
+        &targets,
+        args.dir.as_deref(),
+        &options,
+        args.allow_unconverged,
+    )
+    .map_err(|e| match e {
+        e @ ExportError::NotACalibration { .. } => anyhow::Error::new(e)
+            .context("give --allow-unconverged to write it anyway, marked NOT A CALIBRATION"),
+        e => e.into(),
+    })?;
     let mut out = String::new();
     for path in written {
         out.push_str(&format!("wrote {}\n", path.display()));
@@ -257,7 +235,6 @@ pub fn solve_outputs(
         let mut calibration =
             Calibration::from_solution(solution, Some(&dataset.dir)).with_lying_torques(dataset);
         calibration.angles = Some(dataset.angles.clone());
-        let problems = calibration.problems();
         if let Some(summary) = naocalib::report::standing_summary(&calibration) {
             note!(
                 "standing leg offsets for the team files (α + κ·τ_stand + ½π·sgn τ_stand): {summary}"
@@ -266,36 +243,22 @@ pub fn solve_outputs(
         for caveat in calibration.standing_caveats() {
             note!("warning: standing leg offset {caveat}");
         }
-        let files: Vec<PathBuf> = if problems.is_empty() && !calibration.corrected_angles() {
-            export_all(&calibration, dir, &options).context("--export")?
-        } else if problems.is_empty() {
-            note!(
+        let (files, withheld) = export::dir_files(&calibration, dir);
+        match withheld {
+            Withheld::Nothing => {}
+            Withheld::JointFiles => note!(
                 "warning: the dataset's joint angles were already corrected by the robot's \
                  joint calibration: --export writes no joint files (their offsets are changes \
                  to the robot's file: use `naocalib export --update FILE`)"
-            );
-            let mut files = Vec::new();
-            for (format, _, name) in ExportFormat::ALL {
-                if check_fresh(&calibration, format).is_ok() {
-                    let path = dir.join(name);
-                    export(&calibration, format, &path, &options).context("--export")?;
-                    files.push(path);
-                }
-            }
-            files
-        } else {
-            note!(
+            ),
+            Withheld::RobotFiles(problems) => note!(
                 "warning: not a calibration ({}); --export writes only calibration.toml and \
                  calibration.json, marked so, and no robot files",
                 problems.join("; ")
-            );
-            let stage = Staged::new(dir, &options).context("--export")?;
-            for format in [ExportFormat::Toml, ExportFormat::Json] {
-                let path = stage.dir().join(format!("calibration.{}", format.name()));
-                export(&calibration, format, &path, &stage.options()).context("--export")?;
-            }
-            stage.publish().context("--export")?
-        };
+            ),
+        }
+        let files = export::write_files(&calibration, &files, Some(dir), &options, false)
+            .context("--export")?;
         for f in files {
             note!("wrote {}", f.display());
         }

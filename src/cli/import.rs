@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::Args;
 
 use naocalib::report::export::{ExportFormat, WriteOptions, export, import_calibration};
@@ -29,13 +29,7 @@ pub struct ImportArgs {
 
 /// Runs `naocalib import`.
 pub fn run(args: &ImportArgs) -> Result<ExitCode> {
-    let format =
-        match &args.format {
-            Some(name) => Some(ExportFormat::from_name(name).with_context(|| {
-                format!("unknown --format '{name}' ({})", ExportFormat::names())
-            })?),
-            None => None,
-        };
+    let format = super::export::format_arg(args.format.as_deref())?;
     let (calibration, read) = import_calibration(&args.files, format)?;
     let out_format = match ExportFormat::from_path(&args.out) {
         Some(f @ (ExportFormat::Toml | ExportFormat::Json)) => f,

@@ -155,18 +155,15 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     let calibration = naocalib::report::export::Calibration::from_solution(&solution, None)
         .with_lying_torques(&dataset);
     if args.json {
-        let mut value = naocalib::report::json(&solution, truth);
-        value["dataset"] = serde_json::Value::String(args.dataset.display().to_string());
-        value["angles"] = serde_json::to_value(dataset.angles.kind)?;
-        if let Some(by) = &dataset.angles.corrected_by {
-            value["corrected_by"] = serde_json::Value::String(by.clone());
-        }
+        let mut result =
+            naocalib::report::ResultJson::new(&solution, truth).with_standing(&calibration);
+        result.dataset = Some(args.dataset.display().to_string());
+        result.angles = Some(dataset.angles.kind);
+        result.corrected_by = dataset.angles.corrected_by.clone();
         if let Some(changes) = &changes {
-            value["changes"] = naocalib::report::changes_json(changes);
+            result = result.with_changes(changes);
         }
-        if !naocalib::report::standing_offsets(&calibration).is_empty() {
-            value["standing"] = naocalib::report::standing_json(&calibration);
-        }
+        let value = result.to_value();
         writeln!(out, "{}", serde_json::to_string_pretty(&value)?)?;
     } else {
         writeln!(out, "{}", args.dataset.display())?;

@@ -98,7 +98,8 @@ pub enum DatasetError {
         /// Why it is in the way.
         reason: &'static str,
     },
-    /// Writing would replace an input file, or something that is not a file.
+    /// The dataset's directory cannot be made: it, or a file on the way to it, is not a
+    /// directory.
     #[error("{}: {reason}", path.display())]
     Refused {
         /// The file not written.
@@ -106,6 +107,10 @@ pub enum DatasetError {
         /// Why.
         reason: String,
     },
+    /// Writing a file failed or was refused ([`crate::output`], the one writer): it exists
+    /// and `force` was not given, it is an input, something is in the way.
+    #[error(transparent)]
+    Write(#[from] crate::output::WriteError),
     /// The content of a file (or of a dataset about to be written) is wrong.
     #[error("{at}: {message}")]
     Invalid {
@@ -133,6 +138,7 @@ impl DatasetError {
             | DatasetError::Io { path, .. }
             | DatasetError::Exists { path, .. }
             | DatasetError::Refused { path, .. } => path,
+            DatasetError::Write(e) => e.path(),
             DatasetError::Invalid { at, .. } => &at.path,
         }
     }
@@ -158,34 +164,6 @@ impl DatasetError {
             path: path.to_path_buf(),
             action,
             error,
-        }
-    }
-}
-
-impl From<crate::output::WriteError> for DatasetError {
-    fn from(e: crate::output::WriteError) -> Self {
-        use crate::output::WriteError as W;
-        match e {
-            W::Io {
-                path,
-                action,
-                error,
-            } => DatasetError::Io {
-                path,
-                action,
-                error,
-            },
-            W::Exists { path } => DatasetError::Exists {
-                path,
-                reason: "already exists",
-            },
-            e @ (W::Input { .. } | W::NotAFile { .. } | W::InTheWay { .. }) => {
-                let path = e.path().to_path_buf();
-                let text = e.to_string();
-                let prefix = format!("{}: ", path.display());
-                let reason = text.strip_prefix(&prefix).unwrap_or(&text).to_string();
-                DatasetError::Refused { path, reason }
-            }
         }
     }
 }

@@ -24,6 +24,7 @@ use std::path::{Path, PathBuf};
 pub use error::{DatasetError, Location};
 
 use crate::model::{JointAngles, Model, PARAMETER_COUNT, Param, Side, Vertex};
+use crate::output::{WriteOptions, write_atomic};
 
 /// File name of the camera, board and robot description (required).
 pub const DATASET_TOML: &str = "dataset.toml";
@@ -273,11 +274,12 @@ impl Dataset {
         check_writable(dir, truth_toml.is_some(), force)?;
         let stale_truth = truth_path.symlink_metadata().is_ok();
 
-        write::write_atomic(&toml_path, dataset_toml.as_bytes(), force)?;
-        write::write_atomic(&captures_path, &captures_csv, force)?;
-        write::write_atomic(&corners_path, &corners_csv, force)?;
+        let options = WriteOptions::new(force);
+        write_atomic(&toml_path, dataset_toml.as_bytes(), &options)?;
+        write_atomic(&captures_path, &captures_csv, &options)?;
+        write_atomic(&corners_path, &corners_csv, &options)?;
         match truth_toml {
-            Some(text) => write::write_atomic(&truth_path, text.as_bytes(), force)?,
+            Some(text) => write_atomic(&truth_path, text.as_bytes(), &options)?,
             None if stale_truth => std::fs::remove_file(&truth_path)
                 .map_err(|e| DatasetError::io(&truth_path, "remove", e))?,
             None => {}
@@ -357,7 +359,7 @@ pub fn read_model(path: &Path) -> Result<Model, DatasetError> {
 /// Writes `contents` to the file `path` atomically (its directory must exist); refuses to
 /// replace an existing file unless `force`.
 pub fn write_file(path: &Path, contents: &[u8], force: bool) -> Result<(), DatasetError> {
-    write::write_atomic(path, contents, force)
+    Ok(write_atomic(path, contents, &WriteOptions::new(force))?)
 }
 
 /// Writes `corners.csv` into `dir` (created if missing), atomically; refuses to replace an
@@ -371,7 +373,7 @@ pub fn write_corners(dir: &Path, corners: &[Corner], force: bool) -> Result<(), 
     corners::validate(&path, corners, None, None, |i, _| i as u64 + 2)?;
     let csv = corners::render(corners).map_err(|e| DatasetError::io(&path, "write", e.into()))?;
     write::create_dir(dir)?;
-    write::write_atomic(&path, &csv, force)
+    Ok(write_atomic(&path, &csv, &WriteOptions::new(force))?)
 }
 
 #[cfg(test)]
@@ -498,7 +500,10 @@ mod tests {
         let text = std::fs::read_to_string(dir.join(CORNERS_CSV)).unwrap();
         assert_eq!(text, "capture,row,col,u,v\n1,0,0,0,0\n1,0,1,0,1\n");
         let e = write_corners(&dir, &[], false).unwrap_err();
-        assert!(matches!(e, DatasetError::Exists { .. }));
+        assert!(matches!(
+            e,
+            DatasetError::Write(crate::output::WriteError::Exists { .. })
+        ));
         write_corners(&dir, &[], true).unwrap();
         let e = write_corners(&dir, &[corner(1, 0, 0), corner(1, 0, 0)], true).unwrap_err();
         assert_eq!(e.line(), Some(3));

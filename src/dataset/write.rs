@@ -1,4 +1,5 @@
-//! Writing dataset files, through the one atomic writer ([`crate::output`]).
+//! Checks before writing dataset files (which go through the one writer,
+//! [`crate::output::write_atomic`]).
 
 use std::path::Path;
 
@@ -33,38 +34,4 @@ pub(crate) fn check_absent(path: &Path, force: bool) -> Result<(), DatasetError>
         });
     }
     Ok(())
-}
-
-/// Writes `contents` to `path` with [`crate::output::write_atomic`]: atomically, refusing
-/// to replace an existing file unless `force`. The directory must exist.
-pub(crate) fn write_atomic(path: &Path, contents: &[u8], force: bool) -> Result<(), DatasetError> {
-    Ok(crate::output::write_atomic(
-        path,
-        contents,
-        &crate::output::WriteOptions::new(force),
-    )?)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn refusal_is_a_dataset_error() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("a.csv");
-        write_atomic(&path, b"one", false).unwrap();
-        let e = write_atomic(&path, b"two", false).unwrap_err();
-        assert!(matches!(e, DatasetError::Exists { .. }), "{e}");
-        assert_eq!(
-            e.to_string(),
-            format!(
-                "{}: already exists; use --force to overwrite",
-                path.display()
-            )
-        );
-        assert_eq!(std::fs::read(&path).unwrap(), b"one");
-        write_atomic(&path, b"two", true).unwrap();
-        assert_eq!(std::fs::read(&path).unwrap(), b"two");
-    }
 }

@@ -73,13 +73,8 @@ pub enum DetectError {
         size: [u32; 2],
     },
     /// An output (an overlay) could not be written.
-    #[error("{message}")]
-    Write {
-        /// The output file.
-        path: PathBuf,
-        /// Why (names the file).
-        message: String,
-    },
+    #[error(transparent)]
+    Write(#[from] crate::output::WriteError),
     /// OpenCV failed.
     #[error("{}: OpenCV: {message}", path.display())]
     OpenCv {

@@ -9,7 +9,7 @@ use opencv::prelude::*;
 
 use crate::dataset::{Corner, Dataset};
 use crate::model::PARAMETER_COUNT;
-use crate::report::export::{ExportError, WriteOptions, write_atomic};
+use crate::output::{WriteOptions, write_atomic};
 
 use super::{DetectError, ImageResult, Outcome};
 
@@ -94,12 +94,6 @@ pub fn path(dir: &Path, id: u64) -> PathBuf {
     dir.join(format!("capture_{id:04}.png"))
 }
 
-/// Checks that an overlay could be written to `path` with `options`: not an input, and
-/// not an existing file unless `options.force`.
-pub fn check_writable(path: &Path, options: &WriteOptions) -> Result<(), ExportError> {
-    crate::report::export::check_writable(path, options)
-}
-
 /// Writes the overlay of one result into `dir` as `capture_NNNN.png`, atomically and
 /// as `options` allow (never an input, an existing file only with `force`), and returns
 /// its path: detected vertices, the nominal model's projection and, with `after`, the
@@ -130,12 +124,7 @@ pub fn write(
     Some(
         draw(&grey, &detected, before.as_deref(), after.as_deref())
             .map_err(cv)
-            .and_then(|png| {
-                write_atomic(&out, &png, options).map_err(|e| DetectError::Write {
-                    path: out.clone(),
-                    message: e.to_string(),
-                })
-            })
+            .and_then(|png| write_atomic(&out, &png, options).map_err(DetectError::from))
             .map(|()| out.clone()),
     )
 }

@@ -2,6 +2,7 @@
 //! unit and solver block (docs/MODEL.md lists them). Adding a parameter is one line here
 //! plus its place in the model.
 
+use super::robot::Joint;
 use std::fmt;
 
 /// The unit a parameter is reported in. Inside the code and files, angles are radians.
@@ -265,7 +266,7 @@ impl ParamGroup {
 }
 
 macro_rules! parameters {
-    ($($name:ident: $unit:ident, $family:ident, $group:ident;)*) => {
+    ($($name:ident: $unit:ident, $family:ident, $group:ident $(, $joint:ident)?;)*) => {
         /// One calibration parameter. The first 21 are the paper's, in the order of its
         /// Table 2; the extended model's follow, held fixed unless freed.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -294,6 +295,12 @@ macro_rules! parameters {
             /// The solver block this parameter belongs to.
             pub fn group(self) -> ParamGroup {
                 match self { $(Param::$name => ParamGroup::$group,)* }
+            }
+
+            /// The measured joint a per-joint parameter of the extended model (a
+            /// compliance, a play) belongs to; `None` for the others.
+            pub fn joint(self) -> Option<Joint> {
+                match self { $(Param::$name => None $(.or(Some(Joint::$joint)))?,)* }
             }
         }
     };
@@ -340,30 +347,30 @@ parameters! {
     CamX: Mm, Links, BodyLinks;
     CamY: Mm, Links, BodyLinks;
     CamZ: Mm, Links, BodyLinks;
-    LHipYawPitchCompliance: DegPerNm, Compliance, LeftElastic;
-    LHipRollCompliance: DegPerNm, Compliance, LeftElastic;
-    LHipPitchCompliance: DegPerNm, Compliance, LeftElastic;
-    LKneePitchCompliance: DegPerNm, Compliance, LeftElastic;
-    LAnklePitchCompliance: DegPerNm, Compliance, LeftElastic;
-    LAnkleRollCompliance: DegPerNm, Compliance, LeftElastic;
-    RHipYawPitchCompliance: DegPerNm, Compliance, RightElastic;
-    RHipRollCompliance: DegPerNm, Compliance, RightElastic;
-    RHipPitchCompliance: DegPerNm, Compliance, RightElastic;
-    RKneePitchCompliance: DegPerNm, Compliance, RightElastic;
-    RAnklePitchCompliance: DegPerNm, Compliance, RightElastic;
-    RAnkleRollCompliance: DegPerNm, Compliance, RightElastic;
-    LHipYawPitchPlay: Deg, Play, LeftElastic;
-    LHipRollPlay: Deg, Play, LeftElastic;
-    LHipPitchPlay: Deg, Play, LeftElastic;
-    LKneePitchPlay: Deg, Play, LeftElastic;
-    LAnklePitchPlay: Deg, Play, LeftElastic;
-    LAnkleRollPlay: Deg, Play, LeftElastic;
-    RHipYawPitchPlay: Deg, Play, RightElastic;
-    RHipRollPlay: Deg, Play, RightElastic;
-    RHipPitchPlay: Deg, Play, RightElastic;
-    RKneePitchPlay: Deg, Play, RightElastic;
-    RAnklePitchPlay: Deg, Play, RightElastic;
-    RAnkleRollPlay: Deg, Play, RightElastic;
+    LHipYawPitchCompliance: DegPerNm, Compliance, LeftElastic, LHipYawPitch;
+    LHipRollCompliance: DegPerNm, Compliance, LeftElastic, LHipRoll;
+    LHipPitchCompliance: DegPerNm, Compliance, LeftElastic, LHipPitch;
+    LKneePitchCompliance: DegPerNm, Compliance, LeftElastic, LKneePitch;
+    LAnklePitchCompliance: DegPerNm, Compliance, LeftElastic, LAnklePitch;
+    LAnkleRollCompliance: DegPerNm, Compliance, LeftElastic, LAnkleRoll;
+    RHipYawPitchCompliance: DegPerNm, Compliance, RightElastic, RHipYawPitch;
+    RHipRollCompliance: DegPerNm, Compliance, RightElastic, RHipRoll;
+    RHipPitchCompliance: DegPerNm, Compliance, RightElastic, RHipPitch;
+    RKneePitchCompliance: DegPerNm, Compliance, RightElastic, RKneePitch;
+    RAnklePitchCompliance: DegPerNm, Compliance, RightElastic, RAnklePitch;
+    RAnkleRollCompliance: DegPerNm, Compliance, RightElastic, RAnkleRoll;
+    LHipYawPitchPlay: Deg, Play, LeftElastic, LHipYawPitch;
+    LHipRollPlay: Deg, Play, LeftElastic, LHipRoll;
+    LHipPitchPlay: Deg, Play, LeftElastic, LHipPitch;
+    LKneePitchPlay: Deg, Play, LeftElastic, LKneePitch;
+    LAnklePitchPlay: Deg, Play, LeftElastic, LAnklePitch;
+    LAnkleRollPlay: Deg, Play, LeftElastic, LAnkleRoll;
+    RHipYawPitchPlay: Deg, Play, RightElastic, RHipYawPitch;
+    RHipRollPlay: Deg, Play, RightElastic, RHipRoll;
+    RHipPitchPlay: Deg, Play, RightElastic, RHipPitch;
+    RKneePitchPlay: Deg, Play, RightElastic, RKneePitch;
+    RAnklePitchPlay: Deg, Play, RightElastic, RAnklePitch;
+    RAnkleRollPlay: Deg, Play, RightElastic, RAnkleRoll;
 }
 
 /// Number of parameters the paper estimates (the first ones of [`Param::ALL`]).
@@ -376,6 +383,14 @@ impl Param {
     /// Index of the parameter in [`Param::ALL`] and in every parameter vector.
     pub fn index(self) -> usize {
         self as usize
+    }
+
+    /// The parameter of `family` that belongs to `joint` (its compliance, its play), from
+    /// the registry's joint column; `None` when the family has none for that joint.
+    pub fn of_joint(family: Family, joint: Joint) -> Option<Param> {
+        Param::ALL
+            .into_iter()
+            .find(|p| p.family() == family && p.joint() == Some(joint))
     }
 
     /// Looks a parameter up by its name (exact, case-sensitive).

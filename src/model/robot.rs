@@ -134,17 +134,14 @@ impl Joint {
         self.index().checked_sub(2)
     }
 
-    /// The joint's compliance parameter (leg joints only). The registry lists them in leg
-    /// joint order.
+    /// The joint's compliance parameter (leg joints only), from the parameter registry.
     pub fn compliance(self) -> Option<Param> {
-        self.leg_index()
-            .map(|k| Param::ALL[Param::LHipYawPitchCompliance.index() + k])
+        Param::of_joint(super::Family::Compliance, self)
     }
 
-    /// The joint's play parameter (leg joints only), in leg joint order like compliance.
+    /// The joint's play parameter (leg joints only), from the parameter registry.
     pub fn play(self) -> Option<Param> {
-        self.leg_index()
-            .map(|k| Param::ALL[Param::LHipYawPitchPlay.index() + k])
+        Param::of_joint(super::Family::Play, self)
     }
 
     /// The joint's mechanical range in radians (NAO H25 documentation).

@@ -15,12 +15,12 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::export::{ExportError, WriteOptions, write_atomic};
 use super::plot::{self, PlotError};
 use crate::batch::Batch;
 use crate::batch::drift::DriftOptions;
 use crate::dataset::Dataset;
 use crate::model::{Side, Vertex};
+use crate::output::{WriteError, WriteOptions, write_atomic};
 use crate::solve::Solution;
 
 /// How many of the worst captures get an overlay.
@@ -42,7 +42,7 @@ pub enum ReportError {
     },
     /// The file could not be written (or was refused).
     #[error(transparent)]
-    Write(#[from] ExportError),
+    Write(#[from] WriteError),
 }
 
 /// Text with `&`, `<`, `>`, `"` and `'` escaped for HTML and XML.
@@ -487,8 +487,7 @@ pub fn write_report(
     path: &Path,
     options: &WriteOptions,
 ) -> Result<(), ReportError> {
-    let page = solve_page(solution, dataset)?;
-    Ok(write_atomic(path, page.as_bytes(), options)?)
+    write_report_with_changes(solution, dataset, None, path, options)
 }
 
 /// Writes [`solve_page_with_changes`] to `path` (atomically; never over an input).

@@ -5,10 +5,13 @@ pub mod export;
 pub mod html;
 pub mod misfit_plot;
 pub mod plot;
+pub mod result_json;
+
+pub use result_json::ResultJson;
 
 use std::fmt::Write as _;
 
-use serde_json::{Map, Value, json};
+use serde_json::Value;
 
 use crate::model::{PAPER_PARAMETERS, Param};
 use crate::solve::Solution;
@@ -203,89 +206,10 @@ pub fn diagnosis(solution: &Solution) -> Vec<String> {
     lines
 }
 
-/// The result JSON of docs/MODEL.md §8 (plus a few extra keys).
+/// The result JSON of docs/MODEL.md §8 ([`ResultJson`]) as a value, keys in alphabetical
+/// order.
 pub fn json(solution: &Solution, truth: Option<&[f64]>) -> Value {
-    let mut params = Map::new();
-    for p in Param::ALL {
-        let fixed = solution.fixed.is_fixed(p);
-        let determined = solution.is_determined(p);
-        let std = if fixed {
-            json!(0.0)
-        } else if determined {
-            json!(solution.report_std(p))
-        } else {
-            Value::Null
-        };
-        let mut entry = json!({
-            "value": solution.report_value(p),
-            "std": std,
-            "unit": p.unit().name(),
-        });
-        if !fixed && !determined {
-            entry["undetermined"] = Value::Bool(true);
-            entry["determined"] = Value::Bool(false);
-        }
-        if let (Some(sw), false, true) = (solution.sandwich_std, fixed, determined) {
-            entry["std_sandwich"] = json!(p.unit().to_report(sw[p.index()]));
-        }
-        if let (Some(b), false, true) = (&solution.bootstrap, fixed, determined) {
-            entry["std_bootstrap"] = json!(p.unit().to_report(b.std[p.index()]));
-        }
-        if fixed {
-            entry["fixed"] = Value::Bool(true);
-        }
-        if let Some(truth) = truth {
-            entry["truth"] = json!(p.unit().to_report(truth[p.index()]));
-        }
-        params.insert(p.name().to_string(), entry);
-    }
-    let s = &solution.summary;
-    json!({
-        "solver": s.solver,
-        "converged": s.converged,
-        "iterations": s.iterations,
-        "termination": s.termination,
-        "initial_cost": s.initial_cost,
-        "final_cost": s.final_cost,
-        "rms_px": solution.rms_px,
-        "initial_rms_px": solution.initial_rms_px,
-        "captures": solution.captures,
-        "vertices": solution.observations,
-        "residual_sigma_px": solution.residual_variance.sqrt(),
-        "seconds": solution.seconds,
-        "noise": solution.noise.map(|n| json!({
-            "px": n.px,
-            "joint_deg": n.joint.to_degrees(),
-        })),
-        "identifiability": identifiability_json(solution),
-        "families": solution.families.iter().map(|f| f.name()).collect::<Vec<_>>(),
-        "misfit": {
-            "detected": solution.misfit.detected,
-            "suggest": solution.misfit.suggest.iter().map(|f| f.name()).collect::<Vec<_>>(),
-            "message": solution.misfit.message,
-            "noise_model_set_aside": solution.misfit.noise_model_set_aside,
-            "tests": solution.misfit.tests.iter().map(|t| json!({
-                "family": t.family.name(),
-                "parameters": t.params.iter().map(|p| p.name()).collect::<Vec<_>>(),
-                "df": t.df,
-                "statistic": t.statistic,
-                "p_value": t.p_value,
-                "significant": t.significant,
-            })).collect::<Vec<_>>(),
-        },
-        "chosen": solution.chosen.iter().map(|t| json!({
-            "family": t.family.name(), "statistic": t.statistic, "p_value": t.p_value,
-        })).collect::<Vec<_>>(),
-        "undetermined": solution.undetermined.iter().map(|u| json!({
-            "parameter": u.param.name(),
-            "combination": u.direction.describe(),
-        })).collect::<Vec<_>>(),
-        "outliers": solution.outliers.iter().map(|o| json!({
-            "capture": o.capture, "row": o.vertex.row, "col": o.vertex.col,
-            "residual_px": o.residual,
-        })).collect::<Vec<_>>(),
-        "parameters": Value::Object(params),
-    })
+    ResultJson::new(solution, truth).to_value()
 }
 
 /// The model part of the text report: the families fitted (and chosen, with
@@ -358,31 +282,6 @@ pub fn identifiability_text(solution: &Solution) -> String {
         );
     }
     out
-}
-
-/// The identifiability part of the JSON.
-fn identifiability_json(solution: &Solution) -> Value {
-    let id = &solution.identifiability;
-    let direction = |d: &crate::solve::uncertainty::Direction| {
-        json!({
-            "combination": d.describe(),
-            "relative_singular_value": d.relative_singular_value,
-            "terms": d.terms.iter().map(|(p, c)| json!([p.name(), c])).collect::<Vec<_>>(),
-        })
-    };
-    json!({
-        "rank": id.rank,
-        "free": id.free,
-        "condition_number": id.condition_number,
-        "singular_values": id.singular_values,
-        "correlated": id.correlated.iter()
-            .map(|(a, b, r)| json!({"a": a.name(), "b": b.name(), "r": r}))
-            .collect::<Vec<_>>(),
-        "weak": id.weak.iter().map(direction).collect::<Vec<_>>(),
-        "undetermined": id.undetermined.iter().map(direction).collect::<Vec<_>>(),
-        "unobserved": id.unobserved.iter().map(|p| p.name()).collect::<Vec<_>>(),
-        "suggest_fix": id.suggest_fix.iter().map(|p| p.name()).collect::<Vec<_>>(),
-    })
 }
 
 /// One parameter's change since the robot's previous calibration (report units).
@@ -465,19 +364,6 @@ pub fn changes_table(changes: &[Change]) -> String {
     out
 }
 
-/// [`changes`] as JSON: `{param: {previous, value, change, z}}`.
-pub fn changes_json(changes: &[Change]) -> Value {
-    let mut map = Map::new();
-    for c in changes {
-        map.insert(
-            c.param.name().to_string(),
-            json!({"previous": c.previous, "value": c.value, "change": c.change,
-                   "z": if c.z.is_finite() { json!(c.z) } else { Value::Null }}),
-        );
-    }
-    Value::Object(map)
-}
-
 /// The leg offsets for a robot in the standard stand beside the lying ones (when compliance
 /// or play have values; empty otherwise): `(offset, lying α, standing α + κ·τ_stand +
 /// ½π·sgn τ_stand, its one-sigma)` ([`export::Calibration::standing_offset`],
@@ -505,27 +391,6 @@ pub fn standing_summary(cal: &export::Calibration) -> Option<String> {
             .collect::<Vec<_>>()
             .join(", ")
     })
-}
-
-/// [`standing_offsets`] as JSON: `{offset: {value, std, tau_stand, tau_lying_max}}` (the
-/// `[standing]` entries of the calibration file).
-pub fn standing_json(cal: &export::Calibration) -> Value {
-    let mut map = Map::new();
-    for (p, _, value, std) in standing_offsets(cal) {
-        let mut entry = Map::new();
-        entry.insert("value".into(), json!(value));
-        if let Some(s) = std {
-            entry.insert("std".into(), json!(s));
-        }
-        if let Some(t) = export::calibration::stand_torque(p) {
-            entry.insert("tau_stand".into(), json!(t));
-        }
-        if let Some(m) = cal.standing.get(&p).and_then(|s| s.lying_torque) {
-            entry.insert("tau_lying_max".into(), json!(m));
-        }
-        map.insert(p.name().to_string(), Value::Object(entry));
-    }
-    Value::Object(map)
 }
 
 /// [`standing_offsets`] as a text table (empty when there are none), with the joints

@@ -32,9 +32,9 @@ use std::sync::Once;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::export::{ExportError, WriteOptions, write_atomic, write_atomic_with};
 use crate::dataset::Dataset;
 use crate::model::{PAPER_PARAMETERS, Param, Side};
+use crate::output::{WriteError, WriteOptions, write_atomic, write_atomic_with};
 use crate::solve::{Solution, VertexResidual};
 
 /// Why a plot could not be made.
@@ -50,7 +50,7 @@ pub enum PlotError {
     },
     /// Writing the file failed (or was refused).
     #[error(transparent)]
-    Write(#[from] ExportError),
+    Write(#[from] WriteError),
     /// Nothing to plot.
     #[error("nothing to plot: {0}")]
     Empty(&'static str),

@@ -238,20 +238,29 @@ fn out_writes_atomically_and_never_over_inputs() {
     let e = result
         .write(&out, &options.drift, &WriteOptions::default())
         .unwrap_err();
-    assert!(matches!(e, ExportError::Exists { .. }), "{e}");
+    assert!(
+        matches!(
+            e,
+            ExportError::Write(naocalib::output::WriteError::Exists { .. })
+        ),
+        "{e}"
+    );
     let force = WriteOptions {
         force: true,
         ..WriteOptions::default()
     };
     result.write(&out, &options.drift, &force).unwrap();
     // Writing into the dataset's own directory cannot touch its files, even with force.
-    let e = naocalib::report::export::write_atomic(
+    let e = naocalib::output::write_atomic(
         &dir.join("corners.csv"),
         b"x",
         &WriteOptions::protecting_dataset(&dir, true),
     )
     .unwrap_err();
-    assert!(matches!(e, ExportError::Input { .. }), "{e}");
+    assert!(
+        matches!(e, naocalib::output::WriteError::Input { .. }),
+        "{e}"
+    );
     assert!(Dataset::load(&dir).is_ok());
     let names: Vec<_> = std::fs::read_dir(&out)
         .unwrap()

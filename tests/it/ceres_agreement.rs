@@ -271,8 +271,7 @@ fn residuals_and_jacobians_agree_with_whitening_and_distortion() {
 #[test]
 fn residuals_and_jacobians_agree_on_the_extended_model() {
     let (mut problem, _) = make_problem(8, distorted_camera(), &Side::BOTH, 4);
-    problem.fixed = FixedSet::from_lists("head,intrinsics,distortion,links,compliance,play", "")
-        .expect("families");
+    problem.fixed = FixedSet::from_lists(&crate::util::every_family(), "").expect("families");
     assert_eq!(problem.free().len(), PARAMETER_COUNT);
     check_agreement(&problem, 81, "extended");
     add_low_rank_whitening(&mut problem, 82);

@@ -98,13 +98,25 @@ fn refuses_inputs_and_existing_files() {
     let opts = WriteOptions::default();
     export::export(&cal, ExportFormat::Toml, &path, &opts).unwrap();
     let e = export::export(&cal, ExportFormat::Toml, &path, &opts).unwrap_err();
-    assert!(matches!(e, ExportError::Exists { .. }), "{e}");
+    assert!(
+        matches!(
+            e,
+            ExportError::Write(naocalib::output::WriteError::Exists { .. })
+        ),
+        "{e}"
+    );
     let input = WriteOptions {
         force: true,
         inputs: vec![path.clone()],
     };
     let e = export::export(&cal, ExportFormat::Json, &path, &input).unwrap_err();
-    assert!(matches!(e, ExportError::Input { .. }), "{e}");
+    assert!(
+        matches!(
+            e,
+            ExportError::Write(naocalib::output::WriteError::Input { .. })
+        ),
+        "{e}"
+    );
     // export_all checks every path before writing any.
     let all = dir.path().join("all");
     std::fs::create_dir_all(&all).unwrap();

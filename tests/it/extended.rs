@@ -162,12 +162,7 @@ fn non_identifiable_families_exit_cleanly_with_named_directions() {
         .expect("ran");
     assert!(out.status.success(), "{}", stderr(&out));
     let out = naocalib()
-        .args([
-            "solve",
-            "--json",
-            "--free",
-            "head,links,intrinsics,distortion,compliance,play",
-        ])
+        .args(["solve", "--json", "--free", &crate::util::every_family()])
         .arg(&dir)
         .output()
         .expect("ran");

@@ -119,3 +119,16 @@ pub fn plausible_value(rng: &mut impl rand::Rng, param: naocalib::model::Param, 
         _ => rng.random_range(-size..size),
     }
 }
+
+/// Every family beyond the paper's, comma-separated, from the family registry (for
+/// `--free` and [`naocalib::model::FixedSet::from_lists`]): a family added to the registry
+/// is freed by the tests that free them all.
+pub fn every_family() -> String {
+    use naocalib::model::Family;
+    Family::ALL
+        .into_iter()
+        .filter(|f| *f != Family::Paper)
+        .map(Family::name)
+        .collect::<Vec<_>>()
+        .join(",")
+}

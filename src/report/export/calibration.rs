@@ -40,6 +40,7 @@ use serde_json::Value;
 use super::{ExportError, parse_error};
 use crate::dataset::{AngleKind, AngleSource};
 use crate::model::{PAPER_PARAMETERS, Param};
+use crate::report::ResultJson;
 use crate::solve::Solution;
 
 /// The `format` key of the TOML and JSON calibration files.
@@ -301,6 +302,27 @@ impl Calibration {
         }
     }
 
+    /// Every standing leg offset with what it rests on, in registry order: what the
+    /// calibration file's `[standing]` table and the result JSON's `standing` carry.
+    pub fn standing_files(&self) -> Vec<(Param, StandingFile)> {
+        self.parameters
+            .iter()
+            .filter_map(|e| {
+                let value = self.standing_offset(e.param)?;
+                let info = self.standing.get(&e.param).copied().unwrap_or_default();
+                Some((
+                    e.param,
+                    StandingFile {
+                        value,
+                        std: info.std,
+                        tau_stand: stand_torque(e.param),
+                        tau_lying_max: info.lying_torque,
+                    },
+                ))
+            })
+            .collect()
+    }
+
     /// [`Calibration::standing_caveat`] of every leg offset that has one.
     pub fn standing_caveats(&self) -> Vec<String> {
         self.parameters
@@ -489,21 +511,9 @@ impl Calibration {
             corrected_by: self.angles.as_ref().and_then(|a| a.corrected_by.as_deref()),
             parameters: Entries(&self.parameters),
             standing: self
-                .parameters
-                .iter()
-                .filter_map(|e| {
-                    let value = self.standing_offset(e.param)?;
-                    let info = self.standing.get(&e.param).copied().unwrap_or_default();
-                    Some((
-                        e.param.name(),
-                        StandingFile {
-                            value,
-                            std: info.std,
-                            tau_stand: stand_torque(e.param),
-                            tau_lying_max: info.lying_torque,
-                        },
-                    ))
-                })
+                .standing_files()
+                .into_iter()
+                .map(|(p, f)| (p.name(), f))
                 .collect(),
         }
     }
@@ -557,8 +567,8 @@ impl Calibration {
             let file: CalibrationIn = serde_json::from_str(text).map_err(json_error)?;
             file.into_calibration(path)
         } else {
-            let file: ResultIn = serde_json::from_str(text).map_err(json_error)?;
-            file.into_calibration(path)
+            let result: ResultJson = serde_json::from_str(text).map_err(json_error)?;
+            Calibration::from_result(result, path)
         }
     }
 }
@@ -613,24 +623,30 @@ struct CalibrationOut<'a> {
 /// One standing leg offset as written (`[standing.<offset>]`): its value (derived from the
 /// parameters, deg), one-sigma (deg), the stand's torque and the largest lying torque its
 /// compliance was estimated from (N·m).
-#[derive(Serialize, Deserialize)]
+#[derive(Serialize, Deserialize, Debug, Clone, PartialEq)]
 #[serde(deny_unknown_fields)]
-struct StandingFile {
-    value: f64,
+pub struct StandingFile {
+    /// The standing offset (deg).
+    pub value: f64,
+    /// Its one-sigma (deg).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    std: Option<f64>,
+    pub std: Option<f64>,
+    /// The stand's gravity torque about the joint (N·m).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    tau_stand: Option<f64>,
+    pub tau_stand: Option<f64>,
+    /// The largest lying torque the compliance was estimated from (N·m).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    tau_lying_max: Option<f64>,
+    pub tau_lying_max: Option<f64>,
 }
 
 /// A standing offset as read: a table, or a bare value (files of earlier versions).
-#[derive(Deserialize)]
+#[derive(Serialize, Deserialize, Debug, Clone, PartialEq)]
 #[serde(untagged)]
-enum StandingIn {
+pub enum StandingIn {
+    /// `{value, std, tau_stand, tau_lying_max}`.
     Table(StandingFile),
-    Value(#[allow(dead_code)] f64),
+    /// A bare value (deg), as earlier versions wrote.
+    Value(f64),
 }
 
 /// The [`Standing`] entries of a `standing` table read (values are derived from the
@@ -747,28 +763,50 @@ impl CalibrationIn {
                 ),
             ));
         }
-        let entries = self
-            .parameters
-            .0
-            .into_iter()
-            .map(|(name, e)| {
-                let determined = !e.undetermined;
-                (name, e.value, e.std, e.unit, e.fixed, determined)
-            })
-            .collect();
-        let angles = angle_source(self.angles, self.corrected_by, path)?;
-        check_rms(self.rms_px, path)?;
-        Ok(Calibration {
-            solver: self.solver,
-            dataset: self.dataset,
-            converged: self.converged,
-            rms_px: self.rms_px,
-            parameters: entries_from(entries, path)?,
-            angles,
-            posture: Posture::Standing,
-            standing: standing_from(self.standing, path)?,
-        })
+        let entries = self.parameters.0.into_iter().map(|(name, e)| {
+            let determined = !e.undetermined;
+            (name, e.value, e.std, e.unit, e.fixed, determined)
+        });
+        let fit = (self.solver, self.dataset, self.converged, self.rms_px);
+        assemble(
+            fit,
+            (self.angles, self.corrected_by),
+            entries.collect(),
+            self.standing,
+            path,
+        )
     }
+}
+
+/// What a calibration or result file says of the fit: solver, dataset, converged, RMS.
+type FitRead = (
+    Option<String>,
+    Option<String>,
+    Option<bool>,
+    Option<[f64; 2]>,
+);
+
+/// The calibration a file holds: its fit, its `angles`/`corrected_by` and its parameters,
+/// each checked.
+fn assemble(
+    (solver, dataset, converged, rms_px): FitRead,
+    (kind, corrected_by): (Option<AngleKind>, Option<String>),
+    entries: Vec<RawEntry>,
+    standing: Option<BTreeMap<String, StandingIn>>,
+    path: &Path,
+) -> Result<Calibration, ExportError> {
+    let angles = angle_source(kind, corrected_by, path)?;
+    check_rms(rms_px, path)?;
+    Ok(Calibration {
+        solver,
+        dataset,
+        converged,
+        rms_px,
+        parameters: entries_from(entries, path)?,
+        angles,
+        posture: Posture::Standing,
+        standing: standing_from(standing, path)?,
+    })
 }
 
 /// The `angles` / `corrected_by` keys as an [`AngleSource`] (`None` when absent).
@@ -788,58 +826,22 @@ fn angle_source(
     }
 }
 
-/// The result JSON of `naocalib solve --json`, as far as a calibration needs it.
-#[derive(Deserialize)]
-struct ResultIn {
-    solver: Option<String>,
-    dataset: Option<String>,
-    converged: Option<bool>,
-    rms_px: Option<[f64; 2]>,
-    angles: Option<AngleKind>,
-    corrected_by: Option<String>,
-    parameters: UniqueMap<ResultEntry>,
-    /// `solve --json`'s standing leg offsets (as [`CalibrationIn::standing`]).
-    standing: Option<BTreeMap<String, StandingIn>>,
-}
-
-/// One parameter of the result JSON (further keys such as `std_sandwich` and `truth` are
-/// ignored).
-#[derive(Deserialize)]
-struct ResultEntry {
-    value: f64,
-    std: Option<f64>,
-    unit: Option<String>,
-    #[serde(default)]
-    fixed: bool,
-    determined: Option<bool>,
-    undetermined: Option<bool>,
-}
-
-impl ResultIn {
-    fn into_calibration(self, path: &Path) -> Result<Calibration, ExportError> {
-        let entries = self
-            .parameters
-            .0
-            .into_iter()
-            .map(|(name, e)| {
-                let determined = e.determined.unwrap_or(true)
-                    && !e.undetermined.unwrap_or(false)
-                    && (e.fixed || e.std.is_some());
-                (name, e.value, e.std, e.unit, e.fixed, determined)
-            })
-            .collect();
-        let angles = angle_source(self.angles, self.corrected_by, path)?;
-        check_rms(self.rms_px, path)?;
-        Ok(Calibration {
-            solver: self.solver,
-            dataset: self.dataset,
-            converged: self.converged,
-            rms_px: self.rms_px,
-            parameters: entries_from(entries, path)?,
-            angles,
-            posture: Posture::Standing,
-            standing: standing_from(self.standing, path)?,
-        })
+impl Calibration {
+    /// The calibration a result JSON ([`ResultJson`]) holds; `path` names the source in
+    /// errors.
+    pub fn from_result(result: ResultJson, path: &Path) -> Result<Self, ExportError> {
+        let entries = result.parameters.0.into_iter().map(|(name, e)| {
+            let determined = e.is_determined();
+            (name, e.value, e.std, e.unit, e.fixed, determined)
+        });
+        let fit = (
+            result.solver,
+            result.dataset,
+            result.converged,
+            result.rms_px,
+        );
+        let angles = (result.angles, result.corrected_by);
+        assemble(fit, angles, entries.collect(), result.standing, path)
     }
 }
 
@@ -854,9 +856,12 @@ fn check_rms(rms: Option<[f64; 2]>, path: &Path) -> Result<(), ExportError> {
     Ok(())
 }
 
-/// A table whose keys must be unique: serde's maps keep the last of a repeated key, so a
-/// parameter given twice would pass unnoticed.
-struct UniqueMap<V>(BTreeMap<String, V>);
+/// The `parameters` table of a calibration or result file, by name: read, its keys must be
+/// unique (serde's maps keep the last of a repeated key, so a parameter given twice would
+/// pass unnoticed); written, in alphabetical order.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(transparent)]
+pub struct UniqueMap<V>(pub BTreeMap<String, V>);
 
 impl<'de, V: Deserialize<'de>> Deserialize<'de> for UniqueMap<V> {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {

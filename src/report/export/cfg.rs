@@ -11,17 +11,7 @@ use std::path::Path;
 use super::{ExportError, parse_error};
 
 /// A value of a config file, with where its text is.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Value {
-    /// What it is.
-    pub kind: Kind,
-    /// Byte offset of its first character.
-    pub start: usize,
-    /// Byte offset after its last character.
-    pub end: usize,
-    /// Its line (1-based).
-    pub line: usize,
-}
+pub type Value = super::tree::Node<Kind>;
 
 /// The kinds of config values.
 #[derive(Debug, Clone, PartialEq)]
@@ -34,21 +24,16 @@ pub enum Kind {
     List(Vec<Value>),
 }
 
-impl Value {
-    /// The value at `path` below this map.
-    pub fn get(&self, path: &[&str]) -> Option<&Value> {
-        let Some((first, rest)) = path.split_first() else {
-            return Some(self);
-        };
-        match &self.kind {
-            Kind::Map(entries) => entries
-                .iter()
-                .find(|(k, _)| k == first)
-                .and_then(|(_, v)| v.get(rest)),
+impl super::tree::Members for Kind {
+    fn members(&self) -> Option<&[(String, Value)]> {
+        match self {
+            Kind::Map(entries) => Some(entries),
             _ => None,
         }
     }
+}
 
+impl Value {
     /// The scalar's text, if a scalar.
     pub fn scalar(&self) -> Option<&str> {
         match &self.kind {

@@ -6,17 +6,7 @@ use std::path::Path;
 use super::{ExportError, parse_error};
 
 /// A JSON value with where its text is.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Value {
-    /// What it is.
-    pub kind: Kind,
-    /// Byte offset of its first character.
-    pub start: usize,
-    /// Byte offset after its last character.
-    pub end: usize,
-    /// Its line (1-based).
-    pub line: usize,
-}
+pub type Value = super::tree::Node<Kind>;
 
 /// The kinds of JSON values.
 #[derive(Debug, Clone, PartialEq)]
@@ -31,17 +21,10 @@ pub enum Kind {
     Array(Vec<Value>),
 }
 
-impl Value {
-    /// The value at `path` below this object.
-    pub fn get(&self, path: &[&str]) -> Option<&Value> {
-        let Some((first, rest)) = path.split_first() else {
-            return Some(self);
-        };
-        match &self.kind {
-            Kind::Object(members) => members
-                .iter()
-                .find(|(k, _)| k == first)
-                .and_then(|(_, v)| v.get(rest)),
+impl super::tree::Members for Kind {
+    fn members(&self) -> Option<&[(String, Value)]> {
+        match self {
+            Kind::Object(members) => Some(members),
             _ => None,
         }
     }

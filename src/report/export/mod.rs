@@ -14,7 +14,8 @@
 //! - [`update`]: a robot's own file with only what a calibration determined replaced, every
 //!   other byte kept ([`mod@cfg`], [`jsonedit`], [`ini`] read the files with the span of every
 //!   value); [`import`] / [`import_calibration`]: a robot's files read back.
-//! - [`io`]: where files may be written and how (atomically, never over an input).
+//! - files are written through [`crate::output`], the one writer (atomically, never over an
+//!   input); [`write_files`] holds the outputs policy for a calibration's files.
 //!
 //! The sign of the joint offsets: naocalib's α means true angle = logged angle + α. Every
 //! team framework computes true = sensor − stored and commands request + stored, so the
@@ -25,8 +26,9 @@
 //!
 //! A result that is not a calibration — not converged, non-finite, or with residuals far
 //! beyond any plausible noise ([`Calibration::problems`]) — is never written into a file a
-//! robot loads: [`export`] and [`export_all`] refuse it with
-//! [`ExportError::NotACalibration`]. naocalib's own TOML/JSON carry `converged` and
+//! robot loads: one policy, [`check_files`] (through [`write_files`], which [`export`],
+//! [`export_all`], `naocalib export` and `solve --export` ([`dir_files`]) all use), refuses
+//! it with [`ExportError::NotACalibration`]. naocalib's own TOML/JSON carry `converged` and
 //! `rms_px`, so they say what the result is; and the rendered team files of such a result
 //! (for those who insist, `naocalib export --allow-unconverged`) start with a
 //! `NOT A CALIBRATION` marker.
@@ -54,11 +56,11 @@ pub mod camera;
 pub mod cfg;
 pub mod hulks;
 pub mod ini;
-pub mod io;
 pub mod jsonedit;
 pub mod naoth;
 pub mod nomadz;
 pub mod runswift;
+pub mod tree;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -72,7 +74,9 @@ pub use bhuman::{
 pub use calibration::{
     COMPENSATION, Calibration, Entry, FORMAT, Posture, VERSION, read_calibration,
 };
-pub use io::{WriteOptions, check_writable, dataset_files, write_atomic, write_atomic_with};
+// `WriteOptions` belongs to the export API.
+pub use crate::output::WriteOptions;
+use crate::output::{check_writable, write_atomic};
 
 /// Everything that can go wrong exporting or reading an export.
 #[derive(Debug, thiserror::Error)]
@@ -88,18 +92,10 @@ pub enum ExportError {
         #[source]
         source: std::io::Error,
     },
-    /// The file exists and `force` was not given.
-    #[error("{}: already exists; use --force to overwrite", path.display())]
-    Exists {
-        /// The existing file.
-        path: PathBuf,
-    },
-    /// The output path is one of the inputs (a dataset file, the file being converted).
-    #[error("{}: is an input file; refusing to overwrite it", path.display())]
-    Input {
-        /// The input file.
-        path: PathBuf,
-    },
+    /// Writing a file failed or was refused ([`crate::output`], the one writer): it exists
+    /// and `force` was not given, it is an input, something is in the way.
+    #[error(transparent)]
+    Write(#[from] crate::output::WriteError),
     /// A calibration file could not be understood.
     #[error("{}: {message}", path.display())]
     Parse {
@@ -117,11 +113,13 @@ pub enum ExportError {
     },
     /// A joint file from a calibration of corrected angles needs the robot's file.
     #[error(
-        "{format}: the calibration was fitted to joint angles already corrected by the \
-             robot's joint calibration, so its offsets are changes to that file: give the \
-             robot's file with --update FILE"
+        "not writing {}: {format}: the calibration was fitted to joint angles already \
+             corrected by the robot's joint calibration, so its offsets are changes to that \
+             file: give the robot's file with --update FILE", path.display()
     )]
     NeedsUpdate {
+        /// The file not written.
+        path: PathBuf,
         /// The format's name.
         format: &'static str,
     },
@@ -353,7 +351,7 @@ pub const REGISTRY: [FormatSpec; 11] = [
         format: ExportFormat::NaothCamera,
         name: "naoth-camera",
         file: "naoth/CameraMatrixOffset.cfg",
-        description: "NaoTH: [CameraMatrixOffset] cam_rot.bottom.x/y/z in rad",
+        description: "NaoTH: [CameraMatrixOffset] cam_rot.bottom.x/y/z and head_rot.x/y/z in rad",
         render: naoth::camera_matrix_offset_cfg,
         read: Some(naoth::import),
         update: Some(naoth::update),
@@ -525,12 +523,17 @@ impl ExportFormat {
     }
 }
 
-/// Refuses a fresh joint file for a calibration fitted to angles the robot's joint
-/// calibration had already corrected: its offsets are changes to that calibration, which
-/// only `--update` of the robot's file can compose (stored_new = stored_old − α).
-pub fn check_fresh(cal: &Calibration, format: ExportFormat) -> Result<(), ExportError> {
+/// Refuses a fresh joint file (at `path`) for a calibration fitted to angles the robot's
+/// joint calibration had already corrected: its offsets are changes to that calibration,
+/// which only `--update` of the robot's file can compose (stored_new = stored_old − α).
+pub fn check_fresh(
+    cal: &Calibration,
+    format: ExportFormat,
+    path: &Path,
+) -> Result<(), ExportError> {
     if format.spec().joints && cal.corrected_angles() {
         Err(ExportError::NeedsUpdate {
+            path: path.to_path_buf(),
             format: format.name(),
         })
     } else {
@@ -551,20 +554,108 @@ fn check_usable(cal: &Calibration, what: impl FnOnce() -> String) -> Result<(), 
     }
 }
 
-/// Writes `cal` to `path` in `format`, atomically (see [`write_atomic`]). A result that
-/// is not a calibration is refused for robot formats ([`ExportError::NotACalibration`]);
-/// naocalib's TOML and JSON are written, carrying `converged` and `rms_px`.
+/// The outputs policy of a calibration's files, checked for every file before any is
+/// written: a result that is not a calibration ([`Calibration::problems`]) never becomes a
+/// file a robot loads ([`ExportError::NotACalibration`], naming the first such file) unless
+/// `allow_not_calibration` (`naocalib export --allow-unconverged`: the files then start
+/// with a `NOT A CALIBRATION` marker); a joint file of a calibration fitted to corrected
+/// angles is refused ([`check_fresh`]); and no file may replace an input, nor an existing
+/// file without `options.force`.
+pub fn check_files(
+    cal: &Calibration,
+    files: &[(ExportFormat, PathBuf)],
+    options: &WriteOptions,
+    allow_not_calibration: bool,
+) -> Result<(), ExportError> {
+    if !allow_not_calibration
+        && let Some((_, path)) = files.iter().find(|(f, _)| f.is_robot_format())
+    {
+        check_usable(cal, || path.display().to_string())?;
+    }
+    for (format, path) in files {
+        check_fresh(cal, *format, path)?;
+        check_writable(path, options)?;
+    }
+    Ok(())
+}
+
+/// Writes `cal` as `files` (each a format and its path) after [`check_files`], atomically,
+/// and returns the paths in the order given. The files inside `dir` are written all or
+/// nothing: into a stage beside `dir`, published after the others.
+pub fn write_files(
+    cal: &Calibration,
+    files: &[(ExportFormat, PathBuf)],
+    dir: Option<&Path>,
+    options: &WriteOptions,
+    allow_not_calibration: bool,
+) -> Result<Vec<PathBuf>, ExportError> {
+    check_files(cal, files, options, allow_not_calibration)?;
+    let stage = dir
+        .map(|d| crate::output::Staged::new(d, options))
+        .transpose()?;
+    for (format, path) in files {
+        let text = format.render(cal);
+        match (&stage, dir.and_then(|d| path.strip_prefix(d).ok())) {
+            (Some(stage), Some(rel)) => {
+                write_atomic(&stage.dir().join(rel), text.as_bytes(), &stage.options())?
+            }
+            _ => write_atomic(path, text.as_bytes(), options)?,
+        }
+    }
+    if let Some(stage) = stage {
+        stage.publish()?;
+    }
+    Ok(files.iter().map(|(_, path)| path.clone()).collect())
+}
+
+/// Writes `cal` to `path` in `format`, atomically, under the outputs policy of
+/// [`check_files`]: a result that is not a calibration is refused for robot formats
+/// ([`ExportError::NotACalibration`]); naocalib's TOML and JSON are written, carrying
+/// `converged` and `rms_px`.
 pub fn export(
     cal: &Calibration,
     format: ExportFormat,
     path: &Path,
     options: &WriteOptions,
 ) -> Result<(), ExportError> {
-    if format.is_robot_format() {
-        check_usable(cal, || path.display().to_string())?;
-    }
-    check_fresh(cal, format)?;
-    write_atomic(path, format.render(cal).as_bytes(), options)
+    write_files(cal, &[(format, path.to_path_buf())], None, options, false).map(|_| ())
+}
+
+/// What a directory export ([`dir_files`]) leaves out, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Withheld {
+    /// Nothing: every format.
+    Nothing,
+    /// The joint files: the calibration was fitted to angles the robot's joint calibration
+    /// had already corrected, so its offsets are changes to the robot's file ([`update`]).
+    JointFiles,
+    /// Every robot file: the result is not a calibration (these reasons); only naocalib's
+    /// own TOML and JSON, which say so.
+    RobotFiles(Vec<String>),
+}
+
+/// The files a directory export of `cal` into `dir` writes under the outputs policy
+/// (`naocalib solve --export`), with the file names of [`ExportFormat::ALL`], and what it
+/// leaves out.
+pub fn dir_files(cal: &Calibration, dir: &Path) -> (Vec<(ExportFormat, PathBuf)>, Withheld) {
+    let problems = cal.problems();
+    let withheld = if !problems.is_empty() {
+        Withheld::RobotFiles(problems)
+    } else if cal.corrected_angles() {
+        Withheld::JointFiles
+    } else {
+        Withheld::Nothing
+    };
+    let files = ExportFormat::ALL
+        .iter()
+        .filter(|(format, _, _)| match withheld {
+            Withheld::Nothing => true,
+            Withheld::JointFiles => !format.spec().joints,
+            Withheld::RobotFiles(_) => !format.is_robot_format(),
+        })
+        .map(|(format, _, name)| (*format, dir.join(name)))
+        .collect();
+    (files, withheld)
 }
 
 /// `naocalib export --update`: replaces in the robot's file `path` (in `format`'s layout)
@@ -600,8 +691,8 @@ pub fn update(
         force: true,
         inputs: inputs.to_vec(),
     };
-    io::check_writable(path, &options)?;
-    io::check_writable(&backup, &options)?;
+    check_writable(path, &options)?;
+    check_writable(&backup, &options)?;
     write_atomic(&backup, text.as_bytes(), &options)?;
     write_atomic(path, new.as_bytes(), &options)?;
     Ok(backup)
@@ -699,33 +790,19 @@ pub fn import(
 }
 
 /// Writes `cal` into `dir` in every format (file names in [`ExportFormat::ALL`]) and
-/// returns the paths written. Checks every path before writing any, so that nothing is
-/// written when one is refused; refuses a result that is not a calibration.
+/// returns the paths written ([`write_files`]): every path is checked before any is
+/// written, so that nothing is written when one is refused; a result that is not a
+/// calibration is refused.
 pub fn export_all(
     cal: &Calibration,
     dir: &Path,
     options: &WriteOptions,
 ) -> Result<Vec<PathBuf>, ExportError> {
-    check_usable(cal, || {
-        format!("the calibration files into {}", dir.display())
-    })?;
-    for (format, _, _) in ExportFormat::ALL {
-        check_fresh(cal, format)?;
-    }
-    let paths: Vec<PathBuf> = ExportFormat::ALL
+    let files: Vec<(ExportFormat, PathBuf)> = ExportFormat::ALL
         .iter()
-        .map(|(_, _, name)| dir.join(name))
+        .map(|(format, _, name)| (*format, dir.join(name)))
         .collect();
-    for path in &paths {
-        io::check_writable(path, options)?;
-    }
-    // All or nothing: written into a stage beside `dir`, published at the end.
-    let stage = crate::output::Staged::new(dir, options)?;
-    for (format, _, name) in ExportFormat::ALL.iter() {
-        export(cal, *format, &stage.dir().join(name), &stage.options())?;
-    }
-    stage.publish()?;
-    Ok(paths)
+    write_files(cal, &files, Some(dir), options, false)
 }
 
 /// A number as team files carry it: the shortest text that reads back to the same `f64`
