@@ -78,3 +78,81 @@ pub(crate) fn check(problem: &Problem, dataset: Option<&Dataset>) -> Result<(), 
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::model::{FixedSet, Joint, Model, Param};
+    use crate::sim::{SimOptions, simulate};
+    use crate::solve::{Problem, SolveError, validate};
+
+    fn message(e: SolveError) -> String {
+        e.to_string()
+    }
+
+    /// A vertex behind the camera and too few corners are told in one wording, with the
+    /// dataset's file and line from `from_dataset` and by capture id from `validate`.
+    #[test]
+    fn from_dataset_and_validate_word_each_error_alike() {
+        let options = SimOptions {
+            stances: 3,
+            heads: 2,
+            ..SimOptions::default()
+        };
+        let mut dataset = simulate(&Model::default(), &options).unwrap();
+        let problem = Problem::from_dataset(&dataset, FixedSet::default()).unwrap();
+        assert!(validate(&problem).is_ok());
+
+        // The head turned round and up: its capture's board lies behind the camera.
+        let turned = dataset.captures[1].clone();
+        let mut joints = turned.joints;
+        joints.set(Joint::HeadYaw, 3.1);
+        joints.set(Joint::HeadPitch, -1.5);
+        dataset.captures[1].joints = joints;
+        let e = message(Problem::from_dataset(&dataset, FixedSet::default()).unwrap_err());
+        let tail = "lies behind the camera at the start values; check the joint angles and \
+                    the board column";
+        assert!(e.contains("captures.csv line "), "{e}");
+        assert!(
+            e.contains(&format!(", capture {}: vertex (", turned.id)),
+            "{e}"
+        );
+        assert!(
+            e.contains(&format!("of the {} board {tail}", turned.side.name())),
+            "{e}"
+        );
+        // The same problem built without the check, as a library user might: `validate`.
+        dataset.captures[1] = turned.clone();
+        let mut bad = Problem::from_dataset(&dataset, FixedSet::default()).unwrap();
+        bad.captures[1].chains = dataset.model.chains(turned.side, &joints);
+        let e = message(validate(&bad).unwrap_err());
+        assert!(
+            e.starts_with(&format!("capture {}: vertex (", turned.id)),
+            "{e}"
+        );
+        assert!(e.ends_with(&format!("of the board {tail}")), "{e}");
+
+        // Too few corners: the same sentence, with corners.csv named from a dataset.
+        let keep = 10;
+        dataset.corners.truncate(keep);
+        let e = message(Problem::from_dataset(&dataset, FixedSet::default()).unwrap_err());
+        let few = format!(
+            "too few corners to calibrate: {keep} vertices give {} residuals, but 21 \
+             parameters are free",
+            2 * keep
+        );
+        assert!(e.contains("corners.csv: ") && e.contains(&few), "{e}");
+        let mut small = problem.clone();
+        small.captures.truncate(1);
+        small.captures[0].observations.truncate(keep);
+        let e = message(validate(&small).unwrap_err());
+        assert!(e.starts_with(&few), "{e}");
+
+        // Nothing free.
+        let mut held = problem;
+        for p in Param::ALL {
+            held.fixed.set(p, true);
+        }
+        let e = message(validate(&held).unwrap_err());
+        assert_eq!(e, "every parameter is held fixed: nothing to solve");
+    }
+}

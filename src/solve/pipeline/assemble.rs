@@ -24,14 +24,9 @@ pub(super) fn solution(
     backend: &dyn Backend,
     options: &UncertaintyOptions,
 ) -> Result<Solution, SolveError> {
-    let Weighted {
-        last,
-        kept,
-        verdict,
-        iterations: noise_iterations,
-        seconds: noise_seconds,
-    } = weighted;
-    let (fitted, levels) = match &kept {
+    let last = &weighted.last;
+    let verdict = weighted.verdict;
+    let (fitted, levels) = match &weighted.kept {
         Some((whitened, levels)) => (whitened, Some(*levels)),
         None => (&robust.inliers, None),
     };
@@ -59,10 +54,10 @@ pub(super) fn solution(
         seconds += s.seconds;
     }
     let summary = Summary {
-        iterations: iterations + noise_iterations,
+        iterations: iterations + weighted.iterations,
         initial_cost: robust_fit.map_or(plain.fit.summary.initial_cost, |s| s.initial_cost),
         final_cost: last.at.cost(),
-        seconds: seconds + noise_seconds,
+        seconds: seconds + weighted.seconds,
         ..last.fit.summary.clone()
     };
     let mut solution = Solution {
