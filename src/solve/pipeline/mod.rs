@@ -107,6 +107,7 @@ fn calibrate_given(
 ) -> Result<Solution, SolveError> {
     let start = Instant::now();
     super::validate(problem)?;
+    // 1–3: the posed problem, outliers left out, its plain fit.
     let hold::Posed {
         problem: posed,
         undetermined,
@@ -115,10 +116,12 @@ fn calibrate_given(
     let robust = robust::robust_stage(posed, backend)?;
     let points = Points::new(&robust.inliers, &held);
     let plain = plain::plain_fit(&points, backend)?;
+    // 4–5: are the residuals noise, and is the noise model kept?
     let any_significant = |tests: &[FamilyTest]| tests.iter().any(|t| t.significant);
     let screened =
         screening::misfit_tests(&points, &plain, &held, backend, options, &any_significant)?;
     let weighted = weighting::weigh(&points, &plain, screened, backend, options)?;
+    // 6: statistics at the final point, the solution, the bootstrap.
     let mut solution = assemble::solution(
         problem,
         undetermined,
@@ -137,8 +140,8 @@ fn calibrate_given(
 #[derive(Debug, Clone)]
 struct Point {
     fit: Fit,
-    /// Shared with the fit's other names: the whitened fit that stayed at the plain fit
-    /// has the plain fit's linearisation.
+    /// Shared where two fits are at the same values: a whitened fit that stayed at the
+    /// plain fit has the plain fit's linearisation.
     at: Rc<Linearisation>,
 }
 
