@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # Record, then check, that `naocalib solve` prints the same results (JSON and text) on the
 # bundled sample and on N simulated datasets with a variety of options; only wall times
-# (the JSON's "seconds", the text's "time …" line) are left out of the comparison.
+# (the JSON's "seconds", the text's "time …" line) are left out of the comparison; what
+# it prints on stderr and its exit code are compared too.
 #
 #   scripts/same-outputs.sh record DIR [N]   # before a change: datasets and outputs into DIR
 #   scripts/same-outputs.sh check DIR        # after it: the same commands, compared byte for byte
 #
-# Uses target/release/naocalib (build it first: cargo build --release).
+# Uses target/release/naocalib (build it first: cargo build --release), or $NAOCALIB.
 set -euo pipefail
 mode=${1:?record or check}
 dir=${2:?directory for datasets and outputs}
@@ -43,6 +44,7 @@ strip_text() { grep -v '^time ' "$1"; }
 case $mode in
 record)
     mkdir -p "$dir/data" "$dir/out"
+    rm -f "$dir/cases"
     for seed in $(seq 1 "$n"); do
         d=$dir/data/s$seed
         # shellcheck disable=SC2046
@@ -67,18 +69,21 @@ out=$dir/out
 [ "$mode" = check ] && out=$dir/out.check
 mkdir -p "$out"
 save=$dir/out
-run_into() {
-    local o=$1
-    shift
+# `solve` as JSON and as text, stdout then stderr and the exit code, into $out/NAME.*
+solve() { # NAME DATASET OPTIONS...
     local name=$1 data=$2
     shift 2
-    "$bin" solve "$data" --json "$@" >"$o/$name.json" 2>/dev/null || echo "exit $?" >>"$o/$name.json"
-    "$bin" solve "$data" "$@" >"$o/$name.txt" 2>/dev/null || echo "exit $?" >>"$o/$name.txt"
+    local code=0
+    "$bin" solve "$data" --json "$@" >"$out/$name.json" 2>"$out/$name.json.err" || code=$?
+    echo "exit $code" >>"$out/$name.json.err"
+    code=0
+    "$bin" solve "$data" "$@" >"$out/$name.txt" 2>"$out/$name.txt.err" || code=$?
+    echo "exit $code" >>"$out/$name.txt.err"
 }
-run_into "$out" sample "$repo/data/sample"
+solve sample "$repo/data/sample"
 while read -r seed opts; do
     # shellcheck disable=SC2086
-    run_into "$out" "s$seed" "$dir/data/s$seed" $opts
+    solve "s$seed" "$dir/data/s$seed" $opts
 done <"$dir/cases"
 
 if [ "$mode" = check ]; then
@@ -87,7 +92,8 @@ if [ "$mode" = check ]; then
         g=$out/$(basename "$f")
         case $f in
         *.json) a=$(strip_json "$f") b=$(strip_json "$g") ;;
-        *) a=$(strip_text "$f") b=$(strip_text "$g") ;;
+        *.txt) a=$(strip_text "$f") b=$(strip_text "$g") ;;
+        *) a=$(cat "$f") b=$(cat "$g") ;;
         esac
         if [ "$a" = "$b" ]; then
             same=$((same + 1))
