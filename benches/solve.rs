@@ -133,8 +133,8 @@ fn bench_calibrate(c: &mut Criterion) {
 /// What the misfit diagnosis adds to that (target: at most 20 % of the calibration without
 /// it). A calibration evaluates each capture's Jacobian once at the plain and once at the
 /// whitened fit and shares it between the noise estimate, the statistics and the tests
-/// (`Linearisations` in `solve`); the diagnosis adds the candidate families' columns to
-/// those two evaluations and the score tests on them. Three timings: the tests on the
+/// (the pipeline's `Point`s, docs/MODEL.md §13); the diagnosis adds the candidate
+/// families' columns to those two evaluations and the score tests on them. Three timings: the tests on the
 /// plain and on the whitened residuals (`tests_plain_and_whitened`), and one evaluation
 /// with and without the candidate columns. Added cost = tests + 2 × (with − without).
 fn bench_misfit(c: &mut Criterion) {

@@ -24,14 +24,13 @@ use super::jacobian::Linearisation;
 use super::problem::Problem;
 use crate::model::{Family, PARAMETER_COUNT, Param};
 
-/// Family-wise false-alarm rate of the misfit verdict (nominal; measured on clean simulated
-/// data: see the README).
+/// Family-wise false-alarm rate of the misfit verdict (nominal; docs/MODEL.md §11, step 6
+/// of the statistic).
 pub const FAMILY_ALPHA: f64 = 0.01;
 /// Family-wise level at which `--model auto` frees a family (Bonferroni over the families
 /// tested, like [`FAMILY_ALPHA`]). More liberal than the misfit verdict on purpose: freeing
 /// a family the data do not need costs a little σ, honestly reported; leaving out one they
-/// need biases the estimates by many σ (measured: at 0.01, one of six realistic robots
-/// stopped before links and head with rms(err/σ) 7.1).
+/// need biases the estimates by many σ (docs/MODEL.md §11, "`--model auto`").
 pub const AUTO_ALPHA: f64 = 0.10;
 /// A residual RMS (either coordinate) beyond this is not a calibration (px).
 pub const IMPLAUSIBLE_RMS_PX: f64 = 10.0;
@@ -289,8 +288,8 @@ impl Scores {
 /// residuals in pixels, `whitened` on the residuals whitened by the noise model. Whitening
 /// gives power against small effects under real joint noise; but a noise model estimated
 /// at a misfitting solution takes the structure for joint noise and whitens the leg-angle
-/// directions — where head, link, compliance and play effects live — away (measured:
-/// realistic robots at 3.4 px RMS passed as 0.31° of joint noise). The smaller p-value
+/// directions — where head, link, compliance and play effects live — away (docs/MODEL.md
+/// §11, "Two weightings"). The smaller p-value
 /// counts, doubled (Bonferroni over the two weightings), so the false-alarm rate stays
 /// within [`FAMILY_ALPHA`]; the suggestions are ranked by the plain test's px².
 pub fn combined_tests(plain: Vec<FamilyTest>, whitened: Vec<FamilyTest>) -> Vec<FamilyTest> {

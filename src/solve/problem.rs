@@ -160,6 +160,18 @@ impl CaptureTerm {
         Some(out)
     }
 
+    /// The first observed vertex (index into `observations`) that falls behind the camera
+    /// at `params`, if any.
+    pub fn behind_camera(&self, camera: &crate::model::Camera, params: &[f64]) -> Option<usize> {
+        let pose = self.chains.camera_to_board(params);
+        let projection = camera.projection();
+        self.observations.iter().position(|obs| {
+            projection
+                .project(params, &pose.apply(&obs.point))
+                .is_none()
+        })
+    }
+
     /// Residuals as the backend minimises them: whitened if the capture has a whitening.
     pub fn weighted_residuals<T: Scalar>(
         &self,
@@ -320,8 +332,9 @@ impl Problem {
     /// with at least one corner, all parameters starting at zero (docs/MODEL.md §5), and the
     /// parameters in `fixed` held at zero (or at `initial` values set afterwards).
     ///
-    /// Fails, naming the file and line, when a vertex lies behind the camera at the start
-    /// values (a sign of wrong joint angles or a wrong `board` column).
+    /// Fails as [`super::validate`] does, naming the dataset's file and line: when a vertex
+    /// lies behind the camera at the start values (a sign of wrong joint angles or a wrong
+    /// `board` column), or the corners are too few for the free parameters.
     pub fn from_dataset(
         dataset: &crate::dataset::Dataset,
         fixed: FixedSet,
@@ -338,53 +351,29 @@ impl Problem {
                     pixel: corner.pixel,
                 });
         }
-        let initial = [0.0; PARAMETER_COUNT];
-        let mut captures = Vec::new();
-        for capture in &dataset.captures {
-            let Some(observations) = by_capture.remove(&capture.id) else {
-                continue;
-            };
-            let chains = model.chains(capture.side, &capture.joints);
-            let vertices: Vec<Vertex> = observations.iter().map(|o| o.vertex).collect();
-            let projected = model.project(&chains, &initial, &vertices);
-            if let Some(k) = projected.iter().position(Option::is_none) {
-                return Err(super::SolveError::Invalid(format!(
-                    "{} line {}, capture {}: vertex ({}, {}) of the {} board lies behind the \
-                     camera at the start values; check the joint angles and the board column",
-                    dataset.dir.join("captures.csv").display(),
-                    capture.line,
-                    capture.id,
-                    vertices[k].row,
-                    vertices[k].col,
-                    capture.side.name(),
-                )));
-            }
-            captures.push(CaptureTerm {
-                capture: capture.id,
-                chains,
-                observations,
-                whitening: None,
-            });
-        }
-        let free = fixed.free().len();
-        let residuals: usize = captures.iter().map(CaptureTerm::residual_count).sum();
-        if residuals <= free {
-            return Err(super::SolveError::Invalid(format!(
-                "{}: too few corners to calibrate: {} vertices of known captures give {residuals} \
-                 residuals, but {free} parameters are free (hold some fixed with --fix, or \
-                 add captures)",
-                dataset.dir.join("corners.csv").display(),
-                residuals / 2,
-            )));
-        }
-        Ok(Problem {
+        let captures = dataset
+            .captures
+            .iter()
+            .filter_map(|capture| {
+                let observations = by_capture.remove(&capture.id)?;
+                Some(CaptureTerm {
+                    capture: capture.id,
+                    chains: model.chains(capture.side, &capture.joints),
+                    observations,
+                    whitening: None,
+                })
+            })
+            .collect();
+        let problem = Problem {
             camera: model.camera,
             captures,
-            initial,
+            initial: [0.0; PARAMETER_COUNT],
             fixed,
             loss: Loss::Squared,
             tolerances: Tolerances::default(),
-        })
+        };
+        super::check::check(&problem, Some(dataset))?;
+        Ok(problem)
     }
 }
 

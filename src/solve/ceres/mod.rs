@@ -19,7 +19,7 @@ use crate::model::{Affine, Axis, PARAMETER_COUNT, Projection, Step};
 /// Residuals per free parameter from which each step solves the normal equations
 /// (`DENSE_NORMAL_CHOLESKY`) instead of a dense QR. A tall Jacobian (the paper's problem:
 /// 6912 × 21) costs QR `2·m·n²` flops against `m·n²` for `JᵀJ`, and the dense QR was most of
-/// Ceres' own time (measured: a whole `naocalib solve` 85 → 75 ms). Ceres scales the
+/// Ceres' own time (docs/MODEL.md §13). Ceres scales the
 /// columns first (Jacobi scaling) and the undetermined directions have been held
 /// (docs/MODEL.md), so squaring the condition number costs no accuracy that matters here;
 /// small problems, where QR costs little more, keep it.
