@@ -7,27 +7,14 @@
 use std::path::Path;
 
 use naocalib::model::gravity::{STAND_DEG, stand_joints, standing_leg_torques};
-use naocalib::model::{Family, FixedSet, Model, Param, RobotGeometry, Side};
+use naocalib::model::{Family, FixedSet, Model, PARAMETER_COUNT, Param, RobotGeometry, Side};
 use naocalib::report::export::{Calibration, ExportFormat, Posture, bhuman};
 use naocalib::sim::{SimOptions, simulate};
 use naocalib::solve::{Problem, UncertaintyOptions, backend, calibrate};
 
 #[test]
 fn standing_offsets_predict_the_standing_robots_joint_angles() {
-    let options = SimOptions {
-        seed: 31,
-        stances: 24,
-        heads: 3,
-        effects: vec![Family::Compliance, Family::Play],
-        ..SimOptions::default()
-    };
-    let dataset = simulate(&Model::default(), &options).unwrap();
-    let truth = dataset.truth.as_ref().unwrap().values;
-    let fixed = FixedSet::from_lists("compliance,play", "").unwrap();
-    let problem = Problem::from_dataset(&dataset, fixed).unwrap();
-    let lm = backend("lm", false).unwrap();
-    let solution = calibrate(&problem, lm.as_ref(), &UncertaintyOptions::plain()).unwrap();
-    let cal = Calibration::from_solution(&solution, None).with_lying_torques(&dataset);
+    let (truth, cal) = calibrated(31);
 
     // The robot standing: logged (commanded) angles of the stand; its true angles by the
     // model with the true offsets, compliance and play under the standing torques.
@@ -127,20 +114,7 @@ fn standing_sigma_is_honest_over_twenty_robots() {
     let (mut z2, mut n) = (0.0, 0.0);
     let (mut extrapolated2, mut without2, mut ankles) = (0.0, 0.0, 0.0);
     for seed in 0..20 {
-        let options = SimOptions {
-            seed: 400 + seed,
-            stances: 24,
-            heads: 3,
-            effects: vec![Family::Compliance, Family::Play],
-            ..SimOptions::default()
-        };
-        let dataset = simulate(&Model::default(), &options).unwrap();
-        let truth = dataset.truth.as_ref().unwrap().values;
-        let fixed = FixedSet::from_lists("compliance,play", "").unwrap();
-        let problem = Problem::from_dataset(&dataset, fixed).unwrap();
-        let lm = backend("lm", false).unwrap();
-        let solution = calibrate(&problem, lm.as_ref(), &UncertaintyOptions::plain()).unwrap();
-        let cal = Calibration::from_solution(&solution, None);
+        let (truth, cal) = calibrated(400 + seed);
         for side in [Side::Left, Side::Right] {
             let tau = standing_leg_torques(&robot, side, &joints);
             for (k, joint) in side.leg_joints().into_iter().enumerate() {
@@ -230,4 +204,25 @@ fn solve_and_export_name_the_extrapolated_ankle_rolls() {
         .output()
         .unwrap();
     assert!(out.status.success() && !stderr(&out).contains("AnkleRoll"));
+}
+
+/// A simulated robot with compliance and play (`seed`; 24 random stances per leg × 3 head
+/// postures, lying on its back): its hidden truth and the calibration (lm, compliance and
+/// play freed) with the lying torques of its captures.
+fn calibrated(seed: u64) -> ([f64; PARAMETER_COUNT], Calibration) {
+    let options = SimOptions {
+        seed,
+        stances: 24,
+        heads: 3,
+        effects: vec![Family::Compliance, Family::Play],
+        ..SimOptions::default()
+    };
+    let dataset = simulate(&Model::default(), &options).unwrap();
+    let truth = dataset.truth.as_ref().unwrap().values;
+    let fixed = FixedSet::from_lists("compliance,play", "").unwrap();
+    let problem = Problem::from_dataset(&dataset, fixed).unwrap();
+    let lm = backend("lm", false).unwrap();
+    let solution = calibrate(&problem, lm.as_ref(), &UncertaintyOptions::plain()).unwrap();
+    let cal = Calibration::from_solution(&solution, None).with_lying_torques(&dataset);
+    (truth, cal)
 }

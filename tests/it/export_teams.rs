@@ -321,6 +321,15 @@ fn every_format_is_written_by_export_all_and_says_its_units() {
     }
 }
 
+/// What NaoTH's `CameraMatrixOffset.cfg` calibrates: the lower camera and the head offsets.
+const NAOTH_HEAD_AND_CAMERA: [Param; 5] = [
+    Param::CamYaw,
+    Param::CamPitch,
+    Param::CamRoll,
+    Param::HeadYaw,
+    Param::HeadPitch,
+];
+
 /// NaoTH's whole head → camera rotation, through the head keys as well
 /// (NaoTHSoccer/Source/Tools/CameraGeometry.cpp lines 324–334, commit 79e1e750b):
 /// `Rz(HeadYaw + head_rot.z) · Ry(HeadPitch + head_rot.y) · Rx(head_rot.x) · Rz(z) ·
@@ -363,13 +372,7 @@ fn naoth_head_keys_through_naoths_camera_matrix() {
             .fold(rx(0.0), |m, r| mul(&m, r));
             // naocalib's chain with its head offsets (q = θ + α).
             let mut params = vec![0.0; Param::ALL.len()];
-            for p in [
-                Param::CamYaw,
-                Param::CamPitch,
-                Param::CamRoll,
-                Param::HeadYaw,
-                Param::HeadPitch,
-            ] {
+            for p in NAOTH_HEAD_AND_CAMERA {
                 params[p.index()] = cal.value(p).to_radians();
             }
             let mut joints = JointAngles::default();
@@ -388,13 +391,7 @@ fn naoth_head_keys_through_naoths_camera_matrix() {
             }
         }
         let (_, imported) = export::import(&path, Some(ExportFormat::NaothCamera)).unwrap();
-        for p in [
-            Param::CamYaw,
-            Param::CamPitch,
-            Param::CamRoll,
-            Param::HeadYaw,
-            Param::HeadPitch,
-        ] {
+        for p in NAOTH_HEAD_AND_CAMERA {
             let v = imported.iter().find(|(q, _)| *q == p).unwrap().1;
             assert!(
                 (v - cal.value(p)).abs() < 1e-9,
