@@ -14,7 +14,7 @@ use naocalib::solve::{Problem, UncertaintyOptions, backend, calibrate};
 
 #[test]
 fn standing_offsets_predict_the_standing_robots_joint_angles() {
-    let (truth, cal) = calibrated(31);
+    let (truth, cal) = calibrated(31, 24);
 
     // The robot standing: logged (commanded) angles of the stand; its true angles by the
     // model with the true offsets, compliance and play under the standing torques.
@@ -114,16 +114,13 @@ fn standing_sigma_is_honest_over_twenty_robots() {
     let (mut z2, mut n) = (0.0, 0.0);
     let (mut extrapolated2, mut without2, mut ankles) = (0.0, 0.0, 0.0);
     for seed in 0..20 {
-        let (truth, cal) = calibrated(400 + seed);
+        let (truth, cal) = calibrated(400 + seed, 24);
         for side in [Side::Left, Side::Right] {
             let tau = standing_leg_torques(&robot, side, &joints);
             for (k, joint) in side.leg_joints().into_iter().enumerate() {
                 let p = joint.offset();
-                let at = |suffix: &str| {
-                    truth[Param::from_name(&format!("{p}{suffix}")).unwrap().index()].to_degrees()
-                };
                 let sign = if tau[k] == 0.0 { 0.0 } else { tau[k].signum() };
-                let true_offset = at("") + at("Compliance") * tau[k] + 0.5 * at("Play") * sign;
+                let true_offset = true_standing_offset(&truth, p, tau[k]);
                 let error = cal.standing_offset(p).unwrap() - true_offset;
                 z2 += (error / cal.standing_std(p).unwrap()).powi(2);
                 n += 1.0;
@@ -206,13 +203,13 @@ fn solve_and_export_name_the_extrapolated_ankle_rolls() {
     assert!(out.status.success() && !stderr(&out).contains("AnkleRoll"));
 }
 
-/// A simulated robot with compliance and play (`seed`; 24 random stances per leg × 3 head
-/// postures, lying on its back): its hidden truth and the calibration (lm, compliance and
-/// play freed) with the lying torques of its captures.
-fn calibrated(seed: u64) -> ([f64; PARAMETER_COUNT], Calibration) {
+/// A simulated robot with compliance and play (`seed`; `stances` random stances per leg × 3
+/// head postures, lying on its back): its hidden truth and the calibration (lm, compliance
+/// and play freed) with the lying torques of its captures.
+fn calibrated(seed: u64, stances: usize) -> ([f64; PARAMETER_COUNT], Calibration) {
     let options = SimOptions {
         seed,
-        stances: 24,
+        stances,
         heads: 3,
         effects: vec![Family::Compliance, Family::Play],
         ..SimOptions::default()
@@ -225,4 +222,67 @@ fn calibrated(seed: u64) -> ([f64; PARAMETER_COUNT], Calibration) {
     let solution = calibrate(&problem, lm.as_ref(), &UncertaintyOptions::plain()).unwrap();
     let cal = Calibration::from_solution(&solution, None).with_lying_torques(&dataset);
     (truth, cal)
+}
+
+/// The true effective offset (deg) of the leg joint whose offset is `p` in the stand, with
+/// the stand's torque `tau` about it: `α + κ·τ + ½π·sgn τ` of the robot's hidden truth.
+fn true_standing_offset(truth: &[f64; PARAMETER_COUNT], p: Param, tau: f64) -> f64 {
+    let at = |suffix: &str| {
+        truth[Param::from_name(&format!("{p}{suffix}")).unwrap().index()].to_degrees()
+    };
+    let sign = if tau == 0.0 { 0.0 } else { tau.signum() };
+    at("") + at("Compliance") * tau + 0.5 * at("Play") * sign
+}
+
+/// The caveat's advice holds: the ankle rolls' σ (±0.09° from 72 captures per leg) falls
+/// as 1/√captures, and the caveat says how many times the captures reach ±0.05°; measured
+/// with four times the stances (288 captures per leg, above the ≈3× it asks for), every
+/// standing offset of each of 12 robots reports σ ≤ 0.05°, no caveat asks for more, and the
+/// ankle rolls' standing predictions — the 24 of them — have an RMS error within 0.05°
+/// (expected ≈ 0.036°; P(RMS > 0.05°) ≈ 0.003 for χ²₂₄), the ten other joints each within
+/// 0.05°.
+#[test]
+fn four_times_the_stances_bring_the_ankle_rolls_within_five_hundredths() {
+    let (_, small) = calibrated(500, 24);
+    let caveat = small.standing_caveat(Param::LAnkleRoll).unwrap();
+    let times: f64 = caveat
+        .split("about ")
+        .nth(1)
+        .and_then(|r| r.split('×').next())
+        .and_then(|x| x.parse().ok())
+        .unwrap_or_else(|| panic!("no advice in {caveat:?}"));
+    assert!((1.5..4.0).contains(&times), "{caveat}");
+
+    let robot = RobotGeometry::default();
+    let joints = stand_joints();
+    let (mut ankle2, mut ankles) = (0.0, 0.0);
+    for seed in 500..512 {
+        let (truth, cal) = calibrated(seed, 96);
+        // The ankle rolls' compliance stays extrapolated (a linear compliance beyond the
+        // torques measured: still named), but no caveat speaks of too few captures.
+        for caveat in cal.standing_caveats() {
+            assert!(
+                caveat.contains("AnkleRoll: compliance") && !caveat.contains("would reach"),
+                "robot {seed}: {caveat}"
+            );
+        }
+        for side in [Side::Left, Side::Right] {
+            let tau = standing_leg_torques(&robot, side, &joints);
+            for (k, joint) in side.leg_joints().into_iter().enumerate() {
+                let p = joint.offset();
+                let sigma = cal.standing_std(p).unwrap();
+                assert!(sigma <= 0.05, "robot {seed} {p}: σ {sigma}°");
+                let error =
+                    cal.standing_offset(p).unwrap() - true_standing_offset(&truth, p, tau[k]);
+                if joint.name().ends_with("AnkleRoll") {
+                    ankle2 += error * error;
+                    ankles += 1.0;
+                } else {
+                    assert!(error.abs() < 0.05, "robot {seed} {p}: {error}° off");
+                }
+            }
+        }
+    }
+    let rms = (ankle2 / ankles).sqrt();
+    assert!(rms < 0.05, "ankle rolls standing: RMS {rms}° over {ankles}");
 }

@@ -276,9 +276,15 @@ impl Calibration {
         let compliance = Param::from_name(&format!("{}Compliance", param.name()))
             .and_then(|p| self.get(p))
             .is_some_and(|e| !e.fixed && e.std.is_some());
-        let sigma = info
-            .std
-            .map_or_else(|| "σ unknown".to_string(), |s| format!("±{s:.3}°"));
+        // σ falls as 1/√captures: how many times the captures would reach the target.
+        let sigma = match info.std {
+            None => "σ unknown".to_string(),
+            Some(s) if s > STANDING_TARGET_DEG => format!(
+                "±{s:.3}° (about {:.1}× the captures would reach ±{STANDING_TARGET_DEG}°)",
+                (s / STANDING_TARGET_DEG).powi(2)
+            ),
+            Some(s) => format!("±{s:.3}°"),
+        };
         let extrapolated = info
             .lying_torque
             .filter(|&m| compliance && tau.abs() > EXTRAPOLATION_LIMIT * m);
