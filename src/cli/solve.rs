@@ -31,9 +31,8 @@ pub struct SolveArgs {
     /// Write plots (PNG and SVG) into this directory: residuals before/after, per capture.
     #[arg(long, value_name = "DIR")]
     plots: Option<PathBuf>,
-    /// Write the calibration files into this directory: calibration.toml/.json and the
-    /// teams' formats (B-Human, HULKs, NaoTH, NomadZ, rUNSWift; see `naocalib export`).
-    #[arg(long, value_name = "DIR")]
+    /// Write the calibration files into this directory (one per export format).
+    #[arg(long, value_name = "DIR", long_help = export_dir_help())]
     export: Option<PathBuf>,
     /// Write one self-contained HTML report (parameters, diagnosis, residual plots,
     /// per-capture RMS, overlays of the worst captures) to this file.
@@ -185,4 +184,17 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     } else {
         ExitCode::from(3)
     })
+}
+
+/// The `--export` help: the files it writes, one per export format of the registry.
+fn export_dir_help() -> String {
+    let files: Vec<&str> = naocalib::report::export::REGISTRY
+        .iter()
+        .map(|f| f.file)
+        .collect();
+    format!(
+        "Write the calibration files into this directory, one per export format \
+         (docs/EXPORTS.md, `naocalib export --help`): {}",
+        files.join(", ")
+    )
 }
