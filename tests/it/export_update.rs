@@ -418,6 +418,12 @@ fn docs_list_exactly_the_registry() {
             s.name
         );
     }
+    // solve --export writes one file per row: its help names them all.
+    let help = naocalib().args(["solve", "--help"]).output().unwrap();
+    let help = String::from_utf8_lossy(&help.stdout);
+    for s in REGISTRY {
+        assert!(help.contains(s.file), "solve --help names {}", s.file);
+    }
 }
 
 #[test]
