@@ -97,21 +97,13 @@ pub fn to_joint_angles(values: &[f32; JOINTS]) -> JointAngles {
 }
 
 /// A LoLA sensor message as the robot writes it, every key of the V6 (HULKs `lola.rs`
-/// lines 5–33). naocalib's simulated robot writes it; the client reads [`SensorMessage`].
+/// lines 5–33): the joint arrays naocalib reads ([`SensorMessage`], first, in LoLA's key
+/// order) and the rest. naocalib's simulated robot writes it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SensorFrame {
-    /// Stiffness of each joint, 0 … 1.
-    #[serde(rename = "Stiffness")]
-    pub stiffness: [f32; JOINTS],
-    /// Joint angle readings (rad), raw: no calibration applied.
-    #[serde(rename = "Position")]
-    pub position: [f32; JOINTS],
-    /// Motor temperatures (°C).
-    #[serde(rename = "Temperature")]
-    pub temperature: [f32; JOINTS],
-    /// Motor currents (A).
-    #[serde(rename = "Current")]
-    pub current: [f32; JOINTS],
+    /// `Stiffness`, `Position`, `Temperature`, `Current`.
+    #[serde(flatten)]
+    pub joints: SensorMessage,
     /// Battery: charge, status, current, temperature.
     #[serde(rename = "Battery")]
     pub battery: [f32; 4],
@@ -143,12 +135,12 @@ pub struct SensorFrame {
 
 /// What naocalib reads of a sensor message: the joint arrays (required, 25 values each);
 /// other keys are ignored.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SensorMessage {
     /// Stiffness of each joint, 0 … 1.
     #[serde(rename = "Stiffness")]
     pub stiffness: [f32; JOINTS],
-    /// Joint angle readings (rad), raw.
+    /// Joint angle readings (rad), raw: no calibration applied.
     #[serde(rename = "Position")]
     pub position: [f32; JOINTS],
     /// Motor temperatures (°C).
@@ -317,10 +309,12 @@ mod tests {
 
     fn v6_frame() -> SensorFrame {
         SensorFrame {
-            stiffness: [0.0; JOINTS],
-            position: std::array::from_fn(|k| 0.01 * k as f32),
-            temperature: [35.0; JOINTS],
-            current: [0.01; JOINTS],
+            joints: SensorMessage {
+                stiffness: [0.0; JOINTS],
+                position: std::array::from_fn(|k| 0.01 * k as f32),
+                temperature: [35.0; JOINTS],
+                current: [0.01; JOINTS],
+            },
             battery: [0.9, 0.0, -0.5, 30.0],
             accelerometer: [0.0, 0.0, 9.81],
             gyroscope: [0.0; 3],
@@ -352,12 +346,15 @@ mod tests {
         let mut reader = &bytes[..];
         for _ in 0..2 {
             let m: SensorMessage = decode_from(&mut reader, 1, CYCLE).unwrap();
-            assert_eq!(m.position, frame.position);
+            assert_eq!(m.position, frame.joints.position);
             assert_eq!(
                 m.joints().get(Joint::RHipYawPitch),
-                frame.position[7] as f64
+                frame.joints.position[7] as f64
             );
-            assert_eq!(m.joints().get(Joint::RAnkleRoll), frame.position[17] as f64);
+            assert_eq!(
+                m.joints().get(Joint::RAnkleRoll),
+                frame.joints.position[17] as f64
+            );
         }
         let end = decode_from::<SensorMessage>(&mut reader, 1, CYCLE).unwrap_err();
         assert!(matches!(end, LolaError::Closed), "{end}");

@@ -29,7 +29,9 @@ use crate::model::{Joint, JointAngles, Model, PARAMETER_COUNT, Side, gravity};
 use crate::output::{WriteOptions, write_atomic, write_atomic_with};
 use crate::sim::render::{self, RenderOptions};
 
-use super::lola::{self, ActuatorMessage, JOINT_NAMES, JOINTS, LolaError, SensorFrame};
+use super::lola::{
+    self, ActuatorMessage, JOINT_NAMES, JOINTS, LolaError, SensorFrame, SensorMessage,
+};
 
 /// Time constant of a joint following its command at stiffness 1 (s).
 pub const LAG_S: f64 = 0.03;
@@ -288,10 +290,12 @@ impl Body {
 
     fn frame(&self) -> SensorFrame {
         SensorFrame {
-            stiffness: self.stiffness.map(|s| s as f32),
-            position: std::array::from_fn(|k| self.reading(k)),
-            temperature: self.temperature.map(|t| t as f32),
-            current: self.current.map(|c| c as f32),
+            joints: SensorMessage {
+                stiffness: self.stiffness.map(|s| s as f32),
+                position: std::array::from_fn(|k| self.reading(k)),
+                temperature: self.temperature.map(|t| t as f32),
+                current: self.current.map(|c| c as f32),
+            },
             battery: [0.9, 0.0, -0.4, 30.0],
             accelerometer: [0.0, 0.0, 9.81],
             gyroscope: [0.0; 3],
@@ -492,7 +496,7 @@ fn session(
         }
         match lola::decode_from::<ActuatorMessage>(&mut reader, 1, Duration::from_secs(2)) {
             Ok(answer) => {
-                record.push(body.cycle, &frame.position, &answer);
+                record.push(body.cycle, &frame.joints.position, &answer);
                 for k in 0..JOINTS {
                     body.command[k] = answer.position[k] as f64;
                     body.stiffness[k] = answer.stiffness[k] as f64;
