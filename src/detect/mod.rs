@@ -276,29 +276,9 @@ fn detect_image(
             },
         )
         .map_err(cv)?;
-        if mode == Mode::Quick {
-            return Ok(match found {
-                Ok(board) => Outcome::Found {
-                    corners: board
-                        .vertices
-                        .iter()
-                        .map(|&(vertex, pixel)| Corner {
-                            capture: capture.id,
-                            vertex,
-                            pixel,
-                            line: 0,
-                        })
-                        .collect(),
-                    order: None,
-                    whole_image: false,
-                    numbered: board.numbered,
-                },
-                Err(_) => Outcome::NotFound,
-            });
-        }
-        if let Ok(board) = found {
-            let complete = board.vertices.len() == grid.len();
-            let corners: Vec<Corner> = board
+        // What the guided search found, as the capture's outcome.
+        let outcome_of = |board: &guided::Board| Outcome::Found {
+            corners: board
                 .vertices
                 .iter()
                 .map(|&(vertex, pixel)| Corner {
@@ -307,13 +287,17 @@ fn detect_image(
                     pixel,
                     line: 0,
                 })
-                .collect();
-            let found = Outcome::Found {
-                corners,
-                order: None,
-                whole_image: false,
-                numbered: board.numbered.clone(),
-            };
+                .collect(),
+            order: None,
+            whole_image: false,
+            numbered: board.numbered.clone(),
+        };
+        if mode == Mode::Quick {
+            return Ok(found.map_or(Outcome::NotFound, |board| outcome_of(&board)));
+        }
+        if let Ok(board) = found {
+            let complete = board.vertices.len() == grid.len();
+            let found = outcome_of(&board);
             if complete {
                 return Ok(found);
             }
