@@ -26,25 +26,13 @@ use rand_chacha::ChaCha8Rng;
 
 /// A converged calibration with random leg and head offsets (deg, up to 2°) estimated.
 fn calibration(rng: &mut impl Rng) -> Calibration {
-    Calibration {
-        solver: Some("test".into()),
-        dataset: None,
-        converged: Some(true),
-        rms_px: Some([0.4, 0.5]),
-        parameters: Param::ALL
-            .iter()
-            .map(|&p| Entry {
-                param: p,
-                value: crate::util::plausible_value(rng, p, 2.0),
-                std: Some(0.05),
-                fixed: false,
-            })
-            .collect(),
-        angles: None,
-        // The lying offsets themselves (the standing ones are tested in export_posture.rs).
-        posture: export::Posture::Lying,
-        standing: Default::default(),
-    }
+    // The lying offsets themselves (the standing ones are tested in export_posture.rs).
+    crate::util::converged_calibration(export::Posture::Lying, |p| Entry {
+        param: p,
+        value: crate::util::plausible_value(rng, p, 2.0),
+        std: Some(0.05),
+        fixed: false,
+    })
 }
 
 /// The stored value (rad) of each joint a team file carries, by naocalib parameter.

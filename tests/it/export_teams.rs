@@ -57,37 +57,25 @@ const TILT_DEG: f64 = 39.7;
 /// A calibration with random values for every parameter (camera offsets up to
 /// `camera_deg`), all determined and converged.
 fn random_calibration(rng: &mut impl Rng, camera_deg: f64) -> Calibration {
-    Calibration {
-        solver: Some("test".into()),
-        dataset: None,
-        converged: Some(true),
-        rms_px: Some([0.4, 0.5]),
-        parameters: Param::ALL
-            .iter()
-            .map(|&p| {
-                let value = match p {
-                    Param::CamYaw | Param::CamPitch | Param::CamRoll => {
-                        rng.random_range(-camera_deg..camera_deg)
-                    }
-                    // Within the physical bounds (naocalib::model::bounds).
-                    _ if naocalib::model::bounds::bound(p).min == 0.0 => {
-                        crate::util::plausible_value(rng, p, 1.5)
-                    }
-                    _ => crate::util::plausible_value(rng, p, 3.0),
-                };
-                Entry {
-                    param: p,
-                    value,
-                    std: Some(rng.random_range(0.01..0.2)),
-                    fixed: false,
-                }
-            })
-            .collect(),
-        angles: None,
-        // The lying offsets themselves (the standing ones are tested in export_posture.rs).
-        posture: export::Posture::Lying,
-        standing: Default::default(),
-    }
+    // The lying offsets themselves (the standing ones are tested in export_posture.rs).
+    crate::util::converged_calibration(export::Posture::Lying, |p| {
+        let value = match p {
+            Param::CamYaw | Param::CamPitch | Param::CamRoll => {
+                rng.random_range(-camera_deg..camera_deg)
+            }
+            // Within the physical bounds (naocalib::model::bounds).
+            _ if naocalib::model::bounds::bound(p).min == 0.0 => {
+                crate::util::plausible_value(rng, p, 1.5)
+            }
+            _ => crate::util::plausible_value(rng, p, 3.0),
+        };
+        Entry {
+            param: p,
+            value,
+            std: Some(rng.random_range(0.01..0.2)),
+            fixed: false,
+        }
+    })
 }
 
 /// naocalib's own corrected camera rotation (camera → head, naocalib's camera frame) for

@@ -22,34 +22,22 @@ fn fixture(name: &str) -> PathBuf {
 /// A converged calibration: camera offsets of real sizes (tilt −2° to −8°), leg offsets
 /// up to 2° and play up to 1° estimated; the head held at zero (not estimated).
 fn calibration(rng: &mut impl Rng) -> Calibration {
-    Calibration {
-        solver: Some("test".into()),
-        dataset: None,
-        converged: Some(true),
-        rms_px: Some([0.4, 0.5]),
-        parameters: Param::ALL
-            .iter()
-            .map(|&p| {
-                let name = p.name();
-                let (value, fixed) = match p {
-                    Param::CamPitch => (rng.random_range(-8.0..-2.0), false),
-                    Param::CamYaw | Param::CamRoll => (rng.random_range(-2.0..2.0), false),
-                    Param::HeadYaw | Param::HeadPitch => (0.0, true),
-                    _ if name.ends_with("Play") => (rng.random_range(0.1..1.0), false),
-                    _ => (crate::util::plausible_value(rng, p, 2.0), false),
-                };
-                Entry {
-                    param: p,
-                    value,
-                    std: Some(if fixed { 0.0 } else { 0.05 }),
-                    fixed,
-                }
-            })
-            .collect(),
-        angles: None,
-        posture: export::Posture::Standing,
-        standing: Default::default(),
-    }
+    crate::util::converged_calibration(export::Posture::Standing, |p| {
+        let name = p.name();
+        let (value, fixed) = match p {
+            Param::CamPitch => (rng.random_range(-8.0..-2.0), false),
+            Param::CamYaw | Param::CamRoll => (rng.random_range(-2.0..2.0), false),
+            Param::HeadYaw | Param::HeadPitch => (0.0, true),
+            _ if name.ends_with("Play") => (rng.random_range(0.1..1.0), false),
+            _ => (crate::util::plausible_value(rng, p, 2.0), false),
+        };
+        Entry {
+            param: p,
+            value,
+            std: Some(if fixed { 0.0 } else { 0.05 }),
+            fixed,
+        }
+    })
 }
 
 /// Each layout's fixture, and the keys an update may change in it (a changed line must

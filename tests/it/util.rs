@@ -132,3 +132,21 @@ pub fn every_family() -> String {
         .collect::<Vec<_>>()
         .join(",")
 }
+
+/// A converged calibration (solver `test`, RMS 0.4/0.5 px) whose robot files carry the
+/// offsets of `posture`, with `entry` of every parameter in registry order.
+pub fn converged_calibration(
+    posture: naocalib::report::export::Posture,
+    entry: impl FnMut(naocalib::model::Param) -> naocalib::report::export::Entry,
+) -> naocalib::report::export::Calibration {
+    naocalib::report::export::Calibration {
+        solver: Some("test".into()),
+        dataset: None,
+        converged: Some(true),
+        rms_px: Some([0.4, 0.5]),
+        parameters: naocalib::model::Param::ALL.into_iter().map(entry).collect(),
+        angles: None,
+        posture,
+        standing: Default::default(),
+    }
+}
