@@ -107,6 +107,20 @@ impl Bench {
         std::fs::write(&png, image.to_png().unwrap()).unwrap();
         format!("command:cp '{}' {{path}}", png.display())
     }
+
+    /// A plan of `n` stances (`seed`) captured into `ds` with the fixed camera from a
+    /// simulated robot started with `robot_args` (on `a.sock`, recording to `a.csv`):
+    /// capture's output, and the robot to [`finish`].
+    fn capture_fixed(&self, n: usize, seed: u64, robot_args: &[&str]) -> (Output, Child) {
+        let plan = self.path("plan.csv");
+        plan_file(&plan, n, seed);
+        let robot = self.robot("a.sock", "a.csv", robot_args);
+        let out = self
+            .capture(&plan, "ds", "a.sock", &self.fixed_camera(), &[])
+            .output()
+            .unwrap();
+        (out, robot)
+    }
 }
 
 fn finish(mut child: Child) -> Output {
@@ -564,17 +578,7 @@ fn a_blocked_joint_skips_its_stances_and_the_leg_returns() {
 #[test]
 fn an_overheating_motor_pauses_the_run_at_rest() {
     let b = Bench::new();
-    let plan = b.path("plan.csv");
-    plan_file(&plan, 4, 4);
-    let robot = b.robot(
-        "a.sock",
-        "a.csv",
-        &["--speed", "5", "--overheat", "LHipPitch"],
-    );
-    let out = b
-        .capture(&plan, "ds", "a.sock", &b.fixed_camera(), &[])
-        .output()
-        .unwrap();
+    let (out, robot) = b.capture_fixed(4, 4, &["--speed", "5", "--overheat", "LHipPitch"]);
     let err = stderr(&out);
     assert!(out.status.success(), "{err}");
     finish(robot);
@@ -588,13 +592,7 @@ fn an_overheating_motor_pauses_the_run_at_rest() {
 #[test]
 fn a_message_that_does_not_parse_stops_cleanly() {
     let b = Bench::new();
-    let plan = b.path("plan.csv");
-    plan_file(&plan, 2, 5);
-    let robot = b.robot("a.sock", "a.csv", &["--speed", "0", "--garbage-at", "300"]);
-    let out = b
-        .capture(&plan, "ds", "a.sock", &b.fixed_camera(), &[])
-        .output()
-        .unwrap();
+    let (out, robot) = b.capture_fixed(2, 5, &["--speed", "0", "--garbage-at", "300"]);
     assert_clean_failure(&out, &["does not parse"]);
     finish(robot);
     let record = read_record(&b.path("a.csv")).unwrap();
@@ -615,17 +613,7 @@ fn a_message_that_does_not_parse_stops_cleanly() {
 #[test]
 fn a_silent_robot_stops_the_run() {
     let b = Bench::new();
-    let plan = b.path("plan.csv");
-    plan_file(&plan, 2, 6);
-    let robot = b.robot(
-        "a.sock",
-        "a.csv",
-        &["--speed", "0", "--silent-after", "200"],
-    );
-    let out = b
-        .capture(&plan, "ds", "a.sock", &b.fixed_camera(), &[])
-        .output()
-        .unwrap();
+    let (out, robot) = b.capture_fixed(2, 6, &["--speed", "0", "--silent-after", "200"]);
     assert_clean_failure(&out, &["no message from LoLA for 25 cycles"]);
     finish(robot);
 }
