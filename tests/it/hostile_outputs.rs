@@ -79,34 +79,10 @@ fn no_output_replaces_an_input() {
     let dir = dataset(tmp.path());
     let before = snapshot(&dir);
     // batch --report onto the dataset's captures.csv, even with --force.
-    let out = naocalib()
-        .args([
-            "batch",
-            "--solver",
-            "lm",
-            "--no-progress",
-            "--force",
-            "--report",
-        ])
-        .arg(dir.join("captures.csv"))
-        .arg(&dir)
-        .output()
-        .unwrap();
+    let out = batch_forced("--report", &dir.join("captures.csv"), &dir);
     assert_clean_failure(&out, &["captures.csv", "is an input file"]);
     // … and --out into a dataset file's place.
-    let out = naocalib()
-        .args([
-            "batch",
-            "--solver",
-            "lm",
-            "--no-progress",
-            "--force",
-            "--out",
-        ])
-        .arg(dir.join("corners.csv"))
-        .arg(&dir)
-        .output()
-        .unwrap();
+    let out = batch_forced("--out", &dir.join("corners.csv"), &dir);
     assert_clean_failure(&out, &["corners.csv"]);
     // plan over its own --camera file.
     let out = naocalib()
@@ -311,19 +287,7 @@ fn a_killed_batch_leaves_all_or_nothing_and_no_temporary_survives() {
     }
     // The next run (with --force where a whole set was published) succeeds and removes
     // what the killed ones left.
-    let out = naocalib()
-        .args([
-            "batch",
-            "--solver",
-            "lm",
-            "--no-progress",
-            "--force",
-            "--out",
-        ])
-        .arg(&out_dir)
-        .arg(&data)
-        .output()
-        .unwrap();
+    let out = batch_forced("--out", &out_dir, &data);
     assert!(out.status.success(), "{}", stderr(&out));
     assert_eq!(names(&out_dir), complete);
     assert!(
@@ -583,4 +547,14 @@ fn errors_are_said_once_and_clearly() {
         .output()
         .unwrap();
     assert_clean_failure(&out, &["dataset.toml", "a file is in the way"]);
+}
+
+/// `naocalib batch --solver lm --no-progress --force FLAG TARGET DATA`: its output.
+fn batch_forced(flag: &str, target: &Path, data: &Path) -> std::process::Output {
+    naocalib()
+        .args(["batch", "--solver", "lm", "--no-progress", "--force", flag])
+        .arg(target)
+        .arg(data)
+        .output()
+        .unwrap()
 }
