@@ -194,12 +194,15 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// The extra outputs of `naocalib solve`: plots into `plots`, the calibration files into
+/// The extra outputs of `naocalib solve`: plots into `plots`, the calibration files of
+/// `calibration` (the solution's, with the dataset's angles and lying torques) into
 /// `export_dir` and the HTML report into `report`, never over a file of the dataset in
 /// `dataset`. Reports on stderr. A result that is not a calibration gets only naocalib's
 /// own calibration.toml/.json (which say so), with a warning, and no robot files.
+#[allow(clippy::too_many_arguments)] // the run, its dataset and each optional output
 pub fn solve_outputs(
     solution: &Solution,
+    calibration: &Calibration,
     dataset: &naocalib::dataset::Dataset,
     plots: Option<&Path>,
     export_dir: Option<&Path>,
@@ -232,10 +235,7 @@ pub fn solve_outputs(
         note!("wrote {} plot files into {}", files.len(), dir.display());
     }
     if let Some(dir) = export_dir {
-        let mut calibration =
-            Calibration::from_solution(solution, Some(&dataset.dir)).with_lying_torques(dataset);
-        calibration.angles = Some(dataset.angles.clone());
-        if let Some(summary) = naocalib::report::standing_summary(&calibration) {
+        if let Some(summary) = naocalib::report::standing_summary(calibration) {
             note!(
                 "standing leg offsets for the team files (α + κ·τ_stand + ½π·sgn τ_stand): {summary}"
             );
@@ -243,7 +243,7 @@ pub fn solve_outputs(
         for caveat in calibration.standing_caveats() {
             note!("warning: standing leg offset {caveat}");
         }
-        let (files, withheld) = export::dir_files(&calibration, dir);
+        let (files, withheld) = export::dir_files(calibration, dir);
         match withheld {
             Withheld::Nothing => {}
             Withheld::JointFiles => note!(
@@ -257,7 +257,7 @@ pub fn solve_outputs(
                 problems.join("; ")
             ),
         }
-        let files = export::write_files(&calibration, &files, Some(dir), &options, false)
+        let files = export::write_files(calibration, &files, Some(dir), &options, false)
             .context("--export")?;
         for f in files {
             note!("wrote {}", f.display());

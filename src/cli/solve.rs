@@ -137,8 +137,13 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     let changes = previous
         .as_ref()
         .map(|p| naocalib::report::changes(&solution, p, corrected));
+    let mut calibration =
+        naocalib::report::export::Calibration::from_solution(&solution, Some(&dataset.dir))
+            .with_lying_torques(&dataset);
+    calibration.angles = Some(dataset.angles.clone());
     super::export::solve_outputs(
         &solution,
+        &calibration,
         &dataset,
         args.plots.as_deref(),
         args.export.as_deref(),
@@ -151,8 +156,6 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     let truth = dataset.truth.as_ref().map(|t| &t.values[..]);
     use std::fmt::Write as _;
     let mut out = String::new();
-    let calibration = naocalib::report::export::Calibration::from_solution(&solution, None)
-        .with_lying_torques(&dataset);
     if args.json {
         let mut result =
             naocalib::report::ResultJson::new(&solution, truth).with_standing(&calibration);
