@@ -203,15 +203,23 @@ fn solve_and_export_name_the_extrapolated_ankle_rolls() {
     assert!(out.status.success() && !stderr(&out).contains("AnkleRoll"));
 }
 
-/// A simulated robot with compliance and play (`seed`; `stances` random stances per leg × 3
-/// head postures, lying on its back): its hidden truth and the calibration (lm, compliance
-/// and play freed) with the lying torques of its captures.
+/// A simulated robot as the teams' files show them, with compliance and play (`seed`;
+/// `stances` random stances per leg × 3 head postures, lying on its back): its hidden truth
+/// and the calibration (lm, compliance and play freed) with the lying torques of its
+/// captures. The lower camera's tilt correction is −2° to −8°, its roll up to 4°; the leg
+/// offsets are σ 1° (at most 2.5°); compliance 0.3 deg/(N·m) and play 0.5°.
 fn calibrated(seed: u64, stances: usize) -> ([f64; PARAMETER_COUNT], Calibration) {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut truth = naocalib::sim::draw_truth(&mut rng);
+    truth[Param::CamPitch.index()] = rng.random_range(-8.0f64..-2.0).to_radians();
+    truth[Param::CamRoll.index()] = rng.random_range(-4.0f64..4.0).to_radians();
+    naocalib::sim::draw_effects(&mut rng, &[Family::Compliance, Family::Play], &mut truth);
     let options = SimOptions {
         seed,
         stances,
         heads: 3,
-        effects: vec![Family::Compliance, Family::Play],
+        truth: Some(truth),
         ..SimOptions::default()
     };
     let dataset = simulate(&Model::default(), &options).unwrap();
