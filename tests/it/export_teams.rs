@@ -102,9 +102,11 @@ fn calibrations() -> Vec<Calibration> {
 
 #[test]
 fn bhuman_camera_convention() {
-    // B-Human, Src/Representations/Perception/ImagePreprocessing/CameraMatrix.cpp,
-    // RobotCameraMatrix::computeRobotCameraMatrix: ... rotateY(tiltNeckToLowerCamera +
-    // correction.y()); rotateX(correction.x()); rotateZ(correction.z()); camera frame x
+    // B-Human (BHumanCodeRelease d89d603f), Src/Representations/Perception/
+    // ImagePreprocessing/CameraMatrix.cpp lines 309–312, RobotCameraMatrix::
+    // computeRobotCameraMatrix: rotateY(tiltNeckToLowerCamera + cameraRotationCorrections
+    // [lower].y()); rotateX(….x()); rotateZ(….z()) (the array read from cameraCalibration.cfg,
+    // Src/Representations/Configuration/CameraCalibration.h line 17); camera frame x
     // forward, y left, z up (naocalib's).
     for cal in calibrations() {
         let text = export::bhuman_camera_cfg(&cal);
@@ -165,11 +167,13 @@ fn naoth_camera_convention() {
 
 #[test]
 fn hulks_camera_convention() {
-    // HULKs, crates/control/src/camera_matrix_calculator.rs: head_to_camera(pitch) =
-    // Rx(−pitch) · Ry(−π/2) · Rx(π/2) · T(−p), mapping head coordinates into the camera
+    // HULKs (commit 21e8a3de9), crates/control/src/camera_matrix_calculator.rs lines
+    // 214–219: head_to_camera(pitch) = Rx(−pitch) · Ry(−π/2) · Rx(π/2) · T(−p), and lines
+    // 109–113: the bottom correction is Rotation3::from_euler_angles(x, y, z); mapping head
+    // coordinates into the camera
     // frame, where a camera pitched *down* has a negative pitch (crates/projection/tests/
     // projection.rs, pixel_to_ground_with_z_pitch_45_degree_down passes −π/4); and
-    // crates/projection/src/camera_matrix.rs, CameraMatrix::to_corrected:
+    // crates/projection/src/camera_matrix.rs line 91, CameraMatrix::to_corrected:
     // corrected head_to_camera = correction_in_camera * head_to_camera, the correction
     // being nalgebra's Rotation3::from_euler_angles(x, y, z) = Rz(z)·Ry(y)·Rx(x) [rad].
     let pitch = -TILT_DEG.to_radians();
@@ -195,11 +199,13 @@ fn hulks_camera_convention() {
 
 #[test]
 fn runswift_camera_convention() {
-    // rUNSWift, robot/perception/kinematics/Kinematics.cpp, Kinematics::updateDHChain:
+    // rUNSWift (2025 release ccdd7f7), robot_ws/src/motion/motion_port/include/perception/
+    // kinematics/Kinematics.cpp lines 477–479 (the offsets in degrees) and 490–492,
+    // Kinematics::updateDHChain:
     // transformLBot[9] = DH(0, −π/2, 0, a3Bot + HeadPitch) with a3Bot = camera_bottom_angle
     // − π; [10] = DH(0, −π/2, l10Bot, π/2 + DEG2RAD(cameraYawBottom)); [11] = DH(0, −π/2 +
     // DEG2RAD(cameraPitchBottom), d11Bot, DEG2RAD(cameraRollBottom)); createDHMatrix(a, α,
-    // d, θ) rotates by Rx(α)·Rz(θ) (robot/utils/matrix_helpers).
+    // d, θ) rotates by Rx(α)·Rz(θ) (include/utils/matrix_helpers.tcc line 53).
     let dh = |alpha: f64, theta: f64| mul(&rx(alpha), &rz(theta));
     let tilt = TILT_DEG.to_radians();
     let mut rng = ChaCha8Rng::seed_from_u64(8);
