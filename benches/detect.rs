@@ -2,7 +2,7 @@
 //! with boards near and across the image border (`SimOptions::near_border`, default
 //! rendering: clutter, blur σ 0.8 px, grey noise σ 2, vignetting), at the NAO V4/V5
 //! resolution 640×480 and the V6's 1280×960; and 144 ordinary images of a robot with the
-//! lower camera tilted by −7.2° (issue 25), which the nominal prediction misses. The whole `detect_dataset` (PNG decoding,
+//! lower camera tilted by −7.2°, which the nominal prediction misses. The whole `detect_dataset` (PNG decoding,
 //! model-guided search, `cornerSubPix`, checks) on all cores and on one.
 //!
 //! Printed once per set: boards and vertices found against the truth, RMS error, images/s
@@ -35,7 +35,7 @@ fn cpu_seconds() -> Option<f64> {
     Some(ticks / 100.0)
 }
 
-/// A robot as teams' files describe them (issue 25): lower-camera tilt −7.2°, roll 2.5°,
+/// A robot as teams' files describe them: lower-camera tilt −7.2°, roll 2.5°,
 /// leg offsets of 1–2°.
 fn tilted_robot() -> [f64; PARAMETER_COUNT] {
     let mut truth = [0.0; PARAMETER_COUNT];

@@ -1,4 +1,4 @@
-//! Detection on robots as they are (issue 25): lower-camera tilt corrections of −3° to −8°,
+//! Detection on robots as they are: lower-camera tilt corrections of −3° to −8°,
 //! roll ±3°, leg offsets ±2°, hidden from detection. Every fully visible board is found,
 //! no vertex gets a wrong (row, col), and `solve --detect`'s data recover the truth.
 

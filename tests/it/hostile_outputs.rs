@@ -1,4 +1,4 @@
-//! Outputs a careless user, a full device or a kill can spoil (issue 26): one test per class
+//! Outputs a careless user, a full device or a kill can spoil: one test per class
 //! of failure, each through the `naocalib` command. No output replaces an input; no panic,
 //! standard output included; multi-file outputs are all or nothing and leave no temporary
 //! file; no robot file from a result that is no plausible calibration; absurd flags refused;

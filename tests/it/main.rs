@@ -38,6 +38,8 @@ mod plan_around;
 mod plot_files;
 mod pure_rust_agreement;
 mod pure_rust_cli;
+#[cfg(feature = "detect")]
+mod readme;
 mod report_html;
 mod robot_file_bounds;
 mod spec_reference;

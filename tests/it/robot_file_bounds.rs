@@ -1,4 +1,4 @@
-//! Property (issue 26): any result JSON that `export` accepts for robot files produces
+//! Property: any result JSON that `export` accepts for robot files produces
 //! robot files whose values, read back with the team readers, are inside the physical
 //! bounds of `naocalib::model::bounds`. The generated results mix plausible values with
 //! garbage (huge, negative, non-physical), missing keys and odd fit summaries.
