@@ -3,7 +3,7 @@
 //! all cores, each solved as `naocalib solve` does (Ceres, noise model).
 //!
 //! This is the solving alone, in memory. `naocalib batch` as a whole process adds loading
-//! and validating the datasets (about 1.1 ms CPU each) and the summary; the README quotes
+//! and validating the datasets (about 1.1 ms CPU each) and the summary; docs/PERFORMANCE.md quotes
 //! the whole process beside one Python scipy solve (`scripts/solve_scipy.py`).
 
 use criterion::{Criterion, criterion_group, criterion_main};

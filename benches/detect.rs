@@ -11,7 +11,7 @@
 //!
 //! The whole-process figure (`naocalib detect` on a dataset written by `simulate --images
 //! --near-border`) and the Python OpenCV loop (`scripts/detect_opencv.py`) are measured
-//! outside criterion; see the README.
+//! outside criterion; see docs/PERFORMANCE.md.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use naocalib::dataset::Dataset;

@@ -277,7 +277,7 @@ fn plan_lowers_the_worst_scatter_of_the_angle_offsets() {
         predicted_random >= 2.0 * predicted,
         "predicted: plan {predicted}°, random {predicted_random}°"
     );
-    // Measured: 2.01× with these seeds (README, planning section); the bound leaves room for
+    // Measured: 2.01× with these seeds; the bound leaves room for
     // the sampling error of 120 runs (about 10 % on each robust scale). Random stances
     // against themselves give 1.0.
     assert!(random >= 1.8 * planned, "plan {planned}°, random {random}°");

@@ -46,6 +46,7 @@ fn help(path: &[String]) -> Help {
     let mut in_commands = false;
     for line in text.lines() {
         let trimmed = line.trim_start();
+        let indent = line.len() - trimmed.len();
         if line.starts_with("Commands:") {
             in_commands = true;
             continue;
@@ -53,11 +54,15 @@ fn help(path: &[String]) -> Help {
         if !line.starts_with(' ') {
             in_commands = false;
         }
+        // A subcommand is indented by two spaces, an option by at most six; what is indented
+        // more is a description's continuation.
         if in_commands {
-            if let Some(name) = trimmed.split_whitespace().next() {
+            if indent == 2
+                && let Some(name) = trimmed.split_whitespace().next()
+            {
                 help.subcommands.insert(name.to_string());
             }
-        } else if trimmed.starts_with('-') {
+        } else if indent <= 6 && trimmed.starts_with('-') {
             // `-j, --threads <N>`, `--detect`: the flag words before the description.
             for word in trimmed.split([' ', ',', '=']) {
                 if is_flag(word) {
