@@ -122,7 +122,7 @@ fn mentions(subcommands: &BTreeSet<String>) -> Vec<Mention> {
     let mut found = Vec::new();
     let mut in_code = false;
     let mut current: Option<(usize, String)> = None;
-    let mut flush = |current: &mut Option<(usize, String)>, found: &mut Vec<Mention>| {
+    let flush = |current: &mut Option<(usize, String)>, found: &mut Vec<Mention>| {
         if let Some((line, text)) = current.take()
             && let Some(words) = naocalib_words(&text)
         {
@@ -265,14 +265,18 @@ fn every_flag_the_readme_names_exists() {
         .collect();
     for (line, flag) in bare_flags() {
         if !all_flags.contains(&flag) {
-            problems.push(format!("README line {line}: `{flag}` is no subcommand's flag"));
+            problems.push(format!(
+                "README line {line}: `{flag}` is no subcommand's flag"
+            ));
         }
     }
     assert!(problems.is_empty(), "{}", problems.join("\n"));
     // The parser must have found the commands, not skipped them: the day's steps and the
     // command summary name a flag of every subcommand a user runs.
     let subcommands_checked: BTreeSet<&str> = checked.iter().map(|(s, _)| s.as_str()).collect();
-    for sub in ["solve", "detect", "plan", "capture", "export", "import", "batch"] {
+    for sub in [
+        "solve", "detect", "plan", "capture", "export", "import", "batch",
+    ] {
         assert!(
             subcommands_checked.contains(sub),
             "the README names no flag of `naocalib {sub}` (checked: {subcommands_checked:?})"
@@ -298,14 +302,36 @@ fn readme_has_the_quick_start_and_its_links_exist() {
     for (i, line) in README.lines().enumerate() {
         for target in line.split("](").skip(1) {
             let target = target.split(')').next().unwrap_or("");
-            let file = target.split('#').next().unwrap_or("");
+            let (file, anchor) = target.split_once('#').unwrap_or((target, ""));
             if file.is_empty() || file.contains("://") {
                 continue;
             }
-            if !root.join(file).exists() {
+            let path = root.join(file);
+            if !path.exists() {
                 missing.push(format!("README line {}: {target}", i + 1));
+            } else if !anchor.is_empty() {
+                let text = std::fs::read_to_string(&path).expect("readable");
+                if !text
+                    .lines()
+                    .any(|l| l.starts_with('#') && slug(l) == anchor)
+                {
+                    missing.push(format!("README line {}: {target} (no such heading)", i + 1));
+                }
             }
         }
     }
     assert!(missing.is_empty(), "links to nothing: {missing:?}");
+}
+
+/// A Markdown heading's anchor as GitHub makes it: lower case, punctuation dropped, spaces
+/// as hyphens (`## 9 What σ means` → `9-what-σ-means`).
+fn slug(heading: &str) -> String {
+    heading
+        .trim_start_matches('#')
+        .trim()
+        .to_lowercase()
+        .chars()
+        .filter(|c| c.is_alphanumeric() || matches!(c, ' ' | '-' | '_'))
+        .map(|c| if c == ' ' { '-' } else { c })
+        .collect()
 }
