@@ -343,7 +343,7 @@ fn naoth_head_keys_through_naoths_camera_matrix() {
         let cal = random_calibration(&mut rng, if k % 2 == 0 { 4.0 } else { 15.0 });
         let path = dir.path().join(format!("CameraMatrixOffset{k}.cfg"));
         std::fs::copy(&fixture, &path).unwrap();
-        export::update(&cal, ExportFormat::NaothCamera, &path, &[]).unwrap();
+        crate::util::updated(&cal, ExportFormat::NaothCamera, &path);
         let text = std::fs::read_to_string(&path).unwrap();
         let key = |name: &str| -> f64 {
             text.lines()

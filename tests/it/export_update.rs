@@ -106,7 +106,7 @@ fn update_changes_exactly_the_calibrated_entries_and_keeps_a_backup() {
             "{name} is recognised"
         );
         let before = imported(format, &path);
-        let backup = export::update(&cal, format, &path, &[]).unwrap();
+        let backup = crate::util::updated(&cal, format, &path);
         assert_eq!(
             std::fs::read_to_string(&backup).unwrap(),
             original,
@@ -201,7 +201,7 @@ fn hulks_body_update_inserts_missing_joints_and_keeps_other_keys() {
     let path = dir.path().join("body.P0000073A03S83I00015.json");
     let original = std::fs::read_to_string(fixture("hulks/body.json")).unwrap();
     std::fs::write(&path, &original).unwrap();
-    export::update(&cal, ExportFormat::HulksBody, &path, &[]).unwrap();
+    crate::util::updated(&cal, ExportFormat::HulksBody, &path);
     let updated = std::fs::read_to_string(&path).unwrap();
     let json: serde_json::Value = serde_json::from_str(&updated).unwrap();
     assert_eq!(json["walking_engine"]["foot_lift_apex"], 0.012, "{updated}");
@@ -258,7 +258,7 @@ fn corrupt_and_unparsable_files_are_refused_untouched() {
         let path = dir.path().join(name.replace('/', "_"));
         let original = std::fs::read(fixture(name)).unwrap();
         std::fs::write(&path, &original).unwrap();
-        let e = export::update(&cal, format, &path, &[])
+        let e = export::update(&cal, Some(format), &path, &[])
             .unwrap_err()
             .to_string();
         assert!(

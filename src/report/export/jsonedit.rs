@@ -38,14 +38,26 @@ pub fn parse(text: &str, path: &Path) -> Result<Value, ExportError> {
         text,
         b: text.as_bytes(),
         pos: 0,
+        twice: None,
     };
-    Ok(p.value())
+    let root = p.value();
+    match p.twice {
+        // serde keeps the last of a repeated key, a team's framework may keep the first:
+        // which one the robot runs with is unknown.
+        Some((line, key)) => Err(parse_error(
+            path,
+            format!("line {line}: \"{key}\" is given twice in the same object"),
+        )),
+        None => Ok(root),
+    }
 }
 
 struct Parser<'a> {
     text: &'a str,
     b: &'a [u8],
     pos: usize,
+    /// The first key given twice in one object, with its line.
+    twice: Option<(usize, String)>,
 }
 
 impl Parser<'_> {
@@ -77,6 +89,7 @@ impl Parser<'_> {
             b'{' => {
                 self.pos += 1;
                 let mut members = Vec::new();
+                let mut seen = std::collections::HashSet::new();
                 loop {
                     self.ws();
                     if self.b[self.pos] == b'}' {
@@ -87,7 +100,12 @@ impl Parser<'_> {
                         self.pos += 1;
                         continue;
                     }
+                    let key_at = self.pos;
                     let key = self.string();
+                    if !seen.insert(key.clone()) && self.twice.is_none() {
+                        let line = self.text[..key_at].matches('\n').count() + 1;
+                        self.twice = Some((line, key.clone()));
+                    }
                     self.ws();
                     self.pos += 1; // ':'
                     let v = self.value();

@@ -148,7 +148,8 @@ fn number_at(
 }
 
 /// Reads back a NomadZ `jointCalibration.cfg` (either layout): joint name → entry (deg),
-/// every offset checked plausible.
+/// every offset checked plausible and every leg joint's `jointPlay` within the play
+/// family's bound ([`crate::model::bounds`], 0 … 5°).
 pub fn read_joint_calibration_cfg(
     text: &str,
     path: &Path,
@@ -188,6 +189,23 @@ pub fn read_joint_calibration_cfg(
             entry.offset,
             super::JOINT_LIMIT_DEG,
         )?;
+        // The play of a joint naocalib models must be one it can hold: a width within
+        // the play family's bound.
+        if let Some(play) = joint_param(name).and_then(play_param) {
+            let bound = crate::model::bounds::bound(play);
+            if !bound.contains(entry.joint_play) {
+                let (_, _, _, line) =
+                    number_at(&root, &[name.as_str(), "jointPlay"], path)?.expect("read above");
+                return Err(parse_error(
+                    path,
+                    format!(
+                        "line {line}: {name}.jointPlay = {} deg is outside naocalib's {} … {} \
+                         deg for {play} ({}): the file looks corrupt; fix it by hand first",
+                        entry.joint_play, bound.min, bound.max, bound.why
+                    ),
+                ));
+            }
+        }
         out.push((name.clone(), entry));
     }
     Ok(out)
