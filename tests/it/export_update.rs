@@ -46,12 +46,19 @@ const CASES: [(ExportFormat, &str, &[&str]); 9] = [
     (
         ExportFormat::BHumanCamera,
         "bhuman/cameraCalibration.cfg",
-        &["lower = {"],
+        &["lower = {", "upper = {"],
     ),
     (
         ExportFormat::BHumanCamera2016,
         "bhuman2016/cameraCalibration.cfg",
-        &["x = -0.6deg", "y = -3.9deg", "z = 0.25deg"],
+        &[
+            "x = -0.6deg",
+            "y = -3.9deg",
+            "z = 0.25deg",
+            "x = 0.8deg",
+            "y = -2.2deg",
+            "z = 0deg",
+        ],
     ),
     (
         ExportFormat::BHumanJoints,
@@ -66,7 +73,7 @@ const CASES: [(ExportFormat, &str, &[&str]); 9] = [
     (
         ExportFormat::NomadzCamera,
         "nomadz/cameraCalibration.cfg",
-        &["cameraTilt", "cameraRoll", "cameraPan"],
+        &["cameraTilt", "cameraRoll", "cameraPan", "upperCamera"],
     ),
     (
         ExportFormat::NomadzJoints,
@@ -77,12 +84,12 @@ const CASES: [(ExportFormat, &str, &[&str]); 9] = [
     (
         ExportFormat::NaothCamera,
         "naoth/CameraMatrixOffset.cfg",
-        &["cam_rot.bottom."],
+        &["cam_rot.bottom.", "cam_rot.top."],
     ),
     (
         ExportFormat::RunswiftCamera,
         "runswift/nao.cfg",
-        &["Bottom="],
+        &["Bottom=", "TopWhenLooking"],
     ),
 ];
 

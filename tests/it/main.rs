@@ -29,6 +29,7 @@ mod export_signs;
 mod export_start_from;
 mod export_teams;
 mod export_update;
+mod export_upper;
 mod extended;
 mod fuzz_readers;
 mod hostile_inputs;

@@ -179,9 +179,14 @@ pub(crate) fn header(s: &mut String, comment: &str, cal: &Calibration, units: &s
         s,
         "{comment} so their files store -alpha. Camera offsets are rotation corrections of the"
     );
+    let cameras = if camera::known(cal, crate::model::CameraId::Upper) {
+        "cameras"
+    } else {
+        "lower camera"
+    };
     let _ = writeln!(
         s,
-        "{comment} lower camera in the camera matrix, applied after the head joints."
+        "{comment} {cameras} in the camera matrix, applied after the head joints."
     );
     let undetermined: Vec<&str> = cal
         .parameters
@@ -308,7 +313,7 @@ pub const REGISTRY: [FormatSpec; 11] = [
         format: ExportFormat::BHumanCamera,
         name: "bhuman-camera",
         file: "cameraCalibration.cfg",
-        description: "B-Human (2019+), SPQR: cameraRotationCorrections.lower {x; y; z} in deg",
+        description: "B-Human (2019+), SPQR: cameraRotationCorrections.{lower,upper} {x; y; z} in deg",
         render: bhuman_camera_cfg,
         read: Some(bhuman::import_camera),
         update: Some(bhuman::update_camera),
@@ -319,7 +324,7 @@ pub const REGISTRY: [FormatSpec; 11] = [
         format: ExportFormat::BHumanCamera2016,
         name: "bhuman-camera-2016",
         file: "bhuman2016/cameraCalibration.cfg",
-        description: "B-Human up to 2018: lowerCameraRotationCorrection {x; y; z} in deg",
+        description: "B-Human up to 2018: lower/upperCameraRotationCorrection {x; y; z} in deg",
         render: bhuman::bhuman_camera_2016_cfg,
         read: Some(bhuman::import_camera),
         update: Some(bhuman::update_camera),
@@ -343,7 +348,7 @@ pub const REGISTRY: [FormatSpec; 11] = [
         format: ExportFormat::HulksHead,
         name: "hulks-head",
         file: "hulks/head.json",
-        description: "HULKs head.<id>.json: correction_in_camera_bottom [x, y, z] in rad",
+        description: "HULKs head.<id>.json: correction_in_camera_bottom/_top [x, y, z] in rad",
         render: hulks::head_json,
         read: Some(hulks::import_head),
         update: Some(hulks::update_head),
@@ -367,7 +372,7 @@ pub const REGISTRY: [FormatSpec; 11] = [
         format: ExportFormat::NaothCamera,
         name: "naoth-camera",
         file: "naoth/CameraMatrixOffset.cfg",
-        description: "NaoTH: [CameraMatrixOffset] cam_rot.bottom.x/y/z and head_rot.x/y/z in rad",
+        description: "NaoTH: [CameraMatrixOffset] cam_rot.bottom/top.x/y/z and head_rot.x/y/z in rad",
         render: naoth::camera_matrix_offset_cfg,
         read: Some(naoth::import),
         update: Some(naoth::update),
@@ -378,7 +383,7 @@ pub const REGISTRY: [FormatSpec; 11] = [
         format: ExportFormat::NomadzCamera,
         name: "nomadz-camera",
         file: "nomadz/cameraCalibration.cfg",
-        description: "NomadZ: cameraTiltCorrection, cameraRollCorrection, cameraPanCorrection in rad",
+        description: "NomadZ: camera/upperCamera Tilt/Roll/PanCorrection in rad",
         render: nomadz::camera_calibration_cfg,
         read: Some(nomadz::import_camera),
         update: Some(nomadz::update_camera),
@@ -400,7 +405,7 @@ pub const REGISTRY: [FormatSpec; 11] = [
         format: ExportFormat::RunswiftCamera,
         name: "runswift-camera",
         file: "runswift/kinematics.cfg",
-        description: "rUNSWift: [kinematics] cameraYawBottom/cameraPitchBottom/cameraRollBottom in deg",
+        description: "rUNSWift: [kinematics] camera{Yaw,Pitch,Roll}Bottom, …TopWhenLooking{Straight,Left,Right} in deg",
         render: runswift::kinematics_cfg,
         read: Some(runswift::import),
         update: Some(runswift::update),
@@ -434,24 +439,6 @@ pub(crate) fn check_plausible(
             ),
         ))
     }
-}
-
-/// Whether `cal` determined the lower camera, for formats whose parameterisation mixes
-/// naocalib's three camera offsets: `false` when none was estimated; an error (nothing
-/// written) when only some are known.
-pub(crate) fn camera_determined(cal: &Calibration, path: &Path) -> Result<bool, ExportError> {
-    let cams = [Param::CamYaw, Param::CamPitch, Param::CamRoll];
-    if cams.iter().all(|&p| cal.determined_here(p).is_none()) {
-        return Ok(false);
-    }
-    if cams.iter().any(|&p| cal.robot_value(p).is_none()) {
-        return Err(parse_error(
-            path,
-            "the camera offsets are only partly determined, and this format mixes them: \
-             not updated",
-        ));
-    }
-    Ok(true)
 }
 
 impl ExportFormat {
