@@ -312,7 +312,7 @@ fn camera_values(
 ) -> Result<Vec<(Param, f64, usize, usize)>, ExportError> {
     let mut out = Vec::new();
     for (k, (key, param)) in CAMERA_KEYS.iter().chain(&UPPER_CAMERA_KEYS).enumerate() {
-        let Some((x, start, end, line)) = number_at(root, &[key], path)? else {
+        let Some((x, start, end, line)) = number_at(root, &[*key], path)? else {
             if k < CAMERA_KEYS.len() {
                 return Err(parse_error(path, format!("{key}: missing")));
             }
