@@ -350,7 +350,7 @@ pub fn update_camera(text: &str, path: &Path, cal: &Calibration) -> Result<Strin
                         path,
                         format!(
                             "the {} camera's correction ({axis}): missing",
-                            super::camera::name(camera)
+                            camera.name()
                         ),
                     )
                 })?;

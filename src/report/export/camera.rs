@@ -36,16 +36,10 @@ pub fn nominal_tilt_deg(camera: CameraId) -> f64 {
     }
 }
 
-/// naocalib's offsets of the camera's correction: `[yaw, pitch, roll]`.
+/// naocalib's offsets of the camera's correction: `[yaw, pitch, roll]`
+/// ([`CameraId::rotation_params`]).
 pub fn params(camera: CameraId) -> [Param; 3] {
-    match camera {
-        CameraId::Lower => [Param::CamYaw, Param::CamPitch, Param::CamRoll],
-        CameraId::Upper => [
-            Param::UpperCamYaw,
-            Param::UpperCamPitch,
-            Param::UpperCamRoll,
-        ],
-    }
+    camera.rotation_params()
 }
 
 /// The axes of an "optical" camera frame (z forward along the optical axis, x right, y
@@ -218,23 +212,15 @@ pub fn determined(
             format!(
                 "the {} camera's offsets are only partly determined, and this format mixes \
                  them: not updated",
-                name(camera)
+                camera.name()
             ),
         ));
     }
     Ok(true)
 }
 
-/// `lower` or `upper`.
-pub fn name(camera: CameraId) -> &'static str {
-    match camera {
-        CameraId::Lower => "lower",
-        CameraId::Upper => "upper",
-    }
-}
-
 /// Both cameras, lower first.
-pub const CAMERAS: [CameraId; 2] = [CameraId::Lower, CameraId::Upper];
+pub const CAMERAS: [CameraId; 2] = CameraId::ALL;
 
 /// Whether a fresh file carries `camera`'s correction from `cal` (the upper camera's is
 /// otherwise zero or absent): when `cal` estimated one of its offsets and the data
