@@ -431,7 +431,11 @@ pub fn write_atomic_with(
 /// is rewritten in place (every link sees the new content; a crash part-way can leave it
 /// partly written, so callers keep a backup first). Refuses an input, something that is
 /// not a regular file, and a read-only file.
-pub fn rewrite(path: &Path, contents: &[u8], options: &WriteOptions) -> Result<PathBuf, WriteError> {
+pub fn rewrite(
+    path: &Path,
+    contents: &[u8],
+    options: &WriteOptions,
+) -> Result<PathBuf, WriteError> {
     let io_err = |path: &Path, action, error| WriteError::Io {
         path: path.to_path_buf(),
         action,
@@ -532,10 +536,8 @@ fn like(path: &Path, model: &std::fs::Metadata) -> bool {
     #[cfg(unix)]
     {
         use std::os::unix::fs::{MetadataExt, PermissionsExt};
-        let _ = std::fs::set_permissions(
-            path,
-            std::fs::Permissions::from_mode(model.mode() & 0o7777),
-        );
+        let _ =
+            std::fs::set_permissions(path, std::fs::Permissions::from_mode(model.mode() & 0o7777));
         let mine = std::fs::metadata(path)
             .map(|m| (m.uid(), m.gid()))
             .unwrap_or((u32::MAX, u32::MAX));
@@ -544,10 +546,8 @@ fn like(path: &Path, model: &std::fs::Metadata) -> bool {
         }
         let owned = std::os::unix::fs::chown(path, Some(model.uid()), Some(model.gid())).is_ok();
         // chown clears set-id bits: set the mode again.
-        let _ = std::fs::set_permissions(
-            path,
-            std::fs::Permissions::from_mode(model.mode() & 0o7777),
-        );
+        let _ =
+            std::fs::set_permissions(path, std::fs::Permissions::from_mode(model.mode() & 0o7777));
         owned
     }
     #[cfg(not(unix))]

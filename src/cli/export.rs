@@ -74,12 +74,8 @@ fn run_update(
     format: Option<ExportFormat>,
     calibration: &Calibration,
 ) -> Result<ExitCode> {
-    let (format, updated) = export::update(
-        calibration,
-        format,
-        file,
-        std::slice::from_ref(&args.input),
-    )?;
+    let (format, updated) =
+        export::update(calibration, format, file, std::slice::from_ref(&args.input))?;
     if !format.spec().joints {
         let head = |p: naocalib::model::Param| calibration.value(p);
         note!(
@@ -101,7 +97,11 @@ fn run_update(
             } else {
                 String::new()
             };
-            let kept = if new_backup { "kept as" } else { "already kept in" };
+            let kept = if new_backup {
+                "kept as"
+            } else {
+                "already kept in"
+            };
             format!(
                 "updated {}{through} ({}); previous file {kept} {}\n",
                 file.display(),

@@ -30,7 +30,10 @@ fn fixture(name: &str) -> PathBuf {
 /// Every robot layout's fixture, in its format.
 const FIXTURES: [(ExportFormat, &str); 10] = [
     (ExportFormat::BHumanCamera, "bhuman/cameraCalibration.cfg"),
-    (ExportFormat::BHumanCamera2016, "bhuman2016/cameraCalibration.cfg"),
+    (
+        ExportFormat::BHumanCamera2016,
+        "bhuman2016/cameraCalibration.cfg",
+    ),
     (ExportFormat::BHumanJoints, "bhuman/jointCalibration.cfg"),
     (ExportFormat::HulksHead, "hulks/head.json"),
     (ExportFormat::HulksBody, "hulks/body.json"),
@@ -38,7 +41,10 @@ const FIXTURES: [(ExportFormat, &str); 10] = [
     (ExportFormat::NomadzCamera, "nomadz/cameraCalibration.cfg"),
     (ExportFormat::NomadzJoints, "nomadz/jointCalibration.cfg"),
     (ExportFormat::RunswiftCamera, "runswift/nao.cfg"),
-    (ExportFormat::BHumanJoints, "bhuman2024/jointCalibration.cfg"),
+    (
+        ExportFormat::BHumanJoints,
+        "bhuman2024/jointCalibration.cfg",
+    ),
 ];
 
 /// A converged calibration of real sizes: lower camera tilt −2° to −8°, legs up to 2°,
@@ -150,7 +156,11 @@ fn the_robots_original_is_never_lost_and_updates_are_idempotent() {
         // Another calibration: the original stays in FILE.bak, the first update in .bak.2.
         let b2 = crate::util::updated(&second, format, &path);
         assert_eq!(b2, backup_of(&path, 2), "{name}");
-        assert_eq!(std::fs::read(backup_of(&path, 1)).unwrap(), original, "{name}");
+        assert_eq!(
+            std::fs::read(backup_of(&path, 1)).unwrap(),
+            original,
+            "{name}"
+        );
         assert_eq!(std::fs::read(&b2).unwrap(), after_first, "{name}");
     }
 }
@@ -253,8 +263,14 @@ fn links_mode_and_owner_are_kept_and_a_read_only_file_is_refused() {
     };
     assert_eq!(file, real.canonicalize().unwrap());
     assert!(link.symlink_metadata().unwrap().file_type().is_symlink());
-    assert_ne!(std::fs::read(&real).unwrap(), std::fs::read(fixture(name)).unwrap());
-    assert_eq!(std::fs::read(&backup).unwrap(), std::fs::read(fixture(name)).unwrap());
+    assert_ne!(
+        std::fs::read(&real).unwrap(),
+        std::fs::read(fixture(name)).unwrap()
+    );
+    assert_eq!(
+        std::fs::read(&backup).unwrap(),
+        std::fs::read(fixture(name)).unwrap()
+    );
 
     // Hard links: every name sees the update.
     let a = copy(dir.path(), name);
@@ -266,7 +282,10 @@ fn links_mode_and_owner_are_kept_and_a_read_only_file_is_refused() {
         std::fs::metadata(&a).unwrap().ino(),
         std::fs::metadata(&b).unwrap().ino()
     );
-    assert_ne!(std::fs::read(&a).unwrap(), std::fs::read(fixture(name)).unwrap());
+    assert_ne!(
+        std::fs::read(&a).unwrap(),
+        std::fs::read(fixture(name)).unwrap()
+    );
 
     // Mode and owner (the owner only where this process may give one: as root).
     let path = dir.path().join("mode.cfg");
@@ -283,7 +302,11 @@ fn links_mode_and_owner_are_kept_and_a_read_only_file_is_refused() {
         assert_eq!(after.mode() & 0o7777, 0o640, "{}", file.display());
         assert_eq!((after.uid(), after.gid()), (before.uid(), before.gid()));
     }
-    assert_ne!(std::fs::metadata(&path).unwrap().ino(), before.ino(), "atomic: renamed");
+    assert_ne!(
+        std::fs::metadata(&path).unwrap().ino(),
+        before.ino(),
+        "atomic: renamed"
+    );
 
     // Read-only: refused, untouched, no backup.
     let ro = dir.path().join("ro.cfg");
@@ -293,7 +316,10 @@ fn links_mode_and_owner_are_kept_and_a_read_only_file_is_refused() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("read-only") && e.contains("ro.cfg"), "{e}");
-    assert_eq!(std::fs::read(&ro).unwrap(), std::fs::read(fixture(name)).unwrap());
+    assert_eq!(
+        std::fs::read(&ro).unwrap(),
+        std::fs::read(fixture(name)).unwrap()
+    );
     assert!(!backup_of(&ro, 1).exists());
 }
 
@@ -311,8 +337,15 @@ fn a_calibration_that_determines_nothing_in_the_file_writes_nothing() {
     for (format, name) in FIXTURES.iter().filter(|(f, _)| !f.spec().joints) {
         let path = copy(dir.path(), name);
         let (_, outcome) = export::update(&legs, Some(*format), &path, &[]).unwrap();
-        assert_eq!(outcome, Updated::Unchanged(Unchanged::NothingDetermined), "{name}");
-        assert_eq!(std::fs::read(&path).unwrap(), std::fs::read(fixture(name)).unwrap());
+        assert_eq!(
+            outcome,
+            Updated::Unchanged(Unchanged::NothingDetermined),
+            "{name}"
+        );
+        assert_eq!(
+            std::fs::read(&path).unwrap(),
+            std::fs::read(fixture(name)).unwrap()
+        );
         assert!(!backup_of(&path, 1).exists(), "{name}: no backup");
     }
     // From the command line: an imported calibration determines nothing.
@@ -369,7 +402,11 @@ fn deeply_nested_files_are_refused_with_a_message() {
     let toml = dir.path().join("deep.toml");
     std::fs::write(
         &toml,
-        format!("format = \"naocalib-calibration\"\nx = {}1{}\n", "[".repeat(depth), "]".repeat(depth)),
+        format!(
+            "format = \"naocalib-calibration\"\nx = {}1{}\n",
+            "[".repeat(depth),
+            "]".repeat(depth)
+        ),
     )
     .unwrap();
     let cal = dir.path().join("cal.toml");
@@ -436,7 +473,11 @@ fn naocalibs_own_exports_are_recognised() {
             .output()
             .unwrap();
         assert!(out.status.success(), "{name}: {}", stderr(&out));
-        assert!(stderr(&out).contains(&format!("({name})")), "{}", stderr(&out));
+        assert!(
+            stderr(&out).contains(&format!("({name})")),
+            "{}",
+            stderr(&out)
+        );
     }
 }
 
@@ -458,7 +499,10 @@ fn a_hulks_file_with_a_duplicate_key_is_refused() {
     std::fs::write(&body, &twice_body).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(357);
     let cal = calibration(&mut rng);
-    for (path, format) in [(&head, ExportFormat::HulksHead), (&body, ExportFormat::HulksBody)] {
+    for (path, format) in [
+        (&head, ExportFormat::HulksHead),
+        (&body, ExportFormat::HulksBody),
+    ] {
         let e = export::import(path, Some(format)).unwrap_err().to_string();
         assert!(e.contains("given twice") && e.contains("line "), "{e}");
         let e = export::update(&cal, Some(format), path, &[])
@@ -491,7 +535,12 @@ fn an_implausible_joint_play_is_refused_and_start_from_never_moves_a_joint_by_it
             .unwrap();
         crate::util::assert_clean_failure(
             &out,
-            &["lKneePitch.jointPlay", &format!("= {bad} deg"), "0 … 5", "line "],
+            &[
+                "lKneePitch.jointPlay",
+                &format!("= {bad} deg"),
+                "0 … 5",
+                "line ",
+            ],
         );
         assert!(!dir.path().join("robot.toml").exists());
     }
@@ -529,7 +578,10 @@ fn a_byte_order_mark_is_accepted_and_kept() {
         std::fs::write(&path, format!("\u{feff}{text}")).unwrap();
         let (recognised, values) = export::import(&path, None).unwrap();
         assert_eq!(recognised, format, "{name}");
-        assert_eq!(values, export::import(&fixture(name), Some(format)).unwrap().1);
+        assert_eq!(
+            values,
+            export::import(&fixture(name), Some(format)).unwrap().1
+        );
         crate::util::updated(&cal, format, &path);
         let updated = std::fs::read_to_string(&path).unwrap();
         assert!(updated.starts_with('\u{feff}'), "{name}: the mark is kept");
@@ -549,9 +601,24 @@ fn a_fifo_is_refused_without_hanging() {
     let x = dir.path().join("x.toml");
     let y = dir.path().join("y.toml");
     let runs: [[&std::ffi::OsStr; 4]; 3] = [
-        ["import".as_ref(), fifo.as_ref(), "--out".as_ref(), x.as_ref()],
-        ["export".as_ref(), cal.as_ref(), "--update".as_ref(), fifo.as_ref()],
-        ["export".as_ref(), fifo.as_ref(), "--out".as_ref(), y.as_ref()],
+        [
+            "import".as_ref(),
+            fifo.as_ref(),
+            "--out".as_ref(),
+            x.as_ref(),
+        ],
+        [
+            "export".as_ref(),
+            cal.as_ref(),
+            "--update".as_ref(),
+            fifo.as_ref(),
+        ],
+        [
+            "export".as_ref(),
+            fifo.as_ref(),
+            "--out".as_ref(),
+            y.as_ref(),
+        ],
     ];
     for args in runs {
         let out = naocalib()

@@ -132,7 +132,11 @@ fn calibration(rng: &mut impl Rng, large: bool) -> Calibration {
 /// calibration's upper-camera offsets and, when `head`, its head offsets.
 fn naocalib_upper(cal: &Calibration, yaw: f64, pitch: f64, head: bool) -> M3 {
     let mut params = vec![0.0; Param::ALL.len()];
-    let mut which = vec![Param::UpperCamYaw, Param::UpperCamPitch, Param::UpperCamRoll];
+    let mut which = vec![
+        Param::UpperCamYaw,
+        Param::UpperCamPitch,
+        Param::UpperCamRoll,
+    ];
     if head {
         which.extend([Param::HeadYaw, Param::HeadPitch]);
     }
@@ -187,13 +191,13 @@ fn team_upper(format: ExportFormat, text: &str, yaw: f64, pitch: f64) -> M3 {
         }
         ExportFormat::HulksHead => {
             let json: serde_json::Value = serde_json::from_str(text).unwrap();
-            let c: Vec<f64> = json["camera_matrix_parameters"]["calibration"]
-                ["correction_in_camera_top"]
-                .as_array()
-                .expect("correction_in_camera_top")
-                .iter()
-                .map(|v| v.as_f64().unwrap())
-                .collect();
+            let c: Vec<f64> =
+                json["camera_matrix_parameters"]["calibration"]["correction_in_camera_top"]
+                    .as_array()
+                    .expect("correction_in_camera_top")
+                    .iter()
+                    .map(|v| v.as_f64().unwrap())
+                    .collect();
             // Top camera_pitch −1.2°: head_to_camera(−1.2°) maps head → optical camera.
             let camera_pitch = -tilt;
             let uncorrected = product(&[rx(-camera_pitch), ry(-FRAC_PI_2), rx(FRAC_PI_2)]);
@@ -253,7 +257,10 @@ fn ini_number(text: &str, name: &str) -> Option<f64> {
 /// Every format with an upper camera, with its fixture (a robot's file).
 const UPPER_FORMATS: [(ExportFormat, &str); 6] = [
     (ExportFormat::BHumanCamera, "bhuman/cameraCalibration.cfg"),
-    (ExportFormat::BHumanCamera2016, "bhuman2016/cameraCalibration.cfg"),
+    (
+        ExportFormat::BHumanCamera2016,
+        "bhuman2016/cameraCalibration.cfg",
+    ),
     (ExportFormat::HulksHead, "hulks/head.json"),
     (ExportFormat::NaothCamera, "naoth/CameraMatrixOffset.cfg"),
     (ExportFormat::NomadzCamera, "nomadz/cameraCalibration.cfg"),
@@ -287,16 +294,16 @@ fn every_upper_camera_key_fresh_and_updated_is_naocalibs_rotation_through_the_te
                 // file keeps the robot's head roll, which the update folds in.
                 let ours = naocalib_upper(&cal, yaw, pitch, with_head(format));
                 let team = team_upper(format, text, yaw, pitch);
-                assert_close(
-                    &team,
-                    &ours,
-                    &format!("{} {what} #{k}", format.name()),
-                );
+                assert_close(&team, &ours, &format!("{} {what} #{k}", format.name()));
                 checked += 1;
             }
             // Import reads the upper camera back.
             let (_, values) = export::import(&path, Some(format)).unwrap();
-            for p in [Param::UpperCamYaw, Param::UpperCamPitch, Param::UpperCamRoll] {
+            for p in [
+                Param::UpperCamYaw,
+                Param::UpperCamPitch,
+                Param::UpperCamRoll,
+            ] {
                 let v = values.iter().find(|(q, _)| *q == p).unwrap().1;
                 assert!(
                     (v - cal.value(p)).abs() < 1e-9,
@@ -333,12 +340,18 @@ fn update_changes_the_upper_keys_only_when_the_upper_camera_was_calibrated() {
     for held in [true, false] {
         let cal = lower_only(&mut rng, held);
         for (format, name) in UPPER_FORMATS {
-            let path = dir.path().join(format!("{held}-{}", name.replace('/', "_")));
+            let path = dir
+                .path()
+                .join(format!("{held}-{}", name.replace('/', "_")));
             std::fs::copy(fixture(name), &path).unwrap();
             let before = export::import(&path, Some(format)).unwrap().1;
             crate::util::updated(&cal, format, &path);
             let after = export::import(&path, Some(format)).unwrap().1;
-            for p in [Param::UpperCamYaw, Param::UpperCamPitch, Param::UpperCamRoll] {
+            for p in [
+                Param::UpperCamYaw,
+                Param::UpperCamPitch,
+                Param::UpperCamRoll,
+            ] {
                 let value = |v: &[(Param, f64)]| v.iter().find(|(q, _)| *q == p).unwrap().1;
                 assert!(
                     (value(&before) - value(&after)).abs() < 1e-12,
@@ -380,7 +393,9 @@ fn update_changes_the_upper_keys_only_when_the_upper_camera_was_calibrated() {
         (ExportFormat::NaothCamera, "naoth/CameraMatrixOffset.cfg"),
         (ExportFormat::RunswiftCamera, "runswift/nao.cfg"),
     ] {
-        let path = dir.path().join(format!("partly-{}", name.replace('/', "_")));
+        let path = dir
+            .path()
+            .join(format!("partly-{}", name.replace('/', "_")));
         std::fs::copy(fixture(name), &path).unwrap();
         let e = export::update(&cal, Some(format), &path, &[])
             .unwrap_err()
@@ -419,5 +434,81 @@ fn an_update_with_the_upper_camera_alone_leaves_the_lower_keys() {
         }
         let (_, again) = export::update(&cal, Some(format), &path, &[]).unwrap();
         assert_eq!(again, Updated::Unchanged(Unchanged::AlreadyHolds));
+    }
+}
+
+#[test]
+fn solve_start_from_a_robots_imported_upper_camera_starts_there() {
+    // A simulated robot with upper-camera captures (team-sized offsets, hidden), and its
+    // B-Human camera file holding an upper-camera correction of real size.
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("robot");
+    let out = crate::util::naocalib()
+        .args([
+            "simulate",
+            "--stances",
+            "6",
+            "--upper-stances",
+            "3",
+            "--heads",
+            "2",
+            "--team-offsets",
+            "--seed",
+            "323",
+        ])
+        .arg(&data)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", crate::util::stderr(&out));
+    let camera = dir.path().join("cameraCalibration.cfg");
+    std::fs::write(
+        &camera,
+        "cameraRotationCorrections = {\n  upper = {x = 1.4deg; y = -8.5deg; z = 0.3deg;};\n  \
+         lower = {x = 0.3deg; y = -5.9deg; z = 0deg;};\n};\nbodyRotationCorrection = {x = 0deg; y = 0deg;};\n",
+    )
+    .unwrap();
+    let robot = dir.path().join("robot.toml");
+    let out = crate::util::naocalib()
+        .arg("import")
+        .arg(&camera)
+        .arg("--out")
+        .arg(&robot)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", crate::util::stderr(&out));
+    let imported = export::read_calibration(&robot).unwrap();
+    assert_eq!(imported.value(Param::UpperCamPitch), -8.5);
+    assert_eq!(imported.value(Param::UpperCamRoll), 1.4);
+    assert_eq!(imported.value(Param::UpperCamYaw), 0.3);
+    let out = crate::util::naocalib()
+        .arg("solve")
+        .arg(&data)
+        .arg("--start-from")
+        .arg(&robot)
+        // The robot's head offsets are not in its camera file: estimated here.
+        .args(["--free", "head", "--json"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", crate::util::stderr(&out));
+    let result: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    // The robot's upper camera is where the change is measured from; the estimate is the
+    // data's (the truth, hidden from the solve).
+    let truth = naocalib::dataset::Dataset::load(&data)
+        .unwrap()
+        .truth
+        .unwrap();
+    for (p, previous) in [
+        (Param::UpperCamYaw, 0.3),
+        (Param::UpperCamPitch, -8.5),
+        (Param::UpperCamRoll, 1.4),
+    ] {
+        let change = &result["changes"][p.name()];
+        assert_eq!(change["previous"], previous, "{p}: {change}");
+        let now = result["parameters"][p.name()]["value"].as_f64().unwrap();
+        let true_value = p.unit().to_report(truth.values[p.index()]);
+        assert!(
+            (now - true_value).abs() < 0.05,
+            "{p}: {now} vs {true_value}"
+        );
     }
 }

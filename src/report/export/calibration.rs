@@ -611,7 +611,9 @@ pub fn read_start_from(path: &Path) -> Result<Calibration, ExportError> {
         None => Ok(cal),
         Some(v) => Err(parse_error(
             path,
-            format!("{v}: not a calibration to start from; fix the file (or the robot's file it was imported from) first"),
+            format!(
+                "{v}: not a calibration to start from; fix the file (or the robot's file it was imported from) first"
+            ),
         )),
     }
 }

@@ -94,8 +94,7 @@ pub fn head_json(cal: &Calibration) -> String {
         camera_matrix_parameters: CameraMatrixParameters {
             calibration: CameraCalibration {
                 correction_in_camera_bottom: super::camera::hulks(cal, CameraId::Lower),
-                correction_in_camera_top: upper
-                    .then(|| super::camera::hulks(cal, CameraId::Upper)),
+                correction_in_camera_top: upper.then(|| super::camera::hulks(cal, CameraId::Upper)),
             },
         },
     })

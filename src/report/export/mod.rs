@@ -73,10 +73,10 @@ pub use bhuman::{
     BHUMAN_JOINTS, bhuman_camera_cfg, bhuman_joint_cfg, read_bhuman_camera_cfg,
     read_bhuman_joint_cfg,
 };
-pub use update::{Unchanged, Updated, update};
 pub use calibration::{
     COMPENSATION, Calibration, Entry, FORMAT, Posture, VERSION, read_calibration, read_start_from,
 };
+pub use update::{Unchanged, Updated, update};
 // `WriteOptions` belongs to the export API.
 pub use crate::output::WriteOptions;
 use crate::output::{check_writable, write_atomic};
@@ -353,7 +353,8 @@ pub const REGISTRY: [FormatSpec; 11] = [
         read: Some(hulks::import_head),
         update: Some(hulks::update_head),
         recognise: |c| {
-            c.contains("\"correction_in_camera_bottom\"") || c.contains("\"correction_in_camera_top\"")
+            c.contains("\"correction_in_camera_bottom\"")
+                || c.contains("\"correction_in_camera_top\"")
         },
         joints: false,
     },
@@ -553,7 +554,10 @@ pub fn check_fresh(
 }
 
 /// Refuses a result that is not a calibration for the files robots load.
-pub(crate) fn check_usable(cal: &Calibration, what: impl FnOnce() -> String) -> Result<(), ExportError> {
+pub(crate) fn check_usable(
+    cal: &Calibration,
+    what: impl FnOnce() -> String,
+) -> Result<(), ExportError> {
     let reasons = cal.problems();
     if reasons.is_empty() {
         Ok(())

@@ -162,14 +162,14 @@ const KEYS: [&str; 3] = ["cameraYawBottom", "cameraPitchBottom", "cameraRollBott
 
 /// The `[kinematics]` entries of a rUNSWift config, and every camera key's value (deg),
 /// checked plausible.
-fn entries(
-    text: &str,
-    path: &Path,
-) -> Result<Vec<(&'static str, f64)>, ExportError> {
+fn entries(text: &str, path: &Path) -> Result<Vec<(&'static str, f64)>, ExportError> {
     let (entries, _) = super::ini::section(text, SECTION, path)?
         .ok_or_else(|| parse_error(path, format!("no [{SECTION}] section")))?;
     let mut out = Vec::new();
-    for key in keys(CameraId::Lower).into_iter().chain(keys(CameraId::Upper)) {
+    for key in keys(CameraId::Lower)
+        .into_iter()
+        .chain(keys(CameraId::Upper))
+    {
         if let Some((x, e)) = super::ini::number(&entries, key, path)? {
             super::check_plausible(path, e.line, key, x, super::CAMERA_LIMIT_DEG)?;
             out.push((key, x));
@@ -206,7 +206,10 @@ pub fn import(text: &str, path: &Path) -> Result<Imported, ExportError> {
     for (camera, keys) in [(CameraId::Lower, &KEYS), (CameraId::Upper, &TOP_KEYS[0])] {
         let Some(v) = triple(&found, keys, path)? else {
             if camera == CameraId::Lower {
-                return Err(parse_error(path, format!("[{SECTION}] {}: missing", KEYS[0])));
+                return Err(parse_error(
+                    path,
+                    format!("[{SECTION}] {}: missing", KEYS[0]),
+                ));
             }
             continue;
         };

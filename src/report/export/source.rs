@@ -154,6 +154,9 @@ mod tests {
         let c = code(text);
         assert!(!c.contains("offsets") && !c.contains("minAngle"), "{c}");
         assert!(!c.contains("cameraPitchBottom") && !c.contains("CameraMatrixOffset"));
-        assert!(c.contains("a = 1;") && c.contains("= 2;") && c.contains("c = 3;"), "{c}");
+        assert!(
+            c.contains("a = 1;") && c.contains("= 2;") && c.contains("c = 3;"),
+            "{c}"
+        );
     }
 }

@@ -154,7 +154,10 @@ pub fn update(
     if cal.corrected_angles()
         && let Some(backup) = applied_to(cal, format, text, &existing)
     {
-        return Ok((format, Updated::Unchanged(Unchanged::AlreadyApplied { backup })));
+        return Ok((
+            format,
+            Updated::Unchanged(Unchanged::AlreadyApplied { backup }),
+        ));
     }
     let options = WriteOptions {
         force: false,
