@@ -512,3 +512,33 @@ fn solve_start_from_a_robots_imported_upper_camera_starts_there() {
         );
     }
 }
+
+#[test]
+fn a_runswift_key_missing_beside_the_others_is_runswifts_default_zero() {
+    // One of rUNSWift's own 2025 head configs misspells one top key
+    // (`cameraRollWhenLookingStraight`): rUNSWift then runs that entry at its default, 0.
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(fixture("runswift/nao.cfg")).unwrap();
+    let path = dir.path().join("head.cfg");
+    std::fs::write(
+        &path,
+        text.replace(
+            "cameraRollTopWhenLookingStraight=-0.4",
+            "cameraRollWhenLookingStraight=-0.4",
+        ),
+    )
+    .unwrap();
+    let with_zero = dir.path().join("zero.cfg");
+    std::fs::write(
+        &with_zero,
+        text.replace(
+            "cameraRollTopWhenLookingStraight=-0.4",
+            "cameraRollTopWhenLookingStraight=0",
+        ),
+    )
+    .unwrap();
+    let (_, read) = export::import(&path, None).unwrap();
+    let (_, zero) = export::import(&with_zero, None).unwrap();
+    assert_eq!(read, zero);
+    assert!(read.iter().any(|(p, _)| *p == Param::UpperCamRoll));
+}

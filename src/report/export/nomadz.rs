@@ -202,7 +202,8 @@ pub fn read_joint_calibration_cfg(
                     path,
                     format!(
                         "line {line}: {name}.jointPlay = {} deg is outside naocalib's {} … {} \
-                         deg for {play} ({}): the file looks corrupt; fix it by hand first",
+                         deg for {play} ({}): naocalib's model cannot hold it; correct the \
+                         file by hand first",
                         entry.joint_play, bound.min, bound.max, bound.why
                     ),
                 ));

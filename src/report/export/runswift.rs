@@ -178,22 +178,16 @@ fn entries(text: &str, path: &Path) -> Result<Vec<(&'static str, f64)>, ExportEr
     Ok(out)
 }
 
-/// The `[yaw, pitch, roll]` (deg) under `keys` in `found`; `None` when none is there, an
-/// error when only some are.
-fn triple(
-    found: &[(&str, f64)],
-    keys: &[&str],
-    path: &Path,
-) -> Result<Option<[f64; 3]>, ExportError> {
+/// The `[yaw, pitch, roll]` (deg) under `keys` in `found`; `None` when none is there. A
+/// key missing beside the others is 0, as rUNSWift runs it: its launch file passes only
+/// the keys a config has (`motion_launch.py` lines 117–156, no `[kinematics]` in
+/// `runswift.cfg`) and the parameters default to 0 (`motion_adapter.cpp` lines 123–135).
+fn triple(found: &[(&str, f64)], keys: &[&str]) -> Option<[f64; 3]> {
     let get = |k: &str| found.iter().find(|(key, _)| *key == k).map(|(_, x)| *x);
     if keys.iter().all(|k| get(k).is_none()) {
-        return Ok(None);
+        return None;
     }
-    let mut out = [0.0; 3];
-    for (o, k) in out.iter_mut().zip(keys) {
-        *o = get(k).ok_or_else(|| parse_error(path, format!("[{SECTION}] {k}: missing")))?;
-    }
-    Ok(Some(out))
+    Some([0, 1, 2].map(|k| get(keys[k]).unwrap_or(0.0)))
 }
 
 /// Reads a rUNSWift head config (other keys and sections allowed): naocalib's offsets (deg)
@@ -204,7 +198,7 @@ pub fn import(text: &str, path: &Path) -> Result<Imported, ExportError> {
     let found = entries(text, path)?;
     let mut out = Vec::new();
     for (camera, keys) in [(CameraId::Lower, &KEYS), (CameraId::Upper, &TOP_KEYS[0])] {
-        let Some(v) = triple(&found, keys, path)? else {
+        let Some(v) = triple(&found, keys) else {
             if camera == CameraId::Lower {
                 return Err(parse_error(
                     path,
