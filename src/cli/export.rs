@@ -92,7 +92,10 @@ fn run_update(
             backup,
             new_backup,
         } => {
-            let through = if written != file {
+            let link = file
+                .symlink_metadata()
+                .is_ok_and(|m| m.file_type().is_symlink());
+            let through = if link {
                 format!(" through {}", written.display())
             } else {
                 String::new()

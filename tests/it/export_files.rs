@@ -231,6 +231,11 @@ fn an_update_of_corrected_angles_is_applied_once() {
     };
     let out = run();
     assert!(out.status.success(), "{}", stderr(&out));
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        said.starts_with("updated ") && !said.contains("through") && said.contains(".bak"),
+        "{said}"
+    );
     let once = std::fs::read(&path).unwrap();
     let out = run();
     assert!(out.status.success(), "{}", stderr(&out));
@@ -271,6 +276,23 @@ fn links_mode_and_owner_are_kept_and_a_read_only_file_is_refused() {
         std::fs::read(&backup).unwrap(),
         std::fs::read(fixture(name)).unwrap()
     );
+    // From the command line, the message names the file written through the link.
+    let result = dir.path().join("cal.toml");
+    std::fs::write(&result, calibration(&mut rng).to_toml()).unwrap();
+    let out = naocalib()
+        .arg("export")
+        .arg(&result)
+        .arg("--update")
+        .arg(&link)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        said.contains(&format!("through {}", file.display())),
+        "{said}"
+    );
+    assert!(link.symlink_metadata().unwrap().file_type().is_symlink());
 
     // Hard links: every name sees the update.
     let a = copy(dir.path(), name);
