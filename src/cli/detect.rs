@@ -55,7 +55,7 @@ pub struct DetectArgs {
 /// With `corrected` angles (`[joints] angles = "corrected"`) the robot's joint offsets are
 /// already in the logged angles, and the prediction keeps them at zero.
 pub fn read_start(path: &Path, corrected: bool) -> Result<[f64; PARAMETER_COUNT]> {
-    let calibration = naocalib::report::export::read_calibration(path)
+    let calibration = naocalib::report::export::read_start_from(path)
         .with_context(|| format!("--start-from {}", path.display()))?;
     let mut problem_values = [0.0; PARAMETER_COUNT];
     for e in &calibration.parameters {

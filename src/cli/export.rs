@@ -9,7 +9,8 @@ use clap::Args;
 
 use naocalib::output::Staged;
 use naocalib::report::export::{
-    self, Calibration, ExportError, ExportFormat, Posture, Withheld, WriteOptions, read_calibration,
+    self, Calibration, ExportError, ExportFormat, Posture, Updated, Withheld, WriteOptions,
+    read_calibration,
 };
 use naocalib::report::plot;
 use naocalib::solve::Solution;
@@ -31,7 +32,8 @@ pub struct ExportArgs {
     dir: Option<PathBuf>,
     /// Update a robot's existing file in its team's layout (--format, or recognised from
     /// the content): replace only what this calibration determined, keep every other byte,
-    /// keep the previous file as FILE.bak.
+    /// keep the previous file as FILE.bak (FILE.bak.2, … when that exists: never replaced).
+    /// A symbolic link is followed; mode, owner and hard links are kept.
     #[arg(long, value_name = "FILE", conflicts_with_all = ["out", "dir"])]
     update: Option<PathBuf>,
     /// Replace existing files (never the input).
@@ -72,42 +74,51 @@ fn run_update(
     format: Option<ExportFormat>,
     calibration: &Calibration,
 ) -> Result<ExitCode> {
-    let format = match format {
-        Some(f) => f,
-        None => {
-            let text = std::fs::read_to_string(file)
-                .with_context(|| format!("{}: cannot read", file.display()))?;
-            ExportFormat::recognise(&text).with_context(|| {
-                format!(
-                    "{}: layout not recognised; give --format ({})",
-                    file.display(),
-                    ExportFormat::names()
-                )
-            })?
-        }
-    };
+    let (format, updated) =
+        export::update(calibration, format, file, std::slice::from_ref(&args.input))?;
     if !format.spec().joints {
         let head = |p: naocalib::model::Param| calibration.value(p);
         note!(
-            "note: the lower camera's correction holds for head offsets HeadYaw {} deg, \
+            "note: the cameras' corrections hold for head offsets HeadYaw {} deg, \
              HeadPitch {} deg (as this calibration had them); if the robot's joint \
              calibration holds others, solve with --start-from (naocalib import) first",
             head(naocalib::model::Param::HeadYaw),
             head(naocalib::model::Param::HeadPitch)
         );
     }
-    let backup = naocalib::report::export::update(
-        calibration,
-        format,
-        file,
-        std::slice::from_ref(&args.input),
-    )?;
-    super::print_out(format!(
-        "updated {} ({}); previous file kept as {}\n",
-        file.display(),
-        format.name(),
-        backup.display()
-    ))?;
+    let message = match updated {
+        Updated::Written {
+            file: written,
+            backup,
+            new_backup,
+        } => {
+            let link = file
+                .symlink_metadata()
+                .is_ok_and(|m| m.file_type().is_symlink());
+            let through = if link {
+                format!(" through {}", written.display())
+            } else {
+                String::new()
+            };
+            let kept = if new_backup {
+                "kept as"
+            } else {
+                "already kept in"
+            };
+            format!(
+                "updated {}{through} ({}); previous file {kept} {}\n",
+                file.display(),
+                format.name(),
+                backup.display()
+            )
+        }
+        Updated::Unchanged(why) => format!(
+            "not updated: {} ({}): {why}; nothing written\n",
+            file.display(),
+            format.name()
+        ),
+    };
+    super::print_out(message)?;
     Ok(ExitCode::SUCCESS)
 }
 

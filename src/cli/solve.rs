@@ -107,7 +107,7 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     let corrected = dataset.angles.kind == naocalib::dataset::AngleKind::Corrected;
     let previous = match &args.start_from {
         Some(path) => {
-            let previous = naocalib::report::export::read_calibration(path)
+            let previous = naocalib::report::export::read_start_from(path)
                 .with_context(|| format!("--start-from {}", path.display()))?;
             let values: Vec<_> = previous
                 .parameters

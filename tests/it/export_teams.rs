@@ -5,7 +5,7 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::Path;
 
-use naocalib::model::{JointAngles, Param, RobotGeometry};
+use naocalib::model::{CameraId, JointAngles, Param, RobotGeometry};
 use naocalib::report::export::{
     self, Calibration, Entry, ExportFormat, bhuman, hulks, naoth, nomadz, runswift,
 };
@@ -258,7 +258,7 @@ fn joint_formats_round_trip() {
         assert_eq!(value, -cal.value(param).to_radians(), "{param}");
     }
     let head = hulks::read_head_json(&hulks::head_json(&cal), Path::new("-")).unwrap();
-    assert_eq!(head, export::camera::hulks(&cal));
+    assert_eq!(head, export::camera::hulks(&cal, CameraId::Lower));
 
     // NomadZ: offset and jointPlay in degrees; jointPlay from the play family.
     let text = nomadz::joint_calibration_cfg(&cal);
@@ -285,12 +285,12 @@ fn joint_formats_round_trip() {
         Path::new("-"),
     )
     .unwrap();
-    assert_eq!(naoth, export::camera::naoth(&cal));
+    assert_eq!(naoth, export::camera::naoth(&cal, CameraId::Lower));
     let runswift =
         runswift::read_kinematics_cfg(&runswift::kinematics_cfg(&cal), Path::new("-")).unwrap();
     assert_eq!(
         runswift,
-        export::camera::runswift(&cal).map(f64::to_degrees)
+        export::camera::runswift(&cal, CameraId::Lower).map(f64::to_degrees)
     );
 }
 
@@ -343,7 +343,7 @@ fn naoth_head_keys_through_naoths_camera_matrix() {
         let cal = random_calibration(&mut rng, if k % 2 == 0 { 4.0 } else { 15.0 });
         let path = dir.path().join(format!("CameraMatrixOffset{k}.cfg"));
         std::fs::copy(&fixture, &path).unwrap();
-        export::update(&cal, ExportFormat::NaothCamera, &path, &[]).unwrap();
+        crate::util::updated(&cal, ExportFormat::NaothCamera, &path);
         let text = std::fs::read_to_string(&path).unwrap();
         let key = |name: &str| -> f64 {
             text.lines()

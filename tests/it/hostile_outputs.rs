@@ -528,7 +528,7 @@ fn detect_refuses_a_pattern_opencv_cannot_find() {
 fn errors_are_said_once_and_clearly() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = dataset(tmp.path());
-    // A directory given as the result to export: the OS error once.
+    // A directory given as the result to export: refused before it is opened, said once.
     let out = naocalib()
         .arg("export")
         .arg(&dir)
@@ -537,8 +537,8 @@ fn errors_are_said_once_and_clearly() {
         .output()
         .unwrap();
     let err = stderr(&out);
-    assert_clean_failure(&out, &["os error"]);
-    assert_eq!(err.matches("os error").count(), 1, "{err}");
+    assert_clean_failure(&out, &["is a directory"]);
+    assert_eq!(err.matches("is a directory").count(), 1, "{err}");
     // A file where a directory must be made.
     let out = naocalib()
         .args(["solve", "--solver", "lm", "--plain-std", "--plots"])

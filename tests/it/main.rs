@@ -21,6 +21,7 @@ mod detect_render;
 mod detect_robust;
 #[cfg(feature = "detect")]
 mod detect_tilted;
+mod export_files;
 mod export_posture;
 mod export_robustness;
 mod export_roundtrip;
@@ -28,6 +29,7 @@ mod export_signs;
 mod export_start_from;
 mod export_teams;
 mod export_update;
+mod export_upper;
 mod extended;
 mod fuzz_readers;
 mod hostile_inputs;
@@ -45,3 +47,4 @@ mod robot_file_bounds;
 mod spec_reference;
 #[cfg(feature = "ceres")]
 mod uncertainty;
+mod upper_camera;

@@ -3,7 +3,7 @@
 
 #![allow(dead_code)]
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Output;
 
 use assert_cmd::Command;
@@ -72,7 +72,7 @@ pub fn brute_force_jacobian(problem: &Problem, x: &[f64]) -> (Vec<f64>, DMatrix<
     let mut rows = Vec::new();
     for c in &problem.captures {
         let r = c
-            .weighted_residuals(&problem.camera, &params)
+            .weighted_residuals(&params)
             .expect("in front of the camera");
         for pair in r.chunks(2) {
             let s = pair[0].clone() * pair[0].clone() + pair[1].clone() * pair[1].clone();
@@ -148,5 +148,19 @@ pub fn converged_calibration(
         angles: None,
         posture,
         standing: Default::default(),
+    }
+}
+
+/// `naocalib export --update` of `path` in `format` with `cal`, which must change it: the
+/// backup kept.
+pub fn updated(
+    cal: &naocalib::report::export::Calibration,
+    format: naocalib::report::export::ExportFormat,
+    path: &Path,
+) -> PathBuf {
+    use naocalib::report::export::{Updated, update};
+    match update(cal, Some(format), path, &[]).unwrap() {
+        (f, Updated::Written { backup, .. }) if f == format => backup,
+        other => panic!("{}: not updated: {other:?}", path.display()),
     }
 }

@@ -7,7 +7,8 @@
 //! the 2025 Code Release) applies, after the head joints, `rotateY(tiltNeckToLowerCamera +
 //! y) · rotateX(x) · rotateZ(z)` in a camera frame with x along the optical axis, y left,
 //! z up — naocalib's camera frame and order. So x = CamRoll, y = CamPitch, z = CamYaw,
-//! same signs, exactly. The layout B-Human reads since its 2019 Code Release
+//! same signs, exactly; the upper camera the same way after `tiltNeckToUpperCamera`
+//! (1.2°, lines 301–304): x = UpperCamRoll, y = UpperCamPitch, z = UpperCamYaw. The layout B-Human reads since its 2019 Code Release
 //! (`Src/Representations/Configuration/CameraCalibration.h`: an enum-indexed array over
 //! `CameraInfo::Camera`):
 //!
@@ -19,8 +20,9 @@
 //! bodyRotationCorrection = {x = 0deg; y = 0deg;};
 //! ```
 //!
-//! Releases up to 2018 read `lowerCameraRotationCorrection = {x; y; z;}` instead
-//! ([`bhuman_camera_2016_cfg`], format `bhuman-camera-2016`).
+//! Releases up to 2018 read `lowerCameraRotationCorrection = {x; y; z;}` and
+//! `upperCameraRotationCorrection` instead (CodeRelease 2018, `CameraMatrix.cpp` lines
+//! 302–311; [`bhuman_camera_2016_cfg`], format `bhuman-camera-2016`).
 //!
 //! **Joints.** B-Human computes the true angle as the sensor reading minus the stored
 //! offset (`Src/Modules/Infrastructure/JointAnglesProvider/JointAnglesProvider.cpp`, line
@@ -34,7 +36,7 @@ use std::path::Path;
 
 use super::cfg::{self, Kind};
 use super::{Calibration, ExportError, Imported, header, num, parse_error};
-use crate::model::Param;
+use crate::model::{CameraId, Param};
 
 const UNITS: &str = "angles in degrees (deg)";
 
@@ -83,69 +85,80 @@ fn deg(x: f64) -> String {
     format!("{}deg", num(x))
 }
 
-/// The lower camera's correction `[x, y, z]` (deg) of `cal`: `[CamRoll, CamPitch, CamYaw]`.
-fn lower(cal: &Calibration) -> [f64; 3] {
-    [
-        cal.robot_value(Param::CamRoll).unwrap_or(0.0),
-        cal.robot_value(Param::CamPitch).unwrap_or(0.0),
-        cal.robot_value(Param::CamYaw).unwrap_or(0.0),
-    ]
+/// The correction `[x, y, z]` (deg) of `camera` in `cal`: `[roll, pitch, yaw]` (0 for an
+/// offset a robot file cannot take, and for the upper camera unless
+/// [`super::camera::known`]).
+fn correction(cal: &Calibration, camera: CameraId) -> [f64; 3] {
+    let [yaw, pitch, roll] = super::camera::params(camera);
+    let known = camera == CameraId::Lower || super::camera::known(cal, camera);
+    [roll, pitch, yaw].map(|p| cal.robot_value(p).filter(|_| known).unwrap_or(0.0))
 }
 
-fn camera_notes(s: &mut String) {
+/// `{x = …deg; y = …deg; z = …deg;}` of `camera` in `cal`.
+fn braces(cal: &Calibration, camera: CameraId) -> String {
+    let [x, y, z] = correction(cal, camera);
+    format!("{{x = {}; y = {}; z = {};}}", deg(x), deg(y), deg(z))
+}
+
+fn camera_notes(s: &mut String, cal: &Calibration) {
+    let upper = super::camera::known(cal, CameraId::Upper);
     let _ = writeln!(
         s,
         "// Mapping: x = CamRoll, y = CamPitch, z = CamYaw (Ry(tilt)·Ry(CamPitch)·Rx(CamRoll)·Rz(CamYaw))."
     );
-    let _ = writeln!(
-        s,
-        "// Only the lower camera is calibrated: the upper camera and the body correction are"
-    );
-    let _ = writeln!(
-        s,
-        "// written as zero here. Use `naocalib export --update <robot's file>` to keep them."
-    );
+    if upper {
+        let _ = writeln!(
+            s,
+            "// Upper: x = UpperCamRoll, y = UpperCamPitch, z = UpperCamYaw, the same way (tilt 1.2deg)."
+        );
+        let _ = writeln!(
+            s,
+            "// Both cameras are calibrated: the body correction is written as zero here."
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "// Only the lower camera is calibrated: the upper camera and the body correction are"
+        );
+        let _ = writeln!(
+            s,
+            "// written as zero here. Use `naocalib export --update <robot's file>` to keep them."
+        );
+    }
 }
 
-/// B-Human's `cameraCalibration.cfg` as its framework reads it since 2019, with the lower
-/// camera's rotation correction (deg); the upper camera and body corrections are zero
-/// (they are not calibrated here; [`update_camera`] keeps a robot's own).
+/// B-Human's `cameraCalibration.cfg` as its framework reads it since 2019, with the
+/// cameras' rotation corrections (deg): the upper camera's zero unless the calibration
+/// knows it, the body correction zero (not calibrated here; [`update_camera`] keeps a
+/// robot's own).
 pub fn bhuman_camera_cfg(cal: &Calibration) -> String {
     let mut s = String::new();
     header(&mut s, "//", cal, UNITS);
-    camera_notes(&mut s);
-    let [x, y, z] = lower(cal);
+    camera_notes(&mut s, cal);
     let _ = writeln!(s, "cameraRotationCorrections = {{");
-    let _ = writeln!(s, "  upper = {{x = 0deg; y = 0deg; z = 0deg;}};");
-    let _ = writeln!(
-        s,
-        "  lower = {{x = {}; y = {}; z = {};}};",
-        deg(x),
-        deg(y),
-        deg(z)
-    );
+    let _ = writeln!(s, "  upper = {};", braces(cal, CameraId::Upper));
+    let _ = writeln!(s, "  lower = {};", braces(cal, CameraId::Lower));
     let _ = writeln!(s, "}};");
     let _ = writeln!(s, "bodyRotationCorrection = {{x = 0deg; y = 0deg;}};");
     s
 }
 
 /// B-Human's `cameraCalibration.cfg` as its releases up to 2018 read it
-/// (`lowerCameraRotationCorrection = {x; y; z;}`), same values as [`bhuman_camera_cfg`].
+/// (`lowerCameraRotationCorrection`, `upperCameraRotationCorrection`), same values as
+/// [`bhuman_camera_cfg`].
 pub fn bhuman_camera_2016_cfg(cal: &Calibration) -> String {
     let mut s = String::new();
     header(&mut s, "//", cal, UNITS);
-    camera_notes(&mut s);
-    let [x, y, z] = lower(cal);
+    camera_notes(&mut s, cal);
     let _ = writeln!(
         s,
-        "lowerCameraRotationCorrection = {{x = {}; y = {}; z = {};}};",
-        deg(x),
-        deg(y),
-        deg(z)
+        "lowerCameraRotationCorrection = {};",
+        braces(cal, CameraId::Lower)
     );
     let _ = writeln!(
         s,
-        "upperCameraRotationCorrection = {{x = 0deg; y = 0deg; z = 0deg;}};"
+        "upperCameraRotationCorrection = {};",
+        braces(cal, CameraId::Upper)
     );
     let _ = writeln!(s, "bodyRotationCorrection = {{x = 0deg; y = 0deg;}};");
     s
@@ -187,12 +200,16 @@ pub fn bhuman_joint_cfg(cal: &Calibration) -> String {
     s
 }
 
-/// The lower camera's path in a camera file of either B-Human layout.
-fn lower_path(root: &cfg::Value) -> Option<Vec<&'static str>> {
-    if root.get(&["cameraRotationCorrections", "lower"]).is_some() {
-        Some(vec!["cameraRotationCorrections", "lower"])
-    } else if root.get(&["lowerCameraRotationCorrection"]).is_some() {
-        Some(vec!["lowerCameraRotationCorrection"])
+/// The path of `camera`'s correction in a camera file of either B-Human layout.
+fn camera_path(root: &cfg::Value, camera: CameraId) -> Option<Vec<&'static str>> {
+    let (name, old) = match camera {
+        CameraId::Lower => ("lower", "lowerCameraRotationCorrection"),
+        CameraId::Upper => ("upper", "upperCameraRotationCorrection"),
+    };
+    if root.get(&["cameraRotationCorrections", name]).is_some() {
+        Some(vec!["cameraRotationCorrections", name])
+    } else if root.get(&[old]).is_some() {
+        Some(vec![old])
     } else {
         None
     }
@@ -226,21 +243,33 @@ fn angle_at(
 /// B-Human `cameraCalibration.cfg` of either layout.
 pub fn read_bhuman_camera_cfg(text: &str, path: &Path) -> Result<[f64; 3], ExportError> {
     let root = cfg::parse(text, path)?;
-    let base = lower_path(&root).ok_or_else(|| {
+    read_camera(&root, path, CameraId::Lower)?.ok_or_else(|| {
         parse_error(
             path,
             "no cameraRotationCorrections.lower (nor the pre-2019 lowerCameraRotationCorrection)",
         )
-    })?;
+    })
+}
+
+/// The correction `[x, y, z]` (deg; roll, pitch, yaw) of `camera` in a parsed B-Human
+/// camera file of either layout; `None` when the file has none for it.
+pub fn read_camera(
+    root: &cfg::Value,
+    path: &Path,
+    camera: CameraId,
+) -> Result<Option<[f64; 3]>, ExportError> {
+    let Some(base) = camera_path(root, camera) else {
+        return Ok(None);
+    };
     let mut out = [0.0; 3];
     for (k, axis) in ["x", "y", "z"].iter().enumerate() {
         let mut at = base.clone();
         at.push(axis);
-        out[k] = angle_at(&root, &at, path, super::CAMERA_LIMIT_DEG)?
+        out[k] = angle_at(root, &at, path, super::CAMERA_LIMIT_DEG)?
             .ok_or_else(|| parse_error(path, format!("{}: missing", at.join("."))))?
             .0;
     }
-    Ok(out)
+    Ok(Some(out))
 }
 
 /// Reads the offsets of a B-Human `jointCalibration.cfg`: joint name → stored value (deg).
@@ -264,14 +293,24 @@ pub fn read_bhuman_joint_cfg(text: &str, path: &Path) -> Result<Vec<(String, f64
     Ok(out)
 }
 
-/// The camera values of a B-Human camera file as naocalib parameters (deg).
+/// The camera values of a B-Human camera file as naocalib parameters (deg): the lower
+/// camera's (required) and the upper camera's (when the file has it).
 pub fn import_camera(text: &str, path: &Path) -> Result<Imported, ExportError> {
-    let [x, y, z] = read_bhuman_camera_cfg(text, path)?;
-    Ok(vec![
-        (Param::CamRoll, x),
-        (Param::CamPitch, y),
-        (Param::CamYaw, z),
-    ])
+    let root = cfg::parse(text, path)?;
+    if camera_path(&root, CameraId::Lower).is_none() {
+        return Err(parse_error(
+            path,
+            "no cameraRotationCorrections.lower (nor the pre-2019 lowerCameraRotationCorrection)",
+        ));
+    }
+    let mut out = Vec::new();
+    for camera in super::camera::CAMERAS {
+        if let Some([x, y, z]) = read_camera(&root, path, camera)? {
+            let [yaw, pitch, roll] = super::camera::params(camera);
+            out.extend([(roll, x), (pitch, y), (yaw, z)]);
+        }
+    }
+    Ok(out)
 }
 
 /// The joint offsets of a B-Human joint file as naocalib parameters: α = −stored (deg).
@@ -282,29 +321,41 @@ pub fn import_joints(text: &str, path: &Path) -> Result<Imported, ExportError> {
         .collect())
 }
 
-/// `text` (a robot's `cameraCalibration.cfg`, either layout) with the lower camera's
-/// correction replaced where this calibration determined it; every other byte kept.
+/// `text` (a robot's `cameraCalibration.cfg`, either layout) with each camera's correction
+/// replaced where this calibration determined it; every other byte kept.
 pub fn update_camera(text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
     let root = cfg::parse(text, path)?;
-    let base = lower_path(&root).ok_or_else(|| {
-        parse_error(
+    if camera_path(&root, CameraId::Lower).is_none() {
+        return Err(parse_error(
             path,
             "no cameraRotationCorrections.lower (nor lowerCameraRotationCorrection) to update",
-        )
-    })?;
+        ));
+    }
     let mut edits = Vec::new();
-    for (axis, param) in [
-        ("x", Param::CamRoll),
-        ("y", Param::CamPitch),
-        ("z", Param::CamYaw),
-    ] {
-        let mut at = base.clone();
-        at.push(axis);
-        let found = angle_at(&root, &at, path, super::CAMERA_LIMIT_DEG)?;
-        if let Some(value) = cal.determined_here(param) {
-            let (_, start, end) =
-                found.ok_or_else(|| parse_error(path, format!("{}: missing", at.join("."))))?;
-            edits.push((start, end, deg(value)));
+    for camera in super::camera::CAMERAS {
+        let base = camera_path(&root, camera);
+        let [yaw, pitch, roll] = super::camera::params(camera);
+        for (axis, param) in [("x", roll), ("y", pitch), ("z", yaw)] {
+            let found = match &base {
+                Some(base) => {
+                    let mut at = base.clone();
+                    at.push(axis);
+                    angle_at(&root, &at, path, super::CAMERA_LIMIT_DEG)?
+                }
+                None => None,
+            };
+            if let Some(value) = cal.determined_here(param) {
+                let (_, start, end) = found.ok_or_else(|| {
+                    parse_error(
+                        path,
+                        format!(
+                            "the {} camera's correction ({axis}): missing",
+                            camera.name()
+                        ),
+                    )
+                })?;
+                edits.push((start, end, deg(value)));
+            }
         }
     }
     Ok(cfg::splice(text, edits))

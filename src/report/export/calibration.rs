@@ -198,6 +198,7 @@ impl Calibration {
             rms_px: Some(solution.rms_px),
             parameters: Param::ALL
                 .iter()
+                .filter(|&&p| solution.fixed.in_model(p))
                 .map(|&p| {
                     let fixed = solution.fixed.is_fixed(p);
                     let std = if fixed {
@@ -582,11 +583,7 @@ impl Calibration {
 /// Reads a calibration file: TOML by the `.toml` extension, otherwise JSON (a calibration
 /// JSON or the result JSON of `naocalib solve --json`).
 pub fn read_calibration(path: &Path) -> Result<Calibration, ExportError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ExportError::Io {
-        path: path.to_path_buf(),
-        action: "read",
-        source,
-    })?;
+    let text = super::source::read(path)?.text;
     if path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
@@ -594,6 +591,30 @@ pub fn read_calibration(path: &Path) -> Result<Calibration, ExportError> {
         Calibration::from_toml(&text, path)
     } else {
         Calibration::from_json(&text, path)
+    }
+}
+
+/// Reads the calibration a solve or a detection starts from (`--start-from`: a robot's
+/// calibration from `naocalib import`, or an earlier result) and refuses it when a value it
+/// holds is beyond the physical bounds ([`crate::model::bounds`]), naming the file and the
+/// parameter: a start value beyond them (a play of −3°, an offset of 50°) would move the
+/// model's joints by it without a word.
+pub fn read_start_from(path: &Path) -> Result<Calibration, ExportError> {
+    let cal = read_calibration(path)?;
+    let held: Vec<(Param, f64)> = cal
+        .parameters
+        .iter()
+        .filter(|e| e.is_determined())
+        .map(|e| (e.param, e.value))
+        .collect();
+    match crate::model::bounds::violations(held).first() {
+        None => Ok(cal),
+        Some(v) => Err(parse_error(
+            path,
+            format!(
+                "{v}: not a calibration to start from; fix the file (or the robot's file it was imported from) first"
+            ),
+        )),
     }
 }
 

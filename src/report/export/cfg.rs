@@ -50,6 +50,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Value, ExportError> {
         bytes: text.as_bytes(),
         pos: 0,
         path,
+        depth: 0,
     };
     let entries = p.entries(None)?;
     Ok(Value {
@@ -60,11 +61,16 @@ pub fn parse(text: &str, path: &Path) -> Result<Value, ExportError> {
     })
 }
 
+/// Maps and lists nested deeper than this are refused (the teams' files nest three deep;
+/// the parser recurses, so an unbounded depth would overflow the stack).
+pub const MAX_DEPTH: usize = 64;
+
 struct Parser<'a> {
     text: &'a str,
     bytes: &'a [u8],
     pos: usize,
     path: &'a Path,
+    depth: usize,
 }
 
 impl Parser<'_> {
@@ -149,6 +155,23 @@ impl Parser<'_> {
     fn value(&mut self, key: &str) -> Result<Value, ExportError> {
         self.skip()?;
         let start = self.pos;
+        if matches!(self.peek(), Some(b'{' | b'[')) {
+            self.depth += 1;
+            if self.depth > MAX_DEPTH {
+                return Err(self.error(
+                    start,
+                    format!("{key}: nested deeper than {MAX_DEPTH} levels"),
+                ));
+            }
+        }
+        let value = self.value_at(key, start);
+        if matches!(self.bytes.get(start), Some(b'{' | b'[')) {
+            self.depth -= 1;
+        }
+        value
+    }
+
+    fn value_at(&mut self, key: &str, start: usize) -> Result<Value, ExportError> {
         let line = self.line(start);
         let kind = match self.peek() {
             Some(b'{') => {

@@ -1,14 +1,16 @@
 //! HULKs (Rust): the per-head and per-body parameter JSON files (`etc/parameters/
 //! head.<id>.json`, `body.<id>.json`), which HULKs merges over its defaults. Radians.
 //!
-//! - Head: `camera_matrix_parameters.calibration.correction_in_camera_bottom = [x, y, z]`,
+//! - Head: `camera_matrix_parameters.calibration.correction_in_camera_bottom = [x, y, z]`
+//!   (and `correction_in_camera_top` for the upper camera, the same way),
 //!   turned into `Rotation3::from_euler_angles(x, y, z)` = `Rz(z) · Ry(y) · Rx(x)` and
 //!   applied as `correction_in_camera * head_to_camera` (HULKs
 //!   `crates/projection/src/camera_matrix.rs`, `CameraMatrix::to_corrected`), where
 //!   `head_to_camera = Rx(−pitch) · Ry(−π/2) · Rx(π/2) · T(−p)` maps the head frame into
 //!   an optical camera frame (z forward, x right, y down; HULKs
 //!   `crates/control/src/camera_matrix_calculator.rs`), a camera looking down having a
-//!   negative pitch (HULKs `crates/projection/tests/projection.rs`), here −39.7°. [`super::camera::hulks`] solves
+//!   negative pitch (HULKs `crates/projection/tests/projection.rs`), here −39.7° (the top
+//!   camera: −1.2°, `etc/parameters/default.json`). [`super::camera::hulks`] solves
 //!   that for naocalib's rotation exactly; for small angles `x ≈ CamPitch`,
 //!   `y ≈ CamYaw`, `z ≈ −CamRoll` (the optical frame's axes are others).
 //! - Body: `joint_calibration_offsets.{head,left_leg,right_leg}.<joint>` in radians
@@ -30,7 +32,7 @@ use serde::{Deserialize, Serialize};
 
 use super::jsonedit;
 use super::{Calibration, ExportError, Imported, num, parse_error};
-use crate::model::{Param, Side};
+use crate::model::{CameraId, Param, Side};
 
 /// HULKs' name of each leg joint, in naocalib's leg order.
 pub const LEG_JOINTS: [&str; 6] = [
@@ -60,6 +62,8 @@ struct CameraMatrixParameters {
 #[serde(deny_unknown_fields)]
 struct CameraCalibration {
     correction_in_camera_bottom: [f64; 3],
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    correction_in_camera_top: Option<[f64; 3]>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -81,13 +85,16 @@ fn pretty(value: &impl Serialize) -> String {
     s
 }
 
-/// The per-head JSON: the lower camera's correction `[x, y, z]` (rad).
+/// The per-head JSON: the lower camera's correction `[x, y, z]` (rad), and the upper
+/// camera's when the calibration knows all three of its offsets.
 pub fn head_json(cal: &Calibration) -> String {
+    let upper = super::camera::complete(cal, CameraId::Upper).is_some();
     pretty(&HeadFile {
         naocalib_not_a_calibration: marker(cal),
         camera_matrix_parameters: CameraMatrixParameters {
             calibration: CameraCalibration {
-                correction_in_camera_bottom: super::camera::hulks(cal),
+                correction_in_camera_bottom: super::camera::hulks(cal, CameraId::Lower),
+                correction_in_camera_top: upper.then(|| super::camera::hulks(cal, CameraId::Upper)),
             },
         },
     })
@@ -129,14 +136,21 @@ pub fn body_json(cal: &Calibration) -> String {
     })
 }
 
-/// Reads back a [`head_json`] file: the correction `[x, y, z]` (rad).
+/// Reads back a [`head_json`] file: the lower camera's correction `[x, y, z]` (rad).
 pub fn read_head_json(text: &str, path: &Path) -> Result<[f64; 3], ExportError> {
+    Ok(read_head_json_both(text, path)?.0)
+}
+
+/// Reads back a [`head_json`] file: the lower camera's correction `[x, y, z]` (rad) and
+/// the upper camera's, when written.
+pub fn read_head_json_both(
+    text: &str,
+    path: &Path,
+) -> Result<([f64; 3], Option<[f64; 3]>), ExportError> {
     let file: HeadFile = serde_json::from_str(text)
         .map_err(|e| parse_error(path, format!("line {}: {e}", e.line())))?;
-    Ok(file
-        .camera_matrix_parameters
-        .calibration
-        .correction_in_camera_bottom)
+    let c = file.camera_matrix_parameters.calibration;
+    Ok((c.correction_in_camera_bottom, c.correction_in_camera_top))
 }
 
 /// Reads the stored joint offsets of a HULKs body file (other keys allowed): each by
@@ -149,19 +163,30 @@ pub fn read_body_json(text: &str, path: &Path) -> Result<Vec<(Param, f64)>, Expo
 /// A number with the byte span of its text.
 type Spanned = (f64, usize, usize);
 
-const BOTTOM: [&str; 3] = [
-    "camera_matrix_parameters",
-    "calibration",
-    "correction_in_camera_bottom",
-];
+/// Where each camera's correction is in a head file.
+fn correction_path(camera: CameraId) -> [&'static str; 3] {
+    [
+        "camera_matrix_parameters",
+        "calibration",
+        match camera {
+            CameraId::Lower => "correction_in_camera_bottom",
+            CameraId::Upper => "correction_in_camera_top",
+        },
+    ]
+}
 
-/// The `[x, y, z]` (rad) at [`BOTTOM`] of a parsed head file, checked plausible, with each
-/// number's span.
-fn bottom(root: &jsonedit::Value, path: &Path) -> Result<Option<[Spanned; 3]>, ExportError> {
-    let Some(v) = root.get(&BOTTOM) else {
+/// The `[x, y, z]` (rad) of `camera`'s correction in a parsed head file, checked
+/// plausible, with each number's span.
+fn correction_at(
+    root: &jsonedit::Value,
+    path: &Path,
+    camera: CameraId,
+) -> Result<Option<[Spanned; 3]>, ExportError> {
+    let at = correction_path(camera);
+    let Some(v) = root.get(&at) else {
         return Ok(None);
     };
-    let key = BOTTOM.join(".");
+    let key = at.join(".");
     let bad = || {
         parse_error(
             path,
@@ -191,18 +216,23 @@ fn bottom(root: &jsonedit::Value, path: &Path) -> Result<Option<[Spanned; 3]>, E
     Ok(Some(out))
 }
 
-/// Reads a HULKs head file (any other keys allowed): naocalib's camera offsets (deg).
+/// Reads a HULKs head file (any other keys allowed): naocalib's offsets (deg) of the
+/// lower camera (required) and of the upper camera (when the file has it).
 pub fn import_head(text: &str, path: &Path) -> Result<Imported, ExportError> {
     let root = jsonedit::parse(text, path)?;
-    let [x, y, z] = bottom(&root, path)?
-        .ok_or_else(|| parse_error(path, format!("{}: missing", BOTTOM.join("."))))?
-        .map(|(v, _, _)| v);
-    let [yaw, pitch, roll] = super::camera::from_hulks([x, y, z]);
-    Ok(vec![
-        (Param::CamYaw, yaw),
-        (Param::CamPitch, pitch),
-        (Param::CamRoll, roll),
-    ])
+    let mut out = Vec::new();
+    for camera in super::camera::CAMERAS {
+        let Some(found) = correction_at(&root, path, camera)? else {
+            if camera == CameraId::Lower {
+                let key = correction_path(camera).join(".");
+                return Err(parse_error(path, format!("{key}: missing")));
+            }
+            continue;
+        };
+        let values = super::camera::from_hulks(found.map(|(v, _, _)| v), camera);
+        out.extend(super::camera::params(camera).into_iter().zip(values));
+    }
+    Ok(out)
 }
 
 /// The stored joint offsets (rad) of a parsed body file, checked plausible.
@@ -240,28 +270,36 @@ pub fn import_body(text: &str, path: &Path) -> Result<Imported, ExportError> {
         .collect())
 }
 
-/// A robot's head file with `correction_in_camera_bottom` replaced (inserted when
-/// missing) when this calibration determined the lower camera; every other byte kept.
+/// A robot's head file with each camera's correction (`correction_in_camera_bottom`,
+/// `correction_in_camera_top`) replaced (inserted when missing) when this calibration
+/// determined that camera; every other byte kept.
 pub fn update_head(text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
     let root = jsonedit::parse(text, path)?;
-    let found = bottom(&root, path)?;
-    if !super::camera_determined(cal, path)? {
-        return Ok(text.to_string());
+    for camera in super::camera::CAMERAS {
+        correction_at(&root, path, camera)?;
     }
-    let new = super::camera::hulks(cal);
-    match found {
-        Some(old) => Ok(super::cfg::splice(
-            text,
-            old.iter()
-                .zip(new)
-                .map(|(&(_, s, e), x)| (s, e, num(x)))
-                .collect(),
-        )),
-        None => {
-            let array = format!("[{}, {}, {}]", num(new[0]), num(new[1]), num(new[2]));
-            jsonedit::set(text, &BOTTOM, &array, path)
+    let mut out = text.to_string();
+    for camera in super::camera::CAMERAS {
+        if !super::camera::determined(cal, camera, path)? {
+            continue;
         }
+        let new = super::camera::hulks(cal, camera);
+        let root = jsonedit::parse(&out, path)?;
+        out = match correction_at(&root, path, camera)? {
+            Some(old) => super::cfg::splice(
+                &out,
+                old.iter()
+                    .zip(new)
+                    .map(|(&(_, s, e), x)| (s, e, num(x)))
+                    .collect(),
+            ),
+            None => {
+                let array = format!("[{}, {}, {}]", num(new[0]), num(new[1]), num(new[2]));
+                jsonedit::set(&out, &correction_path(camera), &array, path)?
+            }
+        };
     }
+    Ok(out)
 }
 
 /// A robot's body file with the joint offsets this calibration determined replaced

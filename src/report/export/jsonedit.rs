@@ -30,22 +30,76 @@ impl super::tree::Members for Kind {
     }
 }
 
-/// Parses `text` (checked with serde_json first, whose error names the line).
+/// Objects and arrays nested deeper than this are refused (the teams' files nest four
+/// deep; the parser recurses, so an unbounded depth would overflow the stack).
+pub const MAX_DEPTH: usize = 64;
+
+/// The line where `text`'s objects and arrays first nest deeper than [`MAX_DEPTH`], if
+/// anywhere (strings skipped).
+fn too_deep(text: &str) -> Option<usize> {
+    let (mut depth, mut line, mut in_string, mut escaped) = (0usize, 1, false, false);
+    for b in text.bytes() {
+        match b {
+            b'\n' => line += 1,
+            _ if in_string => {}
+            b'[' | b'{' => {
+                depth += 1;
+                if depth > MAX_DEPTH {
+                    return Some(line);
+                }
+            }
+            b']' | b'}' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+        if in_string {
+            match (escaped, b) {
+                (true, _) => escaped = false,
+                (false, b'\\') => escaped = true,
+                (false, b'"') => in_string = false,
+                _ => {}
+            }
+        } else if b == b'"' {
+            in_string = true;
+        }
+    }
+    None
+}
+
+/// Parses `text` (checked with serde_json first, whose error names the line; nesting
+/// deeper than [`MAX_DEPTH`] refused).
 pub fn parse(text: &str, path: &Path) -> Result<Value, ExportError> {
+    if let Some(line) = too_deep(text) {
+        return Err(parse_error(
+            path,
+            format!("line {line}: nested deeper than {MAX_DEPTH} levels"),
+        ));
+    }
     serde_json::from_str::<serde::de::IgnoredAny>(text)
         .map_err(|e| parse_error(path, format!("line {}: {e}", e.line())))?;
     let mut p = Parser {
         text,
         b: text.as_bytes(),
         pos: 0,
+        twice: None,
     };
-    Ok(p.value())
+    let root = p.value();
+    match p.twice {
+        // serde keeps the last of a repeated key, a team's framework may keep the first:
+        // which one the robot runs with is unknown.
+        Some((line, key)) => Err(parse_error(
+            path,
+            format!("line {line}: \"{key}\" is given twice in the same object"),
+        )),
+        None => Ok(root),
+    }
 }
 
 struct Parser<'a> {
     text: &'a str,
     b: &'a [u8],
     pos: usize,
+    /// The first key given twice in one object, with its line.
+    twice: Option<(usize, String)>,
 }
 
 impl Parser<'_> {
@@ -77,6 +131,7 @@ impl Parser<'_> {
             b'{' => {
                 self.pos += 1;
                 let mut members = Vec::new();
+                let mut seen = std::collections::HashSet::new();
                 loop {
                     self.ws();
                     if self.b[self.pos] == b'}' {
@@ -87,7 +142,12 @@ impl Parser<'_> {
                         self.pos += 1;
                         continue;
                     }
+                    let key_at = self.pos;
                     let key = self.string();
+                    if !seen.insert(key.clone()) && self.twice.is_none() {
+                        let line = self.text[..key_at].matches('\n').count() + 1;
+                        self.twice = Some((line, key.clone()));
+                    }
                     self.ws();
                     self.pos += 1; // ':'
                     let v = self.value();

@@ -11,7 +11,7 @@
 //!   (`CameraMatrixOffset.cfg`), [`nomadz`] (`cameraCalibration.cfg`, `jointCalibration.cfg`
 //!   with `jointPlay`), [`runswift`] (`[kinematics]`). [`camera`] turns naocalib's camera
 //!   offsets into each team's parameterisation of the same rotation and back.
-//! - [`update`]: a robot's own file with only what a calibration determined replaced, every
+//! - [`update()`]: a robot's own file with only what a calibration determined replaced, every
 //!   other byte kept ([`mod@cfg`], [`jsonedit`], [`ini`] read the files with the span of every
 //!   value); [`import`] / [`import_calibration`]: a robot's files read back.
 //! - files are written through [`crate::output`], the one writer (atomically, never over an
@@ -60,7 +60,9 @@ pub mod jsonedit;
 pub mod naoth;
 pub mod nomadz;
 pub mod runswift;
+pub mod source;
 pub mod tree;
+pub mod update;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -72,8 +74,9 @@ pub use bhuman::{
     read_bhuman_joint_cfg,
 };
 pub use calibration::{
-    COMPENSATION, Calibration, Entry, FORMAT, Posture, VERSION, read_calibration,
+    COMPENSATION, Calibration, Entry, FORMAT, Posture, VERSION, read_calibration, read_start_from,
 };
+pub use update::{Unchanged, Updated, update};
 // `WriteOptions` belongs to the export API.
 pub use crate::output::WriteOptions;
 use crate::output::{check_writable, write_atomic};
@@ -176,9 +179,14 @@ pub(crate) fn header(s: &mut String, comment: &str, cal: &Calibration, units: &s
         s,
         "{comment} so their files store -alpha. Camera offsets are rotation corrections of the"
     );
+    let cameras = if camera::known(cal, crate::model::CameraId::Upper) {
+        "cameras"
+    } else {
+        "lower camera"
+    };
     let _ = writeln!(
         s,
-        "{comment} lower camera in the camera matrix, applied after the head joints."
+        "{comment} {cameras} in the camera matrix, applied after the head joints."
     );
     let undetermined: Vec<&str> = cal
         .parameters
@@ -249,7 +257,9 @@ pub struct FormatSpec {
     pub read: Option<ImportFn>,
     /// Updates a robot's file of this format (`naocalib export --update`), when supported.
     pub update: Option<UpdateFn>,
-    /// Whether a file's text is of this format (for `naocalib import` without --format).
+    /// Whether a file is of this format, judged on its text without comments
+    /// ([`source::code`]): for `naocalib import` without --format, and to refuse an
+    /// `--update` of a file in another layout.
     pub recognise: fn(&str) -> bool,
     /// Whether the file carries joint offsets (which a calibration from angles already
     /// corrected by the robot's joint calibration can only write with `--update`).
@@ -264,6 +274,15 @@ fn json_text(cal: &Calibration) -> String {
 
 fn is_naocalib(text: &str) -> bool {
     text.contains(calibration::FORMAT)
+}
+
+/// Whether `code` (a text without comments) has an entry `key = …` (or `key=…`).
+fn has_key(code: &str, key: &str) -> bool {
+    code.match_indices(key).any(|(at, _)| {
+        let before = code[..at].chars().next_back();
+        let after = code[at + key.len()..].trim_start();
+        !before.is_some_and(|c| c.is_ascii_alphanumeric() || c == '_') && after.starts_with('=')
+    })
 }
 
 /// Every format, one row each, in `--dir` order.
@@ -294,22 +313,22 @@ pub const REGISTRY: [FormatSpec; 11] = [
         format: ExportFormat::BHumanCamera,
         name: "bhuman-camera",
         file: "cameraCalibration.cfg",
-        description: "B-Human (2019+), SPQR: cameraRotationCorrections.lower {x; y; z} in deg",
+        description: "B-Human (2019+), SPQR: cameraRotationCorrections.{lower,upper} {x; y; z} in deg",
         render: bhuman_camera_cfg,
         read: Some(bhuman::import_camera),
         update: Some(bhuman::update_camera),
-        recognise: |t| t.contains("cameraRotationCorrections"),
+        recognise: |c| has_key(c, "cameraRotationCorrections"),
         joints: false,
     },
     FormatSpec {
         format: ExportFormat::BHumanCamera2016,
         name: "bhuman-camera-2016",
         file: "bhuman2016/cameraCalibration.cfg",
-        description: "B-Human up to 2018: lowerCameraRotationCorrection {x; y; z} in deg",
+        description: "B-Human up to 2018: lower/upperCameraRotationCorrection {x; y; z} in deg",
         render: bhuman::bhuman_camera_2016_cfg,
         read: Some(bhuman::import_camera),
         update: Some(bhuman::update_camera),
-        recognise: |t| t.contains("lowerCameraRotationCorrection"),
+        recognise: |c| has_key(c, "lowerCameraRotationCorrection"),
         joints: false,
     },
     FormatSpec {
@@ -320,8 +339,8 @@ pub const REGISTRY: [FormatSpec; 11] = [
         render: bhuman_joint_cfg,
         read: Some(bhuman::import_joints),
         update: Some(bhuman::update_joints),
-        recognise: |t| {
-            !t.trim_start().starts_with('{') && t.contains("offsets") && !t.contains("minAngle")
+        recognise: |c| {
+            !c.trim_start().starts_with('{') && has_key(c, "offsets") && !c.contains("minAngle")
         },
         joints: true,
     },
@@ -329,11 +348,14 @@ pub const REGISTRY: [FormatSpec; 11] = [
         format: ExportFormat::HulksHead,
         name: "hulks-head",
         file: "hulks/head.json",
-        description: "HULKs head.<id>.json: correction_in_camera_bottom [x, y, z] in rad",
+        description: "HULKs head.<id>.json: correction_in_camera_bottom/_top [x, y, z] in rad",
         render: hulks::head_json,
         read: Some(hulks::import_head),
         update: Some(hulks::update_head),
-        recognise: |t| t.contains("correction_in_camera_bottom"),
+        recognise: |c| {
+            c.contains("\"correction_in_camera_bottom\"")
+                || c.contains("\"correction_in_camera_top\"")
+        },
         joints: false,
     },
     FormatSpec {
@@ -344,29 +366,29 @@ pub const REGISTRY: [FormatSpec; 11] = [
         render: hulks::body_json,
         read: Some(hulks::import_body),
         update: Some(hulks::update_body),
-        recognise: |t| t.contains("joint_calibration_offsets"),
+        recognise: |c| c.contains("\"joint_calibration_offsets\""),
         joints: true,
     },
     FormatSpec {
         format: ExportFormat::NaothCamera,
         name: "naoth-camera",
         file: "naoth/CameraMatrixOffset.cfg",
-        description: "NaoTH: [CameraMatrixOffset] cam_rot.bottom.x/y/z and head_rot.x/y/z in rad",
+        description: "NaoTH: [CameraMatrixOffset] cam_rot.bottom/top.x/y/z and head_rot.x/y/z in rad",
         render: naoth::camera_matrix_offset_cfg,
         read: Some(naoth::import),
         update: Some(naoth::update),
-        recognise: |t| t.contains("[CameraMatrixOffset]"),
+        recognise: |c| c.contains("[CameraMatrixOffset]"),
         joints: false,
     },
     FormatSpec {
         format: ExportFormat::NomadzCamera,
         name: "nomadz-camera",
         file: "nomadz/cameraCalibration.cfg",
-        description: "NomadZ: cameraTiltCorrection, cameraRollCorrection, cameraPanCorrection in rad",
+        description: "NomadZ: camera/upperCamera Tilt/Roll/PanCorrection in rad",
         render: nomadz::camera_calibration_cfg,
         read: Some(nomadz::import_camera),
         update: Some(nomadz::update_camera),
-        recognise: |t| t.contains("cameraTiltCorrection"),
+        recognise: |c| has_key(c, "cameraTiltCorrection"),
         joints: false,
     },
     FormatSpec {
@@ -377,18 +399,18 @@ pub const REGISTRY: [FormatSpec; 11] = [
         render: nomadz::joint_calibration_cfg,
         read: Some(nomadz::import_joints),
         update: Some(nomadz::update_joints),
-        recognise: |t| t.contains("minAngle") && t.contains("jointPlay"),
+        recognise: |c| has_key(c, "minAngle") && has_key(c, "jointPlay"),
         joints: true,
     },
     FormatSpec {
         format: ExportFormat::RunswiftCamera,
         name: "runswift-camera",
         file: "runswift/kinematics.cfg",
-        description: "rUNSWift: [kinematics] cameraYawBottom/cameraPitchBottom/cameraRollBottom in deg",
+        description: "rUNSWift: [kinematics] camera{Yaw,Pitch,Roll}Bottom, …TopWhenLooking{Straight,Left,Right} in deg",
         render: runswift::kinematics_cfg,
         read: Some(runswift::import),
         update: Some(runswift::update),
-        recognise: |t| t.contains("cameraPitchBottom"),
+        recognise: |c| c.contains("[kinematics]"),
         joints: false,
     },
 ];
@@ -418,24 +440,6 @@ pub(crate) fn check_plausible(
             ),
         ))
     }
-}
-
-/// Whether `cal` determined the lower camera, for formats whose parameterisation mixes
-/// naocalib's three camera offsets: `false` when none was estimated; an error (nothing
-/// written) when only some are known.
-pub(crate) fn camera_determined(cal: &Calibration, path: &Path) -> Result<bool, ExportError> {
-    let cams = [Param::CamYaw, Param::CamPitch, Param::CamRoll];
-    if cams.iter().all(|&p| cal.determined_here(p).is_none()) {
-        return Ok(false);
-    }
-    if cams.iter().any(|&p| cal.robot_value(p).is_none()) {
-        return Err(parse_error(
-            path,
-            "the camera offsets are only partly determined, and this format mixes them: \
-             not updated",
-        ));
-    }
-    Ok(true)
 }
 
 impl ExportFormat {
@@ -507,13 +511,21 @@ impl ExportFormat {
         }
     }
 
-    /// The robot format a file's text is in ([`FormatSpec::recognise`]), if any.
+    /// The robot format a file's text is in ([`FormatSpec::recognise`] on the text without
+    /// comments), if any.
     pub fn recognise(text: &str) -> Option<Self> {
+        let code = source::code(text);
         REGISTRY
             .iter()
             .filter(|s| s.read.is_some())
-            .find(|s| (s.recognise)(text))
+            .find(|s| (s.recognise)(&code))
             .map(|s| s.format)
+    }
+
+    /// Whether `text` is in this format's layout ([`FormatSpec::recognise`] on the text
+    /// without comments).
+    pub fn matches(self, text: &str) -> bool {
+        (self.spec().recognise)(&source::code(text))
     }
 
     /// The calibration rendered in this format (with the `NOT A CALIBRATION` marker when
@@ -542,7 +554,10 @@ pub fn check_fresh(
 }
 
 /// Refuses a result that is not a calibration for the files robots load.
-fn check_usable(cal: &Calibration, what: impl FnOnce() -> String) -> Result<(), ExportError> {
+pub(crate) fn check_usable(
+    cal: &Calibration,
+    what: impl FnOnce() -> String,
+) -> Result<(), ExportError> {
     let reasons = cal.problems();
     if reasons.is_empty() {
         Ok(())
@@ -627,7 +642,7 @@ pub enum Withheld {
     /// Nothing: every format.
     Nothing,
     /// The joint files: the calibration was fitted to angles the robot's joint calibration
-    /// had already corrected, so its offsets are changes to the robot's file ([`update`]).
+    /// had already corrected, so its offsets are changes to the robot's file ([`update()`]).
     JointFiles,
     /// Every robot file: the result is not a calibration (these reasons); only naocalib's
     /// own TOML and JSON, which say so.
@@ -656,46 +671,6 @@ pub fn dir_files(cal: &Calibration, dir: &Path) -> (Vec<(ExportFormat, PathBuf)>
         .map(|(format, _, name)| (*format, dir.join(name)))
         .collect();
     (files, withheld)
-}
-
-/// `naocalib export --update`: replaces in the robot's file `path` (in `format`'s layout)
-/// only what `cal` determined — the lower camera's correction, the leg joint offsets, the
-/// head offsets only when estimated, NomadZ's `jointPlay` only when the play was — and
-/// keeps every other byte. The previous file is kept as `<path>.bak`; both are written
-/// atomically. A file that cannot be parsed, or holds an implausible value, is refused
-/// with its name and line, and nothing is written. Returns the backup's path.
-pub fn update(
-    cal: &Calibration,
-    format: ExportFormat,
-    path: &Path,
-    inputs: &[PathBuf],
-) -> Result<PathBuf, ExportError> {
-    check_usable(cal, || path.display().to_string())?;
-    let spec = format.spec();
-    let update = spec.update.ok_or_else(|| {
-        parse_error(
-            path,
-            format!("--update is not supported for --format {}", spec.name),
-        )
-    })?;
-    let text = std::fs::read_to_string(path).map_err(|source| ExportError::Io {
-        path: path.to_path_buf(),
-        action: "read",
-        source,
-    })?;
-    let new = update(&text, path, cal)?;
-    let mut backup = path.as_os_str().to_owned();
-    backup.push(".bak");
-    let backup = PathBuf::from(backup);
-    let options = WriteOptions {
-        force: true,
-        inputs: inputs.to_vec(),
-    };
-    check_writable(path, &options)?;
-    check_writable(&backup, &options)?;
-    write_atomic(&backup, text.as_bytes(), &options)?;
-    write_atomic(path, new.as_bytes(), &options)?;
-    Ok(backup)
 }
 
 /// One file `naocalib import` read: its path, format name and how many values it held.
@@ -761,22 +736,30 @@ pub fn import_calibration(
 }
 
 /// Reads a robot's team file: its format (given, or recognised from the content) and the
-/// values it holds as naocalib parameters ([`Imported`]: α = −stored for joints).
+/// values it holds as naocalib parameters ([`Imported`]: α = −stored for joints). The file
+/// must be a regular file ([`source::read`]; a byte-order mark is accepted), in the
+/// format's layout, and every value within naocalib's physical bounds
+/// ([`crate::model::bounds`]): a value beyond them is refused, naming the file and the
+/// parameter, rather than carried into a solve.
 pub fn import(
     path: &Path,
     format: Option<ExportFormat>,
 ) -> Result<(ExportFormat, Imported), ExportError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ExportError::Io {
-        path: path.to_path_buf(),
-        action: "read",
-        source,
-    })?;
+    let text = source::read(path)?.text;
     let format = match format {
-        Some(f) => f,
+        Some(f) => {
+            if f.spec().read.is_some() && !f.matches(&text) {
+                return Err(not_in_layout(path, f, &text));
+            }
+            f
+        }
         None => ExportFormat::recognise(&text).ok_or_else(|| {
             parse_error(
                 path,
-                "not a team calibration file naocalib knows (give --format)",
+                format!(
+                    "not a team calibration file naocalib knows (give --format: {})",
+                    ExportFormat::names()
+                ),
             )
         })?,
     };
@@ -786,7 +769,37 @@ pub fn import(
             format!("import is not supported for --format {}", format.name()),
         )
     })?;
-    Ok((format, read(&text, path)?))
+    let values = read(&text, path)?;
+    check_bounds(&values, path)?;
+    Ok((format, values))
+}
+
+/// Refuses values beyond naocalib's physical bounds ([`crate::model::bounds`]), naming the
+/// file and the first such parameter.
+pub(crate) fn check_bounds(values: &[(Param, f64)], path: &Path) -> Result<(), ExportError> {
+    match crate::model::bounds::violations(values.iter().copied()).first() {
+        None => Ok(()),
+        Some(v) => Err(parse_error(
+            path,
+            format!("{v}: the file does not hold a value naocalib can use; fix it by hand first"),
+        )),
+    }
+}
+
+/// The error for a file that is not in `format`'s layout: what it looks like instead.
+pub(crate) fn not_in_layout(path: &Path, format: ExportFormat, text: &str) -> ExportError {
+    let looks = match ExportFormat::recognise(text) {
+        Some(other) => format!("it looks like a {} file", other.name()),
+        None => "its layout is none naocalib knows".to_string(),
+    };
+    parse_error(
+        path,
+        format!(
+            "not a {} file ({}): {looks}; nothing written",
+            format.name(),
+            format.spec().description
+        ),
+    )
 }
 
 /// Writes `cal` into `dir` in every format (file names in [`ExportFormat::ALL`]) and

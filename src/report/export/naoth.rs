@@ -22,8 +22,11 @@
 //! sensor + head_rot: α = +head_rot, not −stored), and `head_rot.x`, a roll between the head and
 //! the camera, is folded into the camera rotation on import (exact for the rotation; the
 //! camera position moves by `head_rot.x` × the 5 cm camera offset, which naocalib's import
-//! leaves out). An update writes the bottom camera's `x, y, z` so that, with the file's
-//! `head_rot.x`, the rotation is naocalib's; the pan comes before the tilt, unlike
+//! leaves out). The top camera (`cam_rot.top.x/y/z`) is built the same way with its
+//! own offset and `rotationY` of 1.2° (`Motion.cpp` lines 473–482,
+//! `Framework/Commons/Source/Tools/NaoInfo.h` line 39), `head_rot` applied before it too:
+//! UpperCam* the same way as Cam*. An update writes each camera's `x, y, z` so that, with
+//! the file's `head_rot.x`, the rotation is naocalib's; the pan comes before the tilt, unlike
 //! naocalib's order, so [`super::camera::naoth`] solves `Rz(z) · Ry(tilt + y) · Rx(x) =
 //! Ry(tilt) · Rc` exactly. A fresh file carries the head keys too (NaoTH's configuration
 //! layers would otherwise take the platform's `head_rot`, which is not zero:
@@ -33,26 +36,40 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::{Calibration, ExportError, Imported, header, num, parse_error};
-use crate::model::Param;
+use crate::model::{CameraId, Param};
 
 /// The INI section NaoTH reads the offsets from.
 pub const SECTION: &str = "CameraMatrixOffset";
 
-/// The `CameraMatrixOffset.cfg` of `cal`: the bottom camera, and the head offsets
-/// (`head_rot.y/z`, `head_rot.x` zero) when known.
+/// The `CameraMatrixOffset.cfg` of `cal`: the bottom camera, the top camera when the
+/// calibration knows all three of its offsets, and the head offsets (`head_rot.y/z`,
+/// `head_rot.x` zero) when known.
 pub fn camera_matrix_offset_cfg(cal: &Calibration) -> String {
     let mut s = String::new();
     header(&mut s, "#", cal, "radians (rad)");
-    let _ = writeln!(
-        s,
-        "# Only the lower (bottom) camera and the head offsets are calibrated; other keys keep \
-         their values."
-    );
-    let [x, y, z] = super::camera::naoth(cal);
+    let upper = super::camera::complete(cal, CameraId::Upper).is_some();
+    if upper {
+        let _ = writeln!(
+            s,
+            "# Both cameras and the head offsets are calibrated; other keys keep their values."
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "# Only the lower (bottom) camera and the head offsets are calibrated; other keys keep \
+             their values."
+        );
+    }
     let _ = writeln!(s, "[{SECTION}]");
-    let _ = writeln!(s, "cam_rot.bottom.x={}", num(x));
-    let _ = writeln!(s, "cam_rot.bottom.y={}", num(y));
-    let _ = writeln!(s, "cam_rot.bottom.z={}", num(z));
+    for camera in super::camera::CAMERAS {
+        if camera == CameraId::Upper && !upper {
+            continue;
+        }
+        let values = super::camera::naoth(cal, camera);
+        for (key, x) in keys(camera).iter().zip(values) {
+            let _ = writeln!(s, "{key}={}", num(x));
+        }
+    }
     if let (Some(yaw), Some(pitch)) = (
         cal.robot_value(Param::HeadYaw),
         cal.robot_value(Param::HeadPitch),
@@ -64,38 +81,72 @@ pub fn camera_matrix_offset_cfg(cal: &Calibration) -> String {
     s
 }
 
-/// Reads back a [`camera_matrix_offset_cfg`] file: `[x, y, z]` (rad).
+/// Reads back a [`camera_matrix_offset_cfg`] file: the bottom camera's `[x, y, z]` (rad).
 pub fn read_camera_matrix_offset_cfg(text: &str, path: &Path) -> Result<[f64; 3], ExportError> {
+    read_camera(text, path, CameraId::Lower)?
+        .ok_or_else(|| parse_error(path, format!("[{SECTION}] cam_rot.bottom.x: missing")))
+}
+
+/// Reads back `camera`'s `[x, y, z]` (rad) of a [`camera_matrix_offset_cfg`] file; `None`
+/// when it has none of its keys.
+pub fn read_camera(
+    text: &str,
+    path: &Path,
+    camera: CameraId,
+) -> Result<Option<[f64; 3]>, ExportError> {
     let values = super::runswift::ini_section(text, SECTION, path)?;
+    let keys = keys(camera);
+    if !values.iter().any(|(name, _)| keys.contains(&name.as_str())) {
+        return Ok(None);
+    }
     let mut out = [0.0; 3];
-    for (k, axis) in ["x", "y", "z"].iter().enumerate() {
-        let key = format!("cam_rot.bottom.{axis}");
+    for (k, key) in keys.iter().enumerate() {
         out[k] = values
             .iter()
-            .find(|(name, _)| *name == key)
+            .find(|(name, _)| name == key)
             .map(|(_, v)| *v)
             .ok_or_else(|| parse_error(path, format!("[{SECTION}] {key}: missing")))?;
     }
-    Ok(out)
+    Ok(Some(out))
 }
 
-const KEYS: [&str; 3] = ["cam_rot.bottom.x", "cam_rot.bottom.y", "cam_rot.bottom.z"];
+/// Each camera's keys: `cam_rot.bottom.x/y/z`, `cam_rot.top.x/y/z`
+/// (`CameraMatrixOffset.h` lines 37–43).
+fn keys(camera: CameraId) -> [&'static str; 3] {
+    match camera {
+        CameraId::Lower => ["cam_rot.bottom.x", "cam_rot.bottom.y", "cam_rot.bottom.z"],
+        CameraId::Upper => ["cam_rot.top.x", "cam_rot.top.y", "cam_rot.top.z"],
+    }
+}
 
 /// The head's keys: roll after the pitch, pitch offset, yaw offset.
 const HEAD_KEYS: [&str; 3] = ["head_rot.x", "head_rot.y", "head_rot.z"];
 
-/// The bottom camera's `[x, y, z]` and the head's `[x, y, z]` (rad; `None` for an absent
-/// head key) of a NaoTH file, checked plausible.
-#[allow(clippy::type_complexity)]
-fn values(text: &str, path: &Path) -> Result<([f64; 3], [Option<f64>; 3]), ExportError> {
+/// What a NaoTH file holds (rad), checked plausible: each camera's `[x, y, z]` (`None`
+/// for a camera without keys; the bottom camera's are required) and the head's `[x, y, z]`
+/// (`None` for an absent key).
+struct Values {
+    cameras: [Option<[f64; 3]>; 2],
+    head: [Option<f64>; 3],
+}
+
+fn values(text: &str, path: &Path) -> Result<Values, ExportError> {
     let (entries, _) = super::ini::section(text, SECTION, path)?
         .ok_or_else(|| parse_error(path, format!("no [{SECTION}] section")))?;
-    let mut camera = [0.0; 3];
-    for (k, key) in KEYS.iter().enumerate() {
-        let (x, e) = super::ini::number(&entries, key, path)?
-            .ok_or_else(|| parse_error(path, format!("[{SECTION}] {key}: missing")))?;
-        super::check_plausible(path, e.line, key, x.to_degrees(), super::CAMERA_LIMIT_DEG)?;
-        camera[k] = x;
+    let mut cameras = [None; 2];
+    for (c, camera) in super::camera::CAMERAS.into_iter().enumerate() {
+        let keys = keys(camera);
+        if camera == CameraId::Upper && !entries.iter().any(|e| keys.contains(&e.key.as_str())) {
+            continue;
+        }
+        let mut v = [0.0; 3];
+        for (k, key) in keys.iter().enumerate() {
+            let (x, e) = super::ini::number(&entries, key, path)?
+                .ok_or_else(|| parse_error(path, format!("[{SECTION}] {key}: missing")))?;
+            super::check_plausible(path, e.line, key, x.to_degrees(), super::CAMERA_LIMIT_DEG)?;
+            v[k] = x;
+        }
+        cameras[c] = Some(v);
     }
     let mut head = [None; 3];
     for (k, key) in HEAD_KEYS.iter().enumerate() {
@@ -104,44 +155,43 @@ fn values(text: &str, path: &Path) -> Result<([f64; 3], [Option<f64>; 3]), Expor
             head[k] = Some(x);
         }
     }
-    Ok((camera, head))
+    Ok(Values { cameras, head })
 }
 
-/// Reads a NaoTH `CameraMatrixOffset.cfg` (other keys allowed): naocalib's camera offsets
-/// (deg), `head_rot.x` folded in, and the head offsets `α = head_rot.z, head_rot.y` (deg)
-/// when the file has them.
+/// Reads a NaoTH `CameraMatrixOffset.cfg` (other keys allowed): naocalib's offsets (deg)
+/// of the bottom camera and of the top camera when the file has it, `head_rot.x` folded
+/// into each, and the head offsets `α = head_rot.z, head_rot.y` (deg) when the file has
+/// them.
 pub fn import(text: &str, path: &Path) -> Result<Imported, ExportError> {
-    use super::camera::{offsets_deg_of, rot_x, rot_y, rot_z};
-    let ([x, y, z], [head_x, head_y, head_z]) = values(text, path)?;
-    let tilt = super::camera::NOMINAL_TILT_DEG.to_radians();
-    let [yaw, pitch, roll] =
-        offsets_deg_of(&(rot_x(head_x.unwrap_or(0.0)) * rot_z(z) * rot_y(tilt + y) * rot_x(x)));
-    let mut out = vec![
-        (Param::CamYaw, yaw),
-        (Param::CamPitch, pitch),
-        (Param::CamRoll, roll),
-    ];
+    use super::camera::{nominal_tilt_deg, offsets_deg_of, rot_x, rot_y, rot_z};
+    let Values { cameras, head } = values(text, path)?;
+    let [head_x, head_y, head_z] = head;
+    let mut out = Vec::new();
+    for (camera, found) in super::camera::CAMERAS.into_iter().zip(cameras) {
+        let Some([x, y, z]) = found else { continue };
+        let tilt = nominal_tilt_deg(camera).to_radians();
+        let m = rot_x(head_x.unwrap_or(0.0)) * rot_z(z) * rot_y(tilt + y) * rot_x(x);
+        let offsets = offsets_deg_of(&m, camera);
+        out.extend(super::camera::params(camera).into_iter().zip(offsets));
+    }
     out.extend(head_z.map(|a| (Param::HeadYaw, a.to_degrees())));
     out.extend(head_y.map(|a| (Param::HeadPitch, a.to_degrees())));
     Ok(out)
 }
 
-/// A robot's `CameraMatrixOffset.cfg` with the bottom camera's offsets replaced when this
-/// calibration determined the lower camera (written so that, with the file's
-/// `head_rot.x`, the rotation is naocalib's), and `head_rot.y/z` when it estimated the head
-/// offsets (entries added when missing); every other byte kept.
+/// A robot's `CameraMatrixOffset.cfg` with each camera's offsets replaced when this
+/// calibration determined that camera (written so that, with the file's `head_rot.x`, the
+/// rotation is naocalib's; the top camera's keys added when missing), and `head_rot.y/z`
+/// when it estimated the head offsets (entries added when missing); every other byte kept.
 pub fn update(text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
-    use super::camera::{head_from_camera, rot_x, zyx_angles};
-    let head_x = if super::ini::section(text, SECTION, path)?.is_some() {
-        values(text, path)?.1[0].unwrap_or(0.0)
-    } else {
-        0.0
-    };
+    use super::camera::{head_from_camera, naoth_of, rot_x};
+    let head_x = values(text, path)?.head[0].unwrap_or(0.0);
     let mut values: Vec<(&str, String)> = Vec::new();
-    if super::camera_determined(cal, path)? {
-        let [z, b, x] = zyx_angles(&(rot_x(-head_x) * head_from_camera(cal)));
-        let new = [x, b - super::camera::NOMINAL_TILT_DEG.to_radians(), z];
-        values.extend(KEYS.iter().zip(new).map(|(k, x)| (*k, num(x))));
+    for camera in super::camera::CAMERAS {
+        if super::camera::determined(cal, camera, path)? {
+            let new = naoth_of(&(rot_x(-head_x) * head_from_camera(cal, camera)), camera);
+            values.extend(keys(camera).iter().zip(new).map(|(k, x)| (*k, num(x))));
+        }
     }
     for (key, p) in [
         (HEAD_KEYS[1], Param::HeadPitch),

@@ -21,8 +21,10 @@
 //! radians (`Src/Representations/Configuration/CameraCalibration.h`), applied after the
 //! head joints as `rotateY(headTiltToCameraTilt + tilt) · rotateX(roll) · rotateZ(pan)`
 //! (`Src/Representations/Perception/CameraMatrix.cpp`, lines 589–591) — B-Human's order:
-//! tilt = CamPitch, roll = CamRoll, pan = CamYaw, exactly. The `upperCamera…` and
-//! `body…` keys are not calibrated here.
+//! tilt = CamPitch, roll = CamRoll, pan = CamYaw, exactly. The upper camera's
+//! `upperCameraTiltCorrection`, `upperCameraRollCorrection`, `upperCameraPanCorrection`
+//! (radians) enter the same way after `headTiltToUpperCameraTilt` (1.2°; lines 582–586):
+//! UpperCamPitch, UpperCamRoll, UpperCamYaw. The `body…` keys are not calibrated here.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -148,7 +150,8 @@ fn number_at(
 }
 
 /// Reads back a NomadZ `jointCalibration.cfg` (either layout): joint name → entry (deg),
-/// every offset checked plausible.
+/// every offset checked plausible and every leg joint's `jointPlay` within the play
+/// family's bound ([`crate::model::bounds`], 0 … 5°).
 pub fn read_joint_calibration_cfg(
     text: &str,
     path: &Path,
@@ -188,6 +191,24 @@ pub fn read_joint_calibration_cfg(
             entry.offset,
             super::JOINT_LIMIT_DEG,
         )?;
+        // The play of a joint naocalib models must be one it can hold: a width within
+        // the play family's bound.
+        if let Some(play) = joint_param(name).and_then(play_param) {
+            let bound = crate::model::bounds::bound(play);
+            if !bound.contains(entry.joint_play) {
+                let (_, _, _, line) =
+                    number_at(&root, &[name.as_str(), "jointPlay"], path)?.expect("read above");
+                return Err(parse_error(
+                    path,
+                    format!(
+                        "line {line}: {name}.jointPlay = {} deg is outside naocalib's {} … {} \
+                         deg for {play} ({}): naocalib's model cannot hold it; correct the \
+                         file by hand first",
+                        entry.joint_play, bound.min, bound.max, bound.why
+                    ),
+                ));
+            }
+        }
         out.push((name.clone(), entry));
     }
     Ok(out)
@@ -237,53 +258,74 @@ pub const CAMERA_KEYS: [(&str, Param); 3] = [
     ("cameraPanCorrection", Param::CamYaw),
 ];
 
-/// The `cameraCalibration.cfg` of `cal` (radians); the upper camera and body corrections
-/// zero (not calibrated here; `--update` keeps a robot's).
+/// NomadZ's upper-camera keys and naocalib's parameter of each (same rotation, radians;
+/// `Src/Representations/Perception/CameraMatrix.cpp` lines 582–586).
+pub const UPPER_CAMERA_KEYS: [(&str, Param); 3] = [
+    ("upperCameraTiltCorrection", Param::UpperCamPitch),
+    ("upperCameraRollCorrection", Param::UpperCamRoll),
+    ("upperCameraPanCorrection", Param::UpperCamYaw),
+];
+
+/// The `cameraCalibration.cfg` of `cal` (radians); the upper camera's corrections zero
+/// unless the calibration knows them, the body's zero (not calibrated here; `--update`
+/// keeps a robot's).
 pub fn camera_calibration_cfg(cal: &Calibration) -> String {
     let mut s = String::new();
     header(&mut s, "//", cal, "radians (rad), body translation in mm");
-    let _ = writeln!(
-        s,
-        "// tilt = CamPitch, roll = CamRoll, pan = CamYaw. Only the lower camera is calibrated:"
-    );
-    let _ = writeln!(
-        s,
-        "// upper camera and body are zero here; `naocalib export --update <file>` keeps a robot's."
-    );
-    for (key, param) in CAMERA_KEYS {
-        let x = cal.robot_value(param).unwrap_or(0.0).to_radians();
-        let _ = writeln!(s, "{key} = {};", num(x));
+    let upper = super::camera::known(cal, crate::model::CameraId::Upper);
+    if upper {
+        let _ = writeln!(
+            s,
+            "// tilt = CamPitch, roll = CamRoll, pan = CamYaw; upperCamera…: UpperCamPitch, \
+             UpperCamRoll, UpperCamYaw."
+        );
+        let _ = writeln!(
+            s,
+            "// The body is zero here; `naocalib export --update <file>` keeps a robot's."
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "// tilt = CamPitch, roll = CamRoll, pan = CamYaw. Only the lower camera is calibrated:"
+        );
+        let _ = writeln!(
+            s,
+            "// upper camera and body are zero here; `naocalib export --update <file>` keeps a robot's."
+        );
     }
-    for key in [
-        "upperCameraTiltCorrection",
-        "upperCameraRollCorrection",
-        "upperCameraPanCorrection",
-        "bodyTiltCorrection",
-        "bodyRollCorrection",
-    ] {
+    for (k, (key, param)) in CAMERA_KEYS.iter().chain(&UPPER_CAMERA_KEYS).enumerate() {
+        let known = k < CAMERA_KEYS.len() || upper;
+        let x = cal.robot_value(*param).filter(|_| known).unwrap_or(0.0);
+        let _ = writeln!(s, "{key} = {};", num(x.to_radians()));
+    }
+    for key in ["bodyTiltCorrection", "bodyRollCorrection"] {
         let _ = writeln!(s, "{key} = 0;");
     }
     let _ = writeln!(s, "bodyTranslationCorrection = {{x = 0; y = 0; z = 0;}};");
     s
 }
 
-/// The lower camera's corrections of a NomadZ camera file (rad, with spans), checked
-/// plausible.
+/// The cameras' corrections of a NomadZ camera file (rad, with spans), checked plausible:
+/// the lower camera's (required) and the upper camera's keys the file has.
 fn camera_values(
     root: &cfg::Value,
     path: &Path,
 ) -> Result<Vec<(Param, f64, usize, usize)>, ExportError> {
     let mut out = Vec::new();
-    for (key, param) in CAMERA_KEYS {
-        let (x, start, end, line) = number_at(root, &[key], path)?
-            .ok_or_else(|| parse_error(path, format!("{key}: missing")))?;
+    for (k, (key, param)) in CAMERA_KEYS.iter().chain(&UPPER_CAMERA_KEYS).enumerate() {
+        let Some((x, start, end, line)) = number_at(root, &[*key], path)? else {
+            if k < CAMERA_KEYS.len() {
+                return Err(parse_error(path, format!("{key}: missing")));
+            }
+            continue;
+        };
         super::check_plausible(path, line, key, x.to_degrees(), super::CAMERA_LIMIT_DEG)?;
-        out.push((param, x, start, end));
+        out.push((*param, x, start, end));
     }
     Ok(out)
 }
 
-/// Reads a NomadZ camera file: naocalib's camera offsets (deg).
+/// Reads a NomadZ camera file: naocalib's camera offsets (deg), both cameras'.
 pub fn import_camera(text: &str, path: &Path) -> Result<Imported, ExportError> {
     let root = cfg::parse(text, path)?;
     Ok(camera_values(&root, path)?
@@ -292,16 +334,21 @@ pub fn import_camera(text: &str, path: &Path) -> Result<Imported, ExportError> {
         .collect())
 }
 
-/// A robot's `cameraCalibration.cfg` with the lower camera's corrections this calibration
+/// A robot's `cameraCalibration.cfg` with the cameras' corrections this calibration
 /// determined replaced; every other byte kept.
 pub fn update_camera(text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
     let root = cfg::parse(text, path)?;
-    let edits = camera_values(&root, path)?
-        .into_iter()
-        .filter_map(|(p, _, start, end)| {
-            cal.determined_here(p)
-                .map(|v| (start, end, num(v.to_radians())))
-        })
-        .collect();
+    let found = camera_values(&root, path)?;
+    let mut edits = Vec::new();
+    for (key, param) in CAMERA_KEYS.iter().chain(&UPPER_CAMERA_KEYS) {
+        let Some(v) = cal.determined_here(*param) else {
+            continue;
+        };
+        let (_, _, start, end) = found
+            .iter()
+            .find(|(p, ..)| p == param)
+            .ok_or_else(|| parse_error(path, format!("{key}: missing")))?;
+        edits.push((*start, *end, num(v.to_radians())));
+    }
     Ok(cfg::splice(text, edits))
 }

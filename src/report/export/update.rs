@@ -1,0 +1,228 @@
+//! `naocalib export --update`: a robot's own file with only what a calibration determined
+//! replaced, every other byte kept — and the robot's original never lost.
+//!
+//! - The file must be in the format's layout ([`super::FormatSpec::recognise`]): another
+//!   team's file is refused, nothing written.
+//! - The previous file is kept as `FILE.bak`; when that exists already (an earlier update),
+//!   as `FILE.bak.2`, `FILE.bak.3`, …: a backup is never replaced, so the robot's original
+//!   stays in `FILE.bak`.
+//! - Nothing is written, and the outcome says why ([`Unchanged`]), when the calibration
+//!   determines none of the values the file carries, when the file holds them already, or
+//!   — for a calibration of angles already corrected by the file, whose offsets are
+//!   changes to it — when the file is a kept backup with this calibration applied: an
+//!   update is idempotent.
+//! - The file is changed through [`crate::output::rewrite`]: through a symbolic link, with
+//!   its mode, owner and hard links kept; a read-only file is refused. The backup gets the
+//!   file's mode and owner.
+
+use std::path::{Path, PathBuf};
+
+use super::{Calibration, ExportError, ExportFormat, check_usable, parse_error, source};
+use crate::model::Param;
+use crate::output::WriteOptions;
+
+/// What [`update()`] did.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Updated {
+    /// The file was changed.
+    Written {
+        /// The file written (the target of a symbolic link).
+        file: PathBuf,
+        /// Where its previous content is kept.
+        backup: PathBuf,
+        /// Whether that backup was written now (`false`: an existing backup already held
+        /// the previous content).
+        new_backup: bool,
+    },
+    /// Nothing was written.
+    Unchanged(Unchanged),
+}
+
+/// Why [`update()`] wrote nothing.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Unchanged {
+    /// The calibration determines none of the values the file carries (all held or
+    /// undetermined).
+    NothingDetermined,
+    /// The file holds this calibration's values already.
+    AlreadyHolds,
+    /// The calibration (of angles already corrected by the file's values) is already
+    /// applied: the file is `backup`, the robot's file before, with this calibration
+    /// composed in.
+    AlreadyApplied {
+        /// The backup holding the file this calibration was applied to.
+        backup: PathBuf,
+    },
+}
+
+impl std::fmt::Display for Unchanged {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Unchanged::NothingDetermined => f.write_str(
+                "the calibration determines none of the values this file carries (each is \
+                 held or not determined by the data)",
+            ),
+            Unchanged::AlreadyHolds => f.write_str("the file holds this calibration already"),
+            Unchanged::AlreadyApplied { backup } => write!(
+                f,
+                "this calibration is already applied: the file is {} with it composed in \
+                 (its offsets are changes to the robot's previous file)",
+                backup.display()
+            ),
+        }
+    }
+}
+
+/// The backups of `file`: `FILE.bak`, then `FILE.bak.2`, `FILE.bak.3`, … as far as they
+/// exist, and the next free name.
+pub fn backups(file: &Path) -> (Vec<PathBuf>, PathBuf) {
+    let name = |k: usize| {
+        let mut s = file.as_os_str().to_owned();
+        if k == 1 {
+            s.push(".bak");
+        } else {
+            s.push(format!(".bak.{k}"));
+        }
+        PathBuf::from(s)
+    };
+    let mut existing = Vec::new();
+    let mut k = 1;
+    loop {
+        let path = name(k);
+        if path.symlink_metadata().is_err() {
+            return (existing, path);
+        }
+        existing.push(path);
+        k += 1;
+    }
+}
+
+/// `naocalib export --update`: replaces in the robot's file `path` (in `format`'s layout,
+/// or the one recognised from its content) only what `cal` determined — the cameras'
+/// corrections, the leg joint offsets, the head offsets only when estimated, NomadZ's
+/// `jointPlay` only when the play was — and keeps every other byte (a byte-order mark
+/// included). See the module's documentation for the backups, the refusals and when
+/// nothing is written. A file that cannot be parsed, or holds an implausible value, is
+/// refused with its name and line, and nothing is written.
+pub fn update(
+    cal: &Calibration,
+    format: Option<ExportFormat>,
+    path: &Path,
+    inputs: &[PathBuf],
+) -> Result<(ExportFormat, Updated), ExportError> {
+    check_usable(cal, || path.display().to_string())?;
+    let src = source::read(path)?;
+    let text = &src.text;
+    let format = match format {
+        Some(f) => f,
+        None => ExportFormat::recognise(text).ok_or_else(|| {
+            parse_error(
+                path,
+                format!(
+                    "layout not recognised; give --format ({})",
+                    ExportFormat::names()
+                ),
+            )
+        })?,
+    };
+    let spec = format.spec();
+    let (Some(update), Some(read)) = (spec.update, spec.read) else {
+        return Err(parse_error(
+            path,
+            format!("--update is not supported for --format {}", spec.name),
+        ));
+    };
+    if !format.matches(text) {
+        return Err(super::not_in_layout(path, format, text));
+    }
+    let new = update(text, path, cal)?;
+    if new == *text {
+        let held = read(text, path).unwrap_or_default();
+        let why = if held.iter().any(|(p, _)| cal.determined_here(*p).is_some()) {
+            Unchanged::AlreadyHolds
+        } else {
+            Unchanged::NothingDetermined
+        };
+        return Ok((format, Updated::Unchanged(why)));
+    }
+    let file = path.canonicalize().map_err(|source| ExportError::Io {
+        path: path.to_path_buf(),
+        action: "resolve",
+        source,
+    })?;
+    let (existing, next) = backups(&file);
+    if cal.corrected_angles()
+        && let Some(backup) = applied_to(cal, format, text, &existing)
+    {
+        return Ok((
+            format,
+            Updated::Unchanged(Unchanged::AlreadyApplied { backup }),
+        ));
+    }
+    let options = WriteOptions {
+        force: false,
+        inputs: inputs.to_vec(),
+    };
+    let meta = std::fs::metadata(&file).map_err(|source| ExportError::Io {
+        path: file.clone(),
+        action: "read",
+        source,
+    })?;
+    // The previous content is kept: by the newest backup when it holds it, else anew.
+    let bytes = src.with_text(text);
+    let (backup, new_backup) = match existing.last() {
+        Some(last) if std::fs::read(last).is_ok_and(|b| b == bytes.as_bytes()) => {
+            (last.clone(), false)
+        }
+        _ => (next, true),
+    };
+    // Refuse before writing anything: an input, a read-only file.
+    crate::output::check_rewritable(&file, &options)?;
+    if new_backup {
+        crate::output::write_new_like(&backup, bytes.as_bytes(), &meta, &options)?;
+    }
+    let file = crate::output::rewrite(&file, src.with_text(&new).as_bytes(), &options)?;
+    Ok((
+        format,
+        Updated::Written {
+            file,
+            backup,
+            new_backup,
+        },
+    ))
+}
+
+/// The kept backup that, updated with `cal`, holds what `text` holds for every parameter
+/// `cal` determined (within 1e-9 of the report unit): the file `cal` was already applied
+/// to.
+fn applied_to(
+    cal: &Calibration,
+    format: ExportFormat,
+    text: &str,
+    backups: &[PathBuf],
+) -> Option<PathBuf> {
+    let spec = format.spec();
+    let (update, read) = (spec.update?, spec.read?);
+    let here = Path::new("-");
+    let now = read(text, here).ok()?;
+    let determined: Vec<Param> = now
+        .iter()
+        .map(|(p, _)| *p)
+        .filter(|p| cal.determined_here(*p).is_some())
+        .collect();
+    if determined.is_empty() {
+        return None;
+    }
+    backups.iter().rev().find_map(|b| {
+        let old = source::read(b).ok()?.text;
+        if !format.matches(&old) {
+            return None;
+        }
+        let applied = read(&update(&old, here, cal).ok()?, here).ok()?;
+        let same = determined.iter().all(|p| {
+            let value = |v: &[(Param, f64)]| v.iter().find(|(q, _)| q == p).map(|(_, x)| *x);
+            matches!((value(&applied), value(&now)), (Some(a), Some(b)) if (a - b).abs() < 1e-9)
+        });
+        same.then(|| b.clone())
+    })
+}
