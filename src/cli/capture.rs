@@ -66,7 +66,7 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         None => None,
     };
     let (out, model) = if args.resume {
-        let (out, model) = DatasetOut::resume(&args.out)?;
+        let (out, model) = DatasetOut::resume(&args.out, &args.plan, &rows)?;
         if config_model.is_some_and(|m| m != model) {
             bail!(
                 "{}: its camera, sandals or geometry differ from {}'s dataset.toml; resume \
@@ -80,26 +80,24 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         let Some(model) = config_model else {
             bail!("--config DATASET.toml is needed (the robot's camera intrinsics and sandals)");
         };
+        DatasetOut::check_new(&args.out)?;
         (None, model)
     };
     // Every row checked before anything is written or moved.
     check_plan(&args.plan, &model, &rows, options.joint_margin)?;
-    if let Some(out) = &out
-        && let Some(id) = out.ids().find(|id| !rows.iter().any(|r| r.id == *id))
-    {
-        bail!(
-            "{}: capture {id} is not in the plan {}; --resume needs the plan the run began \
-             with",
-            args.out.display(),
-            args.plan.display()
-        );
+    if let Some(out) = &out {
+        for (id, why) in out.retake() {
+            note!("capture {id} will be taken again ({why})");
+        }
     }
-    let camera = spec.open(Duration::from_secs_f64(args.camera_timeout))?;
-    let stop = capture::stop_on_signals().context("cannot watch for Ctrl-C / SIGTERM")?;
+    let plan_bytes = std::fs::read(&args.plan)
+        .with_context(|| format!("{}: cannot read", args.plan.display()))?;
+    let camera = spec.open("lower", Duration::from_secs_f64(args.camera_timeout))?;
+    let stop = capture::stop_on_signals().context("cannot watch for Ctrl-C, SIGTERM or SIGHUP")?;
     let mut link = Connection::connect(&args.lola, options.safety.silent_cycles)?;
     let out = match out {
         Some(out) => out,
-        None => DatasetOut::create(&args.out, &model)?,
+        None => DatasetOut::create(&args.out, &model, &plan_bytes)?,
     };
     let todo: Vec<_> = rows.iter().filter(|r| !out.has(r.id)).copied().collect();
     let total = rows.len();

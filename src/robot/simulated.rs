@@ -548,9 +548,20 @@ pub fn read_state(path: &Path) -> Result<State, RobotError> {
     Ok(state)
 }
 
-/// Renders what the lower camera of the robot in `state` sees (the sandal in view, the one
-/// whose centre is nearest the image centre) and writes it as PNG to `out`.
-pub fn snap(state: &State, out: &Path, options: &RenderOptions) -> Result<(), RobotError> {
+/// Renders what the lower camera of the robot in `state` (read from `state_path`) sees (the
+/// sandal in view, the one whose centre is nearest the image centre) and writes it as PNG
+/// to `out` (replacing a picture there, never the state file or the `dataset.toml` it
+/// names).
+pub fn snap(
+    state: &State,
+    state_path: &Path,
+    out: &Path,
+    options: &RenderOptions,
+) -> Result<(), RobotError> {
+    let write = WriteOptions::new(true)
+        .protecting([state_path.to_path_buf()])
+        .protecting(state.config.clone());
+    crate::output::check_writable(out, &write)?;
     let model = match &state.config {
         Some(path) => crate::dataset::read_model(path)?,
         None => Model::default(),
@@ -588,7 +599,13 @@ pub fn snap(state: &State, out: &Path, options: &RenderOptions) -> Result<(), Ro
     });
     let seed = state.seed ^ posture.wrapping_mul(0x9E37_79B9_7F4A_7C15);
     let image = render::render(&model, &pose, options, seed)?;
-    image.write_png(out)?;
+    let bytes = image
+        .to_png()
+        .map_err(|message| render::RenderError::Encode {
+            path: out.to_path_buf(),
+            message,
+        })?;
+    write_atomic(out, &bytes, &write)?;
     Ok(())
 }
 

@@ -32,6 +32,7 @@ mod extended;
 mod fuzz_readers;
 mod hostile_inputs;
 mod hostile_outputs;
+mod lola_faults;
 mod misfit;
 mod plan;
 mod plan_around;
