@@ -49,6 +49,14 @@ pub struct CaptureArgs {
     camera_timeout: f64,
 }
 
+/// What the printer thread writes to the terminal.
+enum Print {
+    /// Captures in the dataset, and the bar's message.
+    Progress(u64, String),
+    /// A line above the bar.
+    Line(String),
+}
+
 /// Runs `naocalib capture`.
 pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     let mut options = CaptureOptions::default();
@@ -102,34 +110,52 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     let todo: Vec<_> = rows.iter().filter(|r| !out.has(r.id)).copied().collect();
     let total = rows.len();
     let bar = super::progress_bar(total as u64 as usize, "captures");
-    bar.set_position(out.len() as u64);
     let predicted = |from: usize| predicted_seconds(&todo[from.min(todo.len())..], &options.motion);
-    bar.set_message(format!(", {:.0} s of robot time planned", predicted(0)));
-    let say = |line: String| {
-        if bar.is_hidden() {
-            note!("{line}");
-        } else {
-            bar.println(line);
-        }
+    // The terminal is written from a thread of its own: a terminal that stops reading (a
+    // stalled or silently lost ssh session) blocks that thread, never the robot's cycles.
+    let (print, printed) = std::sync::mpsc::channel::<Print>();
+    let printer = {
+        let bar = bar.clone();
+        std::thread::spawn(move || {
+            for p in printed {
+                match p {
+                    Print::Progress(done, message) => {
+                        bar.set_position(done);
+                        bar.set_message(message);
+                    }
+                    Print::Line(line) if bar.is_hidden() => note!("{line}"),
+                    Print::Line(line) => bar.println(line),
+                }
+            }
+        })
     };
+    let _ = print.send(Print::Progress(
+        out.len() as u64,
+        format!(", {:.0} s of robot time planned", predicted(0)),
+    ));
     let mut visited = 0usize;
-    let mut events = |event: Event| match event {
-        Event::Started => {}
-        Event::Taken { done, .. } => {
-            visited += 1;
-            bar.set_position(done as u64);
-            bar.set_message(format!(", ~{:.0} s left by the plan", predicted(visited)));
-        }
-        Event::Skipped { id, reason } => {
-            visited += 1;
-            say(format!(
-                "capture {id} skipped: {reason}; the leg returns to rest"
-            ));
-        }
-        Event::Cooling { joint, temperature } => say(format!(
-            "{} at {temperature:.1} °C: resting until the motors cool",
-            joint.name()
-        )),
+    let mut events = |event: Event| {
+        let p = match event {
+            Event::Started => return,
+            Event::Taken { done, .. } => {
+                visited += 1;
+                Print::Progress(
+                    done as u64,
+                    format!(", ~{:.0} s left by the plan", predicted(visited)),
+                )
+            }
+            Event::Skipped { id, reason } => {
+                visited += 1;
+                Print::Line(format!(
+                    "capture {id} skipped: {reason}; the leg returns to rest"
+                ))
+            }
+            Event::Cooling { joint, temperature } => Print::Line(format!(
+                "{} at {temperature:.1} °C: resting until the motors cool",
+                joint.name()
+            )),
+        };
+        let _ = print.send(p);
     };
     let report = capture::run(
         &model,
@@ -140,7 +166,12 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         &options,
         &stop,
         &mut events,
-    )?;
+    );
+    // The robot is limp (or gone): let LoLA go before anything may wait for the terminal.
+    drop(link);
+    drop(print);
+    let _ = printer.join();
+    let report = report?;
     bar.finish_and_clear();
     let done = report.already + report.taken.len();
     note!(

@@ -534,24 +534,10 @@ fn every_stop_signal_ends_at_rest_even_twice() {
     }
 }
 
-/// The terminal is lost (the pseudo-terminal capture runs in is closed, as when the ssh
-/// session drops): SIGHUP, then every message fails; the run still ends at rest, limp,
-/// with exit code 2 (not a panic).
-#[test]
-fn a_lost_terminal_ends_at_rest() {
-    use std::os::fd::{FromRawFd, OwnedFd};
-    use std::os::unix::process::CommandExt as _;
-    let b = Bench::new();
-    let plan = b.path("plan.csv");
-    plan_file(&plan, 6, 23);
-    let robot = Robot::paced(
-        &b.path("f.sock"),
-        Body::lying(),
-        Box::new(|_, _, _| {}),
-        Duration::from_millis(1),
-    );
-    // Both ends close on exec: only capture holds the terminal, and closing the master
-    // here loses it.
+/// A pseudo-terminal for capture to run in (both ends close on exec, so that only capture
+/// holds it): the master's descriptor and the terminal's.
+fn terminal() -> (i32, std::os::fd::OwnedFd) {
+    use std::os::fd::FromRawFd;
     let master = unsafe { libc::posix_openpt(libc::O_RDWR | libc::O_NOCTTY | libc::O_CLOEXEC) };
     assert!(master >= 0, "posix_openpt");
     assert_eq!(unsafe { libc::grantpt(master) }, 0);
@@ -568,8 +554,21 @@ fn a_lost_terminal_ends_at_rest() {
         )
     };
     assert!(slave >= 0, "open the terminal");
-    let slave = unsafe { OwnedFd::from_raw_fd(slave) };
-    let mut cmd = b.capture(&plan, "ds", "f.sock", &b.fixed_camera(), &[]);
+    // 80 × 24, so that the progress bar is drawn.
+    let size = libc::winsize {
+        ws_row: 24,
+        ws_col: 80,
+        ws_xpixel: 0,
+        ws_ypixel: 0,
+    };
+    assert_eq!(unsafe { libc::ioctl(master, libc::TIOCSWINSZ, &size) }, 0);
+    (master, unsafe { std::os::fd::OwnedFd::from_raw_fd(slave) })
+}
+
+/// `cmd` run in the terminal `slave` as its controlling terminal (a session of its own,
+/// as a login shell's command is).
+fn spawn_in_terminal(mut cmd: std::process::Command, slave: &std::os::fd::OwnedFd) -> Child {
+    use std::os::unix::process::CommandExt as _;
     cmd.stdin(slave.try_clone().unwrap())
         .stdout(slave.try_clone().unwrap())
         .stderr(slave.try_clone().unwrap());
@@ -581,7 +580,26 @@ fn a_lost_terminal_ends_at_rest() {
             Ok(())
         });
     }
-    let mut child = cmd.spawn().unwrap();
+    cmd.spawn().unwrap()
+}
+
+/// The terminal is lost (the pseudo-terminal capture runs in is closed, as when the ssh
+/// session drops): SIGHUP, then every message fails; the run still ends at rest, limp,
+/// with exit code 2 (not a panic).
+#[test]
+fn a_lost_terminal_ends_at_rest() {
+    let b = Bench::new();
+    let plan = b.path("plan.csv");
+    plan_file(&plan, 6, 23);
+    let robot = Robot::paced(
+        &b.path("f.sock"),
+        Body::lying(),
+        Box::new(|_, _, _| {}),
+        Duration::from_millis(1),
+    );
+    let (master, slave) = terminal();
+    let cmd = b.capture(&plan, "ds", "f.sock", &b.fixed_camera(), &[]);
+    let mut child = spawn_in_terminal(cmd, &slave);
     drop(slave);
     // The terminal reads what capture writes until it is lost.
     let lost = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
@@ -614,6 +632,45 @@ fn a_lost_terminal_ends_at_rest() {
     let cycles = robot.cycles();
     check_commands(&cycles);
     check_ends_at_rest(&cycles);
+}
+
+/// A terminal that stops reading (a stalled or silently dropped ssh session: no SIGHUP,
+/// its buffer full): the robot's cycles go on regardless; the run completes at rest.
+#[test]
+fn a_terminal_that_stops_reading_does_not_stall_the_robot() {
+    let b = Bench::new();
+    let plan = b.path("plan.csv");
+    plan_file(&plan, 4, 26);
+    let robot = Robot::paced(
+        &b.path("f.sock"),
+        Body::lying(),
+        Box::new(|_, _, _| {}),
+        Duration::from_millis(1),
+    );
+    let (master, slave) = terminal();
+    // Fill the terminal: nobody reads it.
+    {
+        use std::os::fd::AsRawFd;
+        let fd = slave.as_raw_fd();
+        let flags = unsafe { libc::fcntl(fd, libc::F_GETFL) };
+        unsafe { libc::fcntl(fd, libc::F_SETFL, flags | libc::O_NONBLOCK) };
+        let junk = [b'x'; 1024];
+        while unsafe { libc::write(fd, junk.as_ptr().cast(), junk.len()) } > 0 {}
+        unsafe { libc::fcntl(fd, libc::F_SETFL, flags) };
+    }
+    let cmd = b.capture(&plan, "ds", "f.sock", &b.fixed_camera(), &[]);
+    let mut child = spawn_in_terminal(cmd, &slave);
+    drop(slave);
+    // The robot is told everything, to the end of the ramp-down, while the terminal
+    // stays full.
+    let cycles = robot.cycles();
+    check_commands(&cycles);
+    check_ends_at_rest(&cycles);
+    assert_eq!(captures_of(&b.path("ds")).len(), 4);
+    unsafe {
+        libc::close(master);
+    }
+    wait(&mut child, 60);
 }
 
 /// Pictures that `detect` could not use — a JPEG with valid magic bytes but corrupt data,
