@@ -8,6 +8,7 @@ use std::time::Duration;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 
+use naocalib::model::CameraId;
 use naocalib::robot::camera::CameraSpec;
 use naocalib::robot::capture::{self, check_plan, predicted_seconds, read_plan};
 use naocalib::robot::lola::{self, Connection};
@@ -28,10 +29,12 @@ pub struct CaptureArgs {
     /// LoLA's socket.
     #[arg(long, value_name = "SOCKET", default_value = lola::DEFAULT_SOCKET)]
     lola: PathBuf,
-    /// The camera: 'v4l2:/dev/video-bottom' (the V6's lower camera; needs the `v4l2`
-    /// feature) or 'command:CMD {path}' (CMD writes a PNG or JPEG to {path}).
-    #[arg(long, value_name = "SPEC")]
-    camera: String,
+    /// A camera, once per camera: [lower=|upper=]SPEC, SPEC 'v4l2:DEVICE' (the V6's
+    /// /dev/video-bottom and /dev/video-top; needs the `v4l2` feature) or 'command:CMD
+    /// {path}' (CMD writes a PNG or JPEG to {path}; {camera} is 'lower' or 'upper'). Without
+    /// a name: the lower camera. Each plan row's picture comes from its `camera`.
+    #[arg(long, value_name = "[CAMERA=]SPEC", required = true)]
+    camera: Vec<String>,
     /// Go on with the dataset in OUT at the first capture of the plan not yet taken.
     #[arg(long)]
     resume: bool,
@@ -67,7 +70,14 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         .motion
         .validate()
         .map_err(|e| anyhow::anyhow!("{e}"))?;
-    let spec = CameraSpec::parse(&args.camera)?;
+    let mut specs: Vec<(CameraId, CameraSpec)> = Vec::new();
+    for text in &args.camera {
+        let (id, spec) = CameraSpec::parse_named(text)?;
+        if specs.iter().any(|(c, _)| *c == id) {
+            bail!("--camera: the {id} camera is given twice");
+        }
+        specs.push((id, spec));
+    }
     let rows = read_plan(&args.plan)?;
     let config_model = match &args.config {
         Some(path) => Some(naocalib::dataset::read_model(path)?),
@@ -100,7 +110,25 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     }
     let plan_bytes = std::fs::read(&args.plan)
         .with_context(|| format!("{}: cannot read", args.plan.display()))?;
-    let camera = spec.open("lower", Duration::from_secs_f64(args.camera_timeout))?;
+    if let Some(row) = rows
+        .iter()
+        .find(|r| !specs.iter().any(|(c, _)| *c == r.camera))
+    {
+        bail!(
+            "{} line {}: capture {} is for the {} camera; give it with --camera {}=SPEC \
+             (nothing was moved)",
+            args.plan.display(),
+            row.line,
+            row.id,
+            row.camera,
+            row.camera
+        );
+    }
+    let timeout = Duration::from_secs_f64(args.camera_timeout);
+    let mut cameras = Vec::new();
+    for (id, spec) in &specs {
+        cameras.push((*id, spec.open(id.name(), timeout)?));
+    }
     let stop = capture::stop_on_signals().context("cannot watch for Ctrl-C, SIGTERM or SIGHUP")?;
     let mut link = Connection::connect(&args.lola, options.safety.silent_cycles)?;
     let out = match out {
@@ -161,7 +189,7 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         &model,
         &rows,
         out,
-        camera,
+        cameras,
         &mut link,
         &options,
         &stop,

@@ -1,5 +1,5 @@
 //! `naocalib simulate-robot`: a simulated NAO V6 lying on its back that serves LoLA, and
-//! `simulate-robot snap`, its lower camera (for `capture --camera 'command:…'`).
+//! `simulate-robot snap`, its cameras (for `capture --camera 'lower=command:…'`).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -9,7 +9,7 @@ use clap::{Args, Subcommand};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use naocalib::model::{Family, Joint, JointAngles, Model, PARAMETER_COUNT};
+use naocalib::model::{CameraId, Family, Joint, JointAngles, Model, PARAMETER_COUNT};
 use naocalib::robot::simulated::{self, Faults, RobotOptions};
 use naocalib::sim::render::RenderOptions;
 
@@ -68,14 +68,22 @@ pub struct SimulateRobotArgs {
 
 #[derive(Debug, Subcommand)]
 enum SnapCommand {
-    /// Render the lower camera's view of a simulated robot into PATH (PNG).
+    /// Render a camera's view of a simulated robot into PATH (PNG).
     Snap {
         /// The picture to write.
         path: PathBuf,
         /// The state file the robot writes (`--state`).
         #[arg(long, value_name = "FILE")]
         state: PathBuf,
+        /// The camera: lower or upper (which needs [upper_camera] in the robot's
+        /// dataset.toml).
+        #[arg(long, default_value = "lower", value_parser = camera_id)]
+        camera: CameraId,
     },
+}
+
+fn camera_id(name: &str) -> Result<CameraId, String> {
+    CameraId::from_name(name).ok_or_else(|| format!("'{name}': expected lower or upper"))
 }
 
 fn joint(name: &str) -> Result<Joint> {
@@ -87,9 +95,14 @@ fn joint(name: &str) -> Result<Joint> {
 
 /// Runs `naocalib simulate-robot`.
 pub fn run(args: &SimulateRobotArgs) -> Result<ExitCode> {
-    if let Some(SnapCommand::Snap { path, state: file }) = &args.snap {
+    if let Some(SnapCommand::Snap {
+        path,
+        state: file,
+        camera,
+    }) = &args.snap
+    {
         let state = simulated::read_state(file)?;
-        simulated::snap(&state, file, path, &RenderOptions::default())?;
+        simulated::snap(&state, file, *camera, path, &RenderOptions::default())?;
         return Ok(ExitCode::SUCCESS);
     }
     let Some(socket) = &args.lola else {

@@ -6,6 +6,8 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use crate::model::CameraId;
+
 /// A picture as taken: the encoded image and its extension (`png` or `jpg`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Picture {
@@ -20,8 +22,9 @@ pub struct Picture {
 pub enum CameraError {
     /// The `--camera` text is not a known kind.
     #[error(
-        "--camera '{0}': expected 'v4l2:DEVICE' (e.g. v4l2:/dev/video-bottom) or \
-         'command:CMD {{path}}' (CMD writes a PNG or JPEG to {{path}})"
+        "--camera '{0}': expected [lower=|upper=]SPEC, SPEC 'v4l2:DEVICE' (e.g. \
+         v4l2:/dev/video-bottom) or 'command:CMD {{path}}' (CMD writes a PNG or JPEG to \
+         {{path}}; {{camera}} is the camera's name)"
     )]
     Spec(String),
     /// V4L2 was asked for but this build lacks it.
@@ -57,6 +60,9 @@ pub enum CameraError {
         /// What is wrong.
         message: String,
     },
+    /// No camera was given for a capture's camera.
+    #[error("no {0} camera given (--camera {0}=SPEC)")]
+    Missing(crate::model::CameraId),
     /// The run stopped while the picture was being taken.
     #[error("camera command '{0}' stopped: the run is over")]
     Cancelled(String),
@@ -103,6 +109,21 @@ pub enum CameraSpec {
 }
 
 impl CameraSpec {
+    /// Parses `lower=SPEC`, `upper=SPEC` or `SPEC` alone (the lower camera).
+    pub fn parse_named(text: &str) -> Result<(CameraId, CameraSpec), CameraError> {
+        for camera in CameraId::ALL {
+            if let Some(spec) = text
+                .strip_prefix(camera.name())
+                .and_then(|t| t.strip_prefix('='))
+            {
+                return CameraSpec::parse(spec)
+                    .map(|s| (camera, s))
+                    .map_err(|_| CameraError::Spec(text.into()));
+            }
+        }
+        CameraSpec::parse(text).map(|s| (CameraId::Lower, s))
+    }
+
     /// Parses `v4l2:DEVICE` or `command:CMD` (CMD must contain `{path}`).
     pub fn parse(text: &str) -> Result<CameraSpec, CameraError> {
         if let Some(device) = text.strip_prefix("v4l2:") {
@@ -458,6 +479,26 @@ mod tests {
         );
         for bad in ["", "v4l2:", "command:grab", "usb:0"] {
             assert!(CameraSpec::parse(bad).is_err(), "{bad}");
+        }
+        assert_eq!(
+            CameraSpec::parse_named("upper=v4l2:/dev/video-top").unwrap(),
+            (CameraId::Upper, CameraSpec::V4l2("/dev/video-top".into()))
+        );
+        assert_eq!(
+            CameraSpec::parse_named("lower=command:grab {camera} {path}").unwrap(),
+            (
+                CameraId::Lower,
+                CameraSpec::Command("grab {camera} {path}".into())
+            )
+        );
+        assert_eq!(
+            CameraSpec::parse_named("command:grab a=b {path}")
+                .unwrap()
+                .0,
+            CameraId::Lower
+        );
+        for bad in ["upper=", "upper=usb:0", "top=v4l2:/dev/video-top"] {
+            assert!(CameraSpec::parse_named(bad).is_err(), "{bad}");
         }
     }
 

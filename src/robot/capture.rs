@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc;
 
 use crate::dataset::{self, Dataset, DatasetError, Location};
-use crate::model::{Joint, JointAngles, Model, Side};
+use crate::model::{CameraId, Joint, JointAngles, Model, Side};
 use crate::output::{WriteError, WriteOptions, write_atomic};
 use crate::plan::collision::{self, BodyModel};
 use crate::plan::feasible::head_pitch_limits;
@@ -64,6 +64,8 @@ pub struct PlanRow {
     pub id: u64,
     /// The leg whose board is in view.
     pub side: Side,
+    /// The camera that takes the picture (the plan's `camera` column; lower when absent).
+    pub camera: CameraId,
     /// The joint angles to command (rad).
     pub joints: JointAngles,
     /// The row's line in the plan file.
@@ -113,13 +115,15 @@ pub enum CaptureError {
     FirstReading(ReadingFault),
 }
 
-/// Reads a plan (`capture,board,HeadYaw,…`; other columns ignored), keeping the ids.
+/// Reads a plan (`capture,board,HeadYaw,…`, an optional `camera`; other columns ignored),
+/// keeping the ids.
 pub fn read_plan(path: &Path) -> Result<Vec<PlanRow>, CaptureError> {
     Ok(dataset::read_captures(path)?
         .into_iter()
         .map(|c| PlanRow {
             id: c.id,
             side: c.side,
+            camera: c.camera,
             joints: c.joints,
             line: c.line,
         })
@@ -176,7 +180,8 @@ pub fn unsafe_posture(
 }
 
 /// Refuses a plan with a row that is not safe to execute (see [`unsafe_posture`]), naming
-/// the file, the line and the joint; also an empty plan and repeated ids.
+/// the file, the line and the joint; also an empty plan, and an upper-camera row when
+/// `model` has no upper camera (`[upper_camera]` of `dataset.toml`).
 pub fn check_plan(
     path: &Path,
     model: &Model,
@@ -190,6 +195,16 @@ pub fn check_plan(
         });
     }
     for row in rows {
+        if row.camera == CameraId::Upper && model.upper_camera.is_none() {
+            return Err(CaptureError::Unsafe {
+                at: Location::line(path, row.line).field("camera"),
+                message: format!(
+                    "capture {} is for the upper camera, but the robot's dataset.toml has no \
+                     [upper_camera] table (its intrinsics)",
+                    row.id
+                ),
+            });
+        }
         if let Some((field, message)) = unsafe_posture(model, &row.joints, margin) {
             let mut at = Location::line(path, row.line);
             if !field.is_empty() {
@@ -221,11 +236,20 @@ pub const PLAN_CSV: &str = "plan.csv";
 /// differ by far more.
 pub const RESUME_TOLERANCE: f64 = 0.035;
 
-/// The header of the `captures.csv` that capture writes: the dataset's columns, then the
-/// quality columns `spread_deg` (largest standard deviation of a joint's readings around
-/// the picture) and `frames` (readings averaged).
+/// The header of the `captures.csv` that capture writes: the dataset's columns (with
+/// `camera`), then the quality columns `spread_deg` (largest standard deviation of a joint's
+/// readings around the picture) and `frames` (readings averaged).
 pub fn captures_header() -> String {
+    captures_header_with(true)
+}
+
+/// [`captures_header`], with the `camera` column or (as capture wrote lower-camera datasets
+/// before it had one) without.
+fn captures_header_with(camera: bool) -> String {
     let mut out = String::from("capture,board,image");
+    if camera {
+        out.push_str(",camera");
+    }
     for j in Joint::ALL {
         out.push(',');
         out.push_str(j.name());
@@ -299,7 +323,9 @@ impl DatasetOut {
         let text =
             std::fs::read_to_string(&path).map_err(|e| DatasetError::io(&path, "read", e))?;
         let mut lines = text.lines();
-        if lines.next().map(str::trim) != Some(captures_header().as_str()) {
+        let header = lines.next().map(str::trim);
+        let with_camera = header == Some(captures_header().as_str());
+        if !with_camera && header != Some(captures_header_with(false).as_str()) {
             return Err(CaptureError::Dataset(DatasetError::invalid(
                 Location::line(&path, 1),
                 "is not a captures.csv that naocalib capture wrote (its header differs); \
@@ -316,7 +342,8 @@ impl DatasetOut {
                 Some(image) => match std::fs::read(&image) {
                     Err(e) => Some(format!("{}: {e}", image.display())),
                     Ok(bytes) => {
-                        check_picture(&bytes, ds.model.camera.width, ds.model.camera.height)
+                        let size = ds.model.intrinsics(c.camera);
+                        check_picture(&bytes, size.width, size.height)
                             .err()
                             .map(|m| format!("{} {m}", image.display()))
                     }
@@ -337,7 +364,16 @@ impl DatasetOut {
                     .and_then(|id| id.trim().parse::<u64>().ok())
                     .is_some_and(|id| done.contains(&id))
             })
-            .map(str::to_string)
+            .map(|l| {
+                if with_camera {
+                    l.to_string()
+                } else {
+                    // A row of a dataset without the column: capture,board,image,…
+                    let mut fields: Vec<&str> = l.split(',').collect();
+                    fields.insert(3.min(fields.len()), CameraId::Lower.name());
+                    fields.join(",")
+                }
+            })
             .collect();
         let out = DatasetOut {
             dir: dir.to_path_buf(),
@@ -345,7 +381,7 @@ impl DatasetOut {
             done,
             retake,
         };
-        if !out.retake.is_empty() {
+        if !out.retake.is_empty() || !with_camera {
             out.write_captures(true)?;
         }
         Ok((out, ds.model))
@@ -391,11 +427,14 @@ impl DatasetOut {
         )
     }
 
-    /// Writes capture `id`: its image, then `captures.csv` with its row added.
+    /// Writes capture `id` (of the board on `side`, by `camera`): its image, then
+    /// `captures.csv` with its row added.
+    #[allow(clippy::too_many_arguments)] // one row of captures.csv
     pub fn add(
         &mut self,
         id: u64,
         side: Side,
+        camera: CameraId,
         picture: &Picture,
         joints: &JointAngles,
         spread: f64,
@@ -408,7 +447,7 @@ impl DatasetOut {
             &picture.bytes,
             &WriteOptions::new(true),
         )?;
-        let mut row = format!("{id},{},{image}", side.name());
+        let mut row = format!("{id},{},{image},{}", side.name(), camera.name());
         for j in Joint::ALL {
             row.push_str(&format!(",{}", joints.get(j)));
         }
@@ -440,6 +479,7 @@ fn check_same_plan(
         let same_row = |a: &PlanRow, b: &PlanRow| {
             a.id == b.id
                 && a.side == b.side
+                && a.camera == b.camera
                 && Joint::ALL
                     .iter()
                     .all(|&j| (a.joints.get(j) - b.joints.get(j)).abs() <= 1e-9)
@@ -472,14 +512,17 @@ fn check_same_plan(
                 dir.display()
             )));
         };
-        if row.side != c.side {
+        if row.side != c.side || row.camera != c.camera {
             return Err(differs(format!(
-                "line {}: capture {} is of the {} board, in {} of the {}",
+                "line {}: capture {} is of the {} board by the {} camera, in {} of the {} \
+                 by the {}",
                 row.line,
                 c.id,
                 row.side.name(),
+                row.camera.name(),
                 dir.display(),
-                c.side.name()
+                c.side.name(),
+                c.camera.name()
             )));
         }
         if let Some(j) = Joint::ALL
@@ -579,10 +622,11 @@ enum Stance {
 
 /// Jobs of the worker thread that owns the camera and the dataset.
 enum Job {
-    Take(u64),
+    Take(u64, CameraId),
     Store {
         id: u64,
         side: Side,
+        camera: CameraId,
         picture: Picture,
         joints: JointAngles,
         spread: f64,
@@ -606,34 +650,44 @@ struct Worker {
 }
 
 impl Worker {
-    /// The worker of `camera`, whose pictures must be `size` (width, height) pixels.
+    /// The worker of `cameras`, each with the size (width, height) its pictures must have.
     fn spawn(
-        mut camera: Box<dyn Camera>,
-        size: (u32, u32),
+        mut cameras: Vec<(CameraId, Box<dyn Camera>, (u32, u32))>,
         mut out: DatasetOut,
         scratch: PathBuf,
     ) -> Worker {
         let (jobs, rx) = mpsc::channel::<Job>();
         let (tx, done) = mpsc::channel::<Done>();
-        let cancel = camera.cancel_flag().into_iter().collect();
+        let cancel = cameras
+            .iter()
+            .filter_map(|(_, camera, _)| camera.cancel_flag())
+            .collect();
         let handle = std::thread::spawn(move || {
             for job in rx {
                 let result = match job {
-                    Job::Take(id) => Done::Taken(camera.take(&scratch).and_then(|picture| {
-                        check_picture(&picture.bytes, size.0, size.1)
-                            .map(|_| picture)
-                            .map_err(|message| CameraError::Unreadable { id, message })
-                    })),
+                    Job::Take(id, which) => {
+                        Done::Taken(match cameras.iter_mut().find(|(c, _, _)| *c == which) {
+                            None => Err(CameraError::Missing(which)),
+                            Some((_, camera, (w, h))) => {
+                                camera.take(&scratch).and_then(|picture| {
+                                    check_picture(&picture.bytes, *w, *h)
+                                        .map(|_| picture)
+                                        .map_err(|message| CameraError::Unreadable { id, message })
+                                })
+                            }
+                        })
+                    }
                     Job::Store {
                         id,
                         side,
+                        camera,
                         picture,
                         joints,
                         spread,
                         frames,
                     } => Done::Stored(
                         id,
-                        out.add(id, side, &picture, &joints, spread, frames)
+                        out.add(id, side, camera, &picture, &joints, spread, frames)
                             .map(|()| out.len()),
                     ),
                 };
@@ -941,7 +995,7 @@ impl Runner<'_> {
                 return Ok(outcome);
             }
         }
-        worker.send(Job::Take(row.id));
+        worker.send(Job::Take(row.id, row.camera));
         let mut readings = Readings::default();
         let mut picture = None;
         let mut after = 0u32;
@@ -972,6 +1026,7 @@ impl Runner<'_> {
         worker.send(Job::Store {
             id: row.id,
             side: row.side,
+            camera: row.camera,
             picture: picture.expect("taken"),
             joints: readings.mean(),
             spread: readings.spread(),
@@ -1020,7 +1075,8 @@ fn blind_ramp_down(link: &mut dyn Link, last: ActuatorMessage, options: &MotionO
     link.drain();
 }
 
-/// Runs the plan `rows` on the robot behind `link`, writing into `out`: ramps the
+/// Runs the plan `rows` on the robot behind `link`, taking each row's picture with its
+/// camera of `cameras` (each row's camera must be there), writing into `out`: ramps the
 /// stiffness up from what the robot reports, holding the posture it first reports, visits every row not yet in `out` (skipping
 /// obstructed stances, resting while motors are hot), and at the end, on `stop` and on any
 /// fault it can still command, returns to rest and ramps the stiffness down.
@@ -1030,7 +1086,7 @@ pub fn run(
     model: &Model,
     rows: &[PlanRow],
     out: DatasetOut,
-    camera: Box<dyn Camera>,
+    cameras: Vec<(CameraId, Box<dyn Camera>)>,
     link: &mut dyn Link,
     options: &CaptureOptions,
     stop: &AtomicBool,
@@ -1046,10 +1102,30 @@ pub fn run(
     }
     let already = out.len();
     let todo: Vec<PlanRow> = rows.iter().filter(|r| !out.has(r.id)).copied().collect();
+    if let Some(row) = todo
+        .iter()
+        .find(|r| !cameras.iter().any(|(c, _)| *c == r.camera))
+    {
+        return Err(CaptureError::Options(format!(
+            "capture {} (plan line {}) is for the {} camera, and no {} camera is given \
+             (--camera {}=SPEC); nothing was moved",
+            row.id,
+            row.line,
+            row.camera.name(),
+            row.camera.name(),
+            row.camera.name()
+        )));
+    }
     let scratch = tempfile::tempdir()
         .map_err(|e| CaptureError::Dataset(DatasetError::io(Path::new("/tmp"), "create", e)))?;
-    let size = (model.camera.width, model.camera.height);
-    let mut worker = Worker::spawn(camera, size, out, scratch.path().to_path_buf());
+    let cameras = cameras
+        .into_iter()
+        .map(|(id, camera)| {
+            let size = model.intrinsics(id);
+            (id, camera, (size.width, size.height))
+        })
+        .collect();
+    let mut worker = Worker::spawn(cameras, out, scratch.path().to_path_buf());
     let mut report = Report {
         taken: Vec::new(),
         skipped: Vec::new(),

@@ -28,13 +28,21 @@ pub(crate) struct Bench {
 
 impl Bench {
     pub(crate) fn new() -> Bench {
+        Bench::with_model(Model::default())
+    }
+
+    /// A bench whose robot is `model` (its dataset.toml).
+    pub(crate) fn with_model(model: Model) -> Bench {
         let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path().to_path_buf();
         let cfg = dir.join("cfg");
-        Dataset::new(&cfg, Model::default())
-            .write(&cfg, false)
-            .unwrap();
+        Dataset::new(&cfg, model).write(&cfg, false).unwrap();
         Bench { _tmp: tmp, dir }
+    }
+
+    /// The scratch directory.
+    pub(crate) fn dir(&self) -> &Path {
+        &self.dir
     }
 
     pub(crate) fn config(&self) -> PathBuf {
@@ -169,7 +177,7 @@ pub(crate) fn plan_file(path: &Path, n: usize, seed: u64) -> Vec<PlannedCapture>
 
 /// `naocalib plan --captures n --families FAMILIES` for the bench's robot into `path`.
 #[cfg(feature = "detect")]
-fn designed_plan(
+pub(crate) fn designed_plan(
     b: &Bench,
     path: &Path,
     n: usize,
