@@ -341,7 +341,9 @@ fn both_cameras_end_to_end_recover_the_robots_truth() {
     let robot = b.robot(
         "a.sock",
         "a.csv",
-        &["--speed", "0", "--truth", truth_arg.to_str().unwrap()],
+        // Paced (10× real time), so that a busy machine does not starve it into LoLA's
+        // silence limit.
+        &["--speed", "10", "--truth", truth_arg.to_str().unwrap()],
     );
     let snap = format!(
         "command:'{}' simulate-robot snap {{path}} --state '{}' --camera {{camera}}",
