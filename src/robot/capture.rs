@@ -639,6 +639,9 @@ enum Done {
     Stored(u64, Result<usize, CaptureError>),
 }
 
+/// A camera with the size (width, height) its pictures must have.
+type SizedCamera = (CameraId, Box<dyn Camera>, (u32, u32));
+
 /// The worker: takes pictures and writes captures while the main loop keeps answering
 /// LoLA every cycle.
 struct Worker {
@@ -651,11 +654,7 @@ struct Worker {
 
 impl Worker {
     /// The worker of `cameras`, each with the size (width, height) its pictures must have.
-    fn spawn(
-        mut cameras: Vec<(CameraId, Box<dyn Camera>, (u32, u32))>,
-        mut out: DatasetOut,
-        scratch: PathBuf,
-    ) -> Worker {
+    fn spawn(mut cameras: Vec<SizedCamera>, mut out: DatasetOut, scratch: PathBuf) -> Worker {
         let (jobs, rx) = mpsc::channel::<Job>();
         let (tx, done) = mpsc::channel::<Done>();
         let cancel = cameras
