@@ -18,12 +18,14 @@ use super::options::within;
 
 #[derive(Debug, Args)]
 pub struct CaptureArgs {
-    /// The stance schedule (`naocalib plan`'s CSV: capture,board,HeadYaw,…,RAnkleRoll).
+    /// The stance schedule (`naocalib plan`'s CSV: capture,board,HeadYaw,…,RAnkleRoll and
+    /// an optional camera column, lower or upper).
     plan: PathBuf,
     /// The dataset directory to write (dataset.toml, captures.csv, images/).
     out: PathBuf,
-    /// The robot's dataset.toml (lower camera intrinsics, sandals, geometry), copied into
-    /// OUT; with --resume, OUT's own is used (and this one must agree).
+    /// The robot's dataset.toml (camera intrinsics, [upper_camera] for upper rows, sandals,
+    /// geometry), copied into OUT; with --resume, OUT's own is used (and this one must
+    /// agree).
     #[arg(long, value_name = "DATASET_TOML")]
     config: Option<PathBuf>,
     /// LoLA's socket.
