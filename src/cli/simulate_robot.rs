@@ -1,5 +1,5 @@
 //! `naocalib simulate-robot`: a simulated NAO V6 lying on its back that serves LoLA, and
-//! `simulate-robot snap`, its lower camera (for `capture --camera 'command:…'`).
+//! `simulate-robot snap`, its cameras (for `capture --camera 'lower=command:…'`).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -9,7 +9,7 @@ use clap::{Args, Subcommand};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use naocalib::model::{Family, Joint, JointAngles, Model, PARAMETER_COUNT};
+use naocalib::model::{CameraId, Family, Joint, JointAngles, Model, PARAMETER_COUNT};
 use naocalib::robot::simulated::{self, Faults, RobotOptions};
 use naocalib::sim::render::RenderOptions;
 
@@ -61,21 +61,29 @@ pub struct SimulateRobotArgs {
     /// Fault: send a message that does not parse in this cycle.
     #[arg(long, value_name = "CYCLE")]
     garbage_at: Option<u64>,
-    /// Serve this many clients one after the other before exiting.
-    #[arg(long, default_value_t = 1)]
-    clients: usize,
+    /// Serve this many clients one after the other before exiting (at least 1).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    clients: u32,
 }
 
 #[derive(Debug, Subcommand)]
 enum SnapCommand {
-    /// Render the lower camera's view of a simulated robot into PATH (PNG).
+    /// Render a camera's view of a simulated robot into PATH (PNG).
     Snap {
         /// The picture to write.
         path: PathBuf,
         /// The state file the robot writes (`--state`).
         #[arg(long, value_name = "FILE")]
         state: PathBuf,
+        /// The camera: lower or upper (which needs [upper_camera] in the robot's
+        /// dataset.toml).
+        #[arg(long, default_value = "lower", value_parser = camera_id)]
+        camera: CameraId,
     },
+}
+
+fn camera_id(name: &str) -> Result<CameraId, String> {
+    CameraId::from_name(name).ok_or_else(|| format!("'{name}': expected lower or upper"))
 }
 
 fn joint(name: &str) -> Result<Joint> {
@@ -87,9 +95,14 @@ fn joint(name: &str) -> Result<Joint> {
 
 /// Runs `naocalib simulate-robot`.
 pub fn run(args: &SimulateRobotArgs) -> Result<ExitCode> {
-    if let Some(SnapCommand::Snap { path, state }) = &args.snap {
-        let state = simulated::read_state(state)?;
-        simulated::snap(&state, path, &RenderOptions::default())?;
+    if let Some(SnapCommand::Snap {
+        path,
+        state: file,
+        camera,
+    }) = &args.snap
+    {
+        let state = simulated::read_state(file)?;
+        simulated::snap(&state, file, *camera, path, &RenderOptions::default())?;
         return Ok(ExitCode::SUCCESS);
     }
     let Some(socket) = &args.lola else {
@@ -126,8 +139,20 @@ pub fn run(args: &SimulateRobotArgs) -> Result<ExitCode> {
             let deg: f64 = deg
                 .trim()
                 .parse()
-                .map_err(|_| anyhow::anyhow!("--block: '{deg}' is not a number of degrees"))?;
-            Some((joint(name.trim())?, deg.to_radians()))
+                .ok()
+                .filter(|d: &f64| d.is_finite())
+                .ok_or_else(|| anyhow::anyhow!("--block: '{deg}' is not a number of degrees"))?;
+            let joint = joint(name.trim())?;
+            let (lo, hi) = joint.limits();
+            if !(lo..=hi).contains(&deg.to_radians()) {
+                bail!(
+                    "--block: {deg}° is outside {}'s range {:.1}° … {:.1}°",
+                    joint.name(),
+                    lo.to_degrees(),
+                    hi.to_degrees()
+                );
+            }
+            Some((joint, deg.to_radians()))
         }
         None => None,
     };
@@ -156,7 +181,7 @@ pub fn run(args: &SimulateRobotArgs) -> Result<ExitCode> {
             garbage_at: args.garbage_at,
             drop_on_signal: args.drop_on_sigusr1,
         },
-        clients: args.clients,
+        clients: args.clients as usize,
         seed: args.seed,
     };
     let cycles = simulated::serve(socket, &options)?;

@@ -2,7 +2,11 @@
 //! `v4l2` feature) or any command that writes a PNG or JPEG (`command:CMD {path}`).
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
+
+use crate::model::CameraId;
 
 /// A picture as taken: the encoded image and its extension (`png` or `jpg`).
 #[derive(Debug, Clone, PartialEq)]
@@ -18,8 +22,9 @@ pub struct Picture {
 pub enum CameraError {
     /// The `--camera` text is not a known kind.
     #[error(
-        "--camera '{0}': expected 'v4l2:DEVICE' (e.g. v4l2:/dev/video-bottom) or \
-         'command:CMD {{path}}' (CMD writes a PNG or JPEG to {{path}})"
+        "--camera '{0}': expected [lower=|upper=]SPEC, SPEC 'v4l2:DEVICE' (e.g. \
+         v4l2:/dev/video-bottom) or 'command:CMD {{path}}' (CMD writes a PNG or JPEG to \
+         {{path}}; {{camera}} is the camera's name)"
     )]
     Spec(String),
     /// V4L2 was asked for but this build lacks it.
@@ -45,8 +50,22 @@ pub enum CameraError {
         /// The command run.
         command: String,
         /// The limit (s).
-        seconds: u64,
+        seconds: f64,
     },
+    /// A picture that does not decode or does not have the camera's size.
+    #[error("the picture of capture {id} {message}")]
+    Unreadable {
+        /// The capture.
+        id: u64,
+        /// What is wrong.
+        message: String,
+    },
+    /// No camera was given for a capture's camera.
+    #[error("no {0} camera given (--camera {0}=SPEC)")]
+    Missing(crate::model::CameraId),
+    /// The run stopped while the picture was being taken.
+    #[error("camera command '{0}' stopped: the run is over")]
+    Cancelled(String),
     /// The picture is not a PNG or JPEG.
     #[error("{}: {message}", path.display())]
     Image {
@@ -72,6 +91,12 @@ pub enum CameraError {
 pub trait Camera: Send {
     /// Takes a picture now; `scratch` is a directory for temporary files.
     fn take(&mut self, scratch: &Path) -> Result<Picture, CameraError>;
+
+    /// A flag that, once set, makes a [`Camera::take`] under way give up at once (and
+    /// every later one fail), when the camera can be interrupted.
+    fn cancel_flag(&self) -> Option<Arc<AtomicBool>> {
+        None
+    }
 }
 
 /// What `--camera` names.
@@ -84,6 +109,21 @@ pub enum CameraSpec {
 }
 
 impl CameraSpec {
+    /// Parses `lower=SPEC`, `upper=SPEC` or `SPEC` alone (the lower camera).
+    pub fn parse_named(text: &str) -> Result<(CameraId, CameraSpec), CameraError> {
+        for camera in CameraId::ALL {
+            if let Some(spec) = text
+                .strip_prefix(camera.name())
+                .and_then(|t| t.strip_prefix('='))
+            {
+                return CameraSpec::parse(spec)
+                    .map(|s| (camera, s))
+                    .map_err(|_| CameraError::Spec(text.into()));
+            }
+        }
+        CameraSpec::parse(text).map(|s| (CameraId::Lower, s))
+    }
+
     /// Parses `v4l2:DEVICE` or `command:CMD` (CMD must contain `{path}`).
     pub fn parse(text: &str) -> Result<CameraSpec, CameraError> {
         if let Some(device) = text.strip_prefix("v4l2:") {
@@ -101,13 +141,16 @@ impl CameraSpec {
         Err(CameraError::Spec(text.into()))
     }
 
-    /// Opens the camera.
-    pub fn open(&self, timeout: Duration) -> Result<Box<dyn Camera>, CameraError> {
+    /// Opens the camera named `name` (`lower` or `upper`: what `{camera}` stands for in a
+    /// command).
+    pub fn open(&self, name: &str, timeout: Duration) -> Result<Box<dyn Camera>, CameraError> {
         match self {
             CameraSpec::Command(command) => Ok(Box::new(CommandCamera {
                 command: command.clone(),
+                name: name.to_string(),
                 timeout,
                 count: 0,
+                cancel: Arc::new(AtomicBool::new(false)),
             })),
             #[cfg(feature = "v4l2")]
             CameraSpec::V4l2(device) => Ok(Box::new(v4l2::V4l2Camera::open(
@@ -136,13 +179,27 @@ fn shell_quote(text: &str) -> String {
     format!("'{}'", text.replace('\'', r"'\''"))
 }
 
-/// `command:CMD {path}`: runs CMD with `sh -c`, `{path}` replaced by a fresh file name, and
-/// reads the PNG or JPEG it wrote there.
+/// `command:CMD {path}`: runs CMD with `sh -c`, `{path}` replaced by a fresh file name and
+/// `{camera}` by the camera's name (`lower`, `upper`), and reads the PNG or JPEG it wrote
+/// there. CMD runs in a process group of its own, which is
+/// killed as a whole when it takes too long or the run stops.
 #[derive(Debug)]
 pub struct CommandCamera {
     command: String,
+    name: String,
     timeout: Duration,
     count: u64,
+    cancel: Arc<AtomicBool>,
+}
+
+/// Kills the process group `child` leads, and reaps `child`.
+fn kill_group(child: &mut std::process::Child) {
+    // The group's id is the child's pid (`process_group(0)`).
+    unsafe {
+        libc::kill(-(child.id() as libc::pid_t), libc::SIGKILL);
+    }
+    let _ = child.kill();
+    let _ = child.wait();
 }
 
 impl Camera for CommandCamera {
@@ -152,10 +209,16 @@ impl Camera for CommandCamera {
         let _ = std::fs::remove_file(&path);
         let line = self
             .command
-            .replace("{path}", &shell_quote(&path.to_string_lossy()));
+            .replace("{path}", &shell_quote(&path.to_string_lossy()))
+            .replace("{camera}", &shell_quote(&self.name));
+        if self.cancel.load(Ordering::Relaxed) {
+            return Err(CameraError::Cancelled(self.command.clone()));
+        }
+        use std::os::unix::process::CommandExt as _;
         let mut child = std::process::Command::new("sh")
             .arg("-c")
             .arg(&line)
+            .process_group(0)
             .stdin(std::process::Stdio::null())
             .stdout(std::process::Stdio::null())
             .stderr(std::process::Stdio::piped())
@@ -165,16 +228,23 @@ impl Camera for CommandCamera {
             if let Some(status) = child.try_wait()? {
                 break status;
             }
+            if self.cancel.load(Ordering::Relaxed) {
+                kill_group(&mut child);
+                return Err(CameraError::Cancelled(self.command.clone()));
+            }
             if start.elapsed() > self.timeout {
-                let _ = child.kill();
-                let _ = child.wait();
+                kill_group(&mut child);
                 return Err(CameraError::Timeout {
                     command: self.command.clone(),
-                    seconds: self.timeout.as_secs(),
+                    seconds: self.timeout.as_secs_f64(),
                 });
             }
             std::thread::sleep(Duration::from_millis(2));
         };
+        // Whatever CMD left running in its group goes with it.
+        unsafe {
+            libc::kill(-(child.id() as libc::pid_t), libc::SIGKILL);
+        }
         if !status.success() {
             let mut stderr = String::new();
             if let Some(mut e) = child.stderr.take() {
@@ -193,24 +263,63 @@ impl Camera for CommandCamera {
             message: format!("the camera command wrote no picture here: {e}"),
         })?;
         let _ = std::fs::remove_file(&path);
+        // Only the kind here: the run decodes every picture in full and checks its size.
         let extension = image_kind(&bytes).ok_or_else(|| CameraError::Image {
-            path: path.clone(),
+            path,
             message: "is neither a PNG nor a JPEG".into(),
         })?;
-        if extension == "png" {
-            check_png(&bytes).map_err(|message| CameraError::Image { path, message })?;
-        }
         Ok(Picture { bytes, extension })
+    }
+
+    fn cancel_flag(&self) -> Option<Arc<AtomicBool>> {
+        Some(self.cancel.clone())
     }
 }
 
-/// Checks that a PNG decodes (header and image data).
-fn check_png(bytes: &[u8]) -> Result<(), String> {
-    let decoder = png::Decoder::new(std::io::Cursor::new(bytes));
-    let mut reader = decoder.read_info().map_err(|e| e.to_string())?;
-    let mut buf = vec![0; reader.output_buffer_size().ok_or("PNG too large")?];
-    reader.next_frame(&mut buf).map_err(|e| e.to_string())?;
-    Ok(())
+/// Decodes a PNG or JPEG image in full; its extension and size (width, height).
+pub fn decode_size(bytes: &[u8]) -> Result<(&'static str, (u32, u32)), String> {
+    match image_kind(bytes) {
+        Some("png") => {
+            let decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+            let mut reader = decoder
+                .read_info()
+                .map_err(|e| format!("is not a readable PNG: {e}"))?;
+            let size = reader
+                .output_buffer_size()
+                .ok_or("is not a readable PNG: too large")?;
+            let mut buf = vec![0; size];
+            let info = reader
+                .next_frame(&mut buf)
+                .map_err(|e| format!("is not a readable PNG: {e}"))?;
+            Ok(("png", (info.width, info.height)))
+        }
+        Some(_) => {
+            let mut decoder = jpeg_decoder::Decoder::new(std::io::Cursor::new(bytes));
+            let pixels = decoder
+                .decode()
+                .map_err(|e| format!("is not a readable JPEG: {e}"))?;
+            let info = decoder.info().ok_or("is not a readable JPEG: no frame")?;
+            let (w, h) = (info.width as usize, info.height as usize);
+            if pixels.len() < w * h {
+                return Err("is not a readable JPEG: its image data is short".into());
+            }
+            Ok(("jpg", (info.width.into(), info.height.into())))
+        }
+        None => Err("is neither a PNG nor a JPEG".into()),
+    }
+}
+
+/// Checks that a picture decodes in full and has the camera's size (`width`×`height`
+/// from the dataset's camera intrinsics): what `detect` will need of it.
+pub fn check_picture(bytes: &[u8], width: u32, height: u32) -> Result<&'static str, String> {
+    let (extension, size) = decode_size(bytes)?;
+    if size != (width, height) {
+        return Err(format!(
+            "is {}×{} pixels; the camera's intrinsics are for {width}×{height}",
+            size.0, size.1
+        ));
+    }
+    Ok(extension)
 }
 
 /// The V6's lower camera through Video4Linux2 (the `v4l` crate).
@@ -371,6 +480,26 @@ mod tests {
         for bad in ["", "v4l2:", "command:grab", "usb:0"] {
             assert!(CameraSpec::parse(bad).is_err(), "{bad}");
         }
+        assert_eq!(
+            CameraSpec::parse_named("upper=v4l2:/dev/video-top").unwrap(),
+            (CameraId::Upper, CameraSpec::V4l2("/dev/video-top".into()))
+        );
+        assert_eq!(
+            CameraSpec::parse_named("lower=command:grab {camera} {path}").unwrap(),
+            (
+                CameraId::Lower,
+                CameraSpec::Command("grab {camera} {path}".into())
+            )
+        );
+        assert_eq!(
+            CameraSpec::parse_named("command:grab a=b {path}")
+                .unwrap()
+                .0,
+            CameraId::Lower
+        );
+        for bad in ["upper=", "upper=usb:0", "top=v4l2:/dev/video-top"] {
+            assert!(CameraSpec::parse_named(bad).is_err(), "{bad}");
+        }
     }
 
     #[test]
@@ -384,7 +513,7 @@ mod tests {
         let src = dir.path().join("src.png");
         std::fs::write(&src, image.to_png().unwrap()).unwrap();
         let spec = CameraSpec::parse(&format!("command:cp '{}' {{path}}", src.display())).unwrap();
-        let mut camera = spec.open(Duration::from_secs(10)).unwrap();
+        let mut camera = spec.open("lower", Duration::from_secs(10)).unwrap();
         let picture = camera.take(dir.path()).unwrap();
         assert_eq!(picture.extension, "png");
         assert_eq!(picture.bytes, std::fs::read(&src).unwrap());
@@ -392,10 +521,16 @@ mod tests {
         let text = dir.path().join("x.txt");
         std::fs::write(&text, "hello").unwrap();
         let spec = CameraSpec::parse(&format!("command:cp '{}' {{path}}", text.display())).unwrap();
-        let e = spec.open(Duration::from_secs(10)).unwrap().take(dir.path());
+        let e = spec
+            .open("lower", Duration::from_secs(10))
+            .unwrap()
+            .take(dir.path());
         assert!(e.unwrap_err().to_string().contains("neither a PNG"));
         let spec = CameraSpec::parse("command:echo oops >&2; false {path}").unwrap();
-        let e = spec.open(Duration::from_secs(10)).unwrap().take(dir.path());
+        let e = spec
+            .open("lower", Duration::from_secs(10))
+            .unwrap()
+            .take(dir.path());
         assert!(e.unwrap_err().to_string().contains("oops"));
     }
 }

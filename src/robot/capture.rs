@@ -7,15 +7,16 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc;
 
-use crate::dataset::{self, Capture, Dataset, DatasetError, Location};
-use crate::model::{Joint, JointAngles, Model, Side};
+use crate::dataset::{self, Dataset, DatasetError, Location};
+use crate::model::{CameraId, Joint, JointAngles, Model, Side};
 use crate::output::{WriteError, WriteOptions, write_atomic};
 use crate::plan::collision::{self, BodyModel};
 use crate::plan::feasible::head_pitch_limits;
 
-use super::camera::{Camera, CameraError, Picture};
+use super::camera::{Camera, CameraError, Picture, check_picture};
 use super::lola::{self, ActuatorMessage, JOINTS, Link, LolaError, SensorMessage};
 use super::motion::{MotionOptions, Readings, Settle, SettleState};
+use super::plausible::{Believed, ReadingFault};
 use super::safety::{SafetyLimits, Verdict, Watch};
 
 /// How a capture run behaves.
@@ -63,6 +64,8 @@ pub struct PlanRow {
     pub id: u64,
     /// The leg whose board is in view.
     pub side: Side,
+    /// The camera that takes the picture (the plan's `camera` column; lower when absent).
+    pub camera: CameraId,
     /// The joint angles to command (rad).
     pub joints: JointAngles,
     /// The row's line in the plan file.
@@ -98,15 +101,29 @@ pub enum CaptureError {
     /// A motor went beyond a safety limit.
     #[error("{0}")]
     Safety(String),
+    /// The output directory already holds a dataset's file.
+    #[error(
+        "{}: exists; to go on with the dataset there use --resume, else choose another \
+         output directory", .0.display()
+    )]
+    Exists(PathBuf),
+    /// A joint reading is implausible (not finite, out of range, or a jump) and repeats.
+    #[error(transparent)]
+    Reading(ReadingFault),
+    /// LoLA's first message is implausible: nothing was commanded.
+    #[error("{0} in LoLA's first message; nothing was commanded")]
+    FirstReading(ReadingFault),
 }
 
-/// Reads a plan (`capture,board,HeadYaw,…`; other columns ignored), keeping the ids.
+/// Reads a plan (`capture,board,HeadYaw,…`, an optional `camera`; other columns ignored),
+/// keeping the ids.
 pub fn read_plan(path: &Path) -> Result<Vec<PlanRow>, CaptureError> {
     Ok(dataset::read_captures(path)?
         .into_iter()
         .map(|c| PlanRow {
             id: c.id,
             side: c.side,
+            camera: c.camera,
             joints: c.joints,
             line: c.line,
         })
@@ -163,7 +180,8 @@ pub fn unsafe_posture(
 }
 
 /// Refuses a plan with a row that is not safe to execute (see [`unsafe_posture`]), naming
-/// the file, the line and the joint; also an empty plan and repeated ids.
+/// the file, the line and the joint; also an empty plan, and an upper-camera row when
+/// `model` has no upper camera (`[upper_camera]` of `dataset.toml`).
 pub fn check_plan(
     path: &Path,
     model: &Model,
@@ -177,6 +195,16 @@ pub fn check_plan(
         });
     }
     for row in rows {
+        if row.camera == CameraId::Upper && model.upper_camera.is_none() {
+            return Err(CaptureError::Unsafe {
+                at: Location::line(path, row.line).field("camera"),
+                message: format!(
+                    "capture {} is for the upper camera, but the robot's dataset.toml has no \
+                     [upper_camera] table (its intrinsics)",
+                    row.id
+                ),
+            });
+        }
         if let Some((field, message)) = unsafe_posture(model, &row.joints, margin) {
             let mut at = Location::line(path, row.line);
             if !field.is_empty() {
@@ -188,20 +216,40 @@ pub fn check_plan(
     Ok(())
 }
 
-/// The dataset being written: `dataset.toml` once, then each capture's image and the whole
-/// `captures.csv` rewritten atomically after every capture.
+/// The dataset being written: `dataset.toml` and the plan (`plan.csv`, what `--resume`
+/// checks against) once, then each capture's image and the whole `captures.csv` rewritten
+/// atomically after every capture.
 #[derive(Debug)]
 pub struct DatasetOut {
     dir: PathBuf,
     rows: Vec<String>,
     done: BTreeSet<u64>,
+    retake: Vec<(u64, String)>,
 }
 
-/// The header of the `captures.csv` that capture writes: the dataset's columns, then the
-/// quality columns `spread_deg` (largest standard deviation of a joint's readings around
-/// the picture) and `frames` (readings averaged).
+/// The copy of the plan a run keeps in its output directory.
+pub const PLAN_CSV: &str = "plan.csv";
+
+/// How far (rad) a capture's logged angles may be from its plan row for `--resume` to
+/// accept the plan when the output keeps no copy of it: the readings of a settled stance lie
+/// within a degree of the command (sag under the load, encoder steps); another plan's rows
+/// differ by far more.
+pub const RESUME_TOLERANCE: f64 = 0.035;
+
+/// The header of the `captures.csv` that capture writes: the dataset's columns (with
+/// `camera`), then the quality columns `spread_deg` (largest standard deviation of a joint's
+/// readings around the picture) and `frames` (readings averaged).
 pub fn captures_header() -> String {
+    captures_header_with(true)
+}
+
+/// [`captures_header`], with the `camera` column or (as capture wrote lower-camera datasets
+/// before it had one) without.
+fn captures_header_with(camera: bool) -> String {
     let mut out = String::from("capture,board,image");
+    if camera {
+        out.push_str(",camera");
+    }
     for j in Joint::ALL {
         out.push(',');
         out.push_str(j.name());
@@ -211,10 +259,29 @@ pub fn captures_header() -> String {
 }
 
 impl DatasetOut {
-    /// Starts a new dataset in `dir` for `model` (joint angles raw LoLA readings); refuses
-    /// a directory that already holds dataset files.
-    pub fn create(dir: &Path, model: &Model) -> Result<DatasetOut, CaptureError> {
+    /// Refuses an output directory that holds a dataset's file (or a plan's copy).
+    pub fn check_new(dir: &Path) -> Result<(), CaptureError> {
+        for name in [
+            dataset::DATASET_TOML,
+            dataset::CAPTURES_CSV,
+            dataset::CORNERS_CSV,
+            dataset::TRUTH_TOML,
+            PLAN_CSV,
+        ] {
+            let path = dir.join(name);
+            if path.symlink_metadata().is_ok() {
+                return Err(CaptureError::Exists(path));
+            }
+        }
         dataset::check_writable(dir, false, false)?;
+        Ok(())
+    }
+
+    /// Starts a new dataset in `dir` for `model` (joint angles raw LoLA readings) with a
+    /// copy of the plan (`plan`, the file's bytes); refuses a directory that already holds
+    /// dataset files.
+    pub fn create(dir: &Path, model: &Model, plan: &[u8]) -> Result<DatasetOut, CaptureError> {
+        DatasetOut::check_new(dir)?;
         // dataset.toml as Dataset::write renders it (every value, `[joints] angles = "raw"`).
         let scratch = tempfile::tempdir().map_err(|e| DatasetError::io(dir, "write", e))?;
         let mut ds = Dataset::new(scratch.path(), *model);
@@ -228,43 +295,102 @@ impl DatasetOut {
             &toml,
             &WriteOptions::new(false),
         )?;
+        write_atomic(&dir.join(PLAN_CSV), plan, &WriteOptions::new(false))?;
         let out = DatasetOut {
             dir: dir.to_path_buf(),
             rows: Vec::new(),
             done: BTreeSet::new(),
+            retake: Vec::new(),
         };
         out.write_captures(false)?;
         Ok(out)
     }
 
-    /// Opens the dataset a run left in `dir` to go on with it; returns it with its model.
-    /// Refuses a dataset that capture did not write (another `captures.csv` header).
-    pub fn resume(dir: &Path) -> Result<(DatasetOut, Model), CaptureError> {
+    /// Opens the dataset a run left in `dir` to go on with the plan `rows` (read from
+    /// `plan`); returns it with its model. Refuses a dataset that capture did not write
+    /// (another `captures.csv` header) and one that another plan began: its `plan.csv`
+    /// differs from `rows`, or (without a `plan.csv`) a capture is not a row of `rows`, is
+    /// of the other board, or lies farther than [`RESUME_TOLERANCE`] from its row. A
+    /// capture whose picture is missing, does not decode or does not have the camera's size
+    /// is dropped, to be taken again ([`DatasetOut::retake`]).
+    pub fn resume(
+        dir: &Path,
+        plan: &Path,
+        rows: &[PlanRow],
+    ) -> Result<(DatasetOut, Model), CaptureError> {
         let ds = Dataset::load_without_corners(dir)?;
         let path = dir.join(dataset::CAPTURES_CSV);
         let text =
             std::fs::read_to_string(&path).map_err(|e| DatasetError::io(&path, "read", e))?;
         let mut lines = text.lines();
-        if lines.next().map(str::trim) != Some(captures_header().as_str()) {
+        let header = lines.next().map(str::trim);
+        let with_camera = header == Some(captures_header().as_str());
+        if !with_camera && header != Some(captures_header_with(false).as_str()) {
             return Err(CaptureError::Dataset(DatasetError::invalid(
                 Location::line(&path, 1),
                 "is not a captures.csv that naocalib capture wrote (its header differs); \
                  --resume goes on only with a run of capture",
             )));
         }
-        let rows: Vec<String> = lines
+        check_same_plan(dir, &ds, plan, rows)?;
+        // The captures whose pictures are fine; the others are taken again.
+        let mut retake = Vec::new();
+        let mut done = BTreeSet::new();
+        for c in &ds.captures {
+            let problem = match ds.image_path(c) {
+                None => Some("its row names no picture".to_string()),
+                Some(image) => match std::fs::read(&image) {
+                    Err(e) => Some(format!("{}: {e}", image.display())),
+                    Ok(bytes) => {
+                        let size = ds.model.intrinsics(c.camera);
+                        check_picture(&bytes, size.width, size.height)
+                            .err()
+                            .map(|m| format!("{} {m}", image.display()))
+                    }
+                },
+            };
+            match problem {
+                Some(p) => retake.push((c.id, p)),
+                None => {
+                    done.insert(c.id);
+                }
+            }
+        }
+        let kept: Vec<String> = lines
             .filter(|l| !l.trim().is_empty())
-            .map(str::to_string)
+            .filter(|l| {
+                l.split(',')
+                    .next()
+                    .and_then(|id| id.trim().parse::<u64>().ok())
+                    .is_some_and(|id| done.contains(&id))
+            })
+            .map(|l| {
+                if with_camera {
+                    l.to_string()
+                } else {
+                    // A row of a dataset without the column: capture,board,image,…
+                    let mut fields: Vec<&str> = l.split(',').collect();
+                    fields.insert(3.min(fields.len()), CameraId::Lower.name());
+                    fields.join(",")
+                }
+            })
             .collect();
-        let done = ds.captures.iter().map(|c: &Capture| c.id).collect();
-        Ok((
-            DatasetOut {
-                dir: dir.to_path_buf(),
-                rows,
-                done,
-            },
-            ds.model,
-        ))
+        let out = DatasetOut {
+            dir: dir.to_path_buf(),
+            rows: kept,
+            done,
+            retake,
+        };
+        if !out.retake.is_empty() || !with_camera {
+            out.write_captures(true)?;
+        }
+        Ok((out, ds.model))
+    }
+
+    /// The captures of the dataset resumed that are taken again, with the reason (their
+    /// picture is missing or unreadable).
+    pub fn retake(&self) -> &[(u64, String)] {
+        &self.retake
     }
 
     /// Whether capture `id` was taken.
@@ -301,11 +427,14 @@ impl DatasetOut {
         )
     }
 
-    /// Writes capture `id`: its image, then `captures.csv` with its row added.
+    /// Writes capture `id` (of the board on `side`, by `camera`): its image, then
+    /// `captures.csv` with its row added.
+    #[allow(clippy::too_many_arguments)] // one row of captures.csv
     pub fn add(
         &mut self,
         id: u64,
         side: Side,
+        camera: CameraId,
         picture: &Picture,
         joints: &JointAngles,
         spread: f64,
@@ -318,7 +447,7 @@ impl DatasetOut {
             &picture.bytes,
             &WriteOptions::new(true),
         )?;
-        let mut row = format!("{id},{},{image}", side.name());
+        let mut row = format!("{id},{},{image},{}", side.name(), camera.name());
         for j in Joint::ALL {
             row.push_str(&format!(",{}", joints.get(j)));
         }
@@ -328,6 +457,90 @@ impl DatasetOut {
         self.write_captures(true)?;
         Ok(())
     }
+}
+
+/// Refuses to resume the dataset `ds` in `dir` with another plan than the one it began
+/// with (see [`DatasetOut::resume`]).
+fn check_same_plan(
+    dir: &Path,
+    ds: &Dataset,
+    plan: &Path,
+    rows: &[PlanRow],
+) -> Result<(), CaptureError> {
+    let kept = dir.join(PLAN_CSV);
+    let differs = |message: String| {
+        CaptureError::Dataset(DatasetError::invalid(
+            Location::file(plan),
+            format!("{message}; --resume needs the plan the run began with"),
+        ))
+    };
+    if kept.symlink_metadata().is_ok() {
+        let before = read_plan(&kept)?;
+        let same_row = |a: &PlanRow, b: &PlanRow| {
+            a.id == b.id
+                && a.side == b.side
+                && a.camera == b.camera
+                && Joint::ALL
+                    .iter()
+                    .all(|&j| (a.joints.get(j) - b.joints.get(j)).abs() <= 1e-9)
+        };
+        if before.len() != rows.len() {
+            return Err(differs(format!(
+                "has {} rows, the plan {} began with {}",
+                rows.len(),
+                dir.display(),
+                before.len()
+            )));
+        }
+        if let Some((a, b)) = before.iter().zip(rows).find(|(a, b)| !same_row(a, b)) {
+            return Err(differs(format!(
+                "line {} (capture {}) differs from {} line {} (capture {})",
+                b.line,
+                b.id,
+                kept.display(),
+                a.line,
+                a.id
+            )));
+        }
+        return Ok(());
+    }
+    for c in &ds.captures {
+        let Some(row) = rows.iter().find(|r| r.id == c.id) else {
+            return Err(differs(format!(
+                "has no capture {} (in {})",
+                c.id,
+                dir.display()
+            )));
+        };
+        if row.side != c.side || row.camera != c.camera {
+            return Err(differs(format!(
+                "line {}: capture {} is of the {} board by the {} camera, in {} of the {} \
+                 by the {}",
+                row.line,
+                c.id,
+                row.side.name(),
+                row.camera.name(),
+                dir.display(),
+                c.side.name(),
+                c.camera.name()
+            )));
+        }
+        if let Some(j) = Joint::ALL
+            .into_iter()
+            .find(|&j| (row.joints.get(j) - c.joints.get(j)).abs() > RESUME_TOLERANCE)
+        {
+            return Err(differs(format!(
+                "line {}: capture {}'s {} is {:.2}°, in {} {:.2}°",
+                row.line,
+                c.id,
+                j.name(),
+                row.joints.get(j).to_degrees(),
+                dir.display(),
+                c.joints.get(j).to_degrees()
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// What happened during a run, as it happens.
@@ -409,10 +622,11 @@ enum Stance {
 
 /// Jobs of the worker thread that owns the camera and the dataset.
 enum Job {
-    Take,
+    Take(u64, CameraId),
     Store {
         id: u64,
         side: Side,
+        camera: CameraId,
         picture: Picture,
         joints: JointAngles,
         spread: f64,
@@ -425,6 +639,9 @@ enum Done {
     Stored(u64, Result<usize, CaptureError>),
 }
 
+/// A camera with the size (width, height) its pictures must have.
+type SizedCamera = (CameraId, Box<dyn Camera>, (u32, u32));
+
 /// The worker: takes pictures and writes captures while the main loop keeps answering
 /// LoLA every cycle.
 struct Worker {
@@ -432,26 +649,44 @@ struct Worker {
     done: mpsc::Receiver<Done>,
     handle: Option<std::thread::JoinHandle<DatasetOut>>,
     pending: usize,
+    cancel: Vec<std::sync::Arc<AtomicBool>>,
 }
 
 impl Worker {
-    fn spawn(mut camera: Box<dyn Camera>, mut out: DatasetOut, scratch: PathBuf) -> Worker {
+    /// The worker of `cameras`, each with the size (width, height) its pictures must have.
+    fn spawn(mut cameras: Vec<SizedCamera>, mut out: DatasetOut, scratch: PathBuf) -> Worker {
         let (jobs, rx) = mpsc::channel::<Job>();
         let (tx, done) = mpsc::channel::<Done>();
+        let cancel = cameras
+            .iter()
+            .filter_map(|(_, camera, _)| camera.cancel_flag())
+            .collect();
         let handle = std::thread::spawn(move || {
             for job in rx {
                 let result = match job {
-                    Job::Take => Done::Taken(camera.take(&scratch)),
+                    Job::Take(id, which) => {
+                        Done::Taken(match cameras.iter_mut().find(|(c, _, _)| *c == which) {
+                            None => Err(CameraError::Missing(which)),
+                            Some((_, camera, (w, h))) => {
+                                camera.take(&scratch).and_then(|picture| {
+                                    check_picture(&picture.bytes, *w, *h)
+                                        .map(|_| picture)
+                                        .map_err(|message| CameraError::Unreadable { id, message })
+                                })
+                            }
+                        })
+                    }
                     Job::Store {
                         id,
                         side,
+                        camera,
                         picture,
                         joints,
                         spread,
                         frames,
                     } => Done::Stored(
                         id,
-                        out.add(id, side, &picture, &joints, spread, frames)
+                        out.add(id, side, camera, &picture, &joints, spread, frames)
                             .map(|()| out.len()),
                     ),
                 };
@@ -466,6 +701,7 @@ impl Worker {
             done,
             handle: Some(handle),
             pending: 0,
+            cancel,
         }
     }
 
@@ -483,8 +719,11 @@ impl Worker {
         Some(done)
     }
 
-    /// Waits for the jobs sent and stops the thread.
+    /// Stops a picture under way, waits for the other jobs sent and stops the thread.
     fn finish(&mut self) -> Vec<Done> {
+        for flag in &self.cancel {
+            flag.store(true, Ordering::Relaxed);
+        }
         self.jobs = None;
         let mut out = Vec::new();
         while self.pending > 0 {
@@ -510,28 +749,31 @@ struct Runner<'a> {
     stop: &'a AtomicBool,
     watch: Watch,
     last: SensorMessage,
+    /// The readings believed ([`Believed`]).
+    believed: Believed,
     /// Positions of the joints naocalib does not move (arms, hands), as first read.
     base: [f32; JOINTS],
     /// The commanded posture.
     command: JointAngles,
-    stiffness: f64,
+    /// The commanded stiffness of each motor (LoLA's order).
+    stiffness: [f64; JOINTS],
     cycles: u64,
     hot: Option<(Joint, f64)>,
     /// On the way out: only a broken link stops the rest and ramp-down.
     finishing: bool,
+    /// Whether the ramp-up ended and the robot was moved.
+    moved: bool,
 }
 
 impl Runner<'_> {
     fn message(&self) -> ActuatorMessage {
         let mut position = self.base;
-        let mut stiffness = [0.0; JOINTS];
         for j in Joint::ALL {
             position[lola::index(j)] = self.command.get(j) as f32;
-            stiffness[lola::index(j)] = self.stiffness as f32;
         }
         ActuatorMessage {
             position,
-            stiffness,
+            stiffness: self.stiffness.map(|s| s as f32),
         }
     }
 
@@ -540,8 +782,12 @@ impl Runner<'_> {
         self.link.send(&self.message())?;
         self.last = self.link.receive()?;
         self.cycles += 1;
+        let fault = self.believed.check(&self.last);
         if self.finishing {
             return Ok(());
+        }
+        if let Some(fault) = fault {
+            return Err(Halt::Fault(CaptureError::Reading(fault)));
         }
         match self.watch.check(&self.options.safety, &self.last) {
             Verdict::Fine => self.hot = None,
@@ -561,6 +807,12 @@ impl Runner<'_> {
                     self.options.safety.max_current
                 ))));
             }
+            Verdict::Unreadable(j, what, value) => {
+                return Err(Halt::Fault(CaptureError::Safety(format!(
+                    "{} reports a {what} of {value}: its limits cannot be watched",
+                    j.name()
+                ))));
+            }
         }
         if self.stop.load(Ordering::Relaxed) {
             return Err(Halt::Interrupted);
@@ -568,16 +820,30 @@ impl Runner<'_> {
         Ok(())
     }
 
+    /// The believed readings; a joint no longer believed reads as commanded (so that
+    /// nothing follows it on the way out).
     fn reading(&self) -> JointAngles {
-        self.last.joints()
+        let mut out = self.believed.readings();
+        for j in Joint::ALL {
+            if self.believed.lost(j) {
+                out.set(j, self.command.get(j));
+            }
+        }
+        out
     }
 
-    /// Ramps the stiffness up from 0 while commanding the measured positions.
+    /// Ramps each motor's stiffness from what the robot reported at the start to the
+    /// measuring stiffness (head and legs) or 0 (arms, hands), holding the posture measured
+    /// at the start: a leg that sags meanwhile does not drag the command along.
     fn ramp_up(&mut self) -> Result<(), Halt> {
         let m = self.options.motion;
+        let from = self.stiffness;
+        let mut to = [0.0; JOINTS];
+        for j in Joint::ALL {
+            to[lola::index(j)] = m.stiffness;
+        }
         for k in 0..=m.ramp_cycles {
-            self.command = self.reading();
-            self.stiffness = m.ramp_up(k);
+            self.stiffness = std::array::from_fn(|i| m.ramp(from[i], to[i], k));
             self.cycle()?;
         }
         Ok(())
@@ -588,7 +854,7 @@ impl Runner<'_> {
         let m = self.options.motion;
         let from = self.stiffness;
         for k in 0..m.ramp_cycles {
-            self.stiffness = m.ramp_down(from, k);
+            self.stiffness = from.map(|s| m.ramp_down(s, k));
             self.cycle()?;
         }
         Ok(())
@@ -728,7 +994,7 @@ impl Runner<'_> {
                 return Ok(outcome);
             }
         }
-        worker.send(Job::Take);
+        worker.send(Job::Take(row.id, row.camera));
         let mut readings = Readings::default();
         let mut picture = None;
         let mut after = 0u32;
@@ -736,7 +1002,8 @@ impl Runner<'_> {
         loop {
             self.cycle()?;
             k += 1;
-            if k > m.sensor_lag_cycles {
+            // A cycle with a glitch is left out of the capture's readings.
+            if k > m.sensor_lag_cycles && self.believed.all_believed() {
                 readings.push(&self.reading());
             }
             if picture.is_none() {
@@ -758,6 +1025,7 @@ impl Runner<'_> {
         worker.send(Job::Store {
             id: row.id,
             side: row.side,
+            camera: row.camera,
             picture: picture.expect("taken"),
             joints: readings.mean(),
             spread: readings.spread(),
@@ -806,8 +1074,9 @@ fn blind_ramp_down(link: &mut dyn Link, last: ActuatorMessage, options: &MotionO
     link.drain();
 }
 
-/// Runs the plan `rows` on the robot behind `link`, writing into `out`: ramps the
-/// stiffness up from the measured posture, visits every row not yet in `out` (skipping
+/// Runs the plan `rows` on the robot behind `link`, taking each row's picture with its
+/// camera of `cameras` (each row's camera must be there), writing into `out`: ramps the
+/// stiffness up from what the robot reports, holding the posture it first reports, visits every row not yet in `out` (skipping
 /// obstructed stances, resting while motors are hot), and at the end, on `stop` and on any
 /// fault it can still command, returns to rest and ramps the stiffness down.
 /// `events` hears of each capture written and each stance skipped.
@@ -816,7 +1085,7 @@ pub fn run(
     model: &Model,
     rows: &[PlanRow],
     out: DatasetOut,
-    camera: Box<dyn Camera>,
+    cameras: Vec<(CameraId, Box<dyn Camera>)>,
     link: &mut dyn Link,
     options: &CaptureOptions,
     stop: &AtomicBool,
@@ -832,9 +1101,30 @@ pub fn run(
     }
     let already = out.len();
     let todo: Vec<PlanRow> = rows.iter().filter(|r| !out.has(r.id)).copied().collect();
+    if let Some(row) = todo
+        .iter()
+        .find(|r| !cameras.iter().any(|(c, _)| *c == r.camera))
+    {
+        return Err(CaptureError::Options(format!(
+            "capture {} (plan line {}) is for the {} camera, and no {} camera is given \
+             (--camera {}=SPEC); nothing was moved",
+            row.id,
+            row.line,
+            row.camera.name(),
+            row.camera.name(),
+            row.camera.name()
+        )));
+    }
     let scratch = tempfile::tempdir()
         .map_err(|e| CaptureError::Dataset(DatasetError::io(Path::new("/tmp"), "create", e)))?;
-    let mut worker = Worker::spawn(camera, out, scratch.path().to_path_buf());
+    let cameras = cameras
+        .into_iter()
+        .map(|(id, camera)| {
+            let size = model.intrinsics(id);
+            (id, camera, (size.width, size.height))
+        })
+        .collect();
+    let mut worker = Worker::spawn(cameras, out, scratch.path().to_path_buf());
     let mut report = Report {
         taken: Vec::new(),
         skipped: Vec::new(),
@@ -849,18 +1139,27 @@ pub fn run(
             return Err(e.into());
         }
     };
+    let believed = match Believed::start(options.safety.readings, &first) {
+        Ok(b) => b,
+        Err(e) => {
+            worker.finish();
+            return Err(CaptureError::FirstReading(e));
+        }
+    };
     let mut runner = Runner {
         link,
         options,
         stop,
         watch: Watch::default(),
         base: first.position,
-        command: first.joints(),
+        command: believed.readings(),
+        believed,
+        stiffness: first.stiffness.map(f64::from),
         last: first,
-        stiffness: 0.0,
         cycles: 0,
         hot: None,
         finishing: false,
+        moved: false,
     };
     let mut taken_ids: Vec<u64> = Vec::new();
     let mut on_done = |done: Done, events: &mut dyn FnMut(Event)| -> Result<(), Halt> {
@@ -876,6 +1175,7 @@ pub fn run(
     };
     let result: Result<(), Halt> = (|| {
         runner.ramp_up()?;
+        runner.moved = true;
         events(Event::Started);
         for row in &todo {
             let mut tries = 0;
@@ -932,10 +1232,14 @@ pub fn run(
     };
     let link_ok = !matches!(end, End::Stopped(CaptureError::Lola(_)));
     if link_ok {
+        // A robot stopped during the ramp-up has not moved: it ramps down where it lies.
         let rest = options.rest;
-        let back = runner
-            .move_to(&rest, false)
-            .and_then(|_| runner.ramp_down());
+        let back = if runner.moved {
+            runner.move_to(&rest, false).map(|_| ())
+        } else {
+            Ok(())
+        }
+        .and_then(|()| runner.ramp_down());
         if let Err(Halt::Link(LolaError::Parse(_))) = back {
             let last = runner.message();
             blind_ramp_down(runner.link, last, &options.motion);
@@ -970,12 +1274,21 @@ pub fn predicted_seconds(rows: &[PlanRow], options: &MotionOptions) -> f64 {
     timing.duration(&postures)
 }
 
-/// The stop flag, set by SIGINT and SIGTERM (the run then returns to rest and ramps the
-/// stiffness down); a second signal ends the process at once (exit code 1).
+/// The signals that would end the process: SIGHUP (the terminal or the ssh session to the
+/// robot is lost), SIGINT (Ctrl-C), SIGQUIT (`Ctrl-\`) and SIGTERM.
+pub const STOP_SIGNALS: [i32; 4] = [
+    signal_hook::consts::SIGHUP,
+    signal_hook::consts::SIGINT,
+    signal_hook::consts::SIGQUIT,
+    signal_hook::consts::SIGTERM,
+];
+
+/// The stop flag, set by any of [`STOP_SIGNALS`], as often as they come: the run then
+/// returns to rest and ramps the stiffness down before the process ends. (A lost terminal
+/// also makes every later message fail; messages are written without panicking.)
 pub fn stop_on_signals() -> std::io::Result<std::sync::Arc<AtomicBool>> {
     let flag = std::sync::Arc::new(AtomicBool::new(false));
-    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        signal_hook::flag::register_conditional_shutdown(signal, 1, flag.clone())?;
+    for signal in STOP_SIGNALS {
         signal_hook::flag::register(signal, flag.clone())?;
     }
     Ok(flag)

@@ -1,5 +1,5 @@
 //! The measurement phase on a NAO V6 (docs/CAPTURE.md): `naocalib capture` drives a plan's
-//! stances over LoLA ([`lola`]), safely ([`motion`], [`safety`]), photographs the sandals
+//! stances over LoLA ([`lola`]), safely ([`motion`], [`safety`], [`plausible`]), photographs the sandals
 //! ([`camera`]) and writes the dataset capture by capture ([`capture`]); [`simulated`] is a
 //! simulated robot that serves LoLA for tests.
 
@@ -7,6 +7,7 @@ pub mod camera;
 pub mod capture;
 pub mod lola;
 pub mod motion;
+pub mod plausible;
 pub mod safety;
 pub mod simulated;
 

@@ -135,10 +135,10 @@ impl MotionOptions {
             .collect()
     }
 
-    /// The stiffness in cycle `k` (0-based) of a ramp up from 0 to
-    /// [`MotionOptions::stiffness`].
-    pub fn ramp_up(&self, k: u32) -> f64 {
-        self.stiffness * (k.min(self.ramp_cycles) as f64 / self.ramp_cycles as f64)
+    /// The stiffness in cycle `k` (0-based) of a ramp from `from` to `to` (cycle 0 is
+    /// `from`; `to` from cycle [`MotionOptions::ramp_cycles`] on).
+    pub fn ramp(&self, from: f64, to: f64, k: u32) -> f64 {
+        from + (to - from) * (k.min(self.ramp_cycles) as f64 / self.ramp_cycles as f64)
     }
 
     /// The stiffness in cycle `k` (0-based) of a ramp down from `from` to 0.
@@ -311,8 +311,10 @@ mod tests {
     #[test]
     fn ramps_take_their_cycles() {
         let o = MotionOptions::default();
-        assert_eq!(o.ramp_up(0), 0.0);
-        assert_eq!(o.ramp_up(o.ramp_cycles), o.stiffness);
+        assert_eq!(o.ramp(0.0, o.stiffness, 0), 0.0);
+        assert_eq!(o.ramp(0.0, o.stiffness, o.ramp_cycles), o.stiffness);
+        assert_eq!(o.ramp(1.0, o.stiffness, 0), 1.0);
+        assert!((o.ramp(1.0, 0.8, o.ramp_cycles / 2) - 0.9).abs() < 1e-12);
         assert_eq!(o.ramp_down(0.8, o.ramp_cycles - 1), 0.0);
         assert!(o.ramp_down(0.8, 0) > 0.79);
         assert!(o.validate().is_ok());

@@ -4,6 +4,7 @@
 use crate::model::Joint;
 
 use super::lola::{self, SensorMessage};
+use super::plausible::Plausibility;
 
 /// The limits on what the motors report.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -22,13 +23,16 @@ pub struct SafetyLimits {
     pub current_cycles: u32,
     /// A message that does not come within this many cycles stops the run.
     pub silent_cycles: u32,
+    /// Which joint readings are believed ([`super::plausible`]).
+    pub readings: Plausibility,
 }
 
 impl Default for SafetyLimits {
     /// Pause at 70 °C until 60 °C (at most 10 minutes), stop at 80 °C (the V6 reports
     /// temperature status 1 "hot" from about 70 °C and cuts motor power near 90 °C),
     /// stop on more than 2.5 A for 50 cycles (0.6 s: a stalled motor, the leg pushing
-    /// against something), and on 25 cycles (0.3 s) without a message.
+    /// against something), and on 25 cycles (0.3 s) without a message; readings as
+    /// [`Plausibility::default`].
     fn default() -> Self {
         SafetyLimits {
             pause_temperature: 70.0,
@@ -38,6 +42,7 @@ impl Default for SafetyLimits {
             max_current: 2.5,
             current_cycles: 50,
             silent_cycles: 25,
+            readings: Plausibility::default(),
         }
     }
 }
@@ -53,6 +58,9 @@ pub enum Verdict {
     Overheated(Joint, f64),
     /// Stop the run: a motor drew too much current for too long (the joint, A).
     Overcurrent(Joint, f64),
+    /// Stop the run: a motor's temperature or current is not a number, so the limits
+    /// above cannot be checked (the joint, `temperature` or `current`, the value).
+    Unreadable(Joint, &'static str, f64),
 }
 
 /// The motor watch, one message per cycle.
@@ -76,6 +84,10 @@ impl SafetyLimits {
         {
             return Err("the current limit and the cycle counts must be above 0".into());
         }
+        let r = &self.readings;
+        if !(r.range_tolerance >= 0.0 && r.jump_slack >= 0.0) {
+            return Err("the readings' range tolerance and jump slack must be at least 0".into());
+        }
         Ok(())
     }
 
@@ -93,8 +105,19 @@ impl SafetyLimits {
 impl Watch {
     /// Checks one message against `limits`.
     pub fn check(&mut self, limits: &SafetyLimits, message: &SensorMessage) -> Verdict {
+        for j in Joint::ALL {
+            let k = lola::index(j);
+            for (what, value) in [
+                ("temperature", message.temperature[k]),
+                ("current", message.current[k]),
+            ] {
+                if !value.is_finite() {
+                    return Verdict::Unreadable(j, what, value as f64);
+                }
+            }
+        }
         let (joint, temperature) = SafetyLimits::hottest(message);
-        if !temperature.is_finite() || temperature >= limits.stop_temperature {
+        if temperature >= limits.stop_temperature {
             return Verdict::Overheated(joint, temperature);
         }
         let (cjoint, current) = Joint::ALL
@@ -103,7 +126,7 @@ impl Watch {
             .fold((Joint::HeadYaw, f64::NEG_INFINITY), |a, b| {
                 if b.1 > a.1 { b } else { a }
             });
-        if current > limits.max_current || !current.is_finite() {
+        if current > limits.max_current {
             self.over_current += 1;
             if self.over_current >= limits.current_cycles {
                 return Verdict::Overcurrent(cjoint, current);
@@ -156,6 +179,23 @@ mod tests {
         );
         // An arm's temperature is not watched (its stiffness stays 0).
         let arm = message(40.0, 0.1).with(3, 95.0, 0.1);
+        assert_eq!(w.check(&limits, &arm), Verdict::Fine);
+    }
+
+    #[test]
+    fn a_temperature_or_current_that_is_not_a_number_stops_at_once() {
+        let limits = SafetyLimits::default();
+        let mut w = Watch::default();
+        assert!(matches!(
+            w.check(&limits, &message(f32::NAN, 0.1)),
+            Verdict::Unreadable(Joint::LKneePitch, "temperature", t) if t.is_nan()
+        ));
+        assert!(matches!(
+            w.check(&limits, &message(40.0, f32::INFINITY)),
+            Verdict::Unreadable(Joint::LKneePitch, "current", _)
+        ));
+        // Arms are not watched.
+        let arm = message(40.0, 0.1).with(3, f32::NAN, f32::NAN);
         assert_eq!(w.check(&limits, &arm), Verdict::Fine);
     }
 

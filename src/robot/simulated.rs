@@ -11,9 +11,10 @@
 //! [`RobotOptions::truth`]). The motor currents follow the holding torques and the
 //! temperatures rise with the square of the current and cool towards 30 °C.
 //!
-//! The camera: the robot writes its state (true parameters, joints) to a file
-//! ([`RobotOptions::state`]), from which [`snap`] renders the lower camera's view
-//! (`naocalib simulate-robot snap {path} --state FILE`, for `--camera 'command:…'`).
+//! The cameras: the robot writes its state (true parameters, joints) to a file
+//! ([`RobotOptions::state`]), from which [`snap`] renders the lower or the upper camera's
+//! view (`naocalib simulate-robot snap {path} --state FILE --camera {camera}`, for
+//! `capture --camera 'lower=command:…' --camera 'upper=command:…'`).
 //!
 //! Faults on request ([`Faults`]): a blocked joint, an overheating motor, a connection
 //! dropped, the robot falling silent, a message that does not parse. Every actuator
@@ -25,7 +26,7 @@ use std::os::unix::net::{UnixListener, UnixStream};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use crate::model::{Joint, JointAngles, Model, PARAMETER_COUNT, Side, gravity};
+use crate::model::{CameraId, Joint, JointAngles, Model, PARAMETER_COUNT, Side, gravity};
 use crate::output::{WriteOptions, write_atomic, write_atomic_with};
 use crate::sim::render::{self, RenderOptions};
 
@@ -548,16 +549,39 @@ pub fn read_state(path: &Path) -> Result<State, RobotError> {
     Ok(state)
 }
 
-/// Renders what the lower camera of the robot in `state` sees (the sandal in view, the one
-/// whose centre is nearest the image centre) and writes it as PNG to `out`.
-pub fn snap(state: &State, out: &Path, options: &RenderOptions) -> Result<(), RobotError> {
+/// Renders what `camera` of the robot in `state` (read from `state_path`) sees (the sandal
+/// in view, the one whose centre is nearest the image centre; the true intrinsics of the
+/// lower camera, the `[upper_camera]` ones of the upper) and writes it as PNG to `out`
+/// (replacing a picture there, never the state file or the `dataset.toml` it names).
+pub fn snap(
+    state: &State,
+    state_path: &Path,
+    camera: CameraId,
+    out: &Path,
+    options: &RenderOptions,
+) -> Result<(), RobotError> {
+    let write = WriteOptions::new(true)
+        .protecting([state_path.to_path_buf()])
+        .protecting(state.config.clone());
+    crate::output::check_writable(out, &write)?;
     let model = match &state.config {
         Some(path) => crate::dataset::read_model(path)?,
         None => Model::default(),
     };
+    if camera == CameraId::Upper && model.upper_camera.is_none() {
+        return Err(RobotError::Read {
+            path: state
+                .config
+                .clone()
+                .unwrap_or_else(|| state_path.to_path_buf()),
+            message: "names no upper camera ([upper_camera] of dataset.toml): nothing to \
+                      render the upper camera's view with"
+                .into(),
+        });
+    }
     let truth: [f64; PARAMETER_COUNT] = std::array::from_fn(|k| state.truth[k]);
     let model = Model {
-        camera: model.camera_at(&truth),
+        camera: model.intrinsics_at(camera, &truth),
         ..model
     };
     let mut joints = JointAngles::default();
@@ -571,7 +595,9 @@ pub fn snap(state: &State, out: &Path, options: &RenderOptions) -> Result<(), Ro
     let side = Side::BOTH
         .into_iter()
         .filter_map(|side| {
-            let pose = model.chains(side, &joints).camera_to_board(&truth);
+            let pose = model
+                .chains_for(camera, side, &joints)
+                .camera_to_board(&truth);
             let uv = model.camera.project(&pose.translation)?;
             model
                 .camera
@@ -580,15 +606,26 @@ pub fn snap(state: &State, out: &Path, options: &RenderOptions) -> Result<(), Ro
         })
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map_or(Side::Left, |(s, _)| s);
-    let pose = model.chains(side, &joints).camera_to_board(&truth);
-    // The noise of the picture follows the posture (to 1e-7 rad), not the cycle it is
-    // taken in, so that a run gives the same pictures however fast the robot is played.
+    let pose = model
+        .chains_for(camera, side, &joints)
+        .camera_to_board(&truth);
+    // The noise of the picture follows the posture (to 1e-7 rad) and the camera, not the
+    // cycle it is taken in, so that a run gives the same pictures however fast the robot
+    // is played.
     let posture = state.joints.iter().fold(0u64, |h, q| {
         (h ^ ((q * 1e7).round() as i64 as u64)).wrapping_mul(0x0100_0000_01B3)
     });
-    let seed = state.seed ^ posture.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    let seed = state.seed
+        ^ posture.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        ^ (camera as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
     let image = render::render(&model, &pose, options, seed)?;
-    image.write_png(out)?;
+    let bytes = image
+        .to_png()
+        .map_err(|message| render::RenderError::Encode {
+            path: out.to_path_buf(),
+            message,
+        })?;
+    write_atomic(out, &bytes, &write)?;
     Ok(())
 }
 

@@ -21,32 +21,40 @@ fn bin() -> PathBuf {
 }
 
 /// A scratch directory with the robot's dataset.toml (the default model).
-struct Bench {
+pub(crate) struct Bench {
     _tmp: tempfile::TempDir,
     dir: PathBuf,
 }
 
 impl Bench {
-    fn new() -> Bench {
+    pub(crate) fn new() -> Bench {
+        Bench::with_model(Model::default())
+    }
+
+    /// A bench whose robot is `model` (its dataset.toml).
+    pub(crate) fn with_model(model: Model) -> Bench {
         let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path().to_path_buf();
         let cfg = dir.join("cfg");
-        Dataset::new(&cfg, Model::default())
-            .write(&cfg, false)
-            .unwrap();
+        Dataset::new(&cfg, model).write(&cfg, false).unwrap();
         Bench { _tmp: tmp, dir }
     }
 
-    fn config(&self) -> PathBuf {
+    /// The scratch directory.
+    pub(crate) fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    pub(crate) fn config(&self) -> PathBuf {
         self.dir.join("cfg/dataset.toml")
     }
 
-    fn path(&self, name: &str) -> PathBuf {
+    pub(crate) fn path(&self, name: &str) -> PathBuf {
         self.dir.join(name)
     }
 
     /// Starts a simulated robot serving `sock` with `args`, recording to `record`.
-    fn robot(&self, sock: &str, record: &str, args: &[&str]) -> Child {
+    pub(crate) fn robot(&self, sock: &str, record: &str, args: &[&str]) -> Child {
         let socket = self.path(sock);
         let child = Command::new(bin())
             .arg("simulate-robot")
@@ -72,7 +80,14 @@ impl Bench {
     }
 
     /// `naocalib capture PLAN OUT` against the robot at `sock`.
-    fn capture(&self, plan: &Path, out: &str, sock: &str, camera: &str, extra: &[&str]) -> Command {
+    pub(crate) fn capture(
+        &self,
+        plan: &Path,
+        out: &str,
+        sock: &str,
+        camera: &str,
+        extra: &[&str],
+    ) -> Command {
         let mut cmd = Command::new(bin());
         cmd.arg("capture")
             .arg(plan)
@@ -96,13 +111,14 @@ impl Bench {
         )
     }
 
-    /// A camera that copies one fixed picture (fast, for the safety tests).
-    fn fixed_camera(&self) -> String {
+    /// A camera that copies one fixed picture of the camera's size (fast, for the safety
+    /// tests).
+    pub(crate) fn fixed_camera(&self) -> String {
         let png = self.path("fixed.png");
         let image = naocalib::sim::render::GreyImage {
-            width: 8,
-            height: 8,
-            pixels: vec![128; 64],
+            width: 640,
+            height: 480,
+            pixels: vec![128; 640 * 480],
         };
         std::fs::write(&png, image.to_png().unwrap()).unwrap();
         format!("command:cp '{}' {{path}}", png.display())
@@ -123,7 +139,7 @@ impl Bench {
     }
 }
 
-fn finish(mut child: Child) -> Output {
+pub(crate) fn finish(mut child: Child) -> Output {
     let start = Instant::now();
     loop {
         if child.try_wait().unwrap().is_some() {
@@ -139,7 +155,7 @@ fn finish(mut child: Child) -> Output {
 
 /// `n` feasible captures (the simulator's stances, safe by the plan's checks), alternating
 /// legs, written as a plan.
-fn plan_file(path: &Path, n: usize, seed: u64) -> Vec<PlannedCapture> {
+pub(crate) fn plan_file(path: &Path, n: usize, seed: u64) -> Vec<PlannedCapture> {
     let model = Model::default();
     let rows: Vec<PlannedCapture> = naocalib::plan::random_stances(&model, 12 * n, 1, seed)
         .unwrap()
@@ -161,7 +177,7 @@ fn plan_file(path: &Path, n: usize, seed: u64) -> Vec<PlannedCapture> {
 
 /// `naocalib plan --captures n --families FAMILIES` for the bench's robot into `path`.
 #[cfg(feature = "detect")]
-fn designed_plan(
+pub(crate) fn designed_plan(
     b: &Bench,
     path: &Path,
     n: usize,
@@ -189,7 +205,7 @@ fn designed_plan(
 }
 
 /// The motors capture moves (LoLA indices, HipYawPitch once) with their speed limits.
-fn moved_motors() -> Vec<(usize, f64)> {
+pub(crate) fn moved_motors() -> Vec<(usize, f64)> {
     let o = MotionOptions::default();
     let mut out: Vec<(usize, f64)> = Joint::ALL
         .iter()
@@ -201,9 +217,10 @@ fn moved_motors() -> Vec<(usize, f64)> {
 }
 
 /// The safety rules on one robot's record: stiffness ramps up from 0 over ≥ 1 s while the
-/// commands are the readings; no commanded step beyond the speed limits; the arms never
-/// stiff; with `ends_at_rest`, the run ends at rest with a ramp down over ≥ 1 s.
-fn check_safety(record: &[RecordRow], ends_at_rest: bool) {
+/// command holds the posture first read; no commanded step beyond the speed limits, the
+/// ramp included; the arms never stiff; with `ends_at_rest`, the run ends at rest with a
+/// ramp down over ≥ 1 s.
+pub(crate) fn check_safety(record: &[RecordRow], ends_at_rest: bool) {
     let motors = moved_motors();
     assert!(!record.is_empty(), "the robot was told nothing");
     // Ramp up.
@@ -217,19 +234,19 @@ fn check_safety(record: &[RecordRow], ends_at_rest: bool) {
     for r in &record[..full] {
         for &(k, _) in &motors {
             assert!(
-                (r.position[k] - r.reading[k]).abs() < 1e-6,
-                "cycle {}: during the ramp-up, motor {k} commanded {} at reading {}",
+                (r.position[k] - record[0].reading[k]).abs() < 1e-6,
+                "cycle {}: during the ramp-up, motor {k} commanded {} (first read {})",
                 r.cycle,
                 r.position[k],
-                r.reading[k]
+                record[0].reading[k]
             );
         }
     }
     for w in record[..=full].windows(2) {
         assert!(w[1].stiffness[10] >= w[0].stiffness[10], "ramp goes up");
     }
-    // Bounded speed after the ramp-up.
-    for w in record[full..].windows(2) {
+    // Bounded speed in every phase.
+    for w in record.windows(2) {
         for &(k, speed) in &motors {
             let step = (w[1].position[k] - w[0].position[k]).abs();
             assert!(
@@ -276,7 +293,7 @@ fn check_safety(record: &[RecordRow], ends_at_rest: bool) {
 }
 
 /// Waits until `dir/captures.csv` has at least `n` rows.
-fn wait_for_captures(dir: &Path, n: usize) {
+pub(crate) fn wait_for_captures(dir: &Path, n: usize) {
     let start = Instant::now();
     loop {
         let csv = std::fs::read_to_string(dir.join("captures.csv")).unwrap_or_default();
@@ -291,7 +308,7 @@ fn wait_for_captures(dir: &Path, n: usize) {
     }
 }
 
-fn captures_of(dir: &Path) -> Vec<u64> {
+pub(crate) fn captures_of(dir: &Path) -> Vec<u64> {
     Dataset::load_without_corners(dir)
         .unwrap()
         .captures

@@ -5,6 +5,7 @@ mod util;
 
 mod batch_solve;
 mod capture;
+mod capture_cameras;
 #[cfg(feature = "ceres")]
 mod ceres_agreement;
 #[cfg(feature = "detect")]
@@ -34,6 +35,7 @@ mod extended;
 mod fuzz_readers;
 mod hostile_inputs;
 mod hostile_outputs;
+mod lola_faults;
 mod misfit;
 mod plan;
 mod plan_around;
