@@ -9,7 +9,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 
 use naocalib::robot::camera::CameraSpec;
-use naocalib::robot::capture::{self, check_plan, predicted_seconds, read_plan};
+use naocalib::robot::capture::{self, check_plan, predicted_steps, read_plan};
 use naocalib::robot::lola::{self, Connection};
 use naocalib::robot::{CaptureOptions, DatasetOut, End, Event};
 
@@ -105,7 +105,8 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     let total = rows.len();
     let bar = super::progress_bar(total as u64 as usize, "captures");
     bar.set_position(out.len() as u64);
-    let predicted = |from: usize| predicted_seconds(&todo[from.min(todo.len())..], &options.motion);
+    let steps = predicted_steps(&model, &todo, &options);
+    let predicted = |from: usize| steps[from.min(todo.len())..].iter().sum::<f64>();
     bar.set_message(format!(", {:.0} s of robot time planned", predicted(0)));
     let say = |line: String| {
         if bar.is_hidden() {

@@ -69,6 +69,8 @@ pub enum Infeasible {
     View,
     /// The resting leg stands between the camera and the board (named).
     Occluded(String),
+    /// The straight move between the rest posture and the capture collides.
+    Unreachable,
 }
 
 impl std::fmt::Display for Infeasible {
@@ -78,6 +80,9 @@ impl std::fmt::Display for Infeasible {
             Infeasible::HipYawPitch => f.write_str("LHipYawPitch and RHipYawPitch differ"),
             Infeasible::Collision(what) => write!(f, "collision: {what}"),
             Infeasible::Occluded(what) => write!(f, "the {what} hides the board"),
+            Infeasible::Unreachable => {
+                f.write_str("the straight move between the rest posture and it collides")
+            }
             Infeasible::View => f.write_str(
                 "the board does not stay fully in view, facing the camera, for every offset \
                  within the bounds",
@@ -308,6 +313,12 @@ pub fn check(
         collision::sight_blocked(&model.robot, &f.body, joints, resting, eye, &vertices)
     {
         return Err(Infeasible::Occluded(what));
+    }
+    // Reachable straight from rest and back: then every order of the captures has a way
+    // for every move (through rest, if nothing shorter), and any capture can end the phase.
+    let rest = super::route::rest_posture();
+    if !super::route::move_is_free(model, &f.body, &rest, joints) {
+        return Err(Infeasible::Unreachable);
     }
     Ok(())
 }

@@ -35,6 +35,7 @@ mod hostile_outputs;
 mod misfit;
 mod plan;
 mod plan_around;
+mod plan_moves;
 mod plot_files;
 mod pure_rust_agreement;
 mod pure_rust_cli;
