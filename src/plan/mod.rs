@@ -120,8 +120,13 @@ pub struct Plan {
     /// Predicted duration of the measurement phase, from rest through every capture and
     /// back, every move along its collision-free way (s).
     pub duration: f64,
-    /// Predicted duration of the random stances in the simulator's order (s).
+    /// Intermediate postures of the plan's moves (where the straight move collides).
+    pub via: usize,
+    /// Predicted duration of the random stances in the simulator's order (s), a stance
+    /// without a collision-free way skipped.
     pub baseline_duration: f64,
+    /// Random stances without a collision-free way in the simulator's order.
+    pub baseline_blocked: usize,
     /// Number of feasible captures in the pool.
     pub pool: usize,
     /// Number of distinct leg stances in the plan.
@@ -309,30 +314,30 @@ pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
         })
         .collect();
     let postures: Vec<JointAngles> = captures.iter().map(|c| c.joints).collect();
-    if let Some(k) = route::moves(model, body, &rest, &postures)
-        .iter()
-        .position(Result::is_err)
-    {
+    let moves = route::moves(model, body, &rest, &postures);
+    if let Some(k) = moves.iter().position(Result::is_err) {
         return Err(PlanError::Moves(k));
     }
+    let via = moves.iter().flatten().map(|way| way.len() - 1).sum();
     let duration = route::duration(model, body, &options.timing, &rest, &postures);
     let mut stances: Vec<usize> = chosen.iter().map(|&k| pool[k].stance).collect();
     stances.sort_unstable();
     stances.dedup();
 
-    let baseline_duration = route::duration(
-        model,
-        body,
-        &options.timing,
-        &rest,
-        &random.iter().map(|c| c.1).collect::<Vec<_>>(),
-    );
+    let random_postures: Vec<JointAngles> = random.iter().map(|c| c.1).collect();
+    let baseline_duration = route::duration(model, body, &options.timing, &rest, &random_postures);
+    let baseline_blocked = route::moves(model, body, &rest, &random_postures)
+        .iter()
+        .filter(|m| m.is_err())
+        .count();
     Ok(Plan {
         captures,
         prediction,
         baseline,
         duration,
+        via,
         baseline_duration,
+        baseline_blocked,
         pool: pool.len(),
         stances: stances.len(),
     })
