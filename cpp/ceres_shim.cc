@@ -95,11 +95,12 @@ void validate(const FfiProblem& p) {
     if (!finite(x)) fail("an observed pixel is not finite");
   for (double x : p.weights)
     if (!finite(x)) fail("a whitening weight is not finite");
-  const FfiProjection& c = p.projection;
-  for (const FfiAmount* a : {&c.fx, &c.fy, &c.cx, &c.cy, &c.k1, &c.k2})
-    validate(*a, n, "projection: ");
-  for (double x : {c.p1, c.p2, c.k3})
-    if (!finite(x)) fail("a distortion coefficient is not finite");
+  for (const FfiProjection& c : p.projections) {
+    for (const FfiAmount* a : {&c.fx, &c.fy, &c.cx, &c.cy, &c.k1, &c.k2})
+      validate(*a, n, "projection: ");
+    for (double x : {c.p1, c.p2, c.k3})
+      if (!finite(x)) fail("a distortion coefficient is not finite");
+  }
 
   for (std::size_t s = 0; s < p.steps.size(); ++s) {
     const FfiStep& step = p.steps[s];
@@ -125,6 +126,7 @@ void validate(const FfiProblem& p) {
     const std::uint64_t end_step = std::uint64_t{cap.first_step} + cap.camera_steps +
                                    cap.board_steps;
     if (end_step > p.steps.size()) fail(where + "steps out of range");
+    if (cap.projection >= p.projections.size()) fail(where + "projection out of range");
     if (std::uint64_t{cap.first_vertex} + cap.vertex_count > vertex_total(p))
       fail(where + "vertices out of range");
     if (cap.vertex_count > 1u << 20) fail(where + "too many vertices");
@@ -269,7 +271,7 @@ class CaptureFunctor {
         amounts_.push_back(&s.amount);
       }
     }
-    const FfiProjection& c = problem.projection;
+    const FfiProjection& c = problem.projections[capture.projection];
     const FfiAmount* intrinsics[6] = {&c.fx, &c.fy, &c.cx, &c.cy, &c.k1, &c.k2};
     for (int i = 0; i < 6; ++i) {
       projection_direction_[i] = -1;
@@ -361,7 +363,7 @@ class CaptureFunctor {
   template <typename T>
   bool project(const T (&p)[3], T (&uv)[2], const T* amounts) const {
     if (value_of(p[0]) <= 0.0) return false;
-    const FfiProjection& c = problem_.projection;
+    const FfiProjection& c = problem_.projections[capture_.projection];
     const T inv = T(1.0) / p[0];
     T a = -(p[1] * inv);
     T b = -(p[2] * inv);
@@ -406,8 +408,8 @@ class CaptureFunctor {
   bool projection_free_ = false;  // whether an intrinsic depends on a free parameter
 };
 
-// Jet widths of the autodiff passes. A capture of the paper's model has at most camera (3)
-// + leg (6) + board (3) = 12 free amounts; one of the extended model with every family
+// Jet widths of the autodiff passes. A capture of the paper's model has at most camera (3,
+// its own camera's: lower or upper) + leg (6) + board (3) = 12 free amounts; one of the extended model with every family
 // free 27. Each block gets the narrower width that covers its amounts in one pass (a pass
 // re-evaluates the whole chain), several passes of the wider one beyond.
 constexpr int kNarrow = 12;
@@ -595,7 +597,7 @@ class Built {
         const FfiStep& s = p.steps[cap.first_step + k];
         if (s.kind != StepKind::Fixed) reference(s.amount);
       }
-      const FfiProjection& c = p.projection;
+      const FfiProjection& c = p.projections[cap.projection];
       for (const FfiAmount* a : {&c.fx, &c.fy, &c.cx, &c.cy, &c.k1, &c.k2}) reference(*a);
       // A capture that depends on no free parameter still contributes its (constant)
       // residuals: attach it to block 0, whose Jacobian columns it leaves zero.

@@ -23,7 +23,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::model::{PAPER_PARAMETERS, Param};
+use crate::model::Param;
 use crate::solve::Solution;
 
 use super::Run;
@@ -50,7 +50,7 @@ pub fn drift(a: &Solution, b: &Solution, threshold: f64) -> Vec<ParamDrift> {
     Param::ALL
         .iter()
         .copied()
-        .filter(|&p| p.index() < PAPER_PARAMETERS || !(a.fixed.is_fixed(p) && b.fixed.is_fixed(p)))
+        .filter(|&p| a.fixed.is_shown(p) || b.fixed.is_shown(p))
         .map(|p| {
             let delta = b.report_value(p) - a.report_value(p);
             let sigma = a.report_std(p).hypot(b.report_std(p));

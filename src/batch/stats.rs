@@ -2,7 +2,7 @@
 //! estimates (the paper's Table 2, column Ø) and the mean one-sigma the runs reported, so
 //! that the scatter the runs show can be compared with the uncertainty they claim.
 
-use crate::model::{PAPER_PARAMETERS, Param};
+use crate::model::Param;
 use crate::solve::Solution;
 
 /// Statistics of one parameter over the runs, in report units (deg / mm).
@@ -69,7 +69,7 @@ pub fn summarize(solutions: &[&Solution]) -> Summary {
     let mut parameters = Vec::new();
     for p in Param::ALL {
         let free: Vec<&&Solution> = solutions.iter().filter(|s| !s.fixed.is_fixed(p)).collect();
-        if free.is_empty() && p.index() >= PAPER_PARAMETERS {
+        if free.is_empty() && !solutions.iter().any(|s| s.fixed.is_shown(p)) {
             continue;
         }
         let values: Vec<f64> = free.iter().map(|s| s.report_value(p)).collect();

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use anyhow::{Result, bail};
 use clap::Args;
 
-use naocalib::model::{Family, Model};
+use naocalib::model::{CameraId, Family, Model};
 use naocalib::output::{Staged, WriteOptions};
 use naocalib::sim::SimOptions;
 use naocalib::sim::camera::CameraPreset;
@@ -24,6 +24,17 @@ pub struct SimulateArgs {
     /// Head postures per stance.
     #[arg(long, default_value_t = 3)]
     heads: usize,
+    /// Stances per leg photographed with the upper camera (each with --heads postures),
+    /// found by search among random stances; the dataset then has an [upper_camera] table
+    /// (the --camera preset's intrinsics).
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    upper_stances: usize,
+    /// Draw the true offsets as SPL teams' robot files show them (lower-camera pitch
+    /// −3.1…−7.8°, upper-camera pitch −2.2…−10.2° with median −8.5° and roll up to 2.7°,
+    /// head offsets up to 6.8° yaw and 4.7° pitch, leg offsets up to 2°) instead of the
+    /// paper-sized ones.
+    #[arg(long, conflicts_with = "truth")]
+    team_offsets: bool,
     /// Pixel noise σ per coordinate (px).
     #[arg(long, default_value_t = 0.1)]
     px_noise: f64,
@@ -59,9 +70,10 @@ pub struct SimulateArgs {
     #[arg(long, default_value = "v4", value_name = "CAMERA", value_parser = parse_camera)]
     camera: CameraPreset,
     /// Photograph the stances of this plan (`naocalib plan`) instead of random ones:
-    /// one capture per row, in its order. Vertices that the true offsets put outside the
-    /// image are left out, as a camera would.
-    #[arg(long, value_name = "PLAN.csv", conflicts_with_all = ["stances", "heads"])]
+    /// one capture per row, in its order, with the camera of its `camera` column (lower
+    /// when absent). Vertices that the true offsets put outside the image are left out, as
+    /// a camera would.
+    #[arg(long, value_name = "PLAN.csv", conflicts_with_all = ["stances", "heads", "upper_stances"])]
     stance_file: Option<PathBuf>,
     /// Let boards come near and across the image border (to test detection): later head
     /// postures aim anywhere in the image, and a board is kept with 8 vertices in view.
@@ -86,16 +98,19 @@ fn check_bounds(args: &SimulateArgs) -> Result<()> {
     }
     let captures = args
         .stances
-        .checked_mul(args.heads)
+        .checked_add(args.upper_stances)
+        .and_then(|n| n.checked_mul(args.heads))
         .and_then(|n| n.checked_mul(2));
     if captures.is_none_or(|n| n > MAX_CAPTURES) {
         let count = captures.map_or("more than 2⁶⁴".to_string(), |n| n.to_string());
         bail!(
-            "--stances {} --heads {} would make 2 × {} × {} = {count} captures; at most \
-             {MAX_CAPTURES} are allowed",
+            "--stances {} --upper-stances {} --heads {} would make 2 × ({} + {}) × {} = \
+             {count} captures; at most {MAX_CAPTURES} are allowed",
             args.stances,
+            args.upper_stances,
             args.heads,
             args.stances,
+            args.upper_stances,
             args.heads
         );
     }
@@ -136,15 +151,20 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
         }
         None => None,
     };
-    let schedule = match &args.stance_file {
+    let (schedule, schedule_cameras) = match &args.stance_file {
         Some(path) => {
             let plan = naocalib::plan::read_csv(path)?;
             if plan.is_empty() {
                 bail!("{}: the plan has no captures", path.display());
             }
-            Some(naocalib::plan::to_stances(&plan))
+            // The camera of each row (the plan's `camera` column; lower when absent).
+            let cameras = naocalib::dataset::read_captures(path)?
+                .iter()
+                .map(|c| c.camera)
+                .collect();
+            (Some(naocalib::plan::to_stances(&plan)), cameras)
         }
-        None => None,
+        None => (None, Vec::new()),
     };
     // Every output against every input, and the dataset files against --force, before
     // anything is simulated or written.
@@ -183,6 +203,9 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
             },
             force: true,
         }),
+        upper_stances: args.upper_stances,
+        team_offsets: args.team_offsets,
+        schedule_cameras,
         schedule,
     };
     let mut model = Model {
@@ -196,6 +219,11 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
         );
         model.camera.distortion = std::array::from_fn(|i| d[i]);
     }
+    let upper = args.upper_stances > 0 || options.schedule_cameras.contains(&CameraId::Upper);
+    if upper {
+        // The V6's two cameras are the same model: the upper one gets the same intrinsics.
+        model.upper_camera = Some(model.camera);
+    }
     let mut dataset = naocalib::sim::simulate(&model, &options)?;
     if args.images {
         dataset.corners.clear();
@@ -204,9 +232,13 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
     if let Some(path) = &args.stance_file {
         // A planned stance may show part of the board outside the image for offsets beyond
         // the plan's bounds: those vertices are not seen.
-        let camera = model.camera;
+        let camera_of: std::collections::HashMap<u64, CameraId> =
+            dataset.captures.iter().map(|c| (c.id, c.camera)).collect();
         let before = dataset.corners.len();
-        dataset.corners.retain(|c| camera.contains(c.pixel, 0.0));
+        dataset.corners.retain(|c| {
+            let camera = camera_of.get(&c.capture).copied().unwrap_or_default();
+            model.intrinsics(camera).contains(c.pixel, 0.0)
+        });
         outside = before - dataset.corners.len();
         if let Some(truth) = &mut dataset.truth {
             for key in ["stances_per_leg", "head_postures"] {
@@ -221,12 +253,18 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
     dataset.dir = args.out.clone();
     dataset.write(stage.dir(), true)?;
     stage.publish()?;
+    let upper = dataset
+        .captures
+        .iter()
+        .filter(|c| c.camera == CameraId::Upper)
+        .count();
     if args.images {
         super::print_out(format!(
-            "wrote {}: {} captures with images in {} (seed {}, blur {} px, grey noise {}, \
+            "wrote {}: {} captures{} with images in {} (seed {}, blur {} px, grey noise {}, \
              vignetting {}, {}° joint noise); corners.csv is empty: run `naocalib detect`\n",
             args.out.display(),
             dataset.captures.len(),
+            upper_note(upper),
             args.out.join("images").display(),
             args.seed,
             args.blur,
@@ -236,9 +274,10 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
         ))?;
     } else {
         super::print_out(format!(
-            "wrote {}: {} captures, {} vertices (seed {}, {} px, {}° joint noise)\n",
+            "wrote {}: {} captures{}, {} vertices (seed {}, {} px, {}° joint noise)\n",
             args.out.display(),
             dataset.captures.len(),
+            upper_note(upper),
             dataset.corners.len(),
             args.seed,
             args.px_noise,
@@ -254,13 +293,32 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// ` (N with the upper camera)` when there are upper-camera captures, else nothing.
+fn upper_note(upper: usize) -> String {
+    if upper == 0 {
+        String::new()
+    } else {
+        format!(" ({upper} with the upper camera)")
+    }
+}
+
 /// `--effects`' help, with the registry's families.
 fn effects_help() -> String {
     format!(
         "Give the drawn robot effects the paper's model lacks, as families ({}, or `realistic` \
          for {}); their true values go into truth.toml",
-        super::options::extended_families(),
+        effect_families(),
         Family::names(Family::realistic())
+    )
+}
+
+/// The families `--effects` draws: every one beyond the paper's but the upper camera's
+/// (drawn with the paper's whenever there are upper-camera captures).
+fn effect_families() -> String {
+    Family::names(
+        Family::ALL
+            .into_iter()
+            .filter(|f| !matches!(f, Family::Paper | Family::UpperCamera)),
     )
 }
 
@@ -274,10 +332,10 @@ fn parse_effects(text: &str) -> Result<Effects, String> {
     for name in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
         let named: Vec<Family> = match (name, Family::from_name(name)) {
             ("realistic", _) => Family::realistic(),
-            (_, Some(Family::Paper)) | (_, None) => {
+            (_, Some(Family::Paper | Family::UpperCamera)) | (_, None) => {
                 return Err(format!(
                     "unknown effect '{name}' ({}, realistic = {})",
-                    super::options::extended_families(),
+                    effect_families(),
                     Family::names(Family::realistic())
                 ));
             }

@@ -3,7 +3,7 @@
 use std::collections::HashMap;
 use std::path::{Component, Path, PathBuf};
 
-use crate::model::{Joint, JointAngles, Side};
+use crate::model::{CameraId, Joint, JointAngles, Model, Side};
 
 use super::Capture;
 use super::csv_table::CsvTable;
@@ -25,6 +25,7 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Vec<Capture>, DatasetEr
     let joint_cols = Joint::ALL.map(|j| table.require(j.name()));
     let joint_cols: Vec<usize> = joint_cols.into_iter().collect::<Result<_, _>>()?;
     let image_col = table.column("image")?;
+    let camera_col = table.column("camera")?;
     let mut captures = Vec::new();
     for row in table.rows() {
         if captures.len() == MAX_CAPTURES {
@@ -45,6 +46,15 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Vec<Capture>, DatasetEr
             };
             DatasetError::invalid(row.at("board"), message)
         })?;
+        let camera = match camera_col.map(|c| row.str(c)) {
+            None | Some("") => CameraId::Lower,
+            Some(name) => CameraId::from_name(name).ok_or_else(|| {
+                DatasetError::invalid(
+                    row.at("camera"),
+                    format!("unknown camera '{name}', expected 'lower' or 'upper'"),
+                )
+            })?,
+        };
         let image = match image_col.map(|c| row.str(c)) {
             None | Some("") => None,
             Some(image) => {
@@ -60,6 +70,7 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Vec<Capture>, DatasetEr
         captures.push(Capture {
             id,
             side,
+            camera,
             image,
             joints,
             line: row.line,
@@ -151,17 +162,54 @@ pub(crate) fn validate(
     Ok(seen)
 }
 
-/// The header of `captures.csv` as written.
-pub(crate) fn header() -> Vec<&'static str> {
+/// Checks that every upper-camera capture has the upper camera's intrinsics: `model`
+/// must have `[upper_camera]` when any capture names the upper camera. `line` gives the line
+/// of each capture (by index) for the message.
+pub(crate) fn check_cameras(
+    path: &Path,
+    captures: &[Capture],
+    model: &Model,
+    line: impl Fn(usize, &Capture) -> u64,
+) -> Result<(), DatasetError> {
+    if model.upper_camera.is_some() {
+        return Ok(());
+    }
+    match captures
+        .iter()
+        .enumerate()
+        .find(|(_, c)| c.camera == CameraId::Upper)
+    {
+        None => Ok(()),
+        Some((i, c)) => Err(DatasetError::invalid(
+            Location::line(path, line(i, c)).field("camera"),
+            format!(
+                "capture {} was taken with the upper camera, but dataset.toml has no \
+                 [upper_camera] table (the upper camera's intrinsics, with the keys of \
+                 [camera])",
+                c.id
+            ),
+        )),
+    }
+}
+
+/// The header of `captures.csv` as written: with a `camera` column after `image` when
+/// `with_camera`.
+pub(crate) fn header(with_camera: bool) -> Vec<&'static str> {
     let mut header = vec!["capture", "board", "image"];
+    if with_camera {
+        header.push("camera");
+    }
     header.extend(Joint::ALL.iter().map(|j| j.name()));
     header
 }
 
-/// `captures.csv` for `captures` (already validated).
+/// `captures.csv` for `captures` (already validated); the `camera` column only when a
+/// capture was taken with the upper camera, so that a lower-camera dataset is written as
+/// one without the column.
 pub(crate) fn render(captures: &[Capture]) -> Result<Vec<u8>, csv::Error> {
+    let with_camera = captures.iter().any(|c| c.camera == CameraId::Upper);
     let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(header())?;
+    w.write_record(header(with_camera))?;
     for c in captures {
         let mut record = vec![
             c.id.to_string(),
@@ -171,6 +219,9 @@ pub(crate) fn render(captures: &[Capture]) -> Result<Vec<u8>, csv::Error> {
                 .map(|p| p.to_string_lossy().into_owned())
                 .unwrap_or_default(),
         ];
+        if with_camera {
+            record.push(c.camera.name().to_string());
+        }
         record.extend(Joint::ALL.iter().map(|&j| csv_float(c.joints.get(j))));
         w.write_record(&record)?;
     }
@@ -182,7 +233,7 @@ mod tests {
     use super::*;
 
     fn header_line() -> String {
-        header().join(",")
+        header(false).join(",")
     }
 
     fn row(id: &str, board: &str, image: &str, knee: &str) -> String {
@@ -292,6 +343,63 @@ mod tests {
             e,
             "d/captures.csv line 1, field RAnkleRoll: the header has no column 'RAnkleRoll'"
         );
+    }
+
+    #[test]
+    fn camera_column() {
+        let h = header(true).join(",");
+        let mut fields: Vec<String> = row("1", "left", "", "0")
+            .split(',')
+            .map(String::from)
+            .collect();
+        fields.insert(3, "upper".into());
+        let upper = fields.join(",");
+        fields[3] = String::new();
+        let empty = fields.join(",");
+        let c = parse_str(&format!("{h}\n{upper}\n{}\n", empty.replacen('1', "2", 1))).unwrap();
+        assert_eq!(
+            (c[0].camera, c[1].camera),
+            (CameraId::Upper, CameraId::Lower)
+        );
+        let c = parse_str(&format!(
+            "{}\n{}\n",
+            header_line(),
+            row("1", "left", "", "0")
+        ))
+        .unwrap();
+        assert_eq!(c[0].camera, CameraId::Lower);
+        fields[3] = "Upper".into();
+        let e = parse_str(&format!("{h}\n{}\n", fields.join(","))).unwrap_err();
+        assert_eq!(
+            e,
+            "d/captures.csv line 2, field camera: unknown camera 'Upper', expected 'lower' or 'upper'"
+        );
+        // An upper capture needs [upper_camera].
+        let c = parse_str(&format!("{h}\n{upper}\n")).unwrap();
+        let path = Path::new("d/captures.csv");
+        let e = check_cameras(path, &c, &Model::default(), |_, c| c.line).unwrap_err();
+        assert!(
+            e.to_string().starts_with(
+                "d/captures.csv line 2, field camera: capture 1 was taken with the upper camera, \
+                 but dataset.toml has no [upper_camera] table"
+            ),
+            "{e}"
+        );
+        let model = Model {
+            upper_camera: Some(Default::default()),
+            ..Model::default()
+        };
+        assert!(check_cameras(path, &c, &model, |_, c| c.line).is_ok());
+        // Written with the column only when a capture is upper.
+        let text = String::from_utf8(render(&c).unwrap()).unwrap();
+        assert!(
+            text.starts_with("capture,board,image,camera,HeadYaw"),
+            "{text}"
+        );
+        let mut lower = c.clone();
+        lower[0].camera = CameraId::Lower;
+        let text = String::from_utf8(render(&lower).unwrap()).unwrap();
+        assert!(text.starts_with("capture,board,image,HeadYaw"), "{text}");
     }
 
     #[test]

@@ -43,6 +43,9 @@ pub(crate) struct DatasetToml {
     /// The lower camera's intrinsics (required; an `Option` so that a missing table gets
     /// its own message).
     camera: Option<CameraToml>,
+    /// The upper camera's intrinsics, when the dataset has upper-camera captures.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    upper_camera: Option<CameraToml>,
     #[serde(default)]
     board: BoardToml,
     #[serde(default)]
@@ -62,7 +65,7 @@ struct JointsToml {
     corrected_by: Option<String>,
 }
 
-/// `[camera]`: the lower camera's a-priori intrinsics.
+/// `[camera]` and `[upper_camera]`: a camera's a-priori intrinsics.
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct CameraToml {
@@ -91,7 +94,9 @@ struct BoardToml {
     com_mm: Numbers<3>,
 }
 
-/// `[robot]`: link lengths, the lower camera's mounting and gravity; every key optional.
+/// `[robot]`: link lengths, the cameras' mountings and gravity; every key optional. The
+/// upper camera's mounting is written only when it differs from the default or the model
+/// has an upper camera, so that a lower-camera dataset is written as before.
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 struct RobotToml {
@@ -102,6 +107,10 @@ struct RobotToml {
     foot_height_mm: f64,
     lower_camera_offset_mm: Numbers<3>,
     lower_camera_tilt_deg: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    upper_camera_offset_mm: Option<Numbers<3>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    upper_camera_tilt_deg: Option<f64>,
     /// The direction of gravity in the origin frame; normalised when read.
     gravity: Numbers<3>,
 }
@@ -132,6 +141,20 @@ impl From<&Camera> for CameraToml {
     }
 }
 
+impl From<CameraToml> for Camera {
+    fn from(c: CameraToml) -> Self {
+        Camera {
+            width: c.width,
+            height: c.height,
+            fx: c.fx,
+            fy: c.fy,
+            cx: c.cx,
+            cy: c.cy,
+            distortion: c.distortion.map_or([0.0; 5], |d| d.0),
+        }
+    }
+}
+
 impl From<&Board> for BoardToml {
     fn from(b: &Board) -> Self {
         BoardToml {
@@ -148,6 +171,7 @@ impl From<&Board> for BoardToml {
 
 impl From<&RobotGeometry> for RobotToml {
     fn from(r: &RobotGeometry) -> Self {
+        let nominal = RobotGeometry::default();
         RobotToml {
             hip_offset_y_mm: r.hip_offset_y,
             hip_to_neck_z_mm: r.hip_to_neck_z,
@@ -156,6 +180,10 @@ impl From<&RobotGeometry> for RobotToml {
             foot_height_mm: r.foot_height,
             lower_camera_offset_mm: Numbers(r.lower_camera_offset),
             lower_camera_tilt_deg: degrees_for(r.lower_camera_tilt),
+            upper_camera_offset_mm: (r.upper_camera_offset != nominal.upper_camera_offset)
+                .then_some(Numbers(r.upper_camera_offset)),
+            upper_camera_tilt_deg: (r.upper_camera_tilt != nominal.upper_camera_tilt)
+                .then(|| degrees_for(r.upper_camera_tilt)),
             gravity: Numbers(r.gravity),
         }
     }
@@ -205,10 +233,16 @@ impl<const N: usize> Serialize for Numbers<N> {
 impl DatasetToml {
     /// The file for `model`, every value written out.
     fn from_model(model: &Model, angles: &AngleSource) -> Self {
+        let mut robot = RobotToml::from(&model.robot);
+        if model.upper_camera.is_some() {
+            robot.upper_camera_offset_mm = Some(Numbers(model.robot.upper_camera_offset));
+            robot.upper_camera_tilt_deg = Some(degrees_for(model.robot.upper_camera_tilt));
+        }
         DatasetToml {
             camera: Some(CameraToml::from(&model.camera)),
+            upper_camera: model.upper_camera.as_ref().map(CameraToml::from),
             board: BoardToml::from(&model.board),
-            robot: RobotToml::from(&model.robot),
+            robot,
             joints: JointsToml {
                 angles: angles.kind,
                 corrected_by: angles.corrected_by.clone(),
@@ -227,15 +261,8 @@ impl DatasetToml {
                     .into(),
             ));
         };
-        let camera = Camera {
-            width: c.width,
-            height: c.height,
-            fx: c.fx,
-            fy: c.fy,
-            cx: c.cx,
-            cy: c.cy,
-            distortion: c.distortion.map_or([0.0; 5], |d| d.0),
-        };
+        let camera = Camera::from(c);
+        let upper_camera = self.upper_camera.map(Camera::from);
         let b = self.board;
         let board = Board {
             squares_x: b.squares_x,
@@ -247,6 +274,7 @@ impl DatasetToml {
             com_mm: b.com_mm.0,
         };
         let r = self.robot;
+        let nominal = RobotGeometry::default();
         let robot = RobotGeometry {
             hip_offset_y: r.hip_offset_y_mm,
             hip_to_neck_z: r.hip_to_neck_z_mm,
@@ -255,12 +283,19 @@ impl DatasetToml {
             foot_height: r.foot_height_mm,
             lower_camera_offset: r.lower_camera_offset_mm.0,
             lower_camera_tilt: r.lower_camera_tilt_deg.to_radians(),
+            upper_camera_offset: r
+                .upper_camera_offset_mm
+                .map_or(nominal.upper_camera_offset, |o| o.0),
+            upper_camera_tilt: r
+                .upper_camera_tilt_deg
+                .map_or(nominal.upper_camera_tilt, f64::to_radians),
             gravity: unit_vector(r.gravity.0)?,
         };
         Ok(Model {
             robot,
             camera,
             board,
+            upper_camera,
         })
     }
 }
@@ -341,6 +376,7 @@ fn check(model: &Model) -> Result<(), KeyError> {
         robot,
         camera,
         board,
+        upper_camera,
     } = model;
     let finite = |key: &str, values: &[f64]| -> Result<(), KeyError> {
         match values.iter().position(|x| !x.is_finite()) {
@@ -371,40 +407,47 @@ fn check(model: &Model) -> Result<(), KeyError> {
             ),
         }
     };
-    let (lo, hi) = IMAGE_SIZE;
-    for (key, n) in [
-        ("camera.width", camera.width),
-        ("camera.height", camera.height),
-    ] {
-        if n < lo || n > hi {
-            return fail(key, format!("must be {lo} … {hi} px, got {n}"));
+    let check_camera = |table: &str, camera: &Camera| -> Result<(), KeyError> {
+        let (lo, hi) = IMAGE_SIZE;
+        for (key, n) in [
+            (format!("{table}.width"), camera.width),
+            (format!("{table}.height"), camera.height),
+        ] {
+            if n < lo || n > hi {
+                return fail(&key, format!("must be {lo} … {hi} px, got {n}"));
+            }
         }
-    }
-    within(
-        "camera.fx",
-        camera.fx,
-        FOCAL,
-        "px (a camera's focal length)",
-    )?;
-    within(
-        "camera.fy",
-        camera.fy,
-        FOCAL,
-        "px (a camera's focal length)",
-    )?;
-    for (key, c, size) in [
-        ("camera.cx", camera.cx, camera.width),
-        ("camera.cy", camera.cy, camera.height),
-    ] {
-        let size = f64::from(size);
         within(
-            key,
-            c,
-            (-0.5 * size, 1.5 * size),
-            "px (the principal point lies within the image ± 50 %)",
+            &format!("{table}.fx"),
+            camera.fx,
+            FOCAL,
+            "px (a camera's focal length)",
         )?;
+        within(
+            &format!("{table}.fy"),
+            camera.fy,
+            FOCAL,
+            "px (a camera's focal length)",
+        )?;
+        for (key, c, size) in [
+            (format!("{table}.cx"), camera.cx, camera.width),
+            (format!("{table}.cy"), camera.cy, camera.height),
+        ] {
+            let size = f64::from(size);
+            within(
+                &key,
+                c,
+                (-0.5 * size, 1.5 * size),
+                "px (the principal point lies within the image ± 50 %)",
+            )?;
+        }
+        finite(&format!("{table}.distortion"), &camera.distortion)?;
+        Ok(())
+    };
+    check_camera("camera", camera)?;
+    if let Some(upper) = upper_camera {
+        check_camera("upper_camera", upper)?;
     }
-    finite("camera.distortion", &camera.distortion)?;
     let (lo, hi) = SQUARES;
     for (key, n) in [
         ("board.squares_x", board.squares_x),
@@ -452,6 +495,18 @@ fn check(model: &Model) -> Result<(), KeyError> {
     within(
         "robot.lower_camera_tilt_deg",
         robot.lower_camera_tilt.to_degrees(),
+        (-ANGLE_DEG, ANGLE_DEG),
+        "°",
+    )?;
+    each_within(
+        "robot.upper_camera_offset_mm",
+        &robot.upper_camera_offset,
+        POSITION_MM,
+        "mm",
+    )?;
+    within(
+        "robot.upper_camera_tilt_deg",
+        robot.upper_camera_tilt.to_degrees(),
         (-ANGLE_DEG, ANGLE_DEG),
         "°",
     )?;
@@ -506,6 +561,36 @@ mod tests {
              lower_camera_tilt_deg = 39.7\n"
         );
         assert_eq!(parse_str(&text).unwrap(), Model::default());
+    }
+
+    #[test]
+    fn upper_camera_table_and_mount() {
+        let m = parse_str(MINIMAL).unwrap();
+        assert_eq!(m.upper_camera, None);
+        let text = format!(
+            "{MINIMAL}[upper_camera]\nwidth = 1280\nheight = 960\nfx = 1100\nfy = 1100\n\
+             cx = 640\ncy = 480\n[robot]\nupper_camera_tilt_deg = 2\n"
+        );
+        let m = parse_str(&text).unwrap();
+        let upper = m.upper_camera.unwrap();
+        assert_eq!(
+            (upper.width, upper.fx, upper.distortion),
+            (1280, 1100.0, [0.0; 5])
+        );
+        assert_eq!(m.robot.upper_camera_tilt, 2f64.to_radians());
+        assert_eq!(m.robot.upper_camera_offset, [58.71, 0.0, 63.64]);
+        // Written with the table and the mount, read back the same.
+        let written = render(&m, &AngleSource::default()).unwrap();
+        assert!(written.contains("[upper_camera]") && written.contains("upper_camera_offset_mm"));
+        assert_eq!(parse_str(&written).unwrap(), m);
+        // A model without an upper camera is written without either.
+        let written = render(&Model::default(), &AngleSource::default()).unwrap();
+        assert!(!written.contains("upper"), "{written}");
+        let e = parse_str(&text.replace("fx = 1100", "fx = 1")).unwrap_err();
+        assert!(
+            e.contains("line 11, field upper_camera.fx: must be 50 … 20000 px"),
+            "{e}"
+        );
     }
 
     #[test]

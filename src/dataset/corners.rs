@@ -40,7 +40,8 @@ pub(crate) const PIXEL_BAND: f64 = 1.0;
 
 /// Checks corners in memory: finite pixels and no vertex twice in one capture; with
 /// `captures` (id → line in `captures.csv`), that every capture is known, and with `model`,
-/// that every vertex is on its board and every pixel within the image ± [`PIXEL_BAND`].
+/// that every vertex is on its board and every pixel within the image ± [`PIXEL_BAND`] (the
+/// larger image of a dataset with two cameras).
 /// `line` gives the line of each corner (by index).
 pub(crate) fn validate(
     path: &Path,
@@ -88,9 +89,17 @@ pub(crate) fn validate(
                 ));
             }
         }
+        // The larger camera's image where the dataset has two cameras.
+        let largest = |size: fn(&crate::model::Camera) -> u32| {
+            model.map(|m| {
+                m.upper_camera
+                    .as_ref()
+                    .map_or(size(&m.camera), |u| size(u).max(size(&m.camera)))
+            })
+        };
         for (field, x, size) in [
-            ("u", corner.pixel[0], model.map(|m| m.camera.width)),
-            ("v", corner.pixel[1], model.map(|m| m.camera.height)),
+            ("u", corner.pixel[0], largest(|c| c.width)),
+            ("v", corner.pixel[1], largest(|c| c.height)),
         ] {
             if !x.is_finite() {
                 return Err(DatasetError::invalid(

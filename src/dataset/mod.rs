@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 
 pub use error::{DatasetError, Location};
 
-use crate::model::{JointAngles, Model, PARAMETER_COUNT, Param, Side, Vertex};
+use crate::model::{CameraId, JointAngles, Model, PARAMETER_COUNT, Param, Side, Vertex};
 use crate::output::{WriteOptions, write_atomic};
 
 /// File name of the camera, board and robot description (required).
@@ -35,13 +35,16 @@ pub const CORNERS_CSV: &str = "corners.csv";
 /// File name of the true parameters of a simulated dataset (optional).
 pub const TRUTH_TOML: &str = "truth.toml";
 
-/// One captured image: which board is in view and the logged joint angles.
+/// One captured image: which camera took it, which board is in view and the logged joint
+/// angles.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Capture {
     /// Unique capture id.
     pub id: u64,
     /// The foot whose board is in view.
     pub side: Side,
+    /// The camera that took it (`camera` column; lower when absent or empty).
+    pub camera: CameraId,
     /// Image path relative to the dataset directory, if any.
     pub image: Option<PathBuf>,
     /// Logged joint angles, in radians.
@@ -168,6 +171,7 @@ impl Dataset {
         let bytes = text::read_file(&path, true, " (it needs at least its header line)")?;
         let captures = captures::parse(&path, &bytes.unwrap_or_default())?;
         let ids = captures::validate(&path, &captures, |_, c| c.line)?;
+        captures::check_cameras(&path, &captures, &model, |_, c| c.line)?;
 
         let path = dir.join(CORNERS_CSV);
         let bytes = if with_corners {
@@ -217,6 +221,12 @@ impl Dataset {
         let ids = captures::validate(&dir.join(CAPTURES_CSV), &self.captures, |i, c| {
             line(i, c.line)
         })?;
+        captures::check_cameras(
+            &dir.join(CAPTURES_CSV),
+            &self.captures,
+            &self.model,
+            |i, c| line(i, c.line),
+        )?;
         corners::validate(
             &dir.join(CORNERS_CSV),
             &self.corners,
@@ -261,7 +271,7 @@ impl Dataset {
         let corners_csv = corners::render(&self.corners)
             .map_err(|e| DatasetError::io(&corners_path, "write", e.into()))?;
         let truth_toml = match &self.truth {
-            Some(t) => Some(truth::render(t).map_err(|e| {
+            Some(t) => Some(truth::render(t, self.has_upper_captures()).map_err(|e| {
                 DatasetError::invalid(
                     Location::file(&truth_path).field("simulation"),
                     format!("cannot be written as TOML: {e}"),
@@ -285,6 +295,11 @@ impl Dataset {
             None => {}
         }
         Ok(())
+    }
+
+    /// Whether any capture was taken with the upper camera.
+    pub fn has_upper_captures(&self) -> bool {
+        self.captures.iter().any(|c| c.camera == CameraId::Upper)
     }
 
     /// The capture with id `id`.
@@ -387,6 +402,7 @@ mod tests {
         Capture {
             id,
             side,
+            camera: CameraId::Lower,
             image: None,
             joints,
             line: 0,

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use serde::Deserialize;
 
-use crate::model::{PARAMETER_COUNT, Param};
+use crate::model::{Family, PARAMETER_COUNT, Param};
 
 use super::Truth;
 use super::error::{DatasetError, Location};
@@ -108,8 +108,14 @@ fn non_finite(key: &str, value: &toml::Value) -> Result<(), (String, f64)> {
 }
 
 /// `truth.toml` for `truth` (already validated): every parameter in [`Param::ALL`] order,
-/// in report units, then the `[simulation]` table.
-pub(crate) fn render(truth: &Truth) -> Result<String, toml::ser::Error> {
+/// in report units, then the `[simulation]` table. The upper camera's parameters are
+/// written only for a dataset with upper-camera captures (`upper`) or when one is not zero
+/// (a parameter left out reads as zero).
+pub(crate) fn render(truth: &Truth, upper: bool) -> Result<String, toml::ser::Error> {
+    let upper = upper
+        || Family::UpperCamera
+            .params()
+            .any(|p| truth.values[p.index()] != 0.0);
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -118,6 +124,9 @@ pub(crate) fn render(truth: &Truth) -> Result<String, toml::ser::Error> {
     let _ = writeln!(s);
     let _ = writeln!(s, "[parameters]");
     for param in Param::ALL {
+        if param.family() == Family::UpperCamera && !upper {
+            continue;
+        }
         let value = report_value(param.unit(), truth.values[param.index()]);
         let _ = writeln!(
             s,
@@ -218,7 +227,7 @@ mod tests {
         simulation.insert("seed".into(), toml::Value::Integer(42));
         simulation.insert("px_noise".into(), toml::Value::Float(0.1));
         let truth = Truth { values, simulation };
-        let text = render(&truth).unwrap();
+        let text = render(&truth, false).unwrap();
         assert!(text.contains("\nCamYaw = 0.4764   # deg\n"), "{text}");
         assert!(text.contains("\nRBoardTransY = 2.2007   # mm\n"), "{text}");
         assert_eq!(parse(Path::new("t"), text.as_bytes()).unwrap(), truth);

@@ -91,9 +91,12 @@ fn wholly_in_view(
         return false;
     };
     square >= MIN_SQUARE
-        && points
-            .iter()
-            .all(|p| dataset.model.camera.contains(*p, square))
+        && points.iter().all(|p| {
+            dataset
+                .model
+                .intrinsics(capture.camera)
+                .contains(*p, square)
+        })
 }
 
 /// Points refined at full resolution that fit one homography, or why they do not.
@@ -149,11 +152,12 @@ pub(super) fn chessboard(
     search: Search,
 ) -> opencv::Result<Outcome> {
     let model = &dataset.model;
-    let camera = [model.camera.width, model.camera.height];
+    let intrinsics = model.intrinsics(capture.camera);
+    let camera = [intrinsics.width, intrinsics.height];
     let check = |points: Option<Vec<[f64; 2]>>| -> opencv::Result<Option<Checked>> {
         match points {
             None => Ok(None),
-            Some(points) => checked(grey, points, grid, options, &model.camera).map(Some),
+            Some(points) => checked(grey, points, grid, options, intrinsics).map(Some),
         }
     };
     let mut whole_image = false;

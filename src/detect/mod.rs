@@ -236,7 +236,8 @@ fn detect_image(
     let path = resolve_image(&dataset.dir, image)?;
     let bytes = read_bytes(&path)?;
     // The size is checked from the header, before any pixel is decoded.
-    let camera = [model.camera.width, model.camera.height];
+    let intrinsics = model.intrinsics(capture.camera);
+    let camera = [intrinsics.width, intrinsics.height];
     if !bytes.is_empty() {
         let size = check_header(&path, &bytes)?;
         if size != camera {
@@ -259,10 +260,10 @@ fn detect_image(
     if options.use_model && options.guided && grid == board_grid(model) {
         let params = options.prediction();
         let pose = model
-            .chains(capture.side, &capture.joints)
+            .chains_for(capture.camera, capture.side, &capture.joints)
             .camera_to_board(&params);
         let integral = guided::Integral::new(&grey).map_err(cv)?;
-        let camera = model.camera_at(&params);
+        let camera = model.intrinsics_at(capture.camera, &params);
         let found = guided::detect(
             &grey,
             &integral,
@@ -303,7 +304,7 @@ fn detect_image(
             }
             // Part of the board: OpenCV's chessboard finder may still find all of it, but
             // only where every vertex is in view, and it gives up slowly where one is not.
-            if !chessboard::worth_trying(&board, &model.camera, options.subpix_factor) {
+            if !chessboard::worth_trying(&board, intrinsics, options.subpix_factor) {
                 return Ok(found);
             }
             search = chessboard::Search::Whole {
@@ -465,7 +466,7 @@ fn worth_again(
                 && predict(&dataset.model, capture, params).is_some_and(|points| {
                     let inside = points
                         .iter()
-                        .filter(|p| dataset.model.camera.contains(**p, 8.0))
+                        .filter(|p| dataset.model.intrinsics(capture.camera).contains(**p, 8.0))
                         .count();
                     inside > corners.len()
                 })

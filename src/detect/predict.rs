@@ -6,13 +6,14 @@ use opencv::core::Rect;
 use crate::dataset::Capture;
 use crate::model::{Model, PARAMETER_COUNT, Vertex};
 
-/// Where the nominal model (all offsets zero) puts every vertex of the board in view of
-/// `capture` (row-major), or `None` when a vertex is behind the camera.
+/// Where the model with parameters `params` puts every vertex of the board in view of
+/// `capture`, through the capture's camera (row-major), or `None` when a vertex is behind
+/// the camera.
 pub fn predict(model: &Model, capture: &Capture, params: &[f64]) -> Option<Vec<[f64; 2]>> {
     let vertices: Vec<Vertex> = model.board.vertices().collect();
     model
         .project(
-            &model.chains(capture.side, &capture.joints),
+            &model.chains_for(capture.camera, capture.side, &capture.joints),
             params,
             &vertices,
         )
@@ -34,9 +35,9 @@ pub(super) fn predicted_roi(
         (b.squares_y as f64 / 2.0 + 1.0) * b.square,
     );
     let pose = model
-        .chains(capture.side, &capture.joints)
+        .chains_for(capture.camera, capture.side, &capture.joints)
         .camera_to_board(params);
-    let camera = model.camera_at(params);
+    let camera = model.intrinsics_at(capture.camera, params);
     let mut lo = [f64::INFINITY; 2];
     let mut hi = [f64::NEG_INFINITY; 2];
     for (x, y) in [(-hx, -hy), (hx, -hy), (-hx, hy), (hx, hy)] {
@@ -46,7 +47,7 @@ pub(super) fn predicted_roi(
             hi[i] = hi[i].max(p[i]);
         }
     }
-    let (w, h) = (model.camera.width as f64, model.camera.height as f64);
+    let (w, h) = (camera.width as f64, camera.height as f64);
     let margin = 40.0 + 0.15 * (hi[0] - lo[0]).max(hi[1] - lo[1]);
     let x0 = (lo[0] - margin).max(0.0).floor();
     let y0 = (lo[1] - margin).max(0.0).floor();

@@ -112,7 +112,7 @@ pub fn bound(param: Param) -> Bound {
         why,
     };
     match (param.family(), param.unit()) {
-        (Family::Paper | Family::Head, Unit::Deg) => sym(
+        (Family::Paper | Family::UpperCamera | Family::Head, Unit::Deg) => sym(
             30.0,
             "an angle offset beyond ±30° is no mounting or encoder error",
         ),
@@ -137,7 +137,9 @@ pub fn bound(param: Param) -> Bound {
             max: 5.0,
             why: "play is a width, never negative",
         },
-        (Family::Head, _) => sym(30.0, "an angle offset beyond ±30° is no encoder error"),
+        (Family::Head | Family::UpperCamera, _) => {
+            sym(30.0, "an angle offset beyond ±30° is no encoder error")
+        }
     }
 }
 

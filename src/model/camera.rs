@@ -1,12 +1,73 @@
-//! The pinhole camera with optional OpenCV distortion, and its projection as data
-//! ([`Projection`]): the intrinsics and the first two distortion coefficients may carry
-//! calibration parameters (families `intrinsics` and `distortion`, see docs/MODEL.md).
+//! The NAO's two cameras ([`CameraId`]), the pinhole camera with optional OpenCV
+//! distortion, and its projection as data ([`Projection`]): the lower camera's intrinsics
+//! and first two distortion coefficients may carry calibration parameters (families
+//! `intrinsics` and `distortion`, see docs/MODEL.md).
 
 use super::chain::Affine;
 use super::parameters::{PARAMETER_COUNT, Param};
 use super::scalar::{Scalar, lift};
 
-/// A-priori intrinsic calibration of the lower camera.
+/// Which of the NAO's two head cameras took a picture.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Hash,
+    PartialOrd,
+    Ord,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum CameraId {
+    /// The lower camera (mouth), tilted 39.7° down: the paper's camera.
+    #[default]
+    Lower,
+    /// The upper camera (forehead), tilted 1.2° down.
+    Upper,
+}
+
+impl CameraId {
+    /// Both cameras, lower first.
+    pub const ALL: [CameraId; 2] = [CameraId::Lower, CameraId::Upper];
+
+    /// `lower` or `upper`, as in the `camera` column of `captures.csv`.
+    pub fn name(self) -> &'static str {
+        match self {
+            CameraId::Lower => "lower",
+            CameraId::Upper => "upper",
+        }
+    }
+
+    /// Parses `lower` / `upper`.
+    pub fn from_name(name: &str) -> Option<CameraId> {
+        CameraId::ALL.into_iter().find(|c| c.name() == name)
+    }
+
+    /// The camera's rotation offsets: yaw, pitch, roll (`CamYaw, CamPitch, CamRoll` or
+    /// `UpperCamYaw, UpperCamPitch, UpperCamRoll`).
+    pub fn rotation_params(self) -> [Param; 3] {
+        match self {
+            CameraId::Lower => [Param::CamYaw, Param::CamPitch, Param::CamRoll],
+            CameraId::Upper => [
+                Param::UpperCamYaw,
+                Param::UpperCamPitch,
+                Param::UpperCamRoll,
+            ],
+        }
+    }
+}
+
+impl std::fmt::Display for CameraId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A-priori intrinsic calibration of one camera.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Camera {
     /// Image width in pixels.
@@ -65,8 +126,9 @@ impl Camera {
         self.constant_projection().project::<T>(&[], p)
     }
 
-    /// The projection with no parameter attached (the a-priori intrinsics as constants).
-    fn constant_projection(&self) -> Projection {
+    /// The projection with no parameter attached (the a-priori intrinsics as constants):
+    /// the upper camera's, whose intrinsics are not calibrated.
+    pub fn constant_projection(&self) -> Projection {
         let [k1, k2, p1, p2, k3] = self.distortion;
         let c = Affine::constant;
         Projection {
@@ -83,7 +145,7 @@ impl Camera {
     }
 
     /// The projection as data, with the intrinsics and distortion parameters (Fx, Fy, Cx,
-    /// Cy, K1, K2) added to the a-priori values.
+    /// Cy, K1, K2) added to the a-priori values: the lower camera's.
     pub fn projection(&self) -> Projection {
         Projection {
             fx: Affine::constant(self.fx).plus(Param::Fx, 1.0),

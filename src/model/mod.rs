@@ -1,4 +1,4 @@
-//! The kinematic model of the NAO, its lower camera and the checkerboard sandals.
+//! The kinematic model of the NAO, its two cameras and the checkerboard sandals.
 //!
 //! Everything here is written once and generic over [`Scalar`], so the same code gives
 //! values and derivatives; the chains are data ([`Chain`]) so that the Ceres shim can
@@ -15,7 +15,7 @@ pub mod robot;
 pub mod scalar;
 
 pub use board::{Board, Vertex};
-pub use camera::{Camera, Projection};
+pub use camera::{Camera, CameraId, Projection};
 pub use chain::{Affine, Chain, Step};
 pub use parameters::{
     FAMILIES, Family, FamilyInfo, FixedSet, PAPER_PARAMETERS, PARAMETER_COUNT, Param, ParamGroup,
@@ -34,15 +34,20 @@ pub struct Model {
     pub camera: Camera,
     /// The sandal pattern and its mount (the same for both feet).
     pub board: Board,
+    /// Upper camera intrinsics (`[upper_camera]` of `dataset.toml`), when given.
+    pub upper_camera: Option<Camera>,
 }
 
-/// The two chains of one capture: origin → camera and origin → board of the leg in view.
+/// The chains of one capture, origin → camera and origin → board of the leg in view, and
+/// the projection of the camera that took it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StanceChains {
-    /// `T_OC` (docs/MODEL.md §2.2).
+    /// `T_OC` (docs/MODEL.md §2.2): origin → the capture's camera.
     pub camera: Chain,
     /// `T_OS · Rz(α_RotZ) · T(α_TransX, α_TransY, 0) · T_SB` (docs/MODEL.md §4).
     pub board: Chain,
+    /// The capture's camera's projection `P`.
+    pub projection: Projection,
 }
 
 impl StanceChains {
@@ -58,10 +63,12 @@ impl StanceChains {
         StanceChains {
             camera: self.camera.freeze(held, values),
             board: self.board.freeze(held, values),
+            projection: self.projection.freeze(held, values),
         }
     }
 
-    /// The parameters either chain depends on, without repeats.
+    /// The parameters either chain depends on, without repeats (the projection's are not
+    /// included: see [`Projection::params`]).
     pub fn params(&self) -> Vec<Param> {
         let mut out = self.camera.params();
         for p in self.board.params() {
@@ -74,9 +81,15 @@ impl StanceChains {
 }
 
 impl Model {
-    /// The chains of a capture of the board on `side`, with joint angles `joints` (the
-    /// gravity torques of compliance and play computed from them).
+    /// The chains of a lower-camera capture of the board on `side`, with joint angles
+    /// `joints` (the gravity torques of compliance and play computed from them).
     pub fn chains(&self, side: Side, joints: &JointAngles) -> StanceChains {
+        self.chains_for(CameraId::Lower, side, joints)
+    }
+
+    /// The chains of a capture by `camera` of the board on `side`, with joint angles
+    /// `joints`.
+    pub fn chains_for(&self, camera: CameraId, side: Side, joints: &JointAngles) -> StanceChains {
         let [rot_z, trans_x, trans_y] = side.board_params();
         let torques = gravity::leg_torques(&self.robot, &self.board, side, joints);
         let board = self
@@ -87,13 +100,32 @@ impl Model {
             .translate(Axis::Y, Affine::param(trans_y))
             .fixed(self.board.mount());
         StanceChains {
-            camera: self.robot.camera_chain(joints),
+            camera: self.robot.camera_chain_of(camera, joints),
             board,
+            projection: self.projection(camera),
         }
     }
 
-    /// Projects every vertex in `vertices` for parameters `params` (docs/MODEL.md §2.5); `None` for
-    /// a vertex behind the camera.
+    /// The intrinsics of `camera`. The upper camera's are `[upper_camera]`; a model without
+    /// that table (which no dataset with upper-camera captures is) uses the lower camera's.
+    pub fn intrinsics(&self, camera: CameraId) -> &Camera {
+        match camera {
+            CameraId::Lower => &self.camera,
+            CameraId::Upper => self.upper_camera.as_ref().unwrap_or(&self.camera),
+        }
+    }
+
+    /// The projection of `camera` as data: the lower camera's carries the intrinsics and
+    /// distortion parameters, the upper camera's is its a-priori intrinsics.
+    pub fn projection(&self, camera: CameraId) -> Projection {
+        match camera {
+            CameraId::Lower => self.camera.projection(),
+            CameraId::Upper => self.intrinsics(camera).constant_projection(),
+        }
+    }
+
+    /// Projects every vertex in `vertices` through the capture's camera for parameters
+    /// `params` (docs/MODEL.md §2.5); `None` for a vertex behind the camera.
     pub fn project<T: Scalar>(
         &self,
         chains: &StanceChains,
@@ -101,7 +133,7 @@ impl Model {
         vertices: &[Vertex],
     ) -> Vec<Option<[T; 2]>> {
         let pose = chains.camera_to_board(params);
-        let projection = self.camera.projection();
+        let projection = &chains.projection;
         vertices
             .iter()
             .map(|v| {
@@ -122,5 +154,14 @@ impl Model {
         camera.distortion[0] += params[Param::K1.index()];
         camera.distortion[1] += params[Param::K2.index()];
         camera
+    }
+
+    /// The true intrinsics of `camera` for the parameters `params`: [`Model::camera_at`]
+    /// for the lower camera, the a-priori intrinsics for the upper one.
+    pub fn intrinsics_at(&self, camera: CameraId, params: &[f64]) -> Camera {
+        match camera {
+            CameraId::Lower => self.camera_at(params),
+            CameraId::Upper => *self.intrinsics(camera),
+        }
     }
 }

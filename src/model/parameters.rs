@@ -61,6 +61,8 @@ impl Unit {
 pub enum Family {
     /// The paper's 21: camera rotation, leg joint offsets, sandal mounting.
     Paper,
+    /// The upper camera's rotation offsets (free when a dataset has upper-camera captures).
+    UpperCamera,
     /// Head joint offsets.
     Head,
     /// Corrections of the focal lengths and the principal point.
@@ -97,11 +99,19 @@ pub struct FamilyInfo {
 }
 
 /// The family registry, in [`Family`] order.
-pub const FAMILIES: [FamilyInfo; 7] = [
+pub const FAMILIES: [FamilyInfo; 8] = [
     FamilyInfo {
         family: Family::Paper,
         name: "paper",
         about: "the paper's 21: camera rotation, leg joint offsets, sandal mounting",
+        auto: false,
+        realistic: false,
+    },
+    FamilyInfo {
+        family: Family::UpperCamera,
+        name: "upper_camera",
+        about: "the upper camera's rotation offsets (free when the dataset has upper-camera \
+                captures)",
         auto: false,
         realistic: false,
     },
@@ -238,6 +248,8 @@ pub enum ParamGroup {
     LeftElastic,
     /// The right leg's compliance and play.
     RightElastic,
+    /// UpperCamYaw, UpperCamPitch, UpperCamRoll.
+    UpperCamera,
 }
 
 impl ParamGroup {
@@ -256,6 +268,7 @@ impl ParamGroup {
             ParamGroup::RightLinks => "right_links",
             ParamGroup::LeftElastic => "left_elastic",
             ParamGroup::RightElastic => "right_elastic",
+            ParamGroup::UpperCamera => "upper_camera",
         }
     }
 
@@ -268,7 +281,8 @@ impl ParamGroup {
 macro_rules! parameters {
     ($($name:ident: $unit:ident, $family:ident, $group:ident $(, $joint:ident)?;)*) => {
         /// One calibration parameter. The first 21 are the paper's, in the order of its
-        /// Table 2; the extended model's follow, held fixed unless freed.
+        /// Table 2; the upper camera's three follow, then the extended model's, held fixed
+        /// unless freed.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
         #[repr(usize)]
         pub enum Param { $(#[doc = concat!("Parameter `", stringify!($name), "`.")] $name,)* }
@@ -328,6 +342,9 @@ parameters! {
     RBoardRotZ: Deg, Paper, RightBoard;
     RBoardTransX: Mm, Paper, RightBoard;
     RBoardTransY: Mm, Paper, RightBoard;
+    UpperCamYaw: Deg, UpperCamera, UpperCamera;
+    UpperCamPitch: Deg, UpperCamera, UpperCamera;
+    UpperCamRoll: Deg, UpperCamera, UpperCamera;
     HeadYaw: Deg, Head, Head;
     HeadPitch: Deg, Head, Head;
     Fx: Px, Intrinsics, Projection;
@@ -411,12 +428,23 @@ impl fmt::Display for Param {
 }
 
 /// Which parameters are held fixed in a solve.
+///
+/// Besides the mask it remembers which parameters were held on purpose ([`FixedSet::set`],
+/// [`FixedSet::with`], `--fix`): the upper camera's parameters, held by default, are freed
+/// for a dataset with upper-camera captures ([`FixedSet::for_upper_camera`]) unless held on
+/// purpose.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct FixedSet([bool; PARAMETER_COUNT]);
+pub struct FixedSet {
+    held: [bool; PARAMETER_COUNT],
+    pinned: [bool; PARAMETER_COUNT],
+}
 
 impl Default for FixedSet {
     fn default() -> Self {
-        FixedSet(Param::ALL.map(Param::fixed_by_default))
+        FixedSet {
+            held: Param::ALL.map(Param::fixed_by_default),
+            pinned: [false; PARAMETER_COUNT],
+        }
     }
 }
 
@@ -425,7 +453,7 @@ impl FixedSet {
     pub fn with(extra: &[Param]) -> Self {
         let mut set = FixedSet::default();
         for p in extra {
-            set.0[p.index()] = true;
+            set.set(*p, true);
         }
         set
     }
@@ -443,14 +471,42 @@ impl FixedSet {
         Ok(set)
     }
 
-    /// Holds `param` fixed (or frees it).
+    /// Holds `param` fixed (on purpose), or frees it.
     pub fn set(&mut self, param: Param, fixed: bool) {
-        self.0[param.index()] = fixed;
+        self.held[param.index()] = fixed;
+        self.pinned[param.index()] = fixed;
     }
 
     /// Whether `param` is held fixed.
     pub fn is_fixed(&self, param: Param) -> bool {
-        self.0[param.index()]
+        self.held[param.index()]
+    }
+
+    /// The set for a problem with (`upper`) or without upper-camera captures: the upper
+    /// camera's parameters are freed when it has some, unless held on purpose, and held
+    /// when it has none (no capture depends on them).
+    pub fn for_upper_camera(mut self, upper: bool) -> Self {
+        for p in Family::UpperCamera.params() {
+            self.held[p.index()] = !upper || self.pinned[p.index()];
+        }
+        self
+    }
+
+    /// Whether `param` is part of the fitted model: false only for the upper camera's
+    /// parameters of a problem without upper-camera captures (held, and not on purpose),
+    /// which results and reports leave out.
+    pub fn in_model(&self, param: Param) -> bool {
+        param.family() != Family::UpperCamera
+            || !self.held[param.index()]
+            || self.pinned[param.index()]
+    }
+
+    /// Whether reports list `param` in their tables: the paper's parameters, the upper
+    /// camera's when part of the model, and every free one.
+    pub fn is_shown(&self, param: Param) -> bool {
+        param.family() == Family::Paper
+            || (param.family() == Family::UpperCamera && self.in_model(param))
+            || !self.is_fixed(param)
     }
 
     /// The free parameters, in order.
@@ -472,7 +528,7 @@ impl FixedSet {
 
     /// A mask indexed by [`Param::index`].
     pub fn mask(&self) -> &[bool; PARAMETER_COUNT] {
-        &self.0
+        &self.held
     }
 }
 
@@ -509,9 +565,10 @@ mod tests {
 
     #[test]
     fn registry_has_the_extended_model() {
-        assert_eq!(PARAMETER_COUNT, 64);
+        assert_eq!(PARAMETER_COUNT, 67);
         let count = |f: Family| f.params().count();
         assert_eq!(count(Family::Paper), PAPER_PARAMETERS);
+        assert_eq!(count(Family::UpperCamera), 3);
         assert_eq!(count(Family::Head), 2);
         assert_eq!(count(Family::Intrinsics), 4);
         assert_eq!(count(Family::Distortion), 2);
@@ -531,6 +588,42 @@ mod tests {
                 .unwrap_err()
                 .contains("elasticity")
         );
+    }
+
+    #[test]
+    fn the_upper_camera_is_free_only_with_upper_captures_unless_held_on_purpose() {
+        let upper: Vec<Param> = Family::UpperCamera.params().collect();
+        assert_eq!(
+            upper,
+            [
+                Param::UpperCamYaw,
+                Param::UpperCamPitch,
+                Param::UpperCamRoll
+            ]
+        );
+        let default = FixedSet::default();
+        assert!(upper.iter().all(|&p| default.is_fixed(p)));
+        let with = default.clone().for_upper_camera(true);
+        assert!(upper.iter().all(|&p| !with.is_fixed(p) && with.in_model(p)));
+        let without = FixedSet::from_lists("upper_camera", "")
+            .unwrap()
+            .for_upper_camera(false);
+        assert!(
+            upper
+                .iter()
+                .all(|&p| without.is_fixed(p) && !without.in_model(p))
+        );
+        assert!(upper.iter().all(|&p| !without.is_shown(p)));
+        let pinned = FixedSet::from_lists("", "UpperCamYaw")
+            .unwrap()
+            .for_upper_camera(true);
+        assert!(pinned.is_fixed(Param::UpperCamYaw) && pinned.in_model(Param::UpperCamYaw));
+        assert!(pinned.is_shown(Param::UpperCamYaw) && !pinned.is_fixed(Param::UpperCamRoll));
+        // Nothing else changes.
+        for p in Param::ALL.into_iter().filter(|p| !upper.contains(p)) {
+            assert_eq!(with.is_fixed(p), default.is_fixed(p));
+            assert!(with.in_model(p) && without.in_model(p));
+        }
     }
 
     #[test]

@@ -3,6 +3,7 @@
 
 use std::f64::consts::FRAC_PI_4;
 
+use super::camera::CameraId;
 use super::chain::{Affine, Chain};
 use super::parameters::Param;
 use super::pose::Axis;
@@ -197,6 +198,10 @@ pub struct RobotGeometry {
     pub lower_camera_offset: [f64; 3],
     /// Lower camera tilt about y, looking down (rad).
     pub lower_camera_tilt: f64,
+    /// Upper camera position in the HeadPitch frame (mm).
+    pub upper_camera_offset: [f64; 3],
+    /// Upper camera tilt about y, looking down (rad).
+    pub upper_camera_tilt: f64,
     /// Direction of gravity in the origin frame `O`, a unit vector (lying on its back:
     /// `(−1, 0, 0)`); it sets the gravity torques of compliance and play.
     pub gravity: [f64; 3],
@@ -213,6 +218,8 @@ impl Default for RobotGeometry {
             foot_height: 45.19,
             lower_camera_offset: [50.71, 0.0, 17.74],
             lower_camera_tilt: 39.7f64.to_radians(),
+            upper_camera_offset: [58.71, 0.0, 63.64],
+            upper_camera_tilt: 1.2f64.to_radians(),
             gravity: [-1.0, 0.0, 0.0],
         }
     }
@@ -224,6 +231,42 @@ impl RobotGeometry {
     pub fn camera_chain(&self, joints: &JointAngles) -> Chain {
         let [x, y, z] = self.lower_camera_offset;
         let length = |value: f64, param: Param| Affine::constant(value).plus(param, 1.0);
+        self.head_chain(joints)
+            .translate(Axis::X, length(x, Param::CamX))
+            .translate(Axis::Y, length(y, Param::CamY))
+            .translate(Axis::Z, length(z, Param::CamZ))
+            .rotate(Axis::Y, Affine::constant(self.lower_camera_tilt))
+            .rotate(Axis::Y, Affine::param(Param::CamPitch))
+            .rotate(Axis::X, Affine::param(Param::CamRoll))
+            .rotate(Axis::Z, Affine::param(Param::CamYaw))
+    }
+
+    /// Origin → upper camera: the head chain of [`RobotGeometry::camera_chain`], then the
+    /// upper camera's mount `T(upper_camera_offset) · Ry(upper_camera_tilt)` and its rotation
+    /// offsets `Ry(α_UpperCamPitch) · Rx(α_UpperCamRoll) · Rz(α_UpperCamYaw)` (docs/MODEL.md).
+    pub fn upper_camera_chain(&self, joints: &JointAngles) -> Chain {
+        let [x, y, z] = self.upper_camera_offset;
+        self.head_chain(joints)
+            .translate(Axis::X, Affine::constant(x))
+            .translate(Axis::Y, Affine::constant(y))
+            .translate(Axis::Z, Affine::constant(z))
+            .rotate(Axis::Y, Affine::constant(self.upper_camera_tilt))
+            .rotate(Axis::Y, Affine::param(Param::UpperCamPitch))
+            .rotate(Axis::X, Affine::param(Param::UpperCamRoll))
+            .rotate(Axis::Z, Affine::param(Param::UpperCamYaw))
+    }
+
+    /// Origin → the camera `camera`.
+    pub fn camera_chain_of(&self, camera: CameraId, joints: &JointAngles) -> Chain {
+        match camera {
+            CameraId::Lower => self.camera_chain(joints),
+            CameraId::Upper => self.upper_camera_chain(joints),
+        }
+    }
+
+    /// Origin → HeadPitch frame: the neck and the two head joints with their offsets.
+    fn head_chain(&self, joints: &JointAngles) -> Chain {
+        let length = |value: f64, param: Param| Affine::constant(value).plus(param, 1.0);
         Chain::new()
             .translate(Axis::Z, length(self.hip_to_neck_z, Param::NeckZ))
             .rotate(
@@ -234,13 +277,6 @@ impl RobotGeometry {
                 Axis::Y,
                 Affine::joint(1.0, joints.get(Joint::HeadPitch), Param::HeadPitch),
             )
-            .translate(Axis::X, length(x, Param::CamX))
-            .translate(Axis::Y, length(y, Param::CamY))
-            .translate(Axis::Z, length(z, Param::CamZ))
-            .rotate(Axis::Y, Affine::constant(self.lower_camera_tilt))
-            .rotate(Axis::Y, Affine::param(Param::CamPitch))
-            .rotate(Axis::X, Affine::param(Param::CamRoll))
-            .rotate(Axis::Z, Affine::param(Param::CamYaw))
     }
 
     /// `T_OS`: origin → sole of one leg, with the joint offsets, link corrections,

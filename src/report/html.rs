@@ -285,7 +285,11 @@ pub fn overlay_png(
         .map(|c| (c.vertex, c.pixel))
         .collect();
     let (w, h, mut buf) = capture_image(dataset, capture).unwrap_or_else(|| {
-        let (w, h) = (dataset.model.camera.width, dataset.model.camera.height);
+        let camera = dataset
+            .capture(capture)
+            .map_or(crate::model::CameraId::Lower, |c| c.camera);
+        let intrinsics = dataset.model.intrinsics(camera);
+        let (w, h) = (intrinsics.width, intrinsics.height);
         (w, h, vec![200; (w * h * 3) as usize])
     });
     {

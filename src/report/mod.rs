@@ -13,15 +13,16 @@ use std::fmt::Write as _;
 
 use serde_json::Value;
 
-use crate::model::{PAPER_PARAMETERS, Param};
+use crate::model::Param;
 use crate::solve::Solution;
 
-/// Parameters shown in reports: the paper's 21, plus any further one that was estimated.
+/// Parameters shown in reports: the paper's 21, the upper camera's when the dataset has
+/// upper-camera captures, plus any further one that was estimated.
 pub fn shown_parameters(solution: &Solution) -> Vec<Param> {
     Param::ALL
         .iter()
         .copied()
-        .filter(|p| p.index() < PAPER_PARAMETERS || !solution.fixed.is_fixed(*p))
+        .filter(|p| solution.fixed.is_shown(*p))
         .collect()
 }
 

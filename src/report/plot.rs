@@ -33,7 +33,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::dataset::Dataset;
-use crate::model::{PAPER_PARAMETERS, Param, Side};
+use crate::model::{Param, Side};
 use crate::output::{WriteError, WriteOptions, write_atomic, write_atomic_with};
 use crate::solve::{Solution, VertexResidual};
 
@@ -594,12 +594,13 @@ pub fn parameter_estimates_svg(runs: &[&Solution]) -> Result<String, PlotError> 
     })
 }
 
-/// The paper's 21 and any further parameter some run estimated.
+/// The paper's 21, the upper camera's when some run has upper-camera captures, and any
+/// further parameter some run estimated.
 fn estimated_params(runs: &[&Solution]) -> Vec<Param> {
     Param::ALL
         .iter()
         .copied()
-        .filter(|p| p.index() < PAPER_PARAMETERS || runs.iter().any(|s| !s.fixed.is_fixed(*p)))
+        .filter(|p| runs.iter().any(|s| s.fixed.is_shown(*p)))
         .collect()
 }
 

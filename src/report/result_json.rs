@@ -303,6 +303,7 @@ impl ResultJson {
         let id = &solution.identifiability;
         let parameters = Param::ALL
             .iter()
+            .filter(|&&p| solution.fixed.in_model(p))
             .map(|&p| (p.name().to_string(), parameter(solution, p, truth)))
             .collect();
         ResultJson {

@@ -2,7 +2,9 @@
 //! the vertices the camera would see, with pixel and joint-angle noise.
 //!
 //! As in the paper's measurement phase, each leg takes `stances` stances, and each stance is
-//! photographed with `heads` head postures (24 × 3 × 2 = 144 captures by default).
+//! photographed with `heads` head postures (24 × 3 × 2 = 144 captures by default). On
+//! request, each leg also takes `upper_stances` stances photographed with the upper camera,
+//! found by search among random stances (few let the upper camera see a whole sandal).
 
 pub mod camera;
 pub mod render;
@@ -13,7 +15,7 @@ use rand_distr::{Distribution, Normal};
 
 use crate::dataset::{Capture, Corner, Dataset, Truth};
 use crate::model::{
-    Family, Joint, JointAngles, Model, PARAMETER_COUNT, Param, Pose, Side, StanceChains,
+    CameraId, Family, Joint, JointAngles, Model, PARAMETER_COUNT, Param, Pose, Side, StanceChains,
 };
 
 /// What to simulate.
@@ -21,10 +23,13 @@ use crate::model::{
 pub struct SimOptions {
     /// Seed of the random generator; the same seed gives the same dataset.
     pub seed: u64,
-    /// Stances per leg.
+    /// Stances per leg (lower camera).
     pub stances: usize,
     /// Head postures per stance.
     pub heads: usize,
+    /// Stances per leg photographed with the upper camera (each with `heads` postures),
+    /// after the lower camera's.
+    pub upper_stances: usize,
     /// Pixel noise σ per coordinate (px).
     pub px_noise: f64,
     /// Joint-angle noise σ per joint and capture (rad).
@@ -39,9 +44,15 @@ pub struct SimOptions {
     pub noise_seed: Option<u64>,
     /// Render one image per capture (true pose, actual joints) and name it in the capture.
     pub images: Option<render::ImageOutput>,
-    /// Stances to photograph instead of drawing them (a plan's schedule); `stances` and
-    /// `heads` are then ignored.
+    /// Stances to photograph instead of drawing them (a plan's schedule); `stances`,
+    /// `upper_stances` and `heads` are then ignored.
     pub schedule: Option<Vec<Stance>>,
+    /// The camera of each stance of `schedule`, in its order (a plan's `camera` column);
+    /// stances beyond its end are the lower camera's.
+    pub schedule_cameras: Vec<CameraId>,
+    /// Draw the true offsets as the teams' robot files show them ([`draw_team_truth`])
+    /// instead of [`draw_truth`]; ignored when `truth` is given.
+    pub team_offsets: bool,
     /// Let boards come near and across the image border (to test detection): head
     /// postures after a stance's first aim the board centre anywhere in the image, and a
     /// board partly outside is kept when [`MIN_VISIBLE`] vertices are in view. Only
@@ -55,6 +66,7 @@ impl Default for SimOptions {
             seed: 1,
             stances: 24,
             heads: 3,
+            upper_stances: 0,
             px_noise: 0.1,
             joint_noise: 0.0,
             truth: None,
@@ -62,6 +74,8 @@ impl Default for SimOptions {
             noise_seed: None,
             images: None,
             schedule: None,
+            schedule_cameras: Vec::new(),
+            team_offsets: false,
             near_border: false,
         }
     }
@@ -72,10 +86,12 @@ impl Default for SimOptions {
 pub enum SimError {
     /// No stance with the board fully in view was found in many tries.
     #[error(
-        "found only {found} of {wanted} stances for the {side} leg with the whole board in view; \
-         check the camera intrinsics and board geometry"
+        "found only {found} of {wanted} stances for the {side} leg with the whole board in view \
+         of the {camera} camera; check the camera intrinsics and board geometry"
     )]
     NoStances {
+        /// The camera.
+        camera: &'static str,
         /// The leg.
         side: &'static str,
         /// Stances found.
@@ -115,6 +131,72 @@ pub fn draw_truth(rng: &mut impl Rng) -> [f64; PARAMETER_COUNT] {
     truth
 }
 
+/// Draws the upper camera's rotation offsets into `truth` as [`draw_truth`] draws the
+/// lower camera's: ±3° each.
+pub fn draw_upper_camera(rng: &mut impl Rng, truth: &mut [f64; PARAMETER_COUNT]) {
+    for p in CameraId::Upper.rotation_params() {
+        truth[p.index()] = rng.random_range(-3.0f64..3.0).to_radians();
+    }
+}
+
+/// Draws true offsets of the sizes SPL teams' per-robot files show (SPQR's 2024 files in
+/// the B-Human framework, converted to naocalib's `q = θ + α`): lower-camera pitch
+/// −3.1…−7.8°, its yaw and roll within ±2°; upper-camera pitch −2.2…−10.2° with median
+/// −8.5°, its roll within ±2.7° and yaw within ±2°; head offsets within ±6.8° (yaw) and
+/// ±4.7° (pitch); leg joint offsets within ±2°; sandal mounting as [`draw_truth`]. Every
+/// value uniform in its range (the upper pitch uniform on each side of its median).
+pub fn draw_team_truth(rng: &mut impl Rng) -> [f64; PARAMETER_COUNT] {
+    let mut truth = [0.0; PARAMETER_COUNT];
+    let board_rot = Normal::new(0.0, 0.5f64.to_radians()).expect("valid σ");
+    let board_trans = Normal::new(0.0, 1.5).expect("valid σ");
+    for p in Param::ALL {
+        use Param::*;
+        truth[p.index()] = match p {
+            CamPitch => deg(rng, -7.8, -3.1),
+            CamYaw | CamRoll | UpperCamYaw => deg(rng, -2.0, 2.0),
+            UpperCamPitch => {
+                if rng.random_bool(0.5) {
+                    deg(rng, -10.2, -8.5)
+                } else {
+                    deg(rng, -8.5, -2.2)
+                }
+            }
+            UpperCamRoll => deg(rng, -2.7, 2.7),
+            HeadYaw => deg(rng, -6.8, 6.8),
+            HeadPitch => deg(rng, -4.7, 4.7),
+            LBoardRotZ | RBoardRotZ | LBoardTransX | LBoardTransY | RBoardTransX | RBoardTransY => {
+                continue;
+            }
+            _ if p.group() == crate::model::ParamGroup::LeftLeg
+                || p.group() == crate::model::ParamGroup::RightLeg =>
+            {
+                deg(rng, -2.0, 2.0)
+            }
+            _ => 0.0,
+        };
+    }
+    for p in [
+        Param::LBoardRotZ,
+        Param::LBoardTransX,
+        Param::LBoardTransY,
+        Param::RBoardRotZ,
+        Param::RBoardTransX,
+        Param::RBoardTransY,
+    ] {
+        truth[p.index()] = if p.unit() == crate::model::Unit::Deg {
+            board_rot.sample(rng)
+        } else {
+            board_trans.sample(rng)
+        };
+    }
+    truth
+}
+
+/// An angle drawn uniformly from `lo…hi` degrees, in radians.
+fn deg(rng: &mut impl Rng, lo: f64, hi: f64) -> f64 {
+    rng.random_range(lo..hi).to_radians()
+}
+
 /// Adds to `truth` effects of realistic size for each of `families` (the paper's family is
 /// drawn by [`draw_truth`]), each with a random sign where the sign is physical: head
 /// offsets 0.5°, focal lengths 1 % (5.6 px) and principal point 3 px, distortion k1, k2
@@ -127,7 +209,7 @@ pub fn draw_effects(rng: &mut impl Rng, families: &[Family], truth: &mut [f64; P
         }
         let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
         truth[p.index()] = match p.family() {
-            Family::Paper => continue,
+            Family::Paper | Family::UpperCamera => continue,
             Family::Head => sign * 0.5f64.to_radians(),
             Family::Intrinsics => match p {
                 Param::Fx | Param::Fy => sign * 5.625,
@@ -172,14 +254,17 @@ pub(crate) fn line_of_sight(pose: &Pose<f64>) -> [f64; 3] {
     })
 }
 
-/// The projected vertices of the board on `side`, if the whole board is in view (with
-/// `partial`, at least [`MIN_VISIBLE`] vertices), facing the camera, and not too small.
+/// The projected vertices of the board on `side`, if the whole board is in view of
+/// `camera` (with `partial`, at least [`MIN_VISIBLE`] vertices), facing it, and not too
+/// small.
 fn board_in_view(
     model: &Model,
+    camera: CameraId,
     chains: &StanceChains,
     params: &[f64],
     partial: bool,
 ) -> Option<Vec<[f64; 2]>> {
+    let intrinsics = model.intrinsics(camera);
     let to_camera = line_of_sight(&chains.camera_to_board(params));
     let dist = to_camera.iter().map(|x| x * x).sum::<f64>().sqrt();
     if to_camera[2] < dist * MAX_VIEW_ANGLE_DEG.to_radians().cos() {
@@ -191,15 +276,10 @@ fn board_in_view(
         .into_iter()
         .collect::<Option<_>>()?;
     if partial {
-        if uv
-            .iter()
-            .filter(|p| model.camera.contains(**p, 3.0))
-            .count()
-            < MIN_VISIBLE
-        {
+        if uv.iter().filter(|p| intrinsics.contains(**p, 3.0)).count() < MIN_VISIBLE {
             return None;
         }
-    } else if !uv.iter().all(|p| model.camera.contains(*p, MARGIN)) {
+    } else if !uv.iter().all(|p| intrinsics.contains(*p, MARGIN)) {
         return None;
     }
     let cols = model.board.cols() as usize;
@@ -256,19 +336,21 @@ pub fn steer_head(
     Some((j, false))
 }
 
-/// Turns the head so that the board centre appears at `target` (pixels) with
+/// Turns the head so that the board centre appears at `target` (pixels) of `camera` with
 /// [`steer_head`]; `None` if it leaves the joint limits.
 fn aim_head(
     model: &Model,
+    camera: CameraId,
     side: Side,
     joints: &JointAngles,
     params: &[f64],
     target: [f64; 2],
 ) -> Option<JointAngles> {
+    let intrinsics = model.intrinsics(camera);
     let centre = |j: &JointAngles| -> Option<[f64; 2]> {
-        let chains = model.chains(side, j);
+        let chains = model.chains_for(camera, side, j);
         let pose = chains.camera_to_board(params);
-        model.camera.project(&pose.translation)
+        intrinsics.project(&pose.translation)
     };
     let mut start = *joints;
     let sole = model.chains(side, joints).board.eval(params).translation;
@@ -292,11 +374,36 @@ fn random_leg(rng: &mut impl Rng, side: Side, joints: &mut JointAngles) {
 }
 
 /// Chooses `count` stances for `side`, each with `heads` head postures that keep the whole
-/// board in view, facing the camera (with `near_border`, see [`SimOptions::near_border`]).
-/// The other leg rests in a random relaxed posture; both HipYawPitch angles are equal (one
-/// motor).
+/// board in view of the lower camera, facing it (with `near_border`, see
+/// [`SimOptions::near_border`]). The other leg rests in a random relaxed posture; both
+/// HipYawPitch angles are equal (one motor).
 pub fn choose_stances(
     model: &Model,
+    side: Side,
+    params: &[f64],
+    count: usize,
+    heads: usize,
+    near_border: bool,
+    rng: &mut impl Rng,
+) -> Result<Vec<Stance>, SimError> {
+    choose_stances_for(
+        model,
+        CameraId::Lower,
+        side,
+        params,
+        count,
+        heads,
+        near_border,
+        rng,
+    )
+}
+
+/// [`choose_stances`] for the camera `camera`: a simple search over random stances, each
+/// kept when the head can be turned so that `camera` sees the whole board.
+#[allow(clippy::too_many_arguments)]
+pub fn choose_stances_for(
+    model: &Model,
+    camera: CameraId,
     side: Side,
     params: &[f64],
     count: usize,
@@ -309,7 +416,8 @@ pub fn choose_stances(
         Side::Left => Side::Right,
         Side::Right => Side::Left,
     };
-    let (w, h) = (model.camera.width as f64, model.camera.height as f64);
+    let intrinsics = model.intrinsics(camera);
+    let (w, h) = (intrinsics.width as f64, intrinsics.height as f64);
     let max_tries = 20_000 * count.max(1);
     for _ in 0..max_tries {
         if stances.len() == count {
@@ -341,14 +449,15 @@ pub fn choose_stances(
                     h * rng.random_range(0.3..0.7),
                 ]
             };
-            let Some(aimed) = aim_head(model, side, &joints, params, target) else {
+            let Some(aimed) = aim_head(model, camera, side, &joints, params, target) else {
                 if k == 0 {
                     break;
                 }
                 continue;
             };
             let partial = near_border && k > 0;
-            if board_in_view(model, &model.chains(side, &aimed), params, partial).is_some() {
+            let chains = model.chains_for(camera, side, &aimed);
+            if board_in_view(model, camera, &chains, params, partial).is_some() {
                 postures.push(aimed);
             } else if k == 0 {
                 break;
@@ -360,6 +469,7 @@ pub fn choose_stances(
     }
     if stances.len() < count {
         return Err(SimError::NoStances {
+            camera: camera.name(),
             side: side.name(),
             found: stances.len(),
             wanted: count,
@@ -390,29 +500,58 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
         out.options.validate()?;
         crate::dataset::check_writable(&out.dir, true, out.force)?;
     }
+    let upper = match &options.schedule {
+        Some(_) => options.schedule_cameras.contains(&CameraId::Upper),
+        None => options.upper_stances > 0,
+    };
     let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
     let truth = match options.truth {
         Some(t) => t,
-        None => {
-            let mut t = draw_truth(&mut rng);
+        None if options.team_offsets => {
+            let mut t = draw_team_truth(&mut rng);
             draw_effects(&mut rng, &options.effects, &mut t);
             t
         }
+        None => {
+            let mut t = draw_truth(&mut rng);
+            draw_effects(&mut rng, &options.effects, &mut t);
+            if upper {
+                draw_upper_camera(&mut rng, &mut t);
+            }
+            t
+        }
     };
-    let mut stances = options.schedule.clone().unwrap_or_default();
-    for side in Side::BOTH
-        .into_iter()
-        .filter(|_| options.schedule.is_none())
-    {
-        stances.extend(choose_stances(
-            model,
-            side,
-            &truth,
-            options.stances,
-            options.heads,
-            options.near_border,
-            &mut rng,
-        )?);
+    // Each stance with the camera that photographs it.
+    let mut stances: Vec<(CameraId, Stance)> = match &options.schedule {
+        Some(schedule) => schedule
+            .iter()
+            .enumerate()
+            .map(|(k, s)| {
+                let camera = options.schedule_cameras.get(k).copied().unwrap_or_default();
+                (camera, s.clone())
+            })
+            .collect(),
+        None => Vec::new(),
+    };
+    if options.schedule.is_none() {
+        for (camera, count) in [
+            (CameraId::Lower, options.stances),
+            (CameraId::Upper, options.upper_stances),
+        ] {
+            for side in Side::BOTH.into_iter().filter(|_| count > 0) {
+                let chosen = choose_stances_for(
+                    model,
+                    camera,
+                    side,
+                    &truth,
+                    count,
+                    options.heads,
+                    options.near_border,
+                    &mut rng,
+                )?;
+                stances.extend(chosen.into_iter().map(|s| (camera, s)));
+            }
+        }
     }
     let mut noise_rng = match options.noise_seed {
         Some(seed) => ChaCha8Rng::seed_from_u64(seed),
@@ -425,17 +564,19 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
     let mut captures = Vec::new();
     let mut corners = Vec::new();
     let mut image_jobs = Vec::new();
-    for stance in &stances {
+    for (camera, stance) in &stances {
+        let camera = *camera;
         for logged in &stance.postures {
             let id = captures.len() as u64;
             let mut actual = *logged;
             for j in Joint::ALL {
                 actual.set(j, logged.get(j) + joint.sample(&mut noise_rng));
             }
-            let projected = model.project(&model.chains(stance.side, &actual), &truth, &vertices);
+            let chains = model.chains_for(camera, stance.side, &actual);
+            let projected = model.project(&chains, &truth, &vertices);
             for (v, uv) in vertices.iter().zip(projected) {
                 let Some(uv) = uv else { continue };
-                if options.near_border && !model.camera.contains(uv, 0.0) {
+                if options.near_border && !model.intrinsics(camera).contains(uv, 0.0) {
                     continue;
                 }
                 let pixel = [
@@ -452,6 +593,7 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
             if options.images.is_some() {
                 image_jobs.push(render::ImageJob {
                     id,
+                    camera,
                     side: stance.side,
                     joints: actual,
                 });
@@ -459,6 +601,7 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
             captures.push(Capture {
                 id,
                 side: stance.side,
+                camera,
                 image: options.images.as_ref().map(|_| render::image_name(id)),
                 joints: *logged,
                 line: 0,
@@ -488,6 +631,15 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
         "head_postures".into(),
         toml::Value::Integer(options.heads as i64),
     );
+    if options.upper_stances > 0 && options.schedule.is_none() {
+        simulation.insert(
+            "upper_stances_per_leg".into(),
+            toml::Value::Integer(options.upper_stances as i64),
+        );
+    }
+    if options.team_offsets && options.truth.is_none() {
+        simulation.insert("team_offsets".into(), toml::Value::Boolean(true));
+    }
     if options.near_border {
         simulation.insert("near_border".into(), toml::Value::Boolean(true));
     }

@@ -18,7 +18,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
-use crate::model::{JointAngles, Model, Pose, Side};
+use crate::model::{CameraId, JointAngles, Model, Pose, Side};
 
 /// How to render images.
 #[derive(Debug, Clone, PartialEq)]
@@ -365,7 +365,7 @@ fn blur(img: &mut [f32], width: usize, height: usize, sigma: f64) {
     }
 }
 
-/// Renders the view of the lower camera of `model` onto a board in pose `pose` (`T_CB`, the
+/// Renders the view of the camera `model.camera` onto a board in pose `pose` (`T_CB`, the
 /// board in the camera frame), with the background and noise drawn from `seed`.
 pub fn render(
     model: &Model,
@@ -469,11 +469,14 @@ pub struct ImageOutput {
     pub force: bool,
 }
 
-/// One image to render: the capture id, the board in view and the actual joint angles.
+/// One image to render: the capture id, the camera, the board in view and the actual joint
+/// angles.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ImageJob {
     /// Capture id (names the file `images/NNNN.png` and seeds the image).
     pub id: u64,
+    /// The camera that takes it.
+    pub camera: CameraId,
     /// The leg whose board is in view.
     pub side: Side,
     /// The actual (not the logged) joint angles.
@@ -514,11 +517,11 @@ pub fn render_all(
         .map(|n| n.get())
         .unwrap_or(1)
         .min(jobs.len().max(1));
-    // The true camera: the a-priori intrinsics with the true intrinsics errors added.
-    let model = &crate::model::Model {
-        camera: model.camera_at(params),
+    // The true cameras: the a-priori intrinsics with the true intrinsics errors added.
+    let models = CameraId::ALL.map(|camera| crate::model::Model {
+        camera: model.intrinsics_at(camera, params),
         ..*model
-    };
+    });
     let next = std::sync::atomic::AtomicUsize::new(0);
     std::thread::scope(|scope| {
         let workers: Vec<_> = (0..threads)
@@ -529,7 +532,10 @@ pub fn render_all(
                         let Some(job) = jobs.get(k) else {
                             return Ok(());
                         };
-                        let pose = model.chains(job.side, &job.joints).camera_to_board(params);
+                        let model = &models[job.camera as usize];
+                        let pose = model
+                            .chains_for(job.camera, job.side, &job.joints)
+                            .camera_to_board(params);
                         let seed = options.seed ^ job.id.wrapping_mul(0x9E37_79B9_7F4A_7C15);
                         let image = render(model, &pose, options, seed)?;
                         image.write_png(&dir.join(image_name(job.id)))?;

@@ -55,7 +55,7 @@ pub(crate) fn check(problem: &Problem, dataset: Option<&Dataset>) -> Result<(), 
                 place()
             ));
         }
-        if let Some(k) = c.behind_camera(&problem.camera, &problem.initial) {
+        if let Some(k) = c.behind_camera(&problem.initial) {
             let board = row().map_or("board".into(), |k| format!("{} board", k.side.name()));
             let vertex = c.observations[k].vertex;
             return invalid(format!(

@@ -82,6 +82,9 @@ struct Term {
     used: Vec<Param>,
     /// How many of `used` are the chains'.
     chain_count: usize,
+    /// Per free parameter of the capture's projection (the rest of `used`): its
+    /// coefficient in fx, fy, cx, cy, k1, k2.
+    projection_scales: Vec<(Param, [f64; 6])>,
     /// Their Jacobian columns.
     columns: Vec<usize>,
     /// First residual row of this capture.
@@ -107,10 +110,6 @@ impl Term {
 /// the lifetime parameter only keeps the type's signature stable.
 #[derive(Debug, Clone)]
 pub struct Evaluator<'a> {
-    /// The projection with the held parameters frozen.
-    projection: Projection,
-    /// Per free parameter of the projection: its coefficient in fx, fy, cx, cy, k1, k2.
-    projection_scales: Vec<(Param, [f64; 6])>,
     loss: Loss,
     initial: [f64; PARAMETER_COUNT],
     terms: Vec<Term>,
@@ -318,6 +317,25 @@ impl Linearisation {
     }
 }
 
+/// Per free parameter of `projection` (those with a `column`): its coefficient in fx, fy,
+/// cx, cy, k1, k2.
+fn projection_scales(
+    projection: &Projection,
+    column: &[Option<usize>; PARAMETER_COUNT],
+) -> Vec<(Param, [f64; 6])> {
+    projection
+        .params()
+        .into_iter()
+        .filter(|p| column[p.index()].is_some())
+        .map(|p| {
+            let scales = projection
+                .coefficients()
+                .map(|a| a.terms().filter(|(q, _)| *q == p).map(|(_, s)| s).sum());
+            (p, scales)
+        })
+        .collect()
+}
+
 impl<'a> Evaluator<'a> {
     /// Prepares `problem` for evaluation.
     pub fn new(problem: &Problem) -> Self {
@@ -339,18 +357,6 @@ impl<'a> Evaluator<'a> {
             column[p.index()] = Some(k);
             held[p.index()] = false;
         }
-        let projection = problem.camera.projection().freeze(&held, values);
-        let projection_scales: Vec<(Param, [f64; 6])> = projection
-            .params()
-            .into_iter()
-            .filter(|p| column[p.index()].is_some())
-            .map(|p| {
-                let scales = projection
-                    .coefficients()
-                    .map(|a| a.terms().filter(|(q, _)| *q == p).map(|(_, s)| s).sum());
-                (p, scales)
-            })
-            .collect();
         let mut row = 0;
         let terms = problem
             .captures
@@ -365,6 +371,7 @@ impl<'a> Evaluator<'a> {
                 }
                 used.retain(|p| column[p.index()].is_some());
                 let chain_count = used.len();
+                let projection_scales = projection_scales(&chains.projection, &column);
                 used.extend(projection_scales.iter().map(|(p, _)| *p));
                 let columns = used
                     .iter()
@@ -374,6 +381,7 @@ impl<'a> Evaluator<'a> {
                     chains,
                     used,
                     chain_count,
+                    projection_scales,
                     columns,
                     row,
                     points: term.observations.iter().map(|o| o.point).collect(),
@@ -389,8 +397,6 @@ impl<'a> Evaluator<'a> {
             })
             .collect();
         Evaluator {
-            projection,
-            projection_scales,
             loss: if weighted {
                 problem.loss
             } else {
@@ -514,7 +520,7 @@ impl<'a> Evaluator<'a> {
     ) -> Option<()> {
         let pose = term.chains.camera_to_board::<f64>(params);
         for (k, (p, px)) in term.points.iter().zip(&term.pixels).enumerate() {
-            let [u, v] = self.projection.project(params, &pose.apply(p))?;
+            let [u, v] = term.chains.projection.project(params, &pose.apply(p))?;
             r[2 * k] = u - px[0];
             r[2 * k + 1] = v - px[1];
         }
@@ -535,7 +541,8 @@ impl<'a> Evaluator<'a> {
         let mut residuals = vec![0.0; rows];
         let mut jacobian = vec![0.0; rows * k];
         let mut dp = vec![[0.0; 3]; kc];
-        let coefficients = self.projection.coefficients().map(|a| a.eval(params));
+        let projection = &term.chains.projection;
+        let coefficients = projection.coefficients().map(|a| a.eval(params));
         for (v, (p, px)) in term.points.iter().zip(&term.pixels).enumerate() {
             // The point in the camera frame and its derivative with respect to each
             // parameter: d(R·p + t) = dR·p + dt.
@@ -547,13 +554,11 @@ impl<'a> Evaluator<'a> {
             }
             // The projection and its gradient with respect to the point (and, when the
             // projection has free parameters, its six coefficients).
-            let (uv, grads): ([f64; 2], [[f64; 9]; 2]) = if self.projection_scales.is_empty() {
+            let (uv, grads): ([f64; 2], [[f64; 9]; 2]) = if term.projection_scales.is_empty() {
                 let seeded: [Dual3; 3] = std::array::from_fn(|i| {
                     Dual3::new(pc[i], Derivative::derivative_generic(Const::<3>, U1, i))
                 });
-                let [u, w] = self
-                    .projection
-                    .project_with(&coefficients.map(Dual3::from), &seeded)?;
+                let [u, w] = projection.project_with(&coefficients.map(Dual3::from), &seeded)?;
                 let g = |d: &Dual3| {
                     let e = d.eps.unwrap_generic(Const::<3>, U1);
                     std::array::from_fn(|i| if i < 3 { e[i] } else { 0.0 })
@@ -566,7 +571,7 @@ impl<'a> Evaluator<'a> {
                 let seeded: [Dual9; 3] = std::array::from_fn(|i| lane(pc[i], i));
                 let coefficients: [Dual9; 6] =
                     std::array::from_fn(|c| lane(coefficients[c], 3 + c));
-                let [u, w] = self.projection.project_with(&coefficients, &seeded)?;
+                let [u, w] = projection.project_with(&coefficients, &seeded)?;
                 let g = |d: &Dual9| {
                     let e = d.eps.unwrap_generic(Const::<9>, U1);
                     std::array::from_fn(|i| e[i])
@@ -580,7 +585,7 @@ impl<'a> Evaluator<'a> {
                 for (o, dp) in out.iter_mut().zip(&dp) {
                     *o = g[0] * dp[0] + g[1] * dp[1] + g[2] * dp[2];
                 }
-                for (o, (_, scales)) in out[kc..].iter_mut().zip(&self.projection_scales) {
+                for (o, (_, scales)) in out[kc..].iter_mut().zip(&term.projection_scales) {
                     *o = (0..6).map(|c| g[3 + c] * scales[c]).sum();
                 }
             }

@@ -143,13 +143,9 @@ impl CaptureTerm {
 
     /// Unweighted residuals (projection − observation), `u₀, v₀, u₁, v₁, …`, or `None`
     /// when a vertex falls behind the camera.
-    pub fn residuals<T: Scalar>(
-        &self,
-        camera: &crate::model::Camera,
-        params: &[T],
-    ) -> Option<Vec<T>> {
+    pub fn residuals<T: Scalar>(&self, params: &[T]) -> Option<Vec<T>> {
         let pose = self.chains.camera_to_board(params);
-        let projection = camera.projection();
+        let projection = &self.chains.projection;
         let mut out = Vec::with_capacity(self.residual_count());
         for obs in &self.observations {
             let p = obs.point.map(crate::model::scalar::lift::<T>);
@@ -162,9 +158,9 @@ impl CaptureTerm {
 
     /// The first observed vertex (index into `observations`) that falls behind the camera
     /// at `params`, if any.
-    pub fn behind_camera(&self, camera: &crate::model::Camera, params: &[f64]) -> Option<usize> {
+    pub fn behind_camera(&self, params: &[f64]) -> Option<usize> {
         let pose = self.chains.camera_to_board(params);
-        let projection = camera.projection();
+        let projection = &self.chains.projection;
         self.observations.iter().position(|obs| {
             projection
                 .project(params, &pose.apply(&obs.point))
@@ -173,12 +169,8 @@ impl CaptureTerm {
     }
 
     /// Residuals as the backend minimises them: whitened if the capture has a whitening.
-    pub fn weighted_residuals<T: Scalar>(
-        &self,
-        camera: &crate::model::Camera,
-        params: &[T],
-    ) -> Option<Vec<T>> {
-        let r = self.residuals(camera, params)?;
+    pub fn weighted_residuals<T: Scalar>(&self, params: &[T]) -> Option<Vec<T>> {
+        let r = self.residuals(params)?;
         Some(match &self.whitening {
             None => r,
             Some(w) => w.apply(&r),
@@ -225,7 +217,7 @@ impl Default for Tolerances {
 /// The calibration as a non-linear least-squares problem (docs/MODEL.md §2.5).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Problem {
-    /// Camera intrinsics (the projection `P`).
+    /// The lower camera's intrinsics (each capture's projection is in its chains).
     pub camera: crate::model::Camera,
     /// One term per capture with at least one observed vertex.
     pub captures: Vec<CaptureTerm>,
@@ -272,19 +264,12 @@ impl Problem {
             .collect()
     }
 
-    /// The projection with the held parameters frozen at their values.
-    pub fn frozen_projection(&self) -> crate::model::Projection {
-        self.camera
-            .projection()
-            .freeze(self.fixed.mask(), &self.initial)
-    }
-
     /// All unweighted residuals at `params` (full vector, internal units), or `None` when a
     /// vertex falls behind the camera.
     pub fn residuals(&self, params: &[f64]) -> Option<Vec<f64>> {
         let mut out = Vec::with_capacity(self.residual_count());
         for c in &self.captures {
-            out.extend(c.residuals(&self.camera, params)?);
+            out.extend(c.residuals(params)?);
         }
         Some(out)
     }
@@ -330,7 +315,9 @@ impl Problem {
 impl Problem {
     /// Turns a dataset's measurements into the least-squares problem: one term per capture
     /// with at least one corner, all parameters starting at zero (docs/MODEL.md §5), and the
-    /// parameters in `fixed` held at zero (or at `initial` values set afterwards).
+    /// parameters in `fixed` held at zero (or at `initial` values set afterwards). The upper
+    /// camera's parameters are free when the dataset has upper-camera captures (unless
+    /// `fixed` holds them on purpose) and held otherwise ([`FixedSet::for_upper_camera`]).
     ///
     /// Fails as [`super::validate`] does, naming the dataset's file and line: when a vertex
     /// lies behind the camera at the start values (a sign of wrong joint angles or a wrong
@@ -358,7 +345,7 @@ impl Problem {
                 let observations = by_capture.remove(&capture.id)?;
                 Some(CaptureTerm {
                     capture: capture.id,
-                    chains: model.chains(capture.side, &capture.joints),
+                    chains: model.chains_for(capture.camera, capture.side, &capture.joints),
                     observations,
                     whitening: None,
                 })
@@ -368,7 +355,7 @@ impl Problem {
             camera: model.camera,
             captures,
             initial: [0.0; PARAMETER_COUNT],
-            fixed,
+            fixed: fixed.for_upper_camera(dataset.has_upper_captures()),
             loss: Loss::Squared,
             tolerances: Tolerances::default(),
         };

@@ -186,10 +186,7 @@ fn rust_residuals(problem: &Problem, free_values: &[f64]) -> Vec<f64> {
     problem
         .captures
         .iter()
-        .flat_map(|c| {
-            c.weighted_residuals::<f64>(&problem.camera, &all)
-                .expect("in front")
-        })
+        .flat_map(|c| c.weighted_residuals::<f64>(&all).expect("in front"))
         .collect()
 }
 

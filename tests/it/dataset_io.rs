@@ -91,6 +91,7 @@ fn rich_dataset(dir: &Path) -> Dataset {
         captures.push(Capture {
             id,
             side,
+            camera: Default::default(),
             image,
             joints,
             line: 0,
@@ -207,6 +208,7 @@ fn written_files_follow_the_spec() {
     ds.captures.push(Capture {
         id: 7,
         side: Side::Right,
+        camera: Default::default(),
         image: None,
         joints,
         line: 0,
@@ -1113,7 +1115,7 @@ fn unknown_keys_in_dataset_toml() {
         &text,
         Some(15),
         Some("lens"),
-        "unknown key 'lens' at the top level (known keys: camera, board, robot, joints)",
+        "unknown key 'lens' at the top level (known keys: camera, upper_camera, board, robot, joints)",
     );
 }
 

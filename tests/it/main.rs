@@ -44,3 +44,4 @@ mod robot_file_bounds;
 mod spec_reference;
 #[cfg(feature = "ceres")]
 mod uncertainty;
+mod upper_camera;

@@ -43,6 +43,7 @@ fn fast_jacobian_equals_brute_force_duals_on_the_extended_model() {
         seed: 9,
         stances: 4,
         heads: 2,
+        upper_stances: 1,
         effects: vec![
             Family::Head,
             Family::Intrinsics,
@@ -52,7 +53,11 @@ fn fast_jacobian_equals_brute_force_duals_on_the_extended_model() {
         ],
         ..SimOptions::default()
     };
-    let dataset = simulate(&Model::default(), &options).expect("simulated");
+    let two_cameras = Model {
+        upper_camera: Some(Model::default().camera),
+        ..Model::default()
+    };
+    let dataset = simulate(&two_cameras, &options).expect("simulated");
     let truth = dataset.truth.as_ref().expect("truth").values;
     let mut problem = Problem::from_dataset(&dataset, FixedSet::default()).expect("problem");
     problem.fixed = FixedSet::from_lists(&crate::util::every_family(), "").expect("families");

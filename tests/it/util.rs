@@ -72,7 +72,7 @@ pub fn brute_force_jacobian(problem: &Problem, x: &[f64]) -> (Vec<f64>, DMatrix<
     let mut rows = Vec::new();
     for c in &problem.captures {
         let r = c
-            .weighted_residuals(&problem.camera, &params)
+            .weighted_residuals(&params)
             .expect("in front of the camera");
         for pair in r.chunks(2) {
             let s = pair[0].clone() * pair[0].clone() + pair[1].clone() * pair[1].clone();

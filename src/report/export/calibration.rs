@@ -198,6 +198,7 @@ impl Calibration {
             rms_px: Some(solution.rms_px),
             parameters: Param::ALL
                 .iter()
+                .filter(|&&p| solution.fixed.in_model(p))
                 .map(|&p| {
                     let fixed = solution.fixed.is_fixed(p);
                     let std = if fixed {

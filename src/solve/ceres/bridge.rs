@@ -86,7 +86,8 @@ pub mod ffi {
     }
 
     /// One capture: its camera chain is `steps[first_step .. first_step + camera_steps]`,
-    /// its board chain the `board_steps` steps after that; its vertices are
+    /// its board chain the `board_steps` steps after that; its camera's projection is
+    /// `projections[projection]`; its vertices are
     /// `points[3·first_vertex ..]` / `pixels[2·first_vertex ..]`, `vertex_count` of them.
     /// `first_weight` indexes `weights` for the capture's whitening `W` (m = 2·vertex_count
     /// rows), or is −1 for none. With `whitening_rank` −1, `W` is dense: m² numbers, row
@@ -97,6 +98,7 @@ pub mod ffi {
         first_step: u32,
         camera_steps: u32,
         board_steps: u32,
+        projection: u32,
         first_vertex: u32,
         vertex_count: u32,
         first_weight: i64,
@@ -118,8 +120,8 @@ pub mod ffi {
         pixels: Vec<f64>,
         /// Whitenings, concatenated (see `FfiCapture`).
         weights: Vec<f64>,
-        /// The camera projection.
-        projection: FfiProjection,
+        /// The cameras' projections (one per distinct projection of the captures).
+        projections: Vec<FfiProjection>,
     }
 
     /// Solver settings.

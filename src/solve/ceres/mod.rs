@@ -202,7 +202,7 @@ fn ffi_projection(
 }
 
 /// Ships a problem across the bridge: chains with the held parameters frozen, parameter
-/// indices among [`Problem::free`], vertices, whitening and intrinsics.
+/// indices among [`Problem::free`], vertices, whitening and the cameras' projections.
 fn to_ffi(problem: &Problem) -> Result<ffi::FfiProblem, SolveError> {
     let free = problem.free();
     let mut free_index = [None; PARAMETER_COUNT];
@@ -217,9 +217,20 @@ fn to_ffi(problem: &Problem) -> Result<ffi::FfiProblem, SolveError> {
         points: Vec::with_capacity(3 * problem.observation_count()),
         pixels: Vec::with_capacity(2 * problem.observation_count()),
         weights: Vec::new(),
-        projection: ffi_projection(&problem.frozen_projection(), &free_index)?,
+        projections: Vec::new(),
     };
+    // The distinct projections (one per camera), each shipped once.
+    let mut projections: Vec<Projection> = Vec::new();
     for (term, chains) in problem.captures.iter().zip(problem.frozen_chains()) {
+        let projection = match projections.iter().position(|p| *p == chains.projection) {
+            Some(k) => k,
+            None => {
+                out.projections
+                    .push(ffi_projection(&chains.projection, &free_index)?);
+                projections.push(chains.projection);
+                projections.len() - 1
+            }
+        };
         let first_step = count(out.steps.len(), "steps")?;
         for step in chains.camera.steps().iter().chain(chains.board.steps()) {
             out.steps.push(ffi_step(step, &free_index)?);
@@ -266,6 +277,7 @@ fn to_ffi(problem: &Problem) -> Result<ffi::FfiProblem, SolveError> {
             first_step,
             camera_steps: count(chains.camera.steps().len(), "steps")?,
             board_steps: count(chains.board.steps().len(), "steps")?,
+            projection: count(projection, "projections")?,
             first_vertex,
             vertex_count: count(term.observations.len(), "vertices")?,
             first_weight,

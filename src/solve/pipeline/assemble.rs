@@ -113,8 +113,8 @@ fn initial_rms(residuals: &[VertexResidual]) -> [f64; 2] {
 pub(super) fn vertex_residuals(problem: &Problem, values: &[f64]) -> Vec<VertexResidual> {
     let mut out = Vec::with_capacity(problem.observation_count());
     for term in &problem.captures {
-        let before = term.residuals(&problem.camera, &problem.initial);
-        let after = term.residuals(&problem.camera, values);
+        let before = term.residuals(&problem.initial);
+        let after = term.residuals(values);
         for (k, obs) in term.observations.iter().enumerate() {
             let pick = |r: &Option<Vec<f64>>| {
                 r.as_ref()
