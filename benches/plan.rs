@@ -1,10 +1,12 @@
 //! How long `naocalib plan` takes to design a paper-sized schedule (144 captures of the
-//! paper's 21 parameters, the default pool), and with compliance and play freed too.
+//! paper's 21 parameters, the default pool), and with compliance and play freed too; and
+//! how long ordering its 144 captures along collision-free moves takes of that.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 
+use naocalib::model::JointAngles;
 use naocalib::model::{Family, FixedSet, Model};
-use naocalib::plan::{PlanOptions, plan};
+use naocalib::plan::{PlanOptions, collision::BodyModel, order, plan, route};
 
 fn bench(c: &mut Criterion) {
     let model = Model::default();
@@ -13,6 +15,17 @@ fn bench(c: &mut Criterion) {
     group.bench_function("plan_144_paper", |b| {
         let options = PlanOptions::default();
         b.iter(|| plan(&model, &options).expect("plan"));
+    });
+    group.bench_function("order_144_paper", |b| {
+        let options = PlanOptions::default();
+        let captures: Vec<JointAngles> = plan(&model, &options)
+            .expect("plan")
+            .captures
+            .iter()
+            .map(|c| c.joints)
+            .collect();
+        let (body, rest) = (BodyModel::default(), route::rest_posture());
+        b.iter(|| order::order(&model, &body, &rest, &captures, &options.timing));
     });
     group.bench_function("plan_144_paper_compliance_play", |b| {
         let mut fixed = FixedSet::default();

@@ -10,7 +10,7 @@ use clap::Args;
 
 use naocalib::model::CameraId;
 use naocalib::robot::camera::CameraSpec;
-use naocalib::robot::capture::{self, check_plan, predicted_seconds, read_plan};
+use naocalib::robot::capture::{self, check_plan, predicted_steps, read_plan};
 use naocalib::robot::lola::{self, Connection};
 use naocalib::robot::{CaptureOptions, DatasetOut, End, Event};
 
@@ -140,7 +140,8 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     let todo: Vec<_> = rows.iter().filter(|r| !out.has(r.id)).copied().collect();
     let total = rows.len();
     let bar = super::progress_bar(total as u64 as usize, "captures");
-    let predicted = |from: usize| predicted_seconds(&todo[from.min(todo.len())..], &options.motion);
+    let steps = predicted_steps(&model, &todo, &options);
+    let predicted = |from: usize| steps[from.min(todo.len())..].iter().sum::<f64>();
     // The terminal is written from a thread of its own: a terminal that stops reading (a
     // stalled or silently lost ssh session) blocks that thread, never the robot's cycles.
     let (print, printed) = std::sync::mpsc::channel::<Print>();

@@ -182,7 +182,7 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
     let _ = writeln!(
         out,
         "feasible: every angle at least {:.0}° inside its limits, LHipYawPitch = RHipYawPitch, \
-         no collision (capsules for thighs and tibias; boxes for feet, sandals and torso; the \
+         HeadPitch within its HeadYaw-dependent range, a straight move from rest, no collision (capsules for thighs and tibias; boxes for feet, sandals and torso; the \
          floor), every vertex in plain sight past the resting leg, the whole board at least \
          {} px inside the image and at most {:.0}° off facing the camera for any offsets \
          within ±{}° (sandal translations ±{} mm)",
@@ -214,9 +214,11 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
     report_rank(&mut out, "random stances", &plan.baseline);
     let _ = writeln!(
         out,
-        "\nmeasurement phase: predicted {:.0} s for the plan ({:.0} s for the random stances in \
-         the simulator's order; the paper's took 590 s)",
-        plan.duration, plan.baseline_duration
+        "\nmeasurement phase: predicted {:.0} s for the plan, from rest through every capture \
+         and back, every move collision-free ({} through intermediate postures); {:.0} s for \
+         the random stances in the simulator's order, {} of whose moves have no collision-free \
+         way (the paper's took 590 s)",
+        plan.duration, plan.via, plan.baseline_duration, plan.baseline_blocked
     );
     super::print_out(out)?;
     Ok(ExitCode::SUCCESS)

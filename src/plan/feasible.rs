@@ -1,6 +1,7 @@
 //! What a planned capture must satisfy on a real, not yet calibrated robot: joint angles
-//! inside the limits with a margin, no self-collision, and the whole board in view, facing
-//! the camera, for every offset within the stated bounds. And the pool of random captures
+//! inside the limits with a margin, no self-collision, the whole board in view, facing
+//! the camera, for every offset within the stated bounds, and a straight collision-free
+//! move from the rest posture. And the pool of random captures
 //! that satisfy it, from which the design picks.
 
 use rand::Rng;
@@ -69,6 +70,8 @@ pub enum Infeasible {
     View,
     /// The resting leg stands between the camera and the board (named).
     Occluded(String),
+    /// The straight move between the rest posture and the capture collides.
+    Unreachable,
 }
 
 impl std::fmt::Display for Infeasible {
@@ -78,6 +81,9 @@ impl std::fmt::Display for Infeasible {
             Infeasible::HipYawPitch => f.write_str("LHipYawPitch and RHipYawPitch differ"),
             Infeasible::Collision(what) => write!(f, "collision: {what}"),
             Infeasible::Occluded(what) => write!(f, "the {what} hides the board"),
+            Infeasible::Unreachable => {
+                f.write_str("the straight move between the rest posture and it collides")
+            }
             Infeasible::View => f.write_str(
                 "the board does not stay fully in view, facing the camera, for every offset \
                  within the bounds",
@@ -231,7 +237,11 @@ pub fn board_in_view_for_all_offsets(
 }
 
 /// The NAO documentation's head anti-collision limits: HeadPitch range (deg) by HeadYaw
-/// (deg) (the head must not hit the shoulders), interpolated linearly between rows.
+/// (deg) (the head must not hit the shoulders), interpolated linearly between rows. The
+/// same table, in radians, is B-Human's `Config/Robots/Default/headLimits.cfg` lines 2–4
+/// (`intervals`, `lowerBounds`, `upperBounds`; BHumanCodeRelease d89d603f), which
+/// `HeadLimits::getTiltBound` (`Src/Representations/Configuration/HeadLimits.cpp` lines
+/// 15–42) interpolates linearly between rows as here.
 const HEAD_PITCH_BY_YAW: [(f64, f64, f64); 13] = [
     (-119.52, -25.73, 18.91),
     (-87.49, -18.91, 11.46),
@@ -308,6 +318,12 @@ pub fn check(
         collision::sight_blocked(&model.robot, &f.body, joints, resting, eye, &vertices)
     {
         return Err(Infeasible::Occluded(what));
+    }
+    // Reachable straight from rest and back: then every order of the captures has a way
+    // for every move (through rest, if nothing shorter), and any capture can end the phase.
+    let rest = super::route::rest_posture();
+    if !super::route::move_is_free(model, &f.body, &rest, joints) {
+        return Err(Infeasible::Unreachable);
     }
     Ok(())
 }

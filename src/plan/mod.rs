@@ -15,8 +15,9 @@
 //!    15 angle offsets (with the other free parameters column-scaled beside them).
 //! 3. **Refinement**: variants of the picked captures (leg angles moved by up to 0.15 rad,
 //!    then 0.075, 0.0375) join the pool and the exchange continues from the design.
-//! 4. **Order** ([`order::order`]): a short tour through the captures (nearest neighbour and
-//!    2-opt on the time of each move) and its predicted duration.
+//! 4. **Order** ([`order::order`]): a short tour from the rest posture through the captures
+//!    and back, every move along a collision-free way ([`route::route`], the same search
+//!    `capture` drives), and its predicted duration, every move included.
 //!
 //! One head posture per leg stance: each capture draws its own joint noise, so a new leg
 //! stance tells more than the same stance with the head turned (with up to four postures
@@ -29,6 +30,7 @@ pub mod collision;
 pub mod design;
 pub mod feasible;
 pub mod order;
+pub mod route;
 
 use std::path::Path;
 
@@ -41,7 +43,7 @@ use crate::solve::noise::NoiseLevels;
 
 pub use design::{DesignOptions, Prediction};
 pub use feasible::{Feasibility, Infeasible};
-pub use order::Timing;
+pub use route::Timing;
 
 /// What to plan.
 #[derive(Debug, Clone, PartialEq)]
@@ -115,10 +117,16 @@ pub struct Plan {
     pub prediction: Prediction,
     /// The same for the simulator's random stances at equal capture count.
     pub baseline: Prediction,
-    /// Predicted duration of the measurement phase (s).
+    /// Predicted duration of the measurement phase, from rest through every capture and
+    /// back, every move along its collision-free way (s).
     pub duration: f64,
-    /// Predicted duration of the random stances in the simulator's order (s).
+    /// Intermediate postures of the plan's moves (where the straight move collides).
+    pub via: usize,
+    /// Predicted duration of the random stances in the simulator's order (s), a stance
+    /// without a collision-free way skipped.
     pub baseline_duration: f64,
+    /// Random stances without a collision-free way in the simulator's order.
+    pub baseline_blocked: usize,
     /// Number of feasible captures in the pool.
     pub pool: usize,
     /// Number of distinct leg stances in the plan.
@@ -142,6 +150,11 @@ pub enum PlanError {
         /// Feasible captures found.
         found: usize,
     },
+    /// No order of the captures has a collision-free way for every move (the move to
+    /// capture `k` in execution order, or the return to rest when `k` is the number of
+    /// captures).
+    #[error("no collision-free order of the captures was found (move {0})")]
+    Moves(usize),
     /// The random stances to compare with could not be drawn.
     #[error(transparent)]
     Sim(#[from] crate::sim::SimError),
@@ -290,7 +303,9 @@ pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
     );
 
     let angles: Vec<JointAngles> = chosen.iter().map(|&k| pool[k].joints).collect();
-    let tour = order::order(&angles, &options.timing);
+    let body = &options.feasibility.body;
+    let rest = route::rest_posture();
+    let tour = order::order(model, body, &rest, &angles, &options.timing);
     let captures: Vec<PlannedCapture> = tour
         .iter()
         .map(|&i| PlannedCapture {
@@ -298,22 +313,31 @@ pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
             joints: pool[chosen[i]].joints,
         })
         .collect();
-    let duration = options
-        .timing
-        .duration(&captures.iter().map(|c| c.joints).collect::<Vec<_>>());
+    let postures: Vec<JointAngles> = captures.iter().map(|c| c.joints).collect();
+    let moves = route::moves(model, body, &rest, &postures);
+    if let Some(k) = moves.iter().position(Result::is_err) {
+        return Err(PlanError::Moves(k));
+    }
+    let via = moves.iter().flatten().map(|way| way.len() - 1).sum();
+    let duration = route::duration(model, body, &options.timing, &rest, &postures);
     let mut stances: Vec<usize> = chosen.iter().map(|&k| pool[k].stance).collect();
     stances.sort_unstable();
     stances.dedup();
 
-    let baseline_duration = options
-        .timing
-        .duration(&random.iter().map(|c| c.1).collect::<Vec<_>>());
+    let random_postures: Vec<JointAngles> = random.iter().map(|c| c.1).collect();
+    let baseline_duration = route::duration(model, body, &options.timing, &rest, &random_postures);
+    let baseline_blocked = route::moves(model, body, &rest, &random_postures)
+        .iter()
+        .filter(|m| m.is_err())
+        .count();
     Ok(Plan {
         captures,
         prediction,
         baseline,
         duration,
+        via,
         baseline_duration,
+        baseline_blocked,
         pool: pool.len(),
         stances: stances.len(),
     })

@@ -12,6 +12,7 @@ use crate::model::{CameraId, Joint, JointAngles, Model, Side};
 use crate::output::{WriteError, WriteOptions, write_atomic};
 use crate::plan::collision::{self, BodyModel};
 use crate::plan::feasible::head_pitch_limits;
+use crate::plan::route;
 
 use super::camera::{Camera, CameraError, Picture, check_picture};
 use super::lola::{self, ActuatorMessage, JOINTS, Link, LolaError, SensorMessage};
@@ -49,13 +50,7 @@ impl Default for CaptureOptions {
     }
 }
 
-/// Lying on its back, every head and leg joint at 0 but the hips rolled out by 0.15 rad.
-pub fn rest_posture() -> JointAngles {
-    let mut rest = JointAngles::default();
-    rest.set(Joint::LHipRoll, 0.15);
-    rest.set(Joint::RHipRoll, -0.15);
-    rest
-}
+pub use crate::plan::route::rest_posture;
 
 /// One row of the plan: what to capture.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -900,82 +895,6 @@ impl Runner<'_> {
         ))))
     }
 
-    /// A collision-free way to `target` (checked every 0.03 rad against the plan's
-    /// collision model): directly; else moving the HipYawPitch motor first or last, or one
-    /// leg (with the head) first; else through the rest posture, or through both legs
-    /// raised (hips −0.8, knees 1.4, ankles −0.6 rad). `Err(reason)` when none is free.
-    fn route(&self, model: &Model, target: &JointAngles) -> Result<Vec<JointAngles>, String> {
-        let free = |from: &JointAngles, to: &JointAngles| {
-            let n = Joint::ALL
-                .iter()
-                .map(|&j| ((to.get(j) - from.get(j)).abs() / 0.03).ceil() as usize)
-                .max()
-                .unwrap_or(0)
-                .max(1);
-            // Parts that touch at the start (the feet of a robot put down with its legs
-            // together) may go on touching until they part; after that nothing may.
-            let mut parted = false;
-            (0..=n).all(|k| {
-                let t = k as f64 / n as f64;
-                let mut a = *from;
-                for j in Joint::ALL {
-                    a.set(j, from.get(j) + t * (to.get(j) - from.get(j)));
-                }
-                let free = collision::collision(&model.robot, &BodyModel::default(), &a).is_none();
-                parted |= free;
-                free || !parted
-            }) && parted
-        };
-        let here = self.command;
-        let rest = self.options.rest;
-        let mut tucked = rest;
-        for side in Side::BOTH {
-            let [_, _, hip, knee, ankle, _] = side.leg_joints();
-            tucked.set(hip, -0.8);
-            tucked.set(knee, 1.4);
-            tucked.set(ankle, -0.6);
-        }
-        // `base` with the joints `joints` taken from `from`.
-        let with = |base: &JointAngles, from: &JointAngles, joints: &[Joint]| {
-            let mut a = *base;
-            for &j in joints {
-                a.set(j, from.get(j));
-            }
-            a
-        };
-        use Joint::{HeadPitch, HeadYaw, LHipYawPitch, RHipYawPitch};
-        let hyp = [LHipYawPitch, RHipYawPitch];
-        let leg = |side: Side| {
-            let mut joints = side.leg_joints().to_vec();
-            joints.extend([LHipYawPitch, RHipYawPitch, HeadYaw, HeadPitch]);
-            joints
-        };
-        let ways: [Vec<JointAngles>; 8] = [
-            vec![*target],
-            vec![with(&here, target, &hyp), *target],
-            vec![with(target, &here, &hyp), *target],
-            vec![with(&here, target, &leg(Side::Left)), *target],
-            vec![with(&here, target, &leg(Side::Right)), *target],
-            vec![rest, *target],
-            vec![tucked, *target],
-            vec![rest, tucked, *target],
-        ];
-        ways.into_iter()
-            .find(|way| {
-                let mut from = here;
-                way.iter().all(|to| {
-                    let ok = unsafe_posture(model, to, 0.0).is_none() && free(&from, to);
-                    from = *to;
-                    ok
-                })
-            })
-            .ok_or_else(|| {
-                "no collision-free way there (directly, joint group by joint group, or \
-                 through rest or legs raised)"
-                    .into()
-            })
-    }
-
     /// One stance: move, settle, picture, readings.
     fn stance(
         &mut self,
@@ -985,9 +904,16 @@ impl Runner<'_> {
         taken: &mut dyn FnMut(Done) -> Result<(), Halt>,
     ) -> Result<Stance, Halt> {
         let m = self.options.motion;
-        let way = match self.route(model, &row.joints) {
+        let rest = self.options.rest;
+        let way = match route::route(
+            model,
+            &BodyModel::default(),
+            &self.command,
+            &row.joints,
+            &rest,
+        ) {
             Ok(way) => way,
-            Err(reason) => return Ok(Stance::Unreachable(reason)),
+            Err(reason) => return Ok(Stance::Unreachable(reason.to_string())),
         };
         for target in &way {
             if let Some(outcome) = self.move_to(target, true)? {
@@ -1262,16 +1188,24 @@ pub fn run(
     Ok(report)
 }
 
-/// The predicted time (s) to run `rows` from the rest posture with the plan's timing model
-/// at `options`' speeds.
-pub fn predicted_seconds(rows: &[PlanRow], options: &MotionOptions) -> f64 {
-    let timing = crate::plan::Timing {
-        leg_speed: options.leg_speed,
-        head_speed: options.head_speed,
+/// The predicted time (s) of each move of running `rows` from the rest posture with the
+/// plan's timing model at `options`' speeds: the way to each row with its picture (0 for a
+/// row without a collision-free way), and last the return to rest
+/// ([`route::step_times`]).
+pub fn predicted_steps(model: &Model, rows: &[PlanRow], options: &CaptureOptions) -> Vec<f64> {
+    let timing = route::Timing {
+        leg_speed: options.motion.leg_speed,
+        head_speed: options.motion.head_speed,
         ..Default::default()
     };
     let postures: Vec<JointAngles> = rows.iter().map(|r| r.joints).collect();
-    timing.duration(&postures)
+    route::step_times(
+        model,
+        &BodyModel::default(),
+        &timing,
+        &options.rest,
+        &postures,
+    )
 }
 
 /// The signals that would end the process: SIGHUP (the terminal or the ssh session to the
