@@ -248,7 +248,14 @@ fn the_camera_column_and_upper_camera_round_trip() {
     assert_eq!(back.captures, both.captures);
     assert_eq!(back.truth, both.truth);
 
+    // Upper captures of a model without upper intrinsics were taken with the lower
+    // camera's, and the dataset says so.
+    let borrowed = simulate(&Model::default(), &both_cameras(4, 1, 0.1, 0.0)).expect("sim");
+    assert_eq!(borrowed.model.upper_camera, Some(Model::default().camera));
+    borrowed.write(&tmp.path().join("borrowed"), false).unwrap();
+
     let lower = simulate(&Model::default(), &both_cameras(4, 0, 0.1, 0.0)).expect("sim");
+    assert_eq!(lower.model.upper_camera, None);
     let dir = tmp.path().join("lower");
     lower.write(&dir, false).unwrap();
     let captures = std::fs::read_to_string(dir.join("captures.csv")).unwrap();
