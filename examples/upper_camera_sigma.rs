@@ -13,7 +13,7 @@ use naocalib::sim::{SimOptions, draw_team_truth, simulate};
 use naocalib::solve::{Problem, UncertaintyOptions, backend, calibrate};
 use rand::SeedableRng;
 
-const SEEDS: u64 = 8;
+const SEEDS: u64 = 20;
 
 fn main() {
     let model = Model {

@@ -105,7 +105,10 @@ impl Batch {
                 let _ = write!(out, "{:<14} {:<4}", p.name(), p.unit().name());
                 if columns {
                     for run in runs {
-                        let cell = if run.solution.fixed.is_fixed(p) {
+                        let cell = if !run.solution.fixed.in_model(p) {
+                            // A run without upper-camera captures has no upper camera.
+                            "–".to_string()
+                        } else if run.solution.fixed.is_fixed(p) {
                             "fixed".to_string()
                         } else {
                             format!("{:.4}", run.solution.report_value(p))

@@ -216,7 +216,20 @@ fn parameter_table(out: &mut String, solution: &Solution, truth: Option<&[f64]>)
     out.push_str("</table>\n");
 }
 
-fn capture_table(out: &mut String, solution: &Solution, sides: Option<&BTreeMap<u64, Side>>) {
+/// ` (upper camera)` for a capture of `dataset` taken with the upper camera, else nothing.
+fn camera_note(dataset: Option<&Dataset>, id: u64) -> &'static str {
+    match dataset.and_then(|d| d.capture(id)).map(|c| c.camera) {
+        Some(crate::model::CameraId::Upper) => " (upper camera)",
+        _ => "",
+    }
+}
+
+fn capture_table(
+    out: &mut String,
+    solution: &Solution,
+    sides: Option<&BTreeMap<u64, Side>>,
+    dataset: Option<&Dataset>,
+) {
     let mut rms = plot::capture_rms_values(solution);
     rms.sort_by(|a, b| b.1.total_cmp(&a.1));
     out.push_str(
@@ -225,9 +238,10 @@ fn capture_table(out: &mut String, solution: &Solution, sides: Option<&BTreeMap<
     );
     for (id, r) in rms {
         let side = sides.and_then(|s| s.get(&id)).map_or("–", |s| s.name());
+        let camera = camera_note(dataset, id);
         let _ = writeln!(
             out,
-            "<tr><td>{id}</td><td class=\"name\">{side}</td><td>{r:.3}</td></tr>"
+            "<tr><td>{id}</td><td class=\"name\">{side}{camera}</td><td>{r:.3}</td></tr>"
         );
     }
     out.push_str("</table></div>\n");
@@ -388,7 +402,7 @@ fn section(out: &mut String, s: &Section<'_>) -> Result<(), ReportError> {
         s.id_suffix,
         inline_svg(&captures)
     );
-    capture_table(out, s.solution, sides);
+    capture_table(out, s.solution, sides, s.dataset);
     if let (true, Some(dataset)) = (s.overlays, s.dataset) {
         out.push_str("<h3>Worst captures</h3>\n<div class=\"overlays\">\n");
         for (id, rms) in worst_captures(s.solution, OVERLAYS) {
@@ -396,10 +410,11 @@ fn section(out: &mut String, s: &Section<'_>) -> Result<(), ReportError> {
             let _ = writeln!(
                 out,
                 "<figure class=\"overlay\"><img alt=\"overlay of capture {id}\" \
-                 src=\"data:image/png;base64,{}\"/><figcaption>Capture {id}, RMS {rms:.3} px: \
+                 src=\"data:image/png;base64,{}\"/><figcaption>Capture {id}{}, RMS {rms:.3} px: \
                  detected vertices (green crosses), nominal model (red), calibrated model \
                  (blue).</figcaption></figure>",
-                base64(&png)
+                base64(&png),
+                camera_note(Some(dataset), id)
             );
         }
         out.push_str("</div>\n");

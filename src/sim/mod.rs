@@ -658,9 +658,15 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
         simulation.insert("image_grey_noise".into(), toml::Value::Float(o.noise));
         simulation.insert("image_vignetting".into(), toml::Value::Float(o.vignetting));
     }
+    // Upper captures simulated without `[upper_camera]` used the lower camera's intrinsics
+    // (Model::intrinsics); the dataset says so, so that it can be written and read.
+    let mut model = *model;
+    if upper && model.upper_camera.is_none() {
+        model.upper_camera = Some(model.camera);
+    }
     Ok(Dataset {
         dir: Default::default(),
-        model: *model,
+        model,
         captures,
         corners,
         truth: Some(Truth {
