@@ -194,9 +194,9 @@ fn capture_with_fixed_camera(
     }
     let png = dir.join("fixed.png");
     let image = naocalib::sim::render::GreyImage {
-        width: 8,
-        height: 8,
-        pixels: vec![128; 64],
+        width: 640,
+        height: 480,
+        pixels: vec![128; 640 * 480],
     };
     std::fs::write(&png, image.to_png().unwrap()).unwrap();
     let out = Command::new(&bin)
