@@ -127,7 +127,7 @@ pub struct Drawing {
     /// Where the sole frame's origin (the ankle's projection) is on the page (mm).
     pub origin: [f64; 2],
     /// Bounding boxes (page mm) that a seam between sheets must not cut: the pattern with
-    /// its border, and each pin.
+    /// its border, each pin, the ankle mark and each scale bar.
     pub keep_whole: Vec<BBox>,
 }
 
@@ -149,7 +149,6 @@ impl Drawing {
         // Page coordinates before the offset: u = −y, v = −x.
         let page = |p: [f64; 2]| [-p[1], -p[0]];
         let pages = |ps: &[[f64; 2]]| ps.iter().map(|p| page(*p)).collect::<Vec<_>>();
-        let s = sandal.side.sign();
         let mut groups: Vec<(Role, Vec<Shape>)> = Vec::new();
 
         groups.push((
@@ -233,10 +232,12 @@ impl Drawing {
             shapes.extend(cross(pin.at, r + 2.0));
             groups.push((Role::Pin(pin.name), shapes));
         }
-        // Scale bars, 100 mm along both page axes, in the sole's region (under the foot).
+        // Scale bars, 100 mm along both page axes, just outside the plate beside the
+        // pattern: on the pattern's sheet, and cut away with the sheet's margin.
         let bar = |a: [f64; 2], b: [f64; 2]| {
             let (pa, pb) = (page(a), page(b));
-            let ticks = |p: [f64; 2], along_u: bool| {
+            let along_u = (pa[1] - pb[1]).abs() < 1e-9;
+            let tick = |p: [f64; 2]| {
                 let d = if along_u { [0.0, 2.0] } else { [2.0, 0.0] };
                 Shape::Stroke {
                     points: vec![[p[0] - d[0], p[1] - d[1]], [p[0] + d[0], p[1] + d[1]]],
@@ -245,7 +246,6 @@ impl Drawing {
                     dashed: false,
                 }
             };
-            let along_u = (pa[1] - pb[1]).abs() < 1e-9;
             vec![
                 Shape::Stroke {
                     points: vec![pa, pb],
@@ -253,18 +253,34 @@ impl Drawing {
                     width: THIN,
                     dashed: false,
                 },
-                ticks(pa, along_u),
-                ticks(pb, along_u),
+                tick(pa),
+                tick(pb),
             ]
         };
-        let across_x = 12.0;
-        let along_y = -s * 42.0;
-        let mut bars = bar(
-            [across_x, SCALE_BAR_MM / 2.0],
-            [across_x, -SCALE_BAR_MM / 2.0],
-        );
-        bars.extend(bar([-25.0, along_y], [-25.0 + SCALE_BAR_MM, along_y]));
-        groups.push((Role::ScaleBar, bars));
+        let outline = sandal.plate_outline();
+        let x_far = outline.iter().map(|p| p[0]).fold(f64::MIN, f64::max);
+        let y_right = outline.iter().map(|p| p[1]).fold(f64::MAX, f64::min);
+        let [cx, cy] = [sandal.board.mount_origin[0], sandal.board.mount_origin[1]];
+        let half = SCALE_BAR_MM / 2.0;
+        let across_x = x_far + 8.0;
+        let along_y = y_right - 8.0;
+        let across = bar([across_x, cy + half], [across_x, cy - half]);
+        let along = bar([cx - half, along_y], [cx + half, along_y]);
+        // Kept whole on one sheet: each bar, the ankle mark, each pin.
+        let mut keep: Vec<Vec<[f64; 2]>> = Vec::new();
+        for shapes in [&across, &along] {
+            keep.push(shapes.iter().flat_map(Shape::extent).collect());
+        }
+        keep.push(vec![page([-8.0, -8.0]), page([8.0, 8.0])]);
+        for pin in sandal.pins() {
+            let g = r + 3.0;
+            keep.push(vec![
+                page([pin.at[0] - g, pin.at[1] - g]),
+                page([pin.at[0] + g, pin.at[1] + g]),
+            ]);
+        }
+        keep.push(pages(&sandal.border_outline()));
+        groups.push((Role::ScaleBar, [across, along].concat()));
 
         let side = sandal.side.name().to_uppercase();
         let b = &sandal.board;
@@ -314,8 +330,8 @@ impl Drawing {
             ),
             text([33.0, start], 2.8, "the sheet flat on the plate.".into()),
             text([3.0, -5.0], 2.8, "ankle".into()),
-            text([across_x + 1.5, 10.0], 2.8, "100 mm".into()),
-            text([77.0, along_y + 6.0], 2.8, "100 mm".into()),
+            text([across_x + 3.0, cy + 8.0], 2.8, "100 mm".into()),
+            text([cx - half - 6.0, along_y + 6.0], 2.8, "100 mm".into()),
         ];
         for pin in sandal.pins() {
             labels.push(text(
@@ -346,15 +362,10 @@ impl Drawing {
                 }
             }
         }
-        let shifted_box = |ps: Vec<[f64; 2]>| bbox(ps.into_iter().map(|p| shift(page(p))));
-        let mut keep_whole = vec![shifted_box(sandal.border_outline().to_vec())];
-        for pin in sandal.pins() {
-            let g = r + 3.0;
-            keep_whole.push(shifted_box(vec![
-                [pin.at[0] - g, pin.at[1] - g],
-                [pin.at[0] + g, pin.at[1] + g],
-            ]));
-        }
+        let keep_whole = keep
+            .into_iter()
+            .map(|ps| bbox(ps.into_iter().map(shift)))
+            .collect();
         Drawing {
             groups,
             size: [all[2] - all[0], all[3] - all[1]],

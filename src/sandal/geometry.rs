@@ -219,7 +219,11 @@ impl Sandal {
     /// A point of the sole frame in the board plane (the inverse of [`Sandal::board_to_sole`]).
     pub fn sole_to_board(&self, p: [f64; 2]) -> [f64; 2] {
         let m = self.board.mount();
-        let d = [p[0] - m.translation[0], p[1] - m.translation[1], -m.translation[2]];
+        let d = [
+            p[0] - m.translation[0],
+            p[1] - m.translation[1],
+            -m.translation[2],
+        ];
         let r = m.rotation;
         [
             r[0][0] * d[0] + r[1][0] * d[1] + r[2][0] * d[2],
@@ -449,7 +453,13 @@ mod tests {
 
     #[test]
     fn hull_of_a_square_with_an_inner_point() {
-        let hull = convex_hull(vec![[0.0, 0.0], [2.0, 0.0], [1.0, 1.0], [2.0, 2.0], [0.0, 2.0]]);
+        let hull = convex_hull(vec![
+            [0.0, 0.0],
+            [2.0, 0.0],
+            [1.0, 1.0],
+            [2.0, 2.0],
+            [0.0, 2.0],
+        ]);
         assert_eq!(hull, vec![[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]]);
     }
 

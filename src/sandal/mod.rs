@@ -115,7 +115,11 @@ pub fn write(
 ) -> Result<Vec<PathBuf>, SandalError> {
     let staged = Staged::new(dir, options)?;
     for file in files {
-        write_atomic(&staged.dir().join(&file.name), &file.bytes, &staged.options())?;
+        write_atomic(
+            &staged.dir().join(&file.name),
+            &file.bytes,
+            &staged.options(),
+        )?;
     }
     Ok(staged.publish()?)
 }

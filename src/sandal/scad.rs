@@ -12,7 +12,11 @@ fn point(p: [f64; 2]) -> String {
 }
 
 fn list(points: &[[f64; 2]]) -> String {
-    points.iter().map(|p| point(*p)).collect::<Vec<_>>().join(", ")
+    points
+        .iter()
+        .map(|p| point(*p))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// The OpenSCAD source of `sandal`'s plate.

@@ -40,6 +40,7 @@ mod pure_rust_agreement;
 mod pure_rust_cli;
 mod report_html;
 mod robot_file_bounds;
+mod sandal;
 mod spec_reference;
 #[cfg(feature = "ceres")]
 mod uncertainty;

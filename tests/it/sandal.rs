@@ -189,7 +189,11 @@ fn read_svg(path: &Path) -> SvgRead {
         .split_whitespace()
         .map(|x| x.parse().unwrap())
         .collect();
-    assert_eq!(view, vec![0.0, 0.0, size_mm[0], size_mm[1]], "1 unit = 1 mm");
+    assert_eq!(
+        view,
+        vec![0.0, 0.0, size_mm[0], size_mm[1]],
+        "1 unit = 1 mm"
+    );
     let group = |id: &str| {
         doc.descendants()
             .find(|n| n.has_tag_name("g") && n.attribute("id") == Some(id))
@@ -208,7 +212,10 @@ fn read_svg(path: &Path) -> SvgRead {
     assert_eq!(lines.len(), 2, "the ankle mark is a cross");
     let mid = |l: &[[f64; 2]]| [(l[0][0] + l[1][0]) / 2.0, (l[0][1] + l[1][1]) / 2.0];
     let origin = mid(&lines[0]);
-    assert!(dist(origin, mid(&lines[1])) < 1e-9, "the cross's lines meet");
+    assert!(
+        dist(origin, mid(&lines[1])) < 1e-9,
+        "the cross's lines meet"
+    );
     let mut pins = Vec::new();
     for name in ["fl", "fr", "bl", "br"] {
         let circle = group(&format!("pin-{name}"))
@@ -243,7 +250,10 @@ fn check_svg(dir: &Path, side: Side, board: &Board) -> f64 {
         .map(|p| svg.sole(p))
         .collect();
     let (worst, _) = match_vertices(&found, board);
-    assert!(worst <= TOLERANCE_MM, "{side:?} SVG: a vertex {worst} mm off");
+    assert!(
+        worst <= TOLERANCE_MM,
+        "{side:?} SVG: a vertex {worst} mm off"
+    );
     check_pins(side, &svg.pins, |p| svg.sole(p), "SVG");
     assert_eq!(svg.scale_bars.len(), 2, "two scale bars");
     for len in &svg.scale_bars {
@@ -314,7 +324,7 @@ fn read_pdf(path: &Path) -> Vec<PdfPage> {
             .iter()
             .map(|o| o.as_float().unwrap() as f64)
             .collect();
-        let content = Content::decode(&doc.get_page_content(id).unwrap()).unwrap();
+        let content = Content::decode(&doc.get_page_content(id)).unwrap();
         let mut ctm: Option<[f64; 6]> = None;
         let mut clip = None;
         let mut tag = String::new();
@@ -334,9 +344,13 @@ fn read_pdf(path: &Path) -> Vec<PdfPage> {
                 .iter()
                 .filter_map(|o| o.as_float().ok().map(f64::from))
                 .collect();
-            let at = |x: f64, y: f64, m: [f64; 6]| [m[0] * x + m[2] * y + m[4], m[1] * x + m[3] * y + m[5]];
+            let at = |x: f64, y: f64, m: [f64; 6]| {
+                [m[0] * x + m[2] * y + m[4], m[1] * x + m[3] * y + m[5]]
+            };
             match op.operator.as_str() {
-                "cm" if ctm.is_none() => ctm = Some([nums[0], nums[1], nums[2], nums[3], nums[4], nums[5]]),
+                "cm" if ctm.is_none() => {
+                    ctm = Some([nums[0], nums[1], nums[2], nums[3], nums[4], nums[5]])
+                }
                 "re" if clip.is_none() => {
                     let m = ctm.unwrap();
                     let a = at(nums[0], nums[1], m);
@@ -360,9 +374,14 @@ fn read_pdf(path: &Path) -> Vec<PdfPage> {
                         && shape.len() == 5
                     {
                         // A circle: four arcs from its rightmost point round to it.
-                        let c = shape[..4].iter().fold([0.0, 0.0], |s, p| [s[0] + p[0] / 4.0, s[1] + p[1] / 4.0]);
+                        let c = shape[..4]
+                            .iter()
+                            .fold([0.0, 0.0], |s, p| [s[0] + p[0] / 4.0, s[1] + p[1] / 4.0]);
                         read.pins.push((name.to_string(), c));
-                    } else if tag == "scale-bar" && shape.len() == 2 && dist(shape[0], shape[1]) > 50.0 {
+                    } else if tag == "scale-bar"
+                        && shape.len() == 2
+                        && dist(shape[0], shape[1]) > 50.0
+                    {
                         read.scale_bars.push(dist(shape[0], shape[1]));
                     }
                 }
@@ -469,11 +488,20 @@ fn every_file_is_named_by_foot_and_paper() {
     expected.sort();
     assert_eq!(names, expected);
     let scad = std::fs::read_to_string(dir.path().join("sandal-left.scad")).unwrap();
-    for name in ["pin_diameter", "pin_height", "plate_thickness", "slot_width", "slot_length"] {
+    for name in [
+        "pin_diameter",
+        "pin_height",
+        "plate_thickness",
+        "slot_width",
+        "slot_length",
+    ] {
         assert!(scad.contains(&format!("{name} = ")), "no parameter {name}");
     }
     let template = std::fs::read_to_string(dir.path().join("sandal-right-template.txt")).unwrap();
-    assert!(template.contains("pin fl   x    70.25  y    23.10"), "{template}");
+    assert!(
+        template.contains("pin fl   x    70.25  y    23.10"),
+        "{template}"
+    );
 }
 
 #[test]
@@ -481,8 +509,14 @@ fn bad_input_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     for (board, needle) in [
         ("[board]\nsquare_mm = -25\n", "board.square_mm"),
-        ("[board]\nmount_rpy_deg = [0, 4, 0]\n", "board.mount_rpy_deg[1]"),
-        ("[board]\nmount_origin_mm = [170, 0, 5]\n", "board.mount_origin_mm[2]"),
+        (
+            "[board]\nmount_rpy_deg = [0, 4, 0]\n",
+            "board.mount_rpy_deg[1]",
+        ),
+        (
+            "[board]\nmount_origin_mm = [170, 0, 5]\n",
+            "board.mount_origin_mm[2]",
+        ),
     ] {
         let config = write_config(dir.path(), &format!("{CAMERA}{board}"));
         let out = dir.path().join("out");
@@ -509,7 +543,12 @@ fn bad_input_writes_nothing() {
     let run = naocalib().arg("sandal").arg(&out).output().unwrap();
     assert_clean_failure(&run, &["already exists", "--force"]);
     assert_eq!(std::fs::read(out.join("sandal-left.svg")).unwrap(), before);
-    let run = naocalib().arg("sandal").arg(&out).arg("--force").output().unwrap();
+    let run = naocalib()
+        .arg("sandal")
+        .arg(&out)
+        .arg("--force")
+        .output()
+        .unwrap();
     assert!(run.status.success());
 }
 
@@ -596,7 +635,10 @@ fn detection_finds_the_rendered_pattern_with_the_models_numbering() {
                 PX_PER_MM * corners[k][1] - 0.5,
             ];
             let e = dist(*px, expected);
-            assert!(e <= 0.1, "{side:?} vertex {v:?} found {e} px from the SVG's");
+            assert!(
+                e <= 0.1,
+                "{side:?} vertex {v:?} found {e} px from the SVG's"
+            );
             worst = worst.max(e);
         }
     }
