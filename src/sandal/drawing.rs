@@ -127,7 +127,8 @@ pub struct Drawing {
     /// Where the sole frame's origin (the ankle's projection) is on the page (mm).
     pub origin: [f64; 2],
     /// Bounding boxes (page mm) that a seam between sheets must not cut: the pattern with
-    /// its border, each pin, the ankle mark and each scale bar.
+    /// its border, each pin, each strap slot, the ankle mark, each scale bar and the
+    /// instructions.
     pub keep_whole: Vec<BBox>,
 }
 
@@ -280,6 +281,9 @@ impl Drawing {
             ]);
         }
         keep.push(pages(&sandal.border_outline()));
+        for slot in sandal.slots() {
+            keep.push(pages(&sandal.slot_outline(&slot)));
+        }
         groups.push((Role::ScaleBar, [across, along].concat()));
 
         let side = sandal.side.name().to_uppercase();
@@ -329,10 +333,14 @@ impl Drawing {
                 "must measure 100.0 mm before you glue".into(),
             ),
             text([33.0, start], 2.8, "the sheet flat on the plate.".into()),
+        ];
+        // The instructions stay together on one sheet.
+        keep.push(labels.iter().flat_map(Shape::extent).collect());
+        labels.extend([
             text([3.0, -5.0], 2.8, "ankle".into()),
             text([across_x + 3.0, cy + 8.0], 2.8, "100 mm".into()),
             text([cx - half - 6.0, along_y + 6.0], 2.8, "100 mm".into()),
-        ];
+        ]);
         for pin in sandal.pins() {
             labels.push(text(
                 [pin.at[0] + r + 3.0, pin.at[1] + 2.0],
