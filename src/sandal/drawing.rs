@@ -130,6 +130,9 @@ pub struct Drawing {
     /// its border, each pin, each strap slot, the ankle mark, each scale bar and the
     /// instructions.
     pub keep_whole: Vec<BBox>,
+    /// The squares' bounding box grown by 5 mm (page mm): kept off a seam where
+    /// [`Drawing::keep_whole`] cannot be.
+    pub keep_squares: BBox,
 }
 
 /// `x` with at most three decimals, without trailing zeros.
@@ -150,56 +153,56 @@ impl Drawing {
         // Page coordinates before the offset: u = −y, v = −x.
         let page = |p: [f64; 2]| [-p[1], -p[0]];
         let pages = |ps: &[[f64; 2]]| ps.iter().map(|p| page(*p)).collect::<Vec<_>>();
-        let mut groups: Vec<(Role, Vec<Shape>)> = Vec::new();
-
-        groups.push((
-            Role::Plate,
-            vec![Shape::Stroke {
-                points: pages(&sandal.plate_outline()),
-                closed: true,
-                width: LINE,
-                dashed: false,
-            }],
-        ));
-        groups.push((
-            Role::Slots,
-            sandal
-                .slots()
-                .iter()
-                .map(|slot| Shape::Stroke {
-                    points: pages(&sandal.slot_outline(slot)),
+        let mut groups: Vec<(Role, Vec<Shape>)> = vec![
+            (
+                Role::Plate,
+                vec![Shape::Stroke {
+                    points: pages(&sandal.plate_outline()),
                     closed: true,
                     width: LINE,
                     dashed: false,
-                })
-                .collect(),
-        ));
-        groups.push((
-            Role::Border,
-            vec![Shape::Stroke {
-                points: pages(&sandal.border_outline()),
-                closed: true,
-                width: THIN,
-                dashed: true,
-            }],
-        ));
-        groups.push((
-            Role::Squares,
-            sandal
-                .black_squares()
-                .iter()
-                .map(|q| Shape::Fill(pages(q)))
-                .collect(),
-        ));
-        groups.push((
-            Role::Sole,
-            vec![Shape::Stroke {
-                points: pages(&sandal.sole_outline()),
-                closed: true,
-                width: THIN,
-                dashed: true,
-            }],
-        ));
+                }],
+            ),
+            (
+                Role::Slots,
+                sandal
+                    .slots()
+                    .iter()
+                    .map(|slot| Shape::Stroke {
+                        points: pages(&sandal.slot_outline(slot)),
+                        closed: true,
+                        width: LINE,
+                        dashed: false,
+                    })
+                    .collect(),
+            ),
+            (
+                Role::Border,
+                vec![Shape::Stroke {
+                    points: pages(&sandal.border_outline()),
+                    closed: true,
+                    width: THIN,
+                    dashed: true,
+                }],
+            ),
+            (
+                Role::Squares,
+                sandal
+                    .black_squares()
+                    .iter()
+                    .map(|q| Shape::Fill(pages(q)))
+                    .collect(),
+            ),
+            (
+                Role::Sole,
+                vec![Shape::Stroke {
+                    points: pages(&sandal.sole_outline()),
+                    closed: true,
+                    width: THIN,
+                    dashed: true,
+                }],
+            ),
+        ];
         let cross = |c: [f64; 2], arm: f64| {
             vec![
                 Shape::Stroke {
@@ -374,7 +377,12 @@ impl Drawing {
             .into_iter()
             .map(|ps| bbox(ps.into_iter().map(shift)))
             .collect();
+        let mut keep_squares = bbox(pages(&sandal.pattern_outline()).into_iter().map(shift));
+        for (k, grow) in [(0, -5.0), (1, -5.0), (2, 5.0), (3, 5.0)] {
+            keep_squares[k] += grow;
+        }
         Drawing {
+            keep_squares,
             groups,
             size: [all[2] - all[0], all[3] - all[1]],
             origin: shift(page([0.0, 0.0])),

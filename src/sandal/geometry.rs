@@ -465,9 +465,11 @@ mod tests {
 
     #[test]
     fn sole_to_board_inverts_the_mount() {
-        let mut board = Board::default();
-        board.mount_origin = [160.0, 12.0, 0.0];
-        board.mount_rpy = [0.0, 0.0, 0.3];
+        let board = Board {
+            mount_origin: [160.0, 12.0, 0.0],
+            mount_rpy: [0.0, 0.0, 0.3],
+            ..Board::default()
+        };
         let s = Sandal::new(&board, Side::Left, PlateParams::default()).unwrap();
         let p = [3.0, -7.5];
         let q = s.sole_to_board(s.board_to_sole(p));

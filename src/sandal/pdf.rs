@@ -59,9 +59,9 @@ pub struct Sheet {
 
 /// The windows along one axis: `[start, end]` pieces covering `0 … length`, each at most
 /// `room` long, consecutive ones overlapping by [`OVERLAP`], every seam (a piece's end)
-/// outside the `keep` intervals where that is possible. A `length` that fits gives one
-/// piece of the full `room`, centred on the content.
-fn pieces(length: f64, room: f64, keep: &[(f64, f64)]) -> Vec<(f64, f64)> {
+/// outside the `keep` intervals where that is possible, else outside the `fallback` ones. A
+/// `length` that fits gives one piece of the full `room`, centred on the content.
+fn pieces(length: f64, room: f64, keep: &[(f64, f64)], fallback: &[(f64, f64)]) -> Vec<(f64, f64)> {
     if length <= room {
         let pad = (room - length) / 2.0;
         return vec![(-pad, length + pad)];
@@ -74,14 +74,15 @@ fn pieces(length: f64, room: f64, keep: &[(f64, f64)]) -> Vec<(f64, f64)> {
             return out;
         }
         let limit = start + room;
-        let mut cut = limit;
-        while let Some(&(a, _)) = keep.iter().find(|(a, b)| cut > *a && cut < *b) {
-            cut = a;
-        }
-        if cut <= start + 2.0 * OVERLAP {
-            // Nothing may be kept whole within reach: cut at the limit.
-            cut = limit;
-        }
+        let seam = |keep: &[(f64, f64)]| {
+            let mut cut = limit;
+            while let Some(&(a, _)) = keep.iter().find(|(a, b)| cut > *a && cut < *b) {
+                cut = a;
+            }
+            (cut > start + 2.0 * OVERLAP).then_some(cut)
+        };
+        // Nothing may be kept whole within reach: cut at the limit.
+        let cut = seam(keep).or_else(|| seam(fallback)).unwrap_or(limit);
         out.push((start, cut));
         start = cut - OVERLAP;
     }
@@ -97,8 +98,9 @@ pub fn sheets(drawing: &Drawing, paper: &Paper) -> Vec<Sheet> {
             .map(|b| (b[axis] - SEAM_CLEARANCE, b[axis + 2] + SEAM_CLEARANCE))
             .collect::<Vec<_>>()
     };
-    let cols = pieces(drawing.size[0], room[0], &keep(0));
-    let rows = pieces(drawing.size[1], room[1], &keep(1));
+    let squares = |axis: usize| [(drawing.keep_squares[axis], drawing.keep_squares[axis + 2])];
+    let cols = pieces(drawing.size[0], room[0], &keep(0), &squares(0));
+    let rows = pieces(drawing.size[1], room[1], &keep(1), &squares(1));
     let mut out = Vec::new();
     for (j, &(v0, v1)) in rows.iter().enumerate() {
         for (i, &(u0, u1)) in cols.iter().enumerate() {
@@ -374,17 +376,19 @@ mod tests {
     #[test]
     fn seams_avoid_what_is_kept_whole() {
         // 330 mm on 277 mm sheets, the pattern at 0 … 220: the seam moves before it.
-        let p = pieces(330.0, 277.0, &[(0.0, 220.0), (230.0, 240.0)]);
+        let p = pieces(330.0, 277.0, &[(0.0, 220.0), (230.0, 240.0)], &[]);
         assert_eq!(p.len(), 2);
-        // Within reach of the first sheet, only 220 … 230 is free … but 277 is past
-        // 240, so the first seam is at the limit if free: 277 is free.
+        // The seam goes as far as the sheet reaches when that is free (277 is).
         assert_eq!(p[0], (0.0, 277.0));
-        let p = pieces(330.0, 277.0, &[(100.0, 300.0)]);
+        let p = pieces(330.0, 277.0, &[(100.0, 300.0)], &[]);
         assert_eq!(p[0], (0.0, 100.0));
         assert_eq!(p[1], (90.0, 367.0));
         // A keep-out longer than a sheet is cut at the limit.
-        let p = pieces(700.0, 277.0, &[(0.0, 600.0)]);
+        let p = pieces(700.0, 277.0, &[(0.0, 600.0)], &[]);
         assert_eq!(p[0], (0.0, 277.0));
+        // … unless the fallback can be kept off the seam.
+        let p = pieces(700.0, 277.0, &[(0.0, 600.0)], &[(20.0, 250.0)]);
+        assert_eq!(p[0], (0.0, 250.0));
     }
 
     #[test]

@@ -14,9 +14,12 @@ use crate::util::{assert_clean_failure, naocalib};
 const TOLERANCE_MM: f64 = 0.01;
 const PT_PER_MM: f64 = 72.0 / 25.4;
 
+/// One foot's FSRs: name and position (mm from the ankle's projection).
+type FsrTable = [(&'static str, [f64; 2]); 4];
+
 /// B-Human `Config/Robots/Default/robotDimensions.cfg` (BHumanCodeRelease d89d603f) lines
 /// 54–65, as the file writes them: `leftFsrPositions` and `rightFsrPositions`.
-const FSR: [(Side, [(&str, [f64; 2]); 4]); 2] = [
+const FSR: [(Side, FsrTable); 2] = [
     (
         Side::Left,
         [
@@ -245,10 +248,13 @@ fn read_svg(path: &Path) -> SvgRead {
 /// error (mm).
 fn check_svg(dir: &Path, side: Side, board: &Board) -> f64 {
     let svg = read_svg(&dir.join(format!("sandal-{}.svg", side.name())));
-    let found: Vec<[f64; 2]> = touching_corners(&svg.squares)
-        .into_iter()
-        .map(|p| svg.sole(p))
-        .collect();
+    let corners = touching_corners(&svg.squares);
+    for p in &corners {
+        let inside =
+            (0.0..=svg.size_mm[0]).contains(&p[0]) && (0.0..=svg.size_mm[1]).contains(&p[1]);
+        assert!(inside, "{side:?} SVG: vertex {p:?} off the canvas");
+    }
+    let found: Vec<[f64; 2]> = corners.into_iter().map(|p| svg.sole(p)).collect();
     let (worst, _) = match_vertices(&found, board);
     assert!(
         worst <= TOLERANCE_MM,
