@@ -387,8 +387,8 @@ mod tests {
         let p = pieces(700.0, 277.0, &[(0.0, 600.0)], &[]);
         assert_eq!(p[0], (0.0, 277.0));
         // … unless the fallback can be kept off the seam.
-        let p = pieces(700.0, 277.0, &[(0.0, 600.0)], &[(20.0, 250.0)]);
-        assert_eq!(p[0], (0.0, 250.0));
+        let p = pieces(700.0, 277.0, &[(0.0, 600.0)], &[(100.0, 290.0)]);
+        assert_eq!(p[0], (0.0, 100.0));
     }
 
     #[test]
