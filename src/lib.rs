@@ -40,5 +40,6 @@ pub mod output;
 pub mod plan;
 pub mod report;
 pub mod robot;
+pub mod sandal;
 pub mod sim;
 pub mod solve;

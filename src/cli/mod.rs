@@ -22,6 +22,7 @@ mod export;
 mod import;
 mod options;
 mod plan;
+mod sandal;
 mod simulate;
 mod simulate_robot;
 mod solve;
@@ -69,6 +70,9 @@ enum Command {
     /// A simulated NAO lying on its back that serves LoLA (for testing capture), and
     /// `snap`, its lower camera.
     SimulateRobot(simulate_robot::SimulateRobotArgs),
+    /// Write the sandals to make: the pattern to print at 1:1 (SVG, PDF on A4 and US
+    /// Letter), a drilling and cutting template and an OpenSCAD plate, for both feet.
+    Sandal(sandal::SandalArgs),
     /// Find the sandal's vertices in a dataset's images with OpenCV; write corners.csv.
     #[cfg(feature = "detect")]
     Detect(detect::DetectArgs),
@@ -156,6 +160,7 @@ pub fn run(cli: &Cli) -> Result<ExitCode> {
         Command::Import(args) => import::run(args),
         Command::Capture(args) => capture::run(args),
         Command::SimulateRobot(args) => simulate_robot::run(args),
+        Command::Sandal(args) => sandal::run(args),
         #[cfg(feature = "detect")]
         Command::Detect(args) => detect::run(args),
     }

@@ -47,6 +47,7 @@ mod pure_rust_cli;
 mod readme;
 mod report_html;
 mod robot_file_bounds;
+mod sandal;
 mod spec_reference;
 #[cfg(feature = "ceres")]
 mod uncertainty;
