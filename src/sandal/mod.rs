@@ -5,7 +5,7 @@
 //!
 //! Data flows one way: [`Board`] → [`Sandal`] (geometry in the sole frame) → the drawing
 //! (`drawing.rs`, page millimetres) → SVG / PDF; the template and the OpenSCAD source
-//! read the [`Sandal`] directly. [`files`] makes every file, [`write`] writes them
+//! read the [`Sandal`] directly. [`files`] makes every file, [`write()`] writes them
 //! together through [`crate::output`].
 
 pub mod drawing;
