@@ -43,7 +43,7 @@ fn collision_on_the_way(model: &Model, a: &JointAngles, b: &JointAngles) -> Opti
 
 /// Every move of `postures` from rest and back: a way exists, and each of its straight
 /// pieces is free when walked finely; returns the number of intermediate postures.
-fn assert_every_move_is_free(model: &Model, postures: &[JointAngles]) -> usize {
+pub(crate) fn assert_every_move_is_free(model: &Model, postures: &[JointAngles]) -> usize {
     let rest = route::rest_posture();
     let moves = route::moves(model, &BodyModel::default(), &rest, postures);
     assert_eq!(moves.len(), postures.len() + 1);
@@ -194,9 +194,9 @@ fn capture_with_fixed_camera(
     }
     let png = dir.join("fixed.png");
     let image = naocalib::sim::render::GreyImage {
-        width: 8,
-        height: 8,
-        pixels: vec![128; 64],
+        width: 640,
+        height: 480,
+        pixels: vec![128; 640 * 480],
     };
     std::fs::write(&png, image.to_png().unwrap()).unwrap();
     let out = Command::new(&bin)
