@@ -264,8 +264,8 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
         let _ = writeln!(
             out,
             "upper camera: the same rules, with offsets within ±{}° (±{} mm) of the --around \
-             calibration: lying on its back the NAO sees a sandal through its upper camera \
-             only from 220–390 mm, where the board spans most of the image and no capture \
+             calibration (zero without it): lying on its back the NAO sees a sandal through \
+             its upper camera only from 220–390 mm, where the board spans most of the image and no capture \
              stays in view over ±3°; its imported calibration knows the offsets far better, \
              and capture and detection check every picture again",
             args.upper_offset_deg, args.upper_offset_deg
