@@ -8,7 +8,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 
-use naocalib::model::{Family, FixedSet, Model, Param, Unit};
+use naocalib::model::{CameraId, Family, FixedSet, Model, Param, Unit};
 use naocalib::output::WriteOptions;
 use naocalib::plan::{PlanOptions, Prediction, is_angle_offset};
 use naocalib::solve::noise::NoiseLevels;
@@ -17,7 +17,8 @@ use super::options::{joint_sigma_deg_or_zero, px_sigma};
 
 #[derive(Debug, Args)]
 pub struct PlanArgs {
-    /// The stance schedule to write (CSV: capture,board,HeadYaw,…,RAnkleRoll in radians).
+    /// The stance schedule to write (CSV: capture,board,HeadYaw,…,RAnkleRoll in radians,
+    /// and a camera column, lower or upper, when some capture is by the upper camera).
     out: PathBuf,
     /// Number of captures, both legs together.
     #[arg(long, default_value_t = 144,
@@ -45,6 +46,18 @@ pub struct PlanArgs {
     /// sandal translations within ± this in mm).
     #[arg(long, default_value_t = 3.0, value_parser = offset_deg)]
     offset_deg: f64,
+    /// Cameras to plan captures for, comma-separated (lower, upper); both by default when
+    /// the --camera dataset has an [upper_camera] table, else lower. Planning for the upper
+    /// camera frees its rotation offsets (UpperCamYaw, UpperCamPitch, UpperCamRoll).
+    #[arg(long, value_name = "CAMERAS", value_parser = parse_cameras)]
+    cameras: Option<Cameras>,
+    /// The box of offsets for upper-camera captures (deg, 0 … 30; sandal translations in
+    /// mm), centred on the --around calibration. Lying on its back the NAO sees a sandal
+    /// through its upper camera only from 220–390 mm, where the board spans most of the
+    /// image, so no capture stays in view over ±3°; the robot's imported calibration knows
+    /// its offsets far better, and capture and detection check each picture again.
+    #[arg(long, default_value_t = 1.0, value_parser = offset_deg)]
+    upper_offset_deg: f64,
     /// Leg stances drawn into the candidate pool per leg.
     #[arg(long, default_value_t = 300,
           value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=100_000))]
@@ -93,6 +106,26 @@ fn parse_families(text: &str) -> Result<Families, String> {
     Ok(Families(out))
 }
 
+/// The cameras of `--cameras`.
+#[derive(Debug, Clone)]
+struct Cameras(Vec<CameraId>);
+
+/// Parses `--cameras`.
+fn parse_cameras(text: &str) -> Result<Cameras, String> {
+    let mut out = Vec::new();
+    for name in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        let camera = CameraId::from_name(name)
+            .ok_or_else(|| format!("unknown camera '{name}' (cameras: lower, upper)"))?;
+        if !out.contains(&camera) {
+            out.push(camera);
+        }
+    }
+    if out.is_empty() {
+        return Err("name at least one camera".into());
+    }
+    Ok(Cameras(out))
+}
+
 /// An offset range: 0 … 30 (the physical bound of an angle offset,
 /// [`naocalib::model::bounds`]).
 fn offset_deg(text: &str) -> Result<f64, String> {
@@ -120,9 +153,29 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
         Some(path) => naocalib::dataset::read_model(path)?,
         None => Model::default(),
     };
+    let cameras = match &args.cameras {
+        Some(c) => c.0.clone(),
+        None if model.upper_camera.is_some() => vec![CameraId::Lower, CameraId::Upper],
+        None => vec![CameraId::Lower],
+    };
+    if cameras.contains(&CameraId::Upper) && model.upper_camera.is_none() {
+        bail!(
+            "--cameras names the upper camera, but {} has no [upper_camera] table (its \
+             intrinsics)",
+            args.camera
+                .as_ref()
+                .map_or("the default model".to_string(), |p| p.display().to_string())
+        );
+    }
+    let upper = cameras.contains(&CameraId::Upper);
     let mut fixed = FixedSet::with(&Param::ALL);
     for family in &args.families.0 {
         for p in family.params() {
+            fixed.set(p, false);
+        }
+    }
+    if upper {
+        for p in Family::UpperCamera.params() {
             fixed.set(p, false);
         }
     }
@@ -134,11 +187,13 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
             joint: args.joint_noise_deg.to_radians(),
         },
         seed: args.seed,
+        cameras,
         pool_stances: args.pool,
         ..PlanOptions::default()
     };
     options.feasibility.offset_angle = args.offset_deg.to_radians();
     options.feasibility.offset_length = args.offset_deg;
+    options.feasibility.upper_offset = args.upper_offset_deg.to_radians();
     if let Some(path) = &args.around {
         let current = naocalib::report::export::read_calibration(path)
             .with_context(|| format!("--around {}", path.display()))?;
@@ -168,10 +223,23 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
         .filter(|c| c.side == naocalib::model::Side::Left)
         .count();
     let f = &options.feasibility;
+    let n_upper = plan
+        .captures
+        .iter()
+        .filter(|c| c.camera == CameraId::Upper)
+        .count();
+    let by_camera = if upper {
+        format!(
+            ", {} lower camera, {n_upper} upper",
+            plan.captures.len() - n_upper
+        )
+    } else {
+        String::new()
+    };
     let _ = writeln!(
         out,
-        "wrote {}: {} captures ({} left, {} right) in {} leg stances, chosen from {} feasible \
-         captures in {elapsed:.1} s",
+        "wrote {}: {} captures ({} left, {} right{by_camera}) in {} leg stances, chosen from \
+         {} feasible captures in {elapsed:.1} s",
         args.out.display(),
         plan.captures.len(),
         left,
@@ -192,9 +260,21 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
         args.offset_deg,
         args.offset_deg
     );
+    if upper {
+        let _ = writeln!(
+            out,
+            "upper camera: the same rules, with offsets within ±{}° (±{} mm) of the --around \
+             calibration (zero without it): lying on its back the NAO sees a sandal through \
+             its upper camera only from 220–390 mm, where the board spans most of the image and no capture \
+             stays in view over ±3°; its imported calibration knows the offsets far better, \
+             and capture and detection check every picture again",
+            args.upper_offset_deg, args.upper_offset_deg
+        );
+    }
     let _ = writeln!(
         out,
-        "criterion: the worst σ of the 15 camera and leg joint offsets, with every other free \
+        "criterion: the worst σ of the 15 camera and leg joint offsets (and the upper camera's \
+         3 when planned for), with every other free \
          parameter (families {}) weighed by its column-scaled variance (Σ (w·var)^16); greedy \
          selection, exchange, and refinement around the picked stances",
         args.families

@@ -13,7 +13,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::model::{FixedSet, Model, PARAMETER_COUNT, Param, Side, Vertex};
+use crate::model::{CameraId, FixedSet, Model, PARAMETER_COUNT, Param, Side, Vertex};
 use crate::solve::jacobian::Evaluator;
 use crate::solve::noise::{self, NoiseLevels, NoiseOptions};
 use crate::solve::{CaptureTerm, Loss, Observation, Problem, Tolerances};
@@ -39,12 +39,26 @@ pub fn capture_information(
     fixed: &FixedSet,
     levels: NoiseLevels,
 ) -> Vec<Option<CaptureInformation>> {
+    let lower: Vec<(CameraId, Side, JointAngles)> = captures
+        .iter()
+        .map(|(side, joints)| (CameraId::Lower, *side, *joints))
+        .collect();
+    capture_information_for(model, &lower, fixed, levels)
+}
+
+/// [`capture_information`] of captures `(camera, side, joints)`, each through its camera.
+pub fn capture_information_for(
+    model: &Model,
+    captures: &[(CameraId, Side, JointAngles)],
+    fixed: &FixedSet,
+    levels: NoiseLevels,
+) -> Vec<Option<CaptureInformation>> {
     let zero = [0.0; PARAMETER_COUNT];
     let vertices: Vec<Vertex> = model.board.vertices().collect();
     let mut terms = Vec::with_capacity(captures.len());
     let mut index = Vec::with_capacity(captures.len());
-    for (side, joints) in captures {
-        let chains = model.chains(*side, joints);
+    for (camera, side, joints) in captures {
+        let chains = model.chains_for(*camera, *side, joints);
         let Some(pixels) = model
             .project(&chains, &zero, &vertices)
             .into_iter()
@@ -230,19 +244,22 @@ impl Default for DesignOptions {
 
 /// The weights `w_i` of the criterion for `n` free parameters: the average information one
 /// pool capture carries about each (column scaling, so that `w_i·var_i` is unit-free), and
-/// among the `focus` parameters (all in the same unit) one common weight, their mean, so
-/// that the criterion compares their plain variances: its worst term is the largest σ of
-/// the focus parameters.
-pub fn weights(pool: &[&CaptureInformation], n: usize, focus: &[bool]) -> Vec<f64> {
+/// among the `focus` parameters (those with a positive factor, all in the same unit) one
+/// common weight, their mean, times the parameter's factor, so that the criterion compares
+/// their plain variances: its worst term is the largest σ of the focus parameters (a
+/// factor `1/r²` asks for a σ `r` times the others').
+pub fn weights(pool: &[&CaptureInformation], n: usize, focus: &[f64]) -> Vec<f64> {
     let total = information(n, pool);
     let mut w: Vec<f64> = (0..n)
         .map(|i| (total[(i, i)] / pool.len().max(1) as f64).max(1e-300))
         .collect();
-    let focused: Vec<usize> = (0..n).filter(|&i| focus.get(i) == Some(&true)).collect();
+    let focused: Vec<usize> = (0..n)
+        .filter(|&i| focus.get(i).is_some_and(|f| *f > 0.0))
+        .collect();
     if !focused.is_empty() {
         let mean = focused.iter().map(|&i| w[i]).sum::<f64>() / focused.len() as f64;
         for &i in &focused {
-            w[i] = mean;
+            w[i] = mean * focus[i];
         }
     }
     w
@@ -258,7 +275,7 @@ pub fn weights(pool: &[&CaptureInformation], n: usize, focus: &[bool]) -> Vec<f6
 pub fn select(
     pool: &[&CaptureInformation],
     n: usize,
-    focus: &[bool],
+    focus: &[f64],
     count: usize,
     start: &[usize],
     options: &DesignOptions,

@@ -8,7 +8,7 @@ use rand::Rng;
 
 use super::collision::{self, BodyModel};
 use crate::model::{
-    Joint, JointAngles, Model, PARAMETER_COUNT, Param, Side, StanceChains, gravity,
+    CameraId, Joint, JointAngles, Model, PARAMETER_COUNT, Param, Side, StanceChains, gravity,
 };
 
 /// How far the planned captures must stay from the limits of what can be seen and reached.
@@ -30,6 +30,13 @@ pub struct Feasibility {
     pub min_square_px: f64,
     /// Largest angle between the board normal and the line of sight (rad).
     pub max_view_angle: f64,
+    /// For upper-camera captures, the bound (rad, and mm for the sandal translations)
+    /// that replaces [`Feasibility::offset_angle`] and [`Feasibility::offset_length`]:
+    /// lying on its back the NAO sees a sandal through its upper camera only from
+    /// 220–390 mm, where the board spans most of the image, so a ±3° box admits no
+    /// capture; the box is centred on the robot's calibration
+    /// ([`Feasibility::centre`]), whose offsets are known far better than ±3°.
+    pub upper_offset: f64,
     /// The collision model.
     pub body: BodyModel,
     /// The robot's current calibration (internal units) the box of offsets is centred on
@@ -51,6 +58,7 @@ impl Default for Feasibility {
             margin_px: 12.0,
             min_square_px: 14.0,
             max_view_angle: 60f64.to_radians(),
+            upper_offset: 1f64.to_radians(),
             body: BodyModel::default(),
             centre: [0.0; PARAMETER_COUNT],
         }
@@ -92,20 +100,25 @@ impl std::fmt::Display for Infeasible {
     }
 }
 
-/// The offsets whose unknown values the view must tolerate for a capture of `side`, each
-/// with its bound.
-fn uncertain(side: Side, f: &Feasibility) -> Vec<(Param, f64)> {
-    let mut out: Vec<(Param, f64)> = [Param::CamYaw, Param::CamPitch, Param::CamRoll]
+/// The offsets whose unknown values the view must tolerate for a capture of `side` by
+/// `camera`, each with its bound.
+fn uncertain(camera: CameraId, side: Side, f: &Feasibility) -> Vec<(Param, f64)> {
+    let (angle, length) = match camera {
+        CameraId::Lower => (f.offset_angle, f.offset_length),
+        CameraId::Upper => (f.upper_offset, f.upper_offset.to_degrees()),
+    };
+    let mut out: Vec<(Param, f64)> = camera
+        .rotation_params()
         .into_iter()
         .chain(side.leg_joints().map(Joint::offset))
-        .map(|p| (p, f.offset_angle))
+        .map(|p| (p, angle))
         .collect();
     out.push((Param::HeadYaw, f.head_offset));
     out.push((Param::HeadPitch, f.head_offset));
     let [rot_z, trans_x, trans_y] = side.board_params();
-    out.push((rot_z, f.offset_angle));
-    out.push((trans_x, f.offset_length));
-    out.push((trans_y, f.offset_length));
+    out.push((rot_z, angle));
+    out.push((trans_x, length));
+    out.push((trans_y, length));
     out
 }
 
@@ -137,7 +150,20 @@ pub fn board_in_view_for_all_offsets(
     joints: &JointAngles,
     f: &Feasibility,
 ) -> bool {
-    let chains = model.chains(side, joints);
+    board_in_view_of(model, CameraId::Lower, side, joints, f)
+}
+
+/// [`board_in_view_for_all_offsets`] for the image of `camera`, with that camera's box of
+/// offsets ([`Feasibility::upper_offset`] for the upper one).
+pub fn board_in_view_of(
+    model: &Model,
+    camera: CameraId,
+    side: Side,
+    joints: &JointAngles,
+    f: &Feasibility,
+) -> bool {
+    let chains = model.chains_for(camera, side, joints);
+    let intrinsics = model.intrinsics(camera);
     let zero = f.centre;
     let Some((uv, angle)) = view(model, &chains, &zero) else {
         return false;
@@ -153,7 +179,7 @@ pub fn board_in_view_for_all_offsets(
     if min_edge < f.min_square_px {
         return false;
     }
-    let bounds = uncertain(side, f);
+    let bounds = uncertain(camera, side, f);
     // Derivatives by central differences (the model is smooth; h of 1e-5 rad or mm).
     let h = 1e-5;
     let mut d_uv = vec![vec![[0.0; 2]; uv.len()]; bounds.len()];
@@ -176,7 +202,7 @@ pub fn board_in_view_for_all_offsets(
         }
         d_angle[k] = (ap - am) / (2.0 * h);
     }
-    let (w, hgt) = (model.camera.width as f64, model.camera.height as f64);
+    let (w, hgt) = (intrinsics.width as f64, intrinsics.height as f64);
     let (lo, hi) = (
         [f.margin_px; 2],
         [w - 1.0 - f.margin_px, hgt - 1.0 - f.margin_px],
@@ -220,7 +246,7 @@ pub fn board_in_view_for_all_offsets(
     };
     let inside = |params: &[f64; PARAMETER_COUNT]| match view(model, &chains, params) {
         Some((uv, angle)) => {
-            angle <= f.max_view_angle && uv.iter().all(|p| model.camera.contains(*p, f.margin_px))
+            angle <= f.max_view_angle && uv.iter().all(|p| intrinsics.contains(*p, f.margin_px))
         }
         None => false,
     };
@@ -280,6 +306,17 @@ pub fn check(
     joints: &JointAngles,
     f: &Feasibility,
 ) -> Result<(), Infeasible> {
+    check_for(model, CameraId::Lower, side, joints, f)
+}
+
+/// [`check`] for a capture by `camera`.
+pub fn check_for(
+    model: &Model,
+    camera: CameraId,
+    side: Side,
+    joints: &JointAngles,
+    f: &Feasibility,
+) -> Result<(), Infeasible> {
     for j in Joint::ALL {
         let (lo, hi) = j.limits();
         let q = joints.get(j);
@@ -297,11 +334,11 @@ pub fn check(
     if let Some(what) = collision::collision(&model.robot, &f.body, joints) {
         return Err(Infeasible::Collision(what));
     }
-    if !board_in_view_for_all_offsets(model, side, joints, f) {
+    if !board_in_view_of(model, camera, side, joints, f) {
         return Err(Infeasible::View);
     }
     // Every vertex in plain sight of the camera past the resting leg (at the centre).
-    let chains = model.chains(side, joints);
+    let chains = model.chains_for(camera, side, joints);
     let zero = f.centre;
     let eye = chains.camera.eval(&zero).translation;
     let board = chains.board.eval(&zero);
@@ -339,10 +376,32 @@ pub fn aim_head(
     joint_margin: f64,
     centre: &[f64; PARAMETER_COUNT],
 ) -> Option<JointAngles> {
+    aim_head_for(
+        model,
+        CameraId::Lower,
+        side,
+        joints,
+        target,
+        joint_margin,
+        centre,
+    )
+}
+
+/// [`aim_head`] for the image of `camera`.
+pub fn aim_head_for(
+    model: &Model,
+    camera: CameraId,
+    side: Side,
+    joints: &JointAngles,
+    target: [f64; 2],
+    joint_margin: f64,
+    centre: &[f64; PARAMETER_COUNT],
+) -> Option<JointAngles> {
     let zero = *centre;
+    let intrinsics = model.intrinsics(camera);
     let centre = |j: &JointAngles| -> Option<[f64; 2]> {
-        let pose = model.chains(side, j).camera_to_board(&zero);
-        model.camera.project(&pose.translation)
+        let pose = model.chains_for(camera, side, j).camera_to_board(&zero);
+        intrinsics.project(&pose.translation)
     };
     let mut start = *joints;
     let sole = model
@@ -364,6 +423,8 @@ pub fn aim_head(
 /// head posture.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Candidate {
+    /// The camera that takes the picture.
+    pub camera: CameraId,
     /// The leg whose board is in view.
     pub side: Side,
     /// The logged angles to command.
@@ -399,24 +460,40 @@ fn park(side: Side, joints: &mut JointAngles, k: usize) {
     joints.set(ankle_roll, 0.0);
 }
 
-/// The image points the head aims the board centre at, in order of preference: the
-/// centre, then points around it.
-fn aim_targets(model: &Model) -> Vec<[f64; 2]> {
-    let (w, h) = (model.camera.width as f64, model.camera.height as f64);
-    [
-        (0.0, 0.0),
-        (-0.12, -0.1),
-        (0.12, 0.1),
-        (0.12, -0.1),
-        (-0.12, 0.1),
-        (0.0, -0.15),
-        (0.0, 0.15),
-        (-0.18, 0.0),
-        (0.18, 0.0),
-    ]
-    .iter()
-    .map(|(du, dv)| [w * (0.5 + du), h * (0.5 + dv)])
-    .collect()
+/// The image points the head aims the board centre at, in order of preference: for the
+/// lower camera the centre, then points around it; for the upper camera points below the
+/// centre (lying on its back, the NAO cannot pitch its head far enough to bring a sandal to
+/// the upper image's centre).
+fn aim_targets(model: &Model, camera: CameraId) -> Vec<[f64; 2]> {
+    let intrinsics = model.intrinsics(camera);
+    let (w, h) = (intrinsics.width as f64, intrinsics.height as f64);
+    let offsets: &[(f64, f64)] = match camera {
+        CameraId::Lower => &[
+            (0.0, 0.0),
+            (-0.12, -0.1),
+            (0.12, 0.1),
+            (0.12, -0.1),
+            (-0.12, 0.1),
+            (0.0, -0.15),
+            (0.0, 0.15),
+            (-0.18, 0.0),
+            (0.18, 0.0),
+        ],
+        CameraId::Upper => &[
+            (0.0, 0.1),
+            (-0.2, 0.1),
+            (0.2, 0.1),
+            (0.0, 0.05),
+            (0.0, 0.15),
+            (-0.2, 0.15),
+            (0.2, 0.15),
+            (0.0, 0.2),
+        ],
+    };
+    offsets
+        .iter()
+        .map(|(du, dv)| [w * (0.5 + du), h * (0.5 + dv)])
+        .collect()
 }
 
 /// Up to `heads` feasible captures of the stance `joints` of the measured leg `side` (the
@@ -425,6 +502,7 @@ fn aim_targets(model: &Model) -> Vec<[f64; 2]> {
 /// when every resting posture collides or no head posture keeps the board in view.
 fn postures(
     model: &Model,
+    camera: CameraId,
     side: Side,
     joints: &JointAngles,
     heads: usize,
@@ -450,14 +528,39 @@ fn postures(
         if out.len() == heads {
             break;
         }
-        let Some(aimed) = aim_head(model, side, &joints, *target, f.joint_margin, &f.centre) else {
+        let Some(aimed) = aim_head_for(
+            model,
+            camera,
+            side,
+            &joints,
+            *target,
+            f.joint_margin,
+            &f.centre,
+        ) else {
             continue;
         };
-        if check(model, side, &aimed, f).is_ok() {
+        if check_for(model, camera, side, &aimed, f).is_ok() {
             out.push(aimed);
         }
     }
     out
+}
+
+/// The range a leg angle of the pool is drawn from: the joint's limits less the margin;
+/// for the upper camera the hip's HipYawPitch and HipPitch only where it can see a sandal
+/// lying on its back (HipYawPitch −65…+12°, HipPitch −87…−32°).
+fn leg_range(camera: CameraId, j: Joint, margin: f64) -> (f64, f64) {
+    let (lo, hi) = j.limits();
+    let (lo, hi) = (lo + margin, hi - margin);
+    let window = match (camera, j) {
+        (CameraId::Upper, Joint::LHipYawPitch | Joint::RHipYawPitch) => Some((-65.0, 12.0)),
+        (CameraId::Upper, Joint::LHipPitch | Joint::RHipPitch) => Some((-87.0, -32.0)),
+        _ => None,
+    };
+    match window {
+        Some((a, b)) => (lo.max(f64::to_radians(a)), hi.min(f64::to_radians(b))),
+        None => (lo, hi),
+    }
 }
 
 /// A leg angle drawn within `[lo, hi]` from the arcsine distribution (density
@@ -477,6 +580,7 @@ fn towards_limits(lo: f64, hi: f64, rng: &mut impl Rng) -> f64 {
 #[allow(clippy::too_many_arguments)] // each is one plain setting of the pool
 pub fn candidates(
     model: &Model,
+    camera: CameraId,
     side: Side,
     stances: usize,
     heads: usize,
@@ -485,7 +589,7 @@ pub fn candidates(
     first_stance: usize,
     rng: &mut impl Rng,
 ) -> Vec<Candidate> {
-    let targets = aim_targets(model);
+    let targets = aim_targets(model, camera);
     let mut out = Vec::new();
     let mut found = 0;
     // Which signs of each joint's gravity torque the pool has: compliance and play can only
@@ -500,11 +604,8 @@ pub fn candidates(
         }
         let mut joints = JointAngles::default();
         for j in side.leg_joints() {
-            let (lo, hi) = j.limits();
-            joints.set(
-                j,
-                towards_limits(lo + f.joint_margin, hi - f.joint_margin, rng),
-            );
+            let (lo, hi) = leg_range(camera, j, f.joint_margin);
+            joints.set(j, towards_limits(lo, hi, rng));
         }
         let these = torque_signs(&joints);
         // Once the pool is full, only stances that load a joint in a way it lacks.
@@ -512,7 +613,7 @@ pub fn candidates(
         if found >= stances && !new_sign {
             continue;
         }
-        let postures = postures(model, side, &joints, heads, &targets, f);
+        let postures = postures(model, camera, side, &joints, heads, &targets, f);
         if postures.is_empty() {
             continue;
         }
@@ -524,6 +625,7 @@ pub fn candidates(
             }
         }
         out.extend(postures.into_iter().map(|joints| Candidate {
+            camera,
             side,
             joints,
             stance,
@@ -548,7 +650,8 @@ pub fn variants(
     rng: &mut impl Rng,
 ) -> Vec<Candidate> {
     let side = base.side;
-    let targets = aim_targets(model);
+    let camera = base.camera;
+    let targets = aim_targets(model, camera);
     let mut out = Vec::new();
     for _ in 0..tries {
         if out.len() == count {
@@ -560,8 +663,9 @@ pub fn variants(
             let q = joints.get(j) + rng.random_range(-spread..=spread);
             joints.set(j, q.clamp(lo + f.joint_margin, hi - f.joint_margin));
         }
-        if let Some(aimed) = postures(model, side, &joints, 1, &targets, f).pop() {
+        if let Some(aimed) = postures(model, camera, side, &joints, 1, &targets, f).pop() {
             out.push(Candidate {
+                camera,
                 side,
                 joints: aimed,
                 stance: first_stance + out.len(),

@@ -9,10 +9,16 @@
 //!    ([`collision`]), each with the head aiming the board at the image centre (or points
 //!    around it); a capture enters the pool only if its board stays fully in the image and
 //!    facing the camera for every offset within ±3° (and ±3 mm of the sandal mounting).
+//!    For the upper camera ([`PlanOptions::cameras`]) the pool is searched where it can
+//!    see a sandal (the hips flexed and turned in, the board aimed below the image
+//!    centre), with its own box of offsets ([`Feasibility::upper_offset`]) around the
+//!    robot's calibration.
 //! 2. **Design** ([`design::select`]): each candidate's Fisher information under the
 //!    per-capture noise model (pixel noise plus joint noise shared by a capture's vertices);
 //!    a greedy selection, then exchange passes that minimise the worst predicted σ of the
-//!    15 angle offsets (with the other free parameters column-scaled beside them).
+//!    15 angle offsets (and of the upper camera's 3, aimed at
+//!    [`PlanOptions::upper_sigma_ratio`] of them), with the other free parameters
+//!    column-scaled beside them.
 //! 3. **Refinement**: variants of the picked captures (leg angles moved by up to 0.15 rad,
 //!    then 0.075, 0.0375) join the pool and the exchange continues from the design.
 //! 4. **Order** ([`order::order`]): a short tour from the rest posture through the captures
@@ -37,7 +43,7 @@ use std::path::Path;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use crate::model::{FixedSet, Joint, JointAngles, Model, PARAMETER_COUNT, Param, Side};
+use crate::model::{CameraId, FixedSet, Joint, JointAngles, Model, PARAMETER_COUNT, Param, Side};
 use crate::sim::Stance;
 use crate::solve::noise::NoiseLevels;
 
@@ -56,8 +62,19 @@ pub struct PlanOptions {
     pub levels: NoiseLevels,
     /// Seed of the random candidate pool (and of the random stances compared against).
     pub seed: u64,
+    /// The cameras to plan captures for (the upper camera's parameters are freed when it
+    /// is among them, unless held on purpose).
+    pub cameras: Vec<CameraId>,
     /// Leg stances drawn into the pool per leg.
     pub pool_stances: usize,
+    /// Leg stances drawn into the upper camera's pool per leg (when it is planned for).
+    pub upper_pool_stances: usize,
+    /// Head postures tried per upper-camera pool stance (its stances are rare: the board
+    /// aimed at points across the image makes more of each).
+    pub upper_heads: usize,
+    /// The σ the design aims at for the upper camera's rotation offsets, as a fraction of
+    /// the worst σ of the 15 angle offsets (the upper camera has fewer captures to share).
+    pub upper_sigma_ratio: f64,
     /// Head postures tried per pool stance.
     pub heads: usize,
     /// Refinement rounds: variants of every picked capture (its leg angles moved a little)
@@ -87,7 +104,11 @@ impl Default for PlanOptions {
                 joint: 0.1f64.to_radians(),
             },
             seed: 1,
+            cameras: vec![CameraId::Lower],
             pool_stances: 300,
+            upper_pool_stances: 300,
+            upper_heads: 2,
+            upper_sigma_ratio: 0.88,
             heads: 1,
             refine_rounds: 3,
             variants: 2,
@@ -102,6 +123,8 @@ impl Default for PlanOptions {
 /// One capture of a plan.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PlannedCapture {
+    /// The camera that takes the picture.
+    pub camera: CameraId,
     /// The leg whose board is in view.
     pub side: Side,
     /// The joint angles to command (radians).
@@ -141,10 +164,13 @@ pub enum PlanError {
     Options(String),
     /// Too few feasible captures were found for a leg.
     #[error(
-        "found only {found} feasible captures for the {side} leg (board in view for all \
-         offsets, no collision, within the limits); check the camera intrinsics and board"
+        "found only {found} feasible {camera}-camera captures for the {side} leg (board in \
+         view for all offsets, no collision, within the limits); check the camera intrinsics \
+         and board"
     )]
     Pool {
+        /// The camera.
+        camera: &'static str,
         /// The leg.
         side: &'static str,
         /// Feasible captures found.
@@ -175,50 +201,78 @@ pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
     if options.fixed.free().is_empty() {
         return Err(PlanError::Options("no parameter is free".into()));
     }
-    // The pool: both legs drawn in parallel, each from its own seeded generator.
-    let pools: Vec<Vec<feasible::Candidate>> = std::thread::scope(|scope| {
-        let handles: Vec<_> = Side::BOTH
-            .into_iter()
-            .enumerate()
-            .map(|(k, side)| {
-                scope.spawn(move || {
-                    let mut rng = ChaCha8Rng::seed_from_u64(options.seed.wrapping_add(k as u64));
-                    feasible::candidates(
-                        model,
-                        side,
-                        options.pool_stances,
-                        options.heads,
-                        options.pool_stances * 400,
-                        &options.feasibility,
-                        k * options.pool_stances,
-                        &mut rng,
-                    )
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| h.join().expect("pool thread"))
-            .collect()
-    });
-    let need = options.captures.div_ceil(4);
-    for (side, pool) in Side::BOTH.iter().zip(&pools) {
-        if pool.len() < need {
-            return Err(PlanError::Pool {
-                side: side.name(),
-                found: pool.len(),
-            });
+    let upper = options.cameras.contains(&CameraId::Upper);
+    let fixed = options.fixed.clone().for_upper_camera(upper);
+    let mut pools: Vec<Vec<feasible::Candidate>> = Vec::new();
+    let mut first = 0;
+    for camera in CameraId::ALL {
+        if !options.cameras.contains(&camera) {
+            continue;
         }
+        let (stances, heads, seed) = match camera {
+            CameraId::Lower => (options.pool_stances, options.heads, options.seed),
+            CameraId::Upper => (
+                options.upper_pool_stances,
+                options.upper_heads,
+                options.seed ^ 0x0bbe_0000,
+            ),
+        };
+        // Both legs drawn in parallel, each from its own seeded generator.
+        let found: Vec<Vec<feasible::Candidate>> = std::thread::scope(|scope| {
+            let handles: Vec<_> = Side::BOTH
+                .into_iter()
+                .enumerate()
+                .map(|(k, side)| {
+                    scope.spawn(move || {
+                        let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_add(k as u64));
+                        feasible::candidates(
+                            model,
+                            camera,
+                            side,
+                            stances,
+                            heads,
+                            stances * 400,
+                            &options.feasibility,
+                            first + k * stances,
+                            &mut rng,
+                        )
+                    })
+                })
+                .collect();
+            handles
+                .into_iter()
+                .map(|h| h.join().expect("pool thread"))
+                .collect()
+        });
+        first += 2 * stances;
+        // Lower captures must fill a quarter of the plan per leg; upper ones are optional
+        // but a leg without any would leave its pool to chance.
+        let need = match camera {
+            CameraId::Lower => options.captures.div_ceil(4),
+            CameraId::Upper => 1,
+        };
+        for (side, pool) in Side::BOTH.iter().zip(&found) {
+            if pool.len() < need {
+                return Err(PlanError::Pool {
+                    camera: camera.name(),
+                    side: side.name(),
+                    found: pool.len(),
+                });
+            }
+        }
+        pools.extend(found);
     }
     let mut pool: Vec<feasible::Candidate> = Vec::new();
     let mut infos: Vec<design::CaptureInformation> = Vec::new();
-    let free = options.fixed.free();
+    let free = fixed.free();
     let admit = |candidates: Vec<feasible::Candidate>,
                  pool: &mut Vec<feasible::Candidate>,
                  infos: &mut Vec<design::CaptureInformation>| {
-        let pairs: Vec<(Side, JointAngles)> =
-            candidates.iter().map(|c| (c.side, c.joints)).collect();
-        let new = information_parallel(model, &pairs, &options.fixed, options.levels);
+        let pairs: Vec<(CameraId, Side, JointAngles)> = candidates
+            .iter()
+            .map(|c| (c.camera, c.side, c.joints))
+            .collect();
+        let new = information_parallel(model, &pairs, &fixed, options.levels);
         for (c, info) in candidates.into_iter().zip(new) {
             if let Some(info) = info {
                 pool.push(c);
@@ -228,14 +282,28 @@ pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
     };
     admit(pools.into_iter().flatten().collect(), &mut pool, &mut infos);
     let random = random_stances(model, options.captures, 3, options.seed)?;
-    let random_infos = information_parallel(model, &random, &options.fixed, options.levels);
+    let random: Vec<(CameraId, Side, JointAngles)> = random
+        .into_iter()
+        .map(|(side, joints)| (CameraId::Lower, side, joints))
+        .collect();
+    // The random stances are the lower camera's: the upper camera's offsets stay out.
+    let lower_fixed = options.fixed.clone().for_upper_camera(false);
+    let random_infos = information_parallel(model, &random, &lower_fixed, options.levels);
     let random_refs: Vec<&design::CaptureInformation> = random_infos.iter().flatten().collect();
-    let baseline = design::predict(&free, &random_refs);
+    let baseline = design::predict(&lower_fixed.free(), &random_refs);
     // The parameters whose worst σ the design minimises: the 15 angle offsets (camera
     // rotation and leg joints) when free, otherwise every free parameter.
-    let mut focus: Vec<bool> = free.iter().map(|p| is_angle_offset(*p)).collect();
-    if !focus.contains(&true) {
-        focus.fill(true);
+    let upper_focus = options.upper_sigma_ratio.powi(-2);
+    let mut focus: Vec<f64> = free
+        .iter()
+        .map(|p| match p.group() {
+            crate::model::ParamGroup::UpperCamera => upper_focus,
+            _ if is_angle_offset(*p) => 1.0,
+            _ => 0.0,
+        })
+        .collect();
+    if focus.iter().all(|f| *f == 0.0) {
+        focus.fill(1.0);
     }
     let mut chosen = design::select(
         &infos.iter().collect::<Vec<_>>(),
@@ -247,7 +315,7 @@ pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
     );
     // Refinement: variants of the picked captures join the pool, and the design is
     // improved from where it is.
-    let mut next_stance = 2 * options.pool_stances;
+    let mut next_stance = first;
     let mut spread = options.spread;
     for round in 0..options.refine_rounds {
         let bases: Vec<feasible::Candidate> = chosen.iter().map(|&k| pool[k].clone()).collect();
@@ -309,6 +377,7 @@ pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
     let captures: Vec<PlannedCapture> = tour
         .iter()
         .map(|&i| PlannedCapture {
+            camera: pool[chosen[i]].camera,
             side: pool[chosen[i]].side,
             joints: pool[chosen[i]].joints,
         })
@@ -324,7 +393,7 @@ pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
     stances.sort_unstable();
     stances.dedup();
 
-    let random_postures: Vec<JointAngles> = random.iter().map(|c| c.1).collect();
+    let random_postures: Vec<JointAngles> = random.iter().map(|c| c.2).collect();
     let baseline_duration = route::duration(model, body, &options.timing, &rest, &random_postures);
     let baseline_blocked = route::moves(model, body, &rest, &random_postures)
         .iter()
@@ -353,18 +422,18 @@ pub fn is_angle_offset(p: Param) -> bool {
     )
 }
 
-/// [`design::capture_information`] on two threads.
+/// [`design::capture_information_for`] on two threads.
 fn information_parallel(
     model: &Model,
-    captures: &[(Side, JointAngles)],
+    captures: &[(CameraId, Side, JointAngles)],
     fixed: &FixedSet,
     levels: NoiseLevels,
 ) -> Vec<Option<design::CaptureInformation>> {
     let half = captures.len() / 2;
     let (a, b) = captures.split_at(half);
     std::thread::scope(|scope| {
-        let first = scope.spawn(|| design::capture_information(model, a, fixed, levels));
-        let mut second = design::capture_information(model, b, fixed, levels);
+        let first = scope.spawn(|| design::capture_information_for(model, a, fixed, levels));
+        let mut second = design::capture_information_for(model, b, fixed, levels);
         let mut out = first.join().expect("information thread");
         out.append(&mut second);
         out
@@ -404,12 +473,17 @@ pub fn random_stances(
 }
 
 /// The plan as CSV: `capture,board,HeadYaw,…,RAnkleRoll` (the columns of `captures.csv`
-/// without `image`), one row per capture in execution order, angles in radians.
+/// without `image`), one row per capture in execution order, angles in radians; and a last
+/// column `camera` (`lower`/`upper`) when some capture is by the upper camera.
 pub fn render_csv(captures: &[PlannedCapture]) -> Vec<u8> {
+    let cameras = captures.iter().any(|c| c.camera != CameraId::Lower);
     let mut out = String::from("capture,board");
     for j in Joint::ALL {
         out.push(',');
         out.push_str(j.name());
+    }
+    if cameras {
+        out.push_str(",camera");
     }
     out.push('\n');
     for (id, c) in captures.iter().enumerate() {
@@ -417,6 +491,10 @@ pub fn render_csv(captures: &[PlannedCapture]) -> Vec<u8> {
         for j in Joint::ALL {
             // Shortest text that reads back to the same number.
             out.push_str(&format!(",{}", c.joints.get(j)));
+        }
+        if cameras {
+            out.push(',');
+            out.push_str(c.camera.name());
         }
         out.push('\n');
     }
@@ -429,6 +507,7 @@ pub fn read_csv(path: &Path) -> Result<Vec<PlannedCapture>, crate::dataset::Data
     Ok(crate::dataset::read_captures(path)?
         .into_iter()
         .map(|c| PlannedCapture {
+            camera: c.camera,
             side: c.side,
             joints: c.joints,
         })

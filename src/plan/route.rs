@@ -20,7 +20,7 @@ use super::feasible::head_pitch_limits;
 use crate::model::{Joint, JointAngles, Model, Side};
 
 /// Largest step of any joint between two collision checks along a move (rad).
-pub const CHECK_STEP: f64 = 0.03;
+pub const CHECK_STEP: f64 = 0.01;
 
 /// Lying on its back, every head and leg joint at 0 but the hips rolled out by 0.15 rad
 /// (as the plan's resting leg, so that the sandals do not touch): where a measurement

@@ -161,7 +161,11 @@ pub(crate) fn plan_file(path: &Path, n: usize, seed: u64) -> Vec<PlannedCapture>
         .unwrap()
         .into_iter()
         .filter(|(_, j)| unsafe_posture(&model, j, 2f64.to_radians()).is_none())
-        .map(|(side, joints)| PlannedCapture { side, joints })
+        .map(|(side, joints)| PlannedCapture {
+            camera: naocalib::model::CameraId::Lower,
+            side,
+            joints,
+        })
         .collect();
     let (left, right): (Vec<_>, Vec<_>) = rows.into_iter().partition(|c| c.side == Side::Left);
     let rows: Vec<PlannedCapture> = left

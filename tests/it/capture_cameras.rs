@@ -231,7 +231,11 @@ fn the_simulated_robot_renders_both_cameras() {
                 .iter()
                 .flat_map(|s| s.postures.iter().map(|p| (s.side, *p)))
                 .filter(|(_, j)| unsafe_posture(&model, j, 2f64.to_radians()).is_none())
-                .map(|(side, joints)| PlannedCapture { side, joints })
+                .map(|(side, joints)| PlannedCapture {
+                    camera: naocalib::model::CameraId::Lower,
+                    side,
+                    joints,
+                })
                 .take(1),
         );
     }
@@ -316,7 +320,11 @@ fn both_cameras_end_to_end_recover_the_robots_truth() {
                 .iter()
                 .flat_map(|s| s.postures.iter().map(|p| (s.side, *p)))
                 .filter(|(_, j)| unsafe_posture(&model, j, 2f64.to_radians()).is_none())
-                .map(|(side, joints)| PlannedCapture { side, joints })
+                .map(|(side, joints)| PlannedCapture {
+                    camera: naocalib::model::CameraId::Lower,
+                    side,
+                    joints,
+                })
                 .take(5),
         );
     }

@@ -39,6 +39,7 @@ mod lola_faults;
 mod misfit;
 mod plan;
 mod plan_around;
+mod plan_cameras;
 mod plan_moves;
 mod plot_files;
 mod pure_rust_agreement;

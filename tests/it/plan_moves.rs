@@ -43,7 +43,7 @@ fn collision_on_the_way(model: &Model, a: &JointAngles, b: &JointAngles) -> Opti
 
 /// Every move of `postures` from rest and back: a way exists, and each of its straight
 /// pieces is free when walked finely; returns the number of intermediate postures.
-fn assert_every_move_is_free(model: &Model, postures: &[JointAngles]) -> usize {
+pub(crate) fn assert_every_move_is_free(model: &Model, postures: &[JointAngles]) -> usize {
     let rest = route::rest_posture();
     let moves = route::moves(model, &BodyModel::default(), &rest, postures);
     assert_eq!(moves.len(), postures.len() + 1);
