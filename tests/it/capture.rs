@@ -199,7 +199,7 @@ pub(crate) fn designed_plan(
             "--seed",
             &seed.to_string(),
         ])
-        .args(["--families", families])
+        .args(["--families", families, "--cameras", "lower"])
         .arg("--camera")
         .arg(b.config())
         .output()

@@ -32,19 +32,22 @@ fn two_camera_model() -> Model {
     }
 }
 
-/// Writes `rows` as a plan with a `camera` column: `upper` for the rows in `upper`.
+/// Writes `rows` as a plan whose rows in `upper` are the upper camera's (the plan's
+/// `camera` column).
 fn plan_with_cameras(path: &Path, rows: &[PlannedCapture], upper: &[usize]) {
-    let text = String::from_utf8(naocalib::plan::render_csv(rows)).unwrap();
-    let mut out = String::new();
-    for (k, line) in text.lines().enumerate() {
-        let camera = match k {
-            0 => "camera",
-            _ if upper.contains(&(k - 1)) => "upper",
-            _ => "lower",
-        };
-        out.push_str(&format!("{line},{camera}\n"));
-    }
-    std::fs::write(path, out).unwrap();
+    let rows: Vec<PlannedCapture> = rows
+        .iter()
+        .enumerate()
+        .map(|(k, r)| PlannedCapture {
+            camera: if upper.contains(&k) {
+                CameraId::Upper
+            } else {
+                r.camera
+            },
+            ..*r
+        })
+        .collect();
+    std::fs::write(path, naocalib::plan::render_csv(&rows)).unwrap();
 }
 
 /// A grey PNG of `width`×`height`.
