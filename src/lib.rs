@@ -32,9 +32,11 @@
 #![warn(missing_docs)]
 
 pub mod batch;
+pub mod calibration;
 pub mod dataset;
 #[cfg(feature = "detect")]
 pub mod detect;
+pub mod export;
 pub mod model;
 pub mod output;
 pub mod plan;

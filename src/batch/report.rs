@@ -8,8 +8,8 @@ use serde_json::{Map, Value, json};
 
 use super::drift::{DriftMode, DriftOptions, DriftPair, Grouping};
 use super::{Batch, Run};
+use crate::export::ExportError;
 use crate::output::{WriteOptions, dataset_files, write_atomic};
-use crate::report::export::ExportError;
 
 /// Most runs shown as columns of the text table; with more, only the summary columns are
 /// shown (every run is in the JSON).

@@ -10,7 +10,7 @@ use clap::{Args, ValueEnum};
 
 use super::options::{ProblemArgs, SolverArgs, UncertaintyArgs};
 use naocalib::batch::{self, BatchOptions, DriftMode, DriftOptions, Grouping, Progress};
-use naocalib::report::export::WriteOptions;
+use naocalib::export::WriteOptions;
 
 /// Which runs are compared for drift.
 #[derive(Debug, Clone, Copy, ValueEnum)]

@@ -12,8 +12,8 @@ use clap::Args;
 use naocalib::dataset::{CORNERS_CSV, Dataset};
 use naocalib::detect::assign::Grid;
 use naocalib::detect::{self, DetectOptions, ImageResult, Summary};
+use naocalib::export::WriteOptions;
 use naocalib::model::{PARAMETER_COUNT, Param};
-use naocalib::report::export::WriteOptions;
 
 #[derive(Debug, Args)]
 pub struct DetectArgs {
@@ -55,7 +55,7 @@ pub struct DetectArgs {
 /// With `corrected` angles (`[joints] angles = "corrected"`) the robot's joint offsets are
 /// already in the logged angles, and the prediction keeps them at zero.
 pub fn read_start(path: &Path, corrected: bool) -> Result<[f64; PARAMETER_COUNT]> {
-    let calibration = naocalib::report::export::read_start_from(path)
+    let calibration = naocalib::export::read_start_from(path)
         .with_context(|| format!("--start-from {}", path.display()))?;
     let mut problem_values = [0.0; PARAMETER_COUNT];
     for e in &calibration.parameters {

@@ -7,11 +7,11 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 
-use naocalib::output::Staged;
-use naocalib::report::export::{
+use naocalib::export::{
     self, Calibration, ExportError, ExportFormat, Posture, Updated, Withheld, WriteOptions,
     read_calibration,
 };
+use naocalib::output::Staged;
 use naocalib::report::plot;
 use naocalib::solve::Solution;
 

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use anyhow::{Result, bail};
 use clap::Args;
 
-use naocalib::report::export::{ExportFormat, WriteOptions, export, import_calibration};
+use naocalib::export::{ExportFormat, WriteOptions, export, import_calibration};
 
 #[derive(Debug, Args)]
 pub struct ImportArgs {

@@ -195,7 +195,7 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
     options.feasibility.offset_length = args.offset_deg;
     options.feasibility.upper_offset = args.upper_offset_deg.to_radians();
     if let Some(path) = &args.around {
-        let current = naocalib::report::export::read_calibration(path)
+        let current = naocalib::export::read_calibration(path)
             .with_context(|| format!("--around {}", path.display()))?;
         for e in current.parameters.iter().filter(|e| e.is_determined()) {
             options.feasibility.centre[e.param.index()] = e.param.unit().from_report(e.value);

@@ -107,7 +107,7 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     let corrected = dataset.angles.kind == naocalib::dataset::AngleKind::Corrected;
     let previous = match &args.start_from {
         Some(path) => {
-            let previous = naocalib::report::export::read_start_from(path)
+            let previous = naocalib::export::read_start_from(path)
                 .with_context(|| format!("--start-from {}", path.display()))?;
             let values: Vec<_> = previous
                 .parameters
@@ -138,7 +138,7 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
         .as_ref()
         .map(|p| naocalib::report::changes(&solution, p, corrected));
     let mut calibration =
-        naocalib::report::export::Calibration::from_solution(&solution, Some(&dataset.dir))
+        naocalib::calibration::Calibration::from_solution(&solution, Some(&dataset.dir))
             .with_lying_torques(&dataset);
     calibration.angles = Some(dataset.angles.clone());
     super::export::solve_outputs(
@@ -191,10 +191,7 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
 
 /// The `--export` help: the files it writes, one per export format of the registry.
 fn export_dir_help() -> String {
-    let files: Vec<&str> = naocalib::report::export::REGISTRY
-        .iter()
-        .map(|f| f.file)
-        .collect();
+    let files: Vec<&str> = naocalib::export::REGISTRY.iter().map(|f| f.file).collect();
     format!(
         "Write the calibration files into this directory, one per export format \
          (docs/EXPORTS.md, `naocalib export --help`): {}",

@@ -363,7 +363,7 @@ fn section(out: &mut String, s: &Section<'_>) -> Result<(), ReportError> {
     }
     // With compliance or play estimated: the leg offsets the robot needs standing (what the
     // team files carry), beside the lying ones, with their one-sigma and caveats.
-    let mut calibration = super::export::Calibration::from_solution(s.solution, None);
+    let mut calibration = crate::calibration::Calibration::from_solution(s.solution, None);
     if let Some(dataset) = s.dataset {
         calibration = calibration.with_lying_torques(dataset);
     }

@@ -13,9 +13,9 @@ use std::path::{Path, PathBuf};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::export::WriteOptions;
 use super::plot::{DrawResult, FONT, Figure, PlotError, err, save};
 use crate::dataset::Dataset;
+use crate::export::WriteOptions;
 use crate::model::gravity::leg_torques;
 use crate::model::{Joint, Vertex};
 use crate::solve::Solution;

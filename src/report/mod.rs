@@ -1,7 +1,6 @@
 //! Reports of a [`Solution`]: the paper's Table 2 as text, and the result JSON of docs/MODEL.md
 //! section 7. A report sees a solution (and optionally the truth), never a solver.
 
-pub mod export;
 pub mod html;
 pub mod misfit_plot;
 pub mod plot;
@@ -307,7 +306,7 @@ pub struct Change {
 /// previous ones.
 pub fn changes(
     solution: &Solution,
-    previous: &export::Calibration,
+    previous: &crate::calibration::Calibration,
     corrected_angles: bool,
 ) -> Vec<Change> {
     Param::ALL
@@ -367,9 +366,11 @@ pub fn changes_table(changes: &[Change]) -> String {
 
 /// The leg offsets for a robot in the standard stand beside the lying ones (when compliance
 /// or play have values; empty otherwise): `(offset, lying α, standing α + κ·τ_stand +
-/// ½π·sgn τ_stand, its one-sigma)` ([`export::Calibration::standing_offset`],
-/// [`export::Calibration::standing_std`]).
-pub fn standing_offsets(cal: &export::Calibration) -> Vec<(Param, f64, f64, Option<f64>)> {
+/// ½π·sgn τ_stand, its one-sigma)` ([`crate::calibration::Calibration::standing_offset`],
+/// [`crate::calibration::Calibration::standing_std`]).
+pub fn standing_offsets(
+    cal: &crate::calibration::Calibration,
+) -> Vec<(Param, f64, f64, Option<f64>)> {
     cal.parameters
         .iter()
         .filter_map(|e| {
@@ -381,7 +382,7 @@ pub fn standing_offsets(cal: &export::Calibration) -> Vec<(Param, f64, f64, Opti
 
 /// [`standing_offsets`] in one line, `LHipPitch 0.1234 ± 0.0100°, …` (`None` when there
 /// are none): what `export` and `solve --export` log for the team files.
-pub fn standing_summary(cal: &export::Calibration) -> Option<String> {
+pub fn standing_summary(cal: &crate::calibration::Calibration) -> Option<String> {
     let rows = standing_offsets(cal);
     (!rows.is_empty()).then(|| {
         rows.iter()
@@ -396,8 +397,8 @@ pub fn standing_summary(cal: &export::Calibration) -> Option<String> {
 
 /// [`standing_offsets`] as a text table (empty when there are none), with the joints
 /// whose standing offset is uncertain beyond the target or extrapolated named below it
-/// ([`export::Calibration::standing_caveats`]).
-pub fn standing_table(cal: &export::Calibration) -> String {
+/// ([`crate::calibration::Calibration::standing_caveats`]).
+pub fn standing_table(cal: &crate::calibration::Calibration) -> String {
     let rows = standing_offsets(cal);
     if rows.is_empty() {
         return String::new();
@@ -415,7 +416,7 @@ pub fn standing_table(cal: &export::Calibration) -> String {
         "parameter", "lying", "standing", "sigma", "tau_stand", "tau_lying"
     );
     for (p, lying, standing, std) in rows {
-        let tau = export::calibration::stand_torque(p).unwrap_or(f64::NAN);
+        let tau = crate::calibration::stand_torque(p).unwrap_or(f64::NAN);
         let sigma = std.map_or_else(|| "-".to_string(), |s| format!("{s:.4}"));
         let lying_tau = cal
             .standing
@@ -434,7 +435,7 @@ pub fn standing_table(cal: &export::Calibration) -> String {
             out,
             "Standing offsets less certain than {}° (one sigma) or resting on an extrapolated \
              compliance:",
-            export::calibration::STANDING_TARGET_DEG
+            crate::calibration::STANDING_TARGET_DEG
         );
         for c in caveats {
             let _ = writeln!(out, "  {c}");

@@ -1,6 +1,6 @@
 //! The result JSON of `naocalib solve --json` (docs/MODEL.md §8) as one type, [`ResultJson`]:
 //! written by `solve --json` and `batch`, read back by `naocalib export` and
-//! `solve --start-from` ([`crate::report::export::Calibration::from_json`]), so that what is
+//! `solve --start-from` ([`crate::calibration::Calibration::from_json`]), so that what is
 //! written and what is read are the same keys.
 //!
 //! Printed through [`ResultJson::to_value`], its keys are in alphabetical order at every
@@ -15,9 +15,9 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use super::Change;
+use crate::calibration::{StandingIn, UniqueMap};
 use crate::dataset::AngleKind;
 use crate::model::Param;
-use crate::report::export::calibration::{StandingIn, UniqueMap};
 use crate::solve::Solution;
 use crate::solve::uncertainty::Direction;
 
@@ -420,7 +420,7 @@ impl ResultJson {
     }
 
     /// Adds the standing leg offsets of `cal` ([`super::standing_offsets`]), if any.
-    pub fn with_standing(mut self, cal: &crate::report::export::Calibration) -> Self {
+    pub fn with_standing(mut self, cal: &crate::calibration::Calibration) -> Self {
         let files = cal.standing_files();
         self.standing = (!files.is_empty()).then(|| {
             files

@@ -429,8 +429,8 @@ fn capture_resume_and_solve_recover_the_robots_truth() {
 #[cfg(feature = "detect")]
 #[test]
 fn a_robot_as_the_teams_files_show_it_is_captured_and_calibrated() {
+    use naocalib::export::{self, Calibration, Entry, ExportFormat, WriteOptions};
     use naocalib::model::Param;
-    use naocalib::report::export::{self, Calibration, Entry, ExportFormat, WriteOptions};
     let b = Bench::new();
     let truth = crate::detect_tilted::robot(-6.0, 3.0, 2.0);
     let mut toml = String::from("[parameters]\n");

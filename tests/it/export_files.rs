@@ -12,10 +12,8 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use naocalib::dataset::{AngleKind, AngleSource};
+use naocalib::export::{self, Calibration, Entry, ExportFormat, REGISTRY, Unchanged, Updated};
 use naocalib::model::Param;
-use naocalib::report::export::{
-    self, Calibration, Entry, ExportFormat, REGISTRY, Unchanged, Updated,
-};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

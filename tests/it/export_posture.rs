@@ -6,9 +6,9 @@
 
 use std::path::Path;
 
+use naocalib::export::{Calibration, ExportFormat, Posture, bhuman};
 use naocalib::model::gravity::{STAND_DEG, stand_joints, standing_leg_torques};
 use naocalib::model::{Family, FixedSet, Model, PARAMETER_COUNT, Param, RobotGeometry, Side};
-use naocalib::report::export::{Calibration, ExportFormat, Posture, bhuman};
 use naocalib::sim::{SimOptions, simulate};
 use naocalib::solve::{Problem, UncertaintyOptions, backend, calibrate};
 

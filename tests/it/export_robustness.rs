@@ -6,10 +6,10 @@ use std::path::Path;
 use std::sync::mpsc;
 use std::time::Duration;
 
-use naocalib::model::{FixedSet, Model, Param, Side};
-use naocalib::report::export::{
+use naocalib::export::{
     self, Calibration, ExportError, ExportFormat, WriteOptions, read_calibration,
 };
+use naocalib::model::{FixedSet, Model, Param, Side};
 use naocalib::report::plot;
 use naocalib::sim::{SimOptions, simulate};
 use naocalib::solve::{Problem, Solution, UncertaintyOptions, backend, calibrate};

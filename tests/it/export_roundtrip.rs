@@ -5,11 +5,11 @@ use std::path::Path;
 
 use crate::util::solve;
 use assert_cmd::Command;
-use naocalib::model::{FixedSet, Model, Param};
-use naocalib::report::export::{
+use naocalib::export::{
     self, Calibration, ExportError, ExportFormat, WriteOptions, read_bhuman_camera_cfg,
     read_bhuman_joint_cfg, read_calibration,
 };
+use naocalib::model::{FixedSet, Model, Param};
 use naocalib::sim::{SimOptions, simulate};
 use naocalib::solve::{Problem, Solution, backend};
 

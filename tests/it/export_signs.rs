@@ -19,8 +19,8 @@
 use std::path::Path;
 
 use naocalib::dataset::{AngleKind, AngleSource};
+use naocalib::export::{self, Calibration, Entry, ExportFormat, bhuman, hulks, nomadz};
 use naocalib::model::Param;
-use naocalib::report::export::{self, Calibration, Entry, ExportFormat, bhuman, hulks, nomadz};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

@@ -6,8 +6,8 @@
 
 use std::path::Path;
 
+use naocalib::export::{self, Calibration, ExportFormat, bhuman};
 use naocalib::model::{FixedSet, Joint, JointAngles, Model, PARAMETER_COUNT, Param, RobotGeometry};
-use naocalib::report::export::{self, Calibration, ExportFormat, bhuman};
 use naocalib::sim::{SimOptions, simulate};
 use naocalib::solve::{Problem, UncertaintyOptions, backend, calibrate};
 

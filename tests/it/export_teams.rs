@@ -5,10 +5,10 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::Path;
 
-use naocalib::model::{CameraId, JointAngles, Param, RobotGeometry};
-use naocalib::report::export::{
+use naocalib::export::{
     self, Calibration, Entry, ExportFormat, bhuman, hulks, naoth, nomadz, runswift,
 };
+use naocalib::model::{CameraId, JointAngles, Param, RobotGeometry};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

@@ -6,8 +6,8 @@
 
 use std::path::{Path, PathBuf};
 
+use naocalib::export::{self, Calibration, Entry, ExportFormat, REGISTRY};
 use naocalib::model::Param;
-use naocalib::report::export::{self, Calibration, Entry, ExportFormat, REGISTRY};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -167,8 +167,7 @@ fn update_changes_exactly_the_calibrated_entries_and_keeps_a_backup() {
             }
             ExportFormat::NomadzJoints => {
                 let read = |t: &str| {
-                    naocalib::report::export::nomadz::read_joint_calibration_cfg(t, Path::new("-"))
-                        .unwrap()
+                    naocalib::export::nomadz::read_joint_calibration_cfg(t, Path::new("-")).unwrap()
                 };
                 for ((name, o), (_, u)) in read(&original).iter().zip(read(&updated)) {
                     assert_eq!(
@@ -176,7 +175,7 @@ fn update_changes_exactly_the_calibrated_entries_and_keeps_a_backup() {
                         (u.min_angle, u.max_angle),
                         "{name}"
                     );
-                    if naocalib::report::export::bhuman::joint_param(name).is_none() {
+                    if naocalib::export::bhuman::joint_param(name).is_none() {
                         assert_eq!(*o, u, "{name}: arms and hands kept");
                     }
                 }

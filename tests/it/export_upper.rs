@@ -45,8 +45,8 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::{Path, PathBuf};
 
+use naocalib::export::{self, Calibration, Entry, ExportFormat, Unchanged, Updated};
 use naocalib::model::{CameraId, Joint, JointAngles, Param, RobotGeometry};
-use naocalib::report::export::{self, Calibration, Entry, ExportFormat, Unchanged, Updated};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

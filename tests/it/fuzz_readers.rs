@@ -1,6 +1,6 @@
 //! Property-based tests of every reader of user files: random bytes, and random mutations of
 //! valid files, fed to the dataset reader (each of its four files), the result reader
-//! (`naocalib::report::export`) and the image decoder. Each must give a result or an error,
+//! (`naocalib::export`) and the image decoder. Each must give a result or an error,
 //! never a panic; a dataset error must name a file of the dataset.
 //!
 //! Cases run: 4 × 256 (dataset: bytes and mutations, per file drawn at random) + 2 × 256
@@ -9,9 +9,9 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
+use naocalib::calibration::Calibration;
 use naocalib::dataset::{CAPTURES_CSV, CORNERS_CSV, DATASET_TOML, Dataset, TRUTH_TOML};
 use naocalib::model::Model;
-use naocalib::report::export::Calibration;
 use naocalib::sim::{SimOptions, simulate};
 use proptest::prelude::*;
 use proptest::test_runner::Config;
@@ -258,7 +258,7 @@ proptest! {
         let tmp = tempfile::tempdir().unwrap();
         let path = tmp.path().join("r.json");
         std::fs::write(&path, &bytes).unwrap();
-        let _ = naocalib::report::export::read_calibration(&path);
+        let _ = naocalib::export::read_calibration(&path);
     }
 }
 

@@ -3,8 +3,8 @@
 use std::path::Path;
 
 use crate::util::solve;
+use naocalib::export::WriteOptions;
 use naocalib::model::{FixedSet, Model};
-use naocalib::report::export::WriteOptions;
 use naocalib::report::plot;
 use naocalib::sim::{SimOptions, simulate};
 use naocalib::solve::{Problem, backend};

@@ -271,7 +271,7 @@ fn change_table_is_in_the_report_with_start_from_only() {
         .unwrap();
     assert!(out.status.success(), "{}", stderr(&out));
     let previous_toml = export.join("calibration.toml");
-    let previous = naocalib::report::export::read_calibration(&previous_toml).unwrap();
+    let previous = naocalib::export::read_calibration(&previous_toml).unwrap();
     let page = |name: &str, start_from: bool| {
         let path = tmp.path().join(name);
         let mut cmd = naocalib();

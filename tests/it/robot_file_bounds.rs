@@ -5,11 +5,9 @@
 
 use std::path::Path;
 
+use naocalib::export::{BHUMAN_JOINTS, Calibration, read_bhuman_camera_cfg, read_bhuman_joint_cfg};
 use naocalib::model::Param;
 use naocalib::model::bounds::bound;
-use naocalib::report::export::{
-    BHUMAN_JOINTS, Calibration, read_bhuman_camera_cfg, read_bhuman_joint_cfg,
-};
 use proptest::prelude::*;
 
 /// A value for a parameter: mostly plausible, sometimes far out (any sign, any size).
@@ -61,12 +59,12 @@ proptest! {
             // Refused for robot files (what `export` does without --allow-unconverged).
             return Ok(());
         }
-        let camera = naocalib::report::export::bhuman_camera_cfg(&cal);
+        let camera = naocalib::export::bhuman_camera_cfg(&cal);
         let [x, y, z] = read_bhuman_camera_cfg(&camera, Path::new("c.cfg")).unwrap();
         for (p, v) in [(Param::CamRoll, x), (Param::CamPitch, y), (Param::CamYaw, z)] {
             prop_assert!(bound(p).contains(v), "{p} = {v} in {camera}");
         }
-        let joints = naocalib::report::export::bhuman_joint_cfg(&cal);
+        let joints = naocalib::export::bhuman_joint_cfg(&cal);
         for (name, v) in read_bhuman_joint_cfg(&joints, Path::new("j.cfg")).unwrap() {
             let param = BHUMAN_JOINTS
                 .iter()

@@ -136,10 +136,10 @@ pub fn every_family() -> String {
 /// A converged calibration (solver `test`, RMS 0.4/0.5 px) whose robot files carry the
 /// offsets of `posture`, with `entry` of every parameter in registry order.
 pub fn converged_calibration(
-    posture: naocalib::report::export::Posture,
-    entry: impl FnMut(naocalib::model::Param) -> naocalib::report::export::Entry,
-) -> naocalib::report::export::Calibration {
-    naocalib::report::export::Calibration {
+    posture: naocalib::export::Posture,
+    entry: impl FnMut(naocalib::model::Param) -> naocalib::export::Entry,
+) -> naocalib::calibration::Calibration {
+    naocalib::calibration::Calibration {
         solver: Some("test".into()),
         dataset: None,
         converged: Some(true),
@@ -154,11 +154,11 @@ pub fn converged_calibration(
 /// `naocalib export --update` of `path` in `format` with `cal`, which must change it: the
 /// backup kept.
 pub fn updated(
-    cal: &naocalib::report::export::Calibration,
-    format: naocalib::report::export::ExportFormat,
+    cal: &naocalib::calibration::Calibration,
+    format: naocalib::export::ExportFormat,
     path: &Path,
 ) -> PathBuf {
-    use naocalib::report::export::{Updated, update};
+    use naocalib::export::{Updated, update};
     match update(cal, Some(format), path, &[]).unwrap() {
         (f, Updated::Written { backup, .. }) if f == format => backup,
         other => panic!("{}: not updated: {other:?}", path.display()),

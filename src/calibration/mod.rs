@@ -37,8 +37,8 @@ use serde::ser::SerializeMap;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::{ExportError, parse_error};
 use crate::dataset::{AngleKind, AngleSource};
+use crate::export::{ExportError, parse_error};
 use crate::model::{PAPER_PARAMETERS, Param};
 use crate::report::ResultJson;
 use crate::solve::Solution;
@@ -528,7 +528,7 @@ impl Calibration {
     /// The calibration as TOML, with a header stating units and the compensation rule.
     pub fn to_toml(&self) -> String {
         let mut s = String::new();
-        super::header(
+        crate::export::header(
             &mut s,
             "#",
             self,
@@ -583,7 +583,7 @@ impl Calibration {
 /// Reads a calibration file: TOML by the `.toml` extension, otherwise JSON (a calibration
 /// JSON or the result JSON of `naocalib solve --json`).
 pub fn read_calibration(path: &Path) -> Result<Calibration, ExportError> {
-    let text = super::source::read(path)?.text;
+    let text = crate::export::source::read(path)?.text;
     if path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("toml"))

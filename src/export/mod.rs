@@ -1,7 +1,7 @@
 //! Exports of a calibration — the paper's compensation step: the joint offsets and camera
 //! corrections in forms that people read and robots load.
 //!
-//! - [`calibration`]: naocalib's own calibration TOML/JSON ([`Calibration`]), which carries
+//! - [`crate::calibration`]: naocalib's own calibration TOML/JSON ([`Calibration`]), which carries
 //!   every parameter with its one-sigma, and reads back the result JSON of
 //!   `naocalib solve --json` as well.
 //! - the formats SPL teams load, each in its own module with its units and axis
@@ -34,7 +34,7 @@
 //! `NOT A CALIBRATION` marker.
 //!
 //! ```
-//! use naocalib::report::export::{Calibration, ExportFormat, WriteOptions, export};
+//! use naocalib::export::{Calibration, ExportFormat, WriteOptions, export};
 //! # use naocalib::model::{FixedSet, Model};
 //! # use naocalib::sim::{SimOptions, simulate};
 //! # use naocalib::solve::{Problem, UncertaintyOptions, backend, calibrate};
@@ -46,12 +46,11 @@
 //! let dir = tempfile::tempdir().unwrap();
 //! let path = dir.path().join("calibration.toml");
 //! export(&calibration, ExportFormat::Toml, &path, &WriteOptions::default()).unwrap();
-//! let back = naocalib::report::export::read_calibration(&path).unwrap();
+//! let back = naocalib::export::read_calibration(&path).unwrap();
 //! assert_eq!(back.parameters, calibration.parameters);
 //! ```
 
 pub mod bhuman;
-pub mod calibration;
 pub mod camera;
 pub mod cfg;
 pub mod hulks;
@@ -69,12 +68,12 @@ use std::path::{Path, PathBuf};
 
 use crate::model::Param;
 
+pub use crate::calibration::{
+    COMPENSATION, Calibration, Entry, FORMAT, Posture, VERSION, read_calibration, read_start_from,
+};
 pub use bhuman::{
     BHUMAN_JOINTS, bhuman_camera_cfg, bhuman_joint_cfg, read_bhuman_camera_cfg,
     read_bhuman_joint_cfg,
-};
-pub use calibration::{
-    COMPENSATION, Calibration, Entry, FORMAT, Posture, VERSION, read_calibration, read_start_from,
 };
 pub use update::{Unchanged, Updated, update};
 // `WriteOptions` belongs to the export API.
@@ -273,7 +272,7 @@ fn json_text(cal: &Calibration) -> String {
 }
 
 fn is_naocalib(text: &str) -> bool {
-    text.contains(calibration::FORMAT)
+    text.contains(crate::calibration::FORMAT)
 }
 
 /// Whether `code` (a text without comments) has an entry `key = …` (or `key=…`).
@@ -721,7 +720,7 @@ pub fn import_calibration(
     let cal = Calibration {
         solver: Some(format!(
             "{} of {}",
-            calibration::IMPORT_SOLVER,
+            crate::calibration::IMPORT_SOLVER,
             names.join(", ")
         )),
         dataset: None,
