@@ -56,8 +56,13 @@ pub struct PlanArgs {
     /// through its upper camera only from 220–390 mm, where the board spans most of the
     /// image, so no capture stays in view over ±3°; the robot's imported calibration knows
     /// its offsets far better, and capture and detection check each picture again.
-    #[arg(long, default_value_t = 1.0, value_parser = offset_deg)]
+    #[arg(long, default_value_t = 0.5, value_parser = offset_deg)]
     upper_offset_deg: f64,
+    /// The σ the design aims at for the upper camera's rotation offsets, as a fraction of
+    /// the worst σ of the lower camera's and legs' 15 angle offsets (0.1 … 10). Lower puts
+    /// more of the captures on the upper camera: its offsets get smaller σ, the 15 larger.
+    #[arg(long, default_value_t = 0.88, value_parser = sigma_ratio)]
+    upper_sigma_ratio: f64,
     /// Leg stances drawn into the candidate pool per leg.
     #[arg(long, default_value_t = 300,
           value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=100_000))]
@@ -135,6 +140,13 @@ fn offset_deg(text: &str) -> Result<f64, String> {
     }
 }
 
+fn sigma_ratio(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(v) if (0.1..=10.0).contains(&v) => Ok(v),
+        _ => Err(format!("must be a number from 0.1 to 10, got '{text}'")),
+    }
+}
+
 /// Runs `naocalib plan`.
 pub fn run(args: &PlanArgs) -> Result<ExitCode> {
     if args.out.is_dir() {
@@ -189,6 +201,7 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
         seed: args.seed,
         cameras,
         pool_stances: args.pool,
+        upper_sigma_ratio: args.upper_sigma_ratio,
         ..PlanOptions::default()
     };
     options.feasibility.offset_angle = args.offset_deg.to_radians();

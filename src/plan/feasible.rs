@@ -35,8 +35,19 @@ pub struct Feasibility {
     /// lying on its back the NAO sees a sandal through its upper camera only from
     /// 220–390 mm, where the board spans most of the image, so a ±3° box admits no
     /// capture; the box is centred on the robot's calibration
-    /// ([`Feasibility::centre`]), whose offsets are known far better than ±3°.
+    /// ([`Feasibility::centre`]), whose offsets are known far better than ±3°. Default
+    /// 0.5°: around a robot whose upper camera pitch correction is −8.5° (the median of
+    /// SPQR's per-robot files), ±1° leaves 0–2 feasible stances per 6000 drawn per leg,
+    /// ±0.5° 14–15; a board that a larger miss moves partly out of the image is detected
+    /// partly or dropped by `detect`, never a safety matter.
     pub upper_offset: f64,
+    /// For upper-camera captures, the distance of the head joints from their limits (rad),
+    /// in place of [`Feasibility::joint_margin`]: the upper camera sees a sandal only with
+    /// the head pitched near its ceiling, and a robot whose upper camera looks down by a
+    /// team-sized correction (−8.5°) would have none left under a 5° margin. The head's
+    /// offsets are bounded by [`Feasibility::head_offset`] (0.5°), and capture refuses a
+    /// posture within 2° of a limit, so 2° keeps every commanded head angle safe.
+    pub upper_head_margin: f64,
     /// The collision model.
     pub body: BodyModel,
     /// The robot's current calibration (internal units) the box of offsets is centred on
@@ -58,9 +69,22 @@ impl Default for Feasibility {
             margin_px: 12.0,
             min_square_px: 14.0,
             max_view_angle: 60f64.to_radians(),
-            upper_offset: 1f64.to_radians(),
+            upper_offset: 0.5f64.to_radians(),
+            upper_head_margin: 2f64.to_radians(),
             body: BodyModel::default(),
             centre: [0.0; PARAMETER_COUNT],
+        }
+    }
+}
+
+impl Feasibility {
+    /// The distance of `joint` from its limits for a capture by `camera`:
+    /// [`Feasibility::upper_head_margin`] for the head in upper-camera captures,
+    /// [`Feasibility::joint_margin`] otherwise.
+    pub fn margin(&self, camera: CameraId, joint: Joint) -> f64 {
+        match (camera, joint) {
+            (CameraId::Upper, Joint::HeadYaw | Joint::HeadPitch) => self.upper_head_margin,
+            _ => self.joint_margin,
         }
     }
 }
@@ -320,12 +344,14 @@ pub fn check_for(
     for j in Joint::ALL {
         let (lo, hi) = j.limits();
         let q = joints.get(j);
-        if !(lo + f.joint_margin..=hi - f.joint_margin).contains(&q) {
+        let margin = f.margin(camera, j);
+        if !(lo + margin..=hi - margin).contains(&q) {
             return Err(Infeasible::Limits(j));
         }
     }
     let (lo, hi) = head_pitch_limits(joints.get(Joint::HeadYaw));
-    if !(lo + f.joint_margin..=hi - f.joint_margin).contains(&joints.get(Joint::HeadPitch)) {
+    let margin = f.margin(camera, Joint::HeadPitch);
+    if !(lo + margin..=hi - margin).contains(&joints.get(Joint::HeadPitch)) {
         return Err(Infeasible::Limits(Joint::HeadPitch));
     }
     if joints.get(Joint::LHipYawPitch) != joints.get(Joint::RHipYawPitch) {
@@ -534,7 +560,7 @@ fn postures(
             side,
             &joints,
             *target,
-            f.joint_margin,
+            f.margin(camera, Joint::HeadPitch),
             &f.centre,
         ) else {
             continue;

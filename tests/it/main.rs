@@ -53,3 +53,4 @@ mod spec_reference;
 #[cfg(feature = "ceres")]
 mod uncertainty;
 mod upper_camera;
+mod upper_session;
