@@ -10,9 +10,9 @@ use clap::Args;
 
 use naocalib::model::CameraId;
 use naocalib::robot::camera::CameraSpec;
-use naocalib::robot::capture::{self, check_plan, predicted_steps, read_plan};
+use naocalib::robot::capture::{self, predicted_steps};
 use naocalib::robot::lola::{self, Connection};
-use naocalib::robot::{CaptureOptions, DatasetOut, End, Event};
+use naocalib::robot::{CaptureOptions, End, Event, Session, Start};
 
 use super::options::within;
 
@@ -80,51 +80,18 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         }
         specs.push((id, spec));
     }
-    let rows = read_plan(&args.plan)?;
-    let config_model = match &args.config {
-        Some(path) => Some(naocalib::dataset::read_model(path)?),
-        None => None,
-    };
-    let (out, model) = if args.resume {
-        let (out, model) = DatasetOut::resume(&args.out, &args.plan, &rows)?;
-        if config_model.is_some_and(|m| m != model) {
-            bail!(
-                "{}: its camera, sandals or geometry differ from {}'s dataset.toml; resume \
-                 with the same robot configuration",
-                args.config.as_ref().expect("given").display(),
-                args.out.display()
-            );
-        }
-        (Some(out), model)
-    } else {
-        let Some(model) = config_model else {
-            bail!("--config DATASET.toml is needed (the robot's camera intrinsics and sandals)");
-        };
-        DatasetOut::check_new(&args.out)?;
-        (None, model)
-    };
+    let given: Vec<CameraId> = specs.iter().map(|(c, _)| *c).collect();
     // Every row checked before anything is written or moved.
-    check_plan(&args.plan, &model, &rows, options.joint_margin)?;
-    if let Some(out) = &out {
-        for (id, why) in out.retake() {
-            note!("capture {id} will be taken again ({why})");
-        }
-    }
-    let plan_bytes = std::fs::read(&args.plan)
-        .with_context(|| format!("{}: cannot read", args.plan.display()))?;
-    if let Some(row) = rows
-        .iter()
-        .find(|r| !specs.iter().any(|(c, _)| *c == r.camera))
-    {
-        bail!(
-            "{} line {}: capture {} is for the {} camera; give it with --camera {}=SPEC \
-             (nothing was moved)",
-            args.plan.display(),
-            row.line,
-            row.id,
-            row.camera,
-            row.camera
-        );
+    let mut start = Start::new(
+        &args.plan,
+        &args.out,
+        args.config.as_deref(),
+        args.resume,
+        &given,
+        options.joint_margin,
+    )?;
+    for (id, why) in start.retake() {
+        note!("capture {id} will be taken again ({why})");
     }
     let timeout = Duration::from_secs_f64(args.camera_timeout);
     let mut cameras = Vec::new();
@@ -133,14 +100,12 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     }
     let stop = capture::stop_on_signals().context("cannot watch for Ctrl-C, SIGTERM or SIGHUP")?;
     let mut link = Connection::connect(&args.lola, options.safety.silent_cycles)?;
-    let out = match out {
-        Some(out) => out,
-        None => DatasetOut::create(&args.out, &model, &plan_bytes)?,
-    };
-    let todo: Vec<_> = rows.iter().filter(|r| !out.has(r.id)).copied().collect();
+    let out = start.open()?;
+    let (model, rows) = (&start.model, &start.rows);
+    let todo = out.todo(rows);
     let total = rows.len();
-    let bar = super::progress_bar(total as u64 as usize, "captures");
-    let steps = predicted_steps(&model, &todo, &options);
+    let bar = super::progress_bar(total, "captures");
+    let steps = predicted_steps(model, &todo, &options);
     let predicted = |from: usize| steps[from.min(todo.len())..].iter().sum::<f64>();
     // The terminal is written from a thread of its own: a terminal that stops reading (a
     // stalled or silently lost ssh session) blocks that thread, never the robot's cycles.
@@ -165,39 +130,28 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         format!(", {:.0} s of robot time planned", predicted(0)),
     ));
     let mut visited = 0usize;
-    let mut events = |event: Event| {
+    let mut events = |event: &Event| {
         let p = match event {
             Event::Started => return,
             Event::Taken { done, .. } => {
                 visited += 1;
                 Print::Progress(
-                    done as u64,
+                    *done as u64,
                     format!(", ~{:.0} s left by the plan", predicted(visited)),
                 )
             }
-            Event::Skipped { id, reason } => {
+            Event::Unreachable { .. } | Event::Abandoned { .. } => {
                 visited += 1;
-                Print::Line(format!(
-                    "capture {id} skipped: {reason}; the leg returns to rest"
-                ))
+                Print::Line(event.to_string())
             }
-            Event::Cooling { joint, temperature } => Print::Line(format!(
-                "{} at {temperature:.1} °C: resting until the motors cool",
-                joint.name()
-            )),
+            Event::Cooling { .. } => Print::Line(event.to_string()),
         };
         let _ = print.send(p);
     };
-    let report = capture::run(
-        &model,
-        &rows,
-        out,
-        cameras,
-        &mut link,
-        &options,
-        &stop,
-        &mut events,
-    );
+    let report = Session::new(model, rows, &options)
+        .observe(&mut events)
+        .stop_on(&stop)
+        .run(out, cameras, &mut link);
     // The robot is limp (or gone): let LoLA go before anything may wait for the terminal.
     drop(link);
     drop(print);
@@ -210,12 +164,15 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
          ({:.1} s of robot time)",
         report.taken.len(),
         report.already,
-        report.skipped.len(),
+        report.skipped(),
         args.out.display(),
         capture::cycles_to_seconds(report.cycles)
     );
-    for (id, reason) in &report.skipped {
-        note!("  skipped capture {id}: {reason}");
+    for (id, reason) in &report.unreachable {
+        note!("  skipped capture {id} before moving: {reason}");
+    }
+    for (id, reason) in &report.abandoned {
+        note!("  skipped capture {id} on the way: {reason}");
     }
     match report.end {
         End::Completed => Ok(ExitCode::SUCCESS),

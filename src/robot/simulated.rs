@@ -167,10 +167,7 @@ struct Body {
 
 impl Body {
     fn new(options: &RobotOptions) -> Body {
-        let mut pos = [0.0; JOINTS];
-        for j in Joint::ALL {
-            pos[lola::index(j)] = options.start.get(j);
-        }
+        let mut pos = lola::put([0.0; JOINTS], &options.start, |q| q);
         // Arms lying beside the body.
         pos[2] = 1.5;
         pos[18] = 1.5;
@@ -214,11 +211,7 @@ impl Body {
     }
 
     fn joints(&self) -> JointAngles {
-        let mut out = JointAngles::default();
-        for j in Joint::ALL {
-            out.set(j, self.pos[lola::index(j)]);
-        }
-        out
+        lola::to_joint_angles(&self.pos)
     }
 
     fn reading(&self, k: usize) -> f32 {
@@ -511,9 +504,7 @@ fn session(
         }
         body.step(&options.model, motors);
         let joints = body.joints();
-        let moved = Joint::ALL
-            .iter()
-            .any(|&j| (joints.get(j) - last_state.get(j)).abs() > 1e-6);
+        let moved = (joints - last_state).iter().any(|(_, d)| d.abs() > 1e-6);
         if moved || body.cycle.is_multiple_of(50) {
             write_state(options, body)?;
             last_state = joints;
@@ -584,10 +575,7 @@ pub fn snap(
         camera: model.intrinsics_at(camera, &truth),
         ..model
     };
-    let mut joints = JointAngles::default();
-    for (k, j) in Joint::ALL.iter().enumerate() {
-        joints.set(*j, state.joints[k]);
-    }
+    let joints = JointAngles::from_fn(|j| state.joints[j.index()]);
     let (cx, cy) = (
         model.camera.width as f64 / 2.0,
         model.camera.height as f64 / 2.0,
