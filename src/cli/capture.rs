@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::Ordering;
+use std::sync::mpsc;
 use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
@@ -12,7 +13,7 @@ use naocalib::model::CameraId;
 use naocalib::robot::camera::CameraSpec;
 use naocalib::robot::capture::{self, predicted_steps};
 use naocalib::robot::lola::{self, Connection};
-use naocalib::robot::{CaptureOptions, End, Event, Session, Start};
+use naocalib::robot::{CaptureOptions, End, Event, Report, Session, Start};
 
 use super::options::within;
 
@@ -54,32 +55,38 @@ pub struct CaptureArgs {
     camera_timeout: f64,
 }
 
-/// What the printer thread writes to the terminal.
-enum Print {
-    /// Captures in the dataset, and the bar's message.
-    Progress(u64, String),
-    /// A line above the bar.
-    Line(String),
+impl CaptureArgs {
+    /// The run's options from the flags.
+    fn options(&self) -> Result<CaptureOptions> {
+        let mut options = CaptureOptions::default();
+        options.motion.leg_speed = self.leg_speed.to_radians();
+        options.motion.head_speed = self.head_speed.to_radians();
+        options.motion.stiffness = self.stiffness;
+        options
+            .motion
+            .validate()
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        Ok(options)
+    }
+
+    /// The cameras of `--camera`, each once.
+    fn cameras(&self) -> Result<Vec<(CameraId, CameraSpec)>> {
+        let mut specs: Vec<(CameraId, CameraSpec)> = Vec::new();
+        for text in &self.camera {
+            let (id, spec) = CameraSpec::parse_named(text)?;
+            if specs.iter().any(|(c, _)| *c == id) {
+                bail!("--camera: the {id} camera is given twice");
+            }
+            specs.push((id, spec));
+        }
+        Ok(specs)
+    }
 }
 
 /// Runs `naocalib capture`.
 pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
-    let mut options = CaptureOptions::default();
-    options.motion.leg_speed = args.leg_speed.to_radians();
-    options.motion.head_speed = args.head_speed.to_radians();
-    options.motion.stiffness = args.stiffness;
-    options
-        .motion
-        .validate()
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
-    let mut specs: Vec<(CameraId, CameraSpec)> = Vec::new();
-    for text in &args.camera {
-        let (id, spec) = CameraSpec::parse_named(text)?;
-        if specs.iter().any(|(c, _)| *c == id) {
-            bail!("--camera: the {id} camera is given twice");
-        }
-        specs.push((id, spec));
-    }
+    let options = args.options()?;
+    let specs = args.cameras()?;
     let given: Vec<CameraId> = specs.iter().map(|(c, _)| *c).collect();
     // Every row checked before anything is written or moved.
     let mut start = Start::new(
@@ -102,51 +109,14 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     let mut link = Connection::connect(&args.lola, options.safety.silent_cycles)?;
     let out = start.open()?;
     let (model, rows) = (&start.model, &start.rows);
-    let todo = out.todo(rows);
-    let total = rows.len();
-    let bar = super::progress_bar(total, "captures");
-    let steps = predicted_steps(model, &todo, &options);
-    let predicted = |from: usize| steps[from.min(todo.len())..].iter().sum::<f64>();
-    // The terminal is written from a thread of its own: a terminal that stops reading (a
-    // stalled or silently lost ssh session) blocks that thread, never the robot's cycles.
-    let (print, printed) = std::sync::mpsc::channel::<Print>();
-    let printer = {
-        let bar = bar.clone();
-        std::thread::spawn(move || {
-            for p in printed {
-                match p {
-                    Print::Progress(done, message) => {
-                        bar.set_position(done);
-                        bar.set_message(message);
-                    }
-                    Print::Line(line) if bar.is_hidden() => note!("{line}"),
-                    Print::Line(line) => bar.println(line),
-                }
-            }
-        })
-    };
-    let _ = print.send(Print::Progress(
-        out.len() as u64,
-        format!(", {:.0} s of robot time planned", predicted(0)),
-    ));
-    let mut visited = 0usize;
+    let steps = predicted_steps(model, &out.todo(rows), &options);
+    let terminal = Terminal::spawn(rows.len());
+    let mut progress = Progress { steps, visited: 0 };
+    terminal.send(progress.start(out.len()));
     let mut events = |event: &Event| {
-        let p = match event {
-            Event::Started => return,
-            Event::Taken { done, .. } => {
-                visited += 1;
-                Print::Progress(
-                    *done as u64,
-                    format!(", ~{:.0} s left by the plan", predicted(visited)),
-                )
-            }
-            Event::Unreachable { .. } | Event::Abandoned { .. } => {
-                visited += 1;
-                Print::Line(event.to_string())
-            }
-            Event::Cooling { .. } => Print::Line(event.to_string()),
-        };
-        let _ = print.send(p);
+        if let Some(p) = progress.tell(event) {
+            terminal.send(p);
+        }
     };
     let report = Session::new(model, rows, &options)
         .observe(&mut events)
@@ -154,10 +124,13 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         .run(out, cameras, &mut link);
     // The robot is limp (or gone): let LoLA go before anything may wait for the terminal.
     drop(link);
-    drop(print);
-    let _ = printer.join();
-    let report = report?;
-    bar.finish_and_clear();
+    terminal.close();
+    summary(args, &report?, rows.len(), stop.load(Ordering::Relaxed))
+}
+
+/// The account of the run, and the exit code: 0 when the plan was run to its end, 2 when
+/// a signal stopped it, an error when a fault did.
+fn summary(args: &CaptureArgs, report: &Report, total: usize, signalled: bool) -> Result<ExitCode> {
     let done = report.already + report.taken.len();
     note!(
         "{} captures taken in this run ({} before), {} skipped, {done} of {total} in {} \
@@ -174,14 +147,10 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     for (id, reason) in &report.abandoned {
         note!("  skipped capture {id} on the way: {reason}");
     }
-    match report.end {
+    match &report.end {
         End::Completed => Ok(ExitCode::SUCCESS),
         End::Interrupted => {
-            let signal = if stop.load(Ordering::Relaxed) {
-                "a signal"
-            } else {
-                "a stop"
-            };
+            let signal = if signalled { "a signal" } else { "a stop" };
             note!(
                 "naocalib: stopped by {signal}: the robot is at rest with its stiffness off; \
                  {} is a valid dataset; go on with --resume",
@@ -195,6 +164,103 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
                  go on with --resume)",
                 args.out.display()
             )
+        }
+    }
+}
+
+/// What the terminal thread writes.
+enum Print {
+    /// Captures in the dataset, and the bar's message.
+    Progress(u64, String),
+    /// A line above the bar.
+    Line(String),
+}
+
+/// The progress bar and the lines above it, written from a thread of its own: a terminal
+/// that stops reading (a stalled or silently lost ssh session) blocks that thread, never the
+/// robot's cycles.
+struct Terminal {
+    bar: indicatif::ProgressBar,
+    print: mpsc::Sender<Print>,
+    thread: std::thread::JoinHandle<()>,
+}
+
+impl Terminal {
+    /// The bar of a plan of `total` captures, and its thread.
+    fn spawn(total: usize) -> Terminal {
+        let bar = super::progress_bar(total, "captures");
+        let (print, printed) = mpsc::channel::<Print>();
+        let thread = {
+            let bar = bar.clone();
+            std::thread::spawn(move || {
+                for p in printed {
+                    match p {
+                        Print::Progress(done, message) => {
+                            bar.set_position(done);
+                            bar.set_message(message);
+                        }
+                        Print::Line(line) if bar.is_hidden() => note!("{line}"),
+                        Print::Line(line) => bar.println(line),
+                    }
+                }
+            })
+        };
+        Terminal { bar, print, thread }
+    }
+
+    /// Hands `p` to the thread, without waiting.
+    fn send(&self, p: Print) {
+        let _ = self.print.send(p);
+    }
+
+    /// Waits until everything is written, then clears the bar.
+    fn close(self) {
+        drop(self.print);
+        let _ = self.thread.join();
+        self.bar.finish_and_clear();
+    }
+}
+
+/// The bar's account of the plan: the robot time the plan's timing model predicts for what
+/// is left.
+struct Progress {
+    /// The predicted time of each move (s; [`predicted_steps`]).
+    steps: Vec<f64>,
+    /// Stances visited: taken or skipped.
+    visited: usize,
+}
+
+impl Progress {
+    /// The predicted time (s) from the `from`-th stance to the end.
+    fn left(&self, from: usize) -> f64 {
+        let moves = self.steps.len().saturating_sub(1);
+        self.steps[from.min(moves)..].iter().sum()
+    }
+
+    /// The bar at the start, with `done` captures in the dataset.
+    fn start(&self, done: usize) -> Print {
+        Print::Progress(
+            done as u64,
+            format!(", {:.0} s of robot time planned", self.left(0)),
+        )
+    }
+
+    /// What the terminal shows of `event`.
+    fn tell(&mut self, event: &Event) -> Option<Print> {
+        match event {
+            Event::Started => None,
+            Event::Taken { done, .. } => {
+                self.visited += 1;
+                Some(Print::Progress(
+                    *done as u64,
+                    format!(", ~{:.0} s left by the plan", self.left(self.visited)),
+                ))
+            }
+            Event::Unreachable { .. } | Event::Abandoned { .. } => {
+                self.visited += 1;
+                Some(Print::Line(event.to_string()))
+            }
+            Event::Cooling { .. } => Some(Print::Line(event.to_string())),
         }
     }
 }

@@ -87,7 +87,8 @@ fn camera_id(name: &str) -> Result<CameraId, String> {
 }
 
 fn joint(name: &str) -> Result<Joint> {
-    Joint::from_name(name).ok_or_else(|| anyhow::anyhow!("unknown joint '{name}' (e.g. LKneePitch, HeadYaw)"))
+    Joint::from_name(name)
+        .ok_or_else(|| anyhow::anyhow!("unknown joint '{name}' (e.g. LKneePitch, HeadYaw)"))
 }
 
 /// Runs `naocalib simulate-robot`.

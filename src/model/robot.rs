@@ -436,7 +436,13 @@ mod tests {
         }
         assert_eq!(a.lerp(&b, 0.0), a);
         assert!((a.lerp(&b, 1.0) - b).iter().all(|(_, d)| d.abs() < 1e-15));
-        assert_eq!(JointAngles::fill(0.5).iter().filter(|&(_, q)| q == 0.5).count(), 14);
+        assert_eq!(
+            JointAngles::fill(0.5)
+                .iter()
+                .filter(|&(_, q)| q == 0.5)
+                .count(),
+            14
+        );
     }
 
     #[test]

@@ -90,7 +90,8 @@ impl ReadingFault {
         let what = match self.why {
             Implausible::NotFinite => format!("{} reads {}", self.joint, self.value),
             Implausible::OutOfRange => {
-                let (lo, hi) = Joint::from_name(self.joint).map_or((f64::NAN, f64::NAN), Joint::limits);
+                let (lo, hi) =
+                    Joint::from_name(self.joint).map_or((f64::NAN, f64::NAN), Joint::limits);
                 format!(
                     "{} reads {deg:.1}°, outside its range {:.1}° … {:.1}°",
                     self.joint,

@@ -93,11 +93,12 @@ impl SafetyLimits {
 
     /// The hottest head or leg motor and its temperature (°C).
     pub fn hottest(message: &SensorMessage) -> (Joint, f64) {
-        lola::to_joint_angles(&message.temperature)
-            .iter()
-            .fold((Joint::HeadYaw, f64::NEG_INFINITY), |a, b| {
+        lola::to_joint_angles(&message.temperature).iter().fold(
+            (Joint::HeadYaw, f64::NEG_INFINITY),
+            |a, b| {
                 if b.1 > a.1 { b } else { a }
-            })
+            },
+        )
     }
 }
 
@@ -117,12 +118,12 @@ impl Watch {
         if temperature >= limits.stop_temperature {
             return Verdict::Overheated(joint, temperature);
         }
-        let (cjoint, current) = currents
-            .iter()
-            .map(|(j, a)| (j, a.abs()))
-            .fold((Joint::HeadYaw, f64::NEG_INFINITY), |a, b| {
+        let (cjoint, current) = currents.iter().map(|(j, a)| (j, a.abs())).fold(
+            (Joint::HeadYaw, f64::NEG_INFINITY),
+            |a, b| {
                 if b.1 > a.1 { b } else { a }
-            });
+            },
+        );
         if current > limits.max_current {
             self.over_current += 1;
             if self.over_current >= limits.current_cycles {

@@ -275,8 +275,8 @@ impl<'a> Drive<'a> {
             End::Stopped(CaptureError::Lola(LolaError::Parse(_))) => self.blind_ramp_down(),
             End::Stopped(CaptureError::Lola(_)) => {}
             _ => {
-                let back = if self.moved { self.rest() } else { Ok(()) }
-                    .and_then(|()| self.ramp_down());
+                let back =
+                    if self.moved { self.rest() } else { Ok(()) }.and_then(|()| self.ramp_down());
                 if let Err(Halt::Link(LolaError::Parse(_))) = back {
                     self.blind_ramp_down();
                 }

@@ -38,8 +38,7 @@ pub mod writer;
 
 pub use crate::plan::route::rest_posture;
 pub use plan::{
-    PlanRow, check_cameras, check_plan, missing_camera, predicted_steps, read_plan,
-    unsafe_posture,
+    PlanRow, check_cameras, check_plan, missing_camera, predicted_steps, read_plan, unsafe_posture,
 };
 pub use session::{End, Event, Report, Session};
 pub use signals::{STOP_SIGNALS, stop_on_signals};

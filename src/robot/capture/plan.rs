@@ -137,7 +137,11 @@ pub fn missing_camera<'r>(rows: &'r [PlanRow], cameras: &[CameraId]) -> Option<&
 
 /// Refuses the plan at `path` when a row's camera is not among `cameras` (the ones given),
 /// naming the line, the capture and the camera.
-pub fn check_cameras(path: &Path, rows: &[PlanRow], cameras: &[CameraId]) -> Result<(), CaptureError> {
+pub fn check_cameras(
+    path: &Path,
+    rows: &[PlanRow],
+    cameras: &[CameraId],
+) -> Result<(), CaptureError> {
     match missing_camera(rows, cameras) {
         None => Ok(()),
         Some(row) => Err(CaptureError::NoCamera {

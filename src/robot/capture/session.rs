@@ -4,10 +4,8 @@
 //! its observers of each [`Event`], watches the stop flag, and always takes the way out
 //! (rest, ramp-down) that the robot can still be commanded through.
 
-use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
-use crate::dataset::DatasetError;
 use crate::model::{CameraId, Joint, Model};
 use crate::plan::collision::BodyModel;
 use crate::plan::route;
@@ -190,17 +188,7 @@ impl<'a> Session<'a> {
                 row.camera.name()
             )));
         }
-        let scratch = tempfile::tempdir().map_err(|e| {
-            CaptureError::Dataset(DatasetError::io(Path::new("/tmp"), "create", e))
-        })?;
-        let cameras = cameras
-            .into_iter()
-            .map(|(id, camera)| {
-                let size = model.intrinsics(id);
-                (id, camera, (size.width, size.height))
-            })
-            .collect();
-        let mut worker = Worker::spawn(cameras, out, scratch.path().to_path_buf());
+        let mut worker = Worker::spawn(model, cameras, out)?;
         let mut drive = match Drive::start(link, options, stop) {
             Ok(drive) => drive,
             Err(e) => {
@@ -420,6 +408,7 @@ fn stance(
 #[cfg(test)]
 mod tests {
     use std::cell::RefCell;
+    use std::path::Path;
     use std::rc::Rc;
 
     use super::*;
@@ -518,7 +507,10 @@ mod tests {
         // Each event with the posture last commanded when it came.
         let mut events: Vec<(Event, JointAngles)> = Vec::new();
         let mut observer = |e: &Event| {
-            let last = sent.borrow().last().map(|m| lola::to_joint_angles(&m.position));
+            let last = sent
+                .borrow()
+                .last()
+                .map(|m| lola::to_joint_angles(&m.position));
             events.push((e.clone(), last.unwrap_or_default()));
         };
         let cameras: Vec<(CameraId, Box<dyn Camera>)> = vec![(CameraId::Lower, Box::new(Black))];
@@ -550,16 +542,18 @@ mod tests {
         };
         let (unreachable, before) = at(1, true);
         let (abandoned, on_the_way) = at(2, false);
-        let close = |a: &JointAngles, b: &JointAngles| {
-            (*a - *b).iter().all(|(_, d)| d.abs() < 1e-6)
-        };
+        let close =
+            |a: &JointAngles, b: &JointAngles| (*a - *b).iter().all(|(_, d)| d.abs() < 1e-6);
         // Skipped before moving: the robot still holds the previous stance.
         assert!(close(&before, &head), "{before:?}");
         // Abandoned on the way: the robot had left it, towards the raised legs.
         assert!(!close(&on_the_way, &head));
         assert!(on_the_way.get(Joint::RHipPitch) < -0.1, "{on_the_way:?}");
         let (u, a) = (unreachable.to_string(), abandoned.to_string());
-        assert!(u.starts_with("capture 1 skipped before moving: no collision-free"), "{u}");
+        assert!(
+            u.starts_with("capture 1 skipped before moving: no collision-free"),
+            "{u}"
+        );
         assert!(u.ends_with("the robot stays where it is"), "{u}");
         assert!(a.starts_with("capture 2 skipped: LKneePitch stayed"), "{a}");
         assert!(a.ends_with("the leg returns to rest"), "{a}");

@@ -2,12 +2,13 @@
 //! writes each capture, while the session loop goes on answering LoLA every 12 ms (a
 //! picture or a disk that is slow never holds up a cycle).
 
-use std::path::PathBuf;
+use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc;
 
-use crate::model::CameraId;
+use crate::dataset::DatasetError;
+use crate::model::{CameraId, Model};
 use crate::robot::camera::{Camera, CameraError, Picture, check_picture};
 
 use super::CaptureError;
@@ -30,7 +31,7 @@ pub(super) enum Done {
 }
 
 /// A camera with the size (width, height) its pictures must have.
-pub(super) type SizedCamera = (CameraId, Box<dyn Camera>, (u32, u32));
+type SizedCamera = (CameraId, Box<dyn Camera>, (u32, u32));
 
 /// The worker: takes pictures and writes captures while the main loop keeps answering
 /// LoLA every cycle.
@@ -43,13 +44,22 @@ pub(super) struct Worker {
 }
 
 impl Worker {
-    /// The worker of `cameras`, each with the size (width, height) its pictures must have,
-    /// writing into `out`; `scratch` is a directory for the cameras' temporary files.
+    /// The worker of `cameras`, each checked to take pictures of its size in `model`,
+    /// writing into `out`; the cameras' temporary files go to a scratch directory of its own.
     pub(super) fn spawn(
-        mut cameras: Vec<SizedCamera>,
+        model: &Model,
+        cameras: Vec<(CameraId, Box<dyn Camera>)>,
         mut out: DatasetOut,
-        scratch: PathBuf,
-    ) -> Worker {
+    ) -> Result<Worker, CaptureError> {
+        let scratch = tempfile::tempdir()
+            .map_err(|e| CaptureError::Dataset(DatasetError::io(Path::new("/tmp"), "create", e)))?;
+        let mut cameras: Vec<SizedCamera> = cameras
+            .into_iter()
+            .map(|(id, camera)| {
+                let size = model.intrinsics(id);
+                (id, camera, (size.width, size.height))
+            })
+            .collect();
         let (jobs, rx) = mpsc::channel::<Job>();
         let (tx, done) = mpsc::channel::<Done>();
         let cancel = cameras
@@ -59,11 +69,12 @@ impl Worker {
         let handle = std::thread::spawn(move || {
             for job in rx {
                 let result = match job {
-                    Job::Take(id, which) => Done::Taken(take(&mut cameras, id, which, &scratch)),
-                    Job::Store(taken, picture) => Done::Stored(
-                        taken.id,
-                        out.add(&taken, &picture).map(|()| out.len()),
-                    ),
+                    Job::Take(id, which) => {
+                        Done::Taken(take(&mut cameras, id, which, scratch.path()))
+                    }
+                    Job::Store(taken, picture) => {
+                        Done::Stored(taken.id, out.add(&taken, &picture).map(|()| out.len()))
+                    }
                 };
                 if tx.send(result).is_err() {
                     break;
@@ -71,13 +82,13 @@ impl Worker {
             }
             out
         });
-        Worker {
+        Ok(Worker {
             jobs: Some(jobs),
             done,
             handle: Some(handle),
             pending: 0,
             cancel,
-        }
+        })
     }
 
     /// Hands `job` to the thread (nothing after [`Worker::finish`]).
@@ -124,7 +135,7 @@ fn take(
     cameras: &mut [SizedCamera],
     id: u64,
     which: CameraId,
-    scratch: &std::path::Path,
+    scratch: &Path,
 ) -> Result<Picture, CameraError> {
     let Some((_, camera, (w, h))) = cameras.iter_mut().find(|(c, _, _)| *c == which) else {
         return Err(CameraError::Missing(which));

@@ -358,4 +358,3 @@ fn check_same_plan(
     }
     Ok(())
 }
-
