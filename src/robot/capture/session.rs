@@ -24,7 +24,7 @@ use super::{CaptureError, CaptureOptions};
 pub enum Event {
     /// The robot is stiff and about to move.
     Started,
-    /// A capture was written (its id; captures written so far, the plan's total).
+    /// A capture was written (its id; the captures in the dataset now).
     Taken {
         /// Capture id.
         id: u64,
