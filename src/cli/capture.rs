@@ -11,7 +11,7 @@ use clap::Args;
 
 use naocalib::model::CameraId;
 use naocalib::robot::camera::CameraSpec;
-use naocalib::robot::capture::{self, predicted_steps};
+use naocalib::robot::capture::{self, Forecast};
 use naocalib::robot::lola::{self, Connection};
 use naocalib::robot::{CaptureOptions, End, Event, Report, Session, Start};
 
@@ -109,14 +109,22 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     let mut link = Connection::connect(&args.lola, options.safety.silent_cycles)?;
     let out = start.open()?;
     let (model, rows) = (&start.model, &start.rows);
-    let steps = predicted_steps(model, &out.todo(rows), &options);
+    let mut forecast = Forecast::new(model, &out.todo(rows), &options);
     let terminal = Terminal::spawn(rows.len());
-    let mut progress = Progress { steps, visited: 0 };
-    terminal.send(progress.start(out.len()));
+    terminal.send(Print::Progress(
+        out.len() as u64,
+        format!(", {:.0} s of robot time planned", forecast.left()),
+    ));
     let mut events = |event: &Event| {
-        if let Some(p) = progress.tell(event) {
-            terminal.send(p);
-        }
+        forecast.observe(event);
+        terminal.send(match event {
+            Event::Started => return,
+            Event::Taken { done, .. } => Print::Progress(
+                *done as u64,
+                format!(", ~{:.0} s left by the plan", forecast.left()),
+            ),
+            _ => Print::Line(event.to_string()),
+        });
     };
     let report = Session::new(model, rows, &options)
         .observe(&mut events)
@@ -218,49 +226,5 @@ impl Terminal {
         drop(self.print);
         let _ = self.thread.join();
         self.bar.finish_and_clear();
-    }
-}
-
-/// The bar's account of the plan: the robot time the plan's timing model predicts for what
-/// is left.
-struct Progress {
-    /// The predicted time of each move (s; [`predicted_steps`]).
-    steps: Vec<f64>,
-    /// Stances visited: taken or skipped.
-    visited: usize,
-}
-
-impl Progress {
-    /// The predicted time (s) from the `from`-th stance to the end.
-    fn left(&self, from: usize) -> f64 {
-        let moves = self.steps.len().saturating_sub(1);
-        self.steps[from.min(moves)..].iter().sum()
-    }
-
-    /// The bar at the start, with `done` captures in the dataset.
-    fn start(&self, done: usize) -> Print {
-        Print::Progress(
-            done as u64,
-            format!(", {:.0} s of robot time planned", self.left(0)),
-        )
-    }
-
-    /// What the terminal shows of `event`.
-    fn tell(&mut self, event: &Event) -> Option<Print> {
-        match event {
-            Event::Started => None,
-            Event::Taken { done, .. } => {
-                self.visited += 1;
-                Some(Print::Progress(
-                    *done as u64,
-                    format!(", ~{:.0} s left by the plan", self.left(self.visited)),
-                ))
-            }
-            Event::Unreachable { .. } | Event::Abandoned { .. } => {
-                self.visited += 1;
-                Some(Print::Line(event.to_string()))
-            }
-            Event::Cooling { .. } => Some(Print::Line(event.to_string())),
-        }
     }
 }

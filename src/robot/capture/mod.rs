@@ -40,7 +40,7 @@ pub use crate::plan::route::rest_posture;
 pub use plan::{
     PlanRow, check_cameras, check_plan, missing_camera, predicted_steps, read_plan, unsafe_posture,
 };
-pub use session::{End, Event, Report, Session};
+pub use session::{End, Event, Forecast, Report, Session};
 pub use signals::{STOP_SIGNALS, stop_on_signals};
 pub use start::Start;
 pub use writer::{DatasetOut, PLAN_CSV, RESUME_TOLERANCE, Taken, captures_header};

@@ -14,7 +14,7 @@ use crate::robot::lola::Link;
 use crate::robot::motion::Readings;
 
 use super::drive::{Drive, Halt, Unsettled};
-use super::plan::{PlanRow, missing_camera, unsafe_posture};
+use super::plan::{PlanRow, missing_camera, predicted_steps, unsafe_posture};
 use super::worker::{Done, Job, Worker};
 use super::writer::{DatasetOut, Taken};
 use super::{CaptureError, CaptureOptions};
@@ -111,6 +111,39 @@ impl Report {
     /// Stances of this run not captured: unreachable or abandoned.
     pub fn skipped(&self) -> usize {
         self.unreachable.len() + self.abandoned.len()
+    }
+}
+
+/// The robot time a run has left by the plan's timing model: the predicted time of each
+/// move ([`predicted_steps`]) from the stance it is at; an observer of the run's events
+/// ([`Forecast::observe`]) moves it on as stances are taken or skipped.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Forecast {
+    steps: Vec<f64>,
+    visited: usize,
+}
+
+impl Forecast {
+    /// The forecast of running `todo` (the rows not yet taken) from the rest posture.
+    pub fn new(model: &Model, todo: &[PlanRow], options: &CaptureOptions) -> Forecast {
+        Forecast {
+            steps: predicted_steps(model, todo, options),
+            visited: 0,
+        }
+    }
+
+    /// The robot time left (s): the moves to the stances not yet visited, their pictures,
+    /// and the return to rest.
+    pub fn left(&self) -> f64 {
+        let stances = self.steps.len().saturating_sub(1);
+        self.steps[self.visited.min(stances)..].iter().sum()
+    }
+
+    /// Moves on past a stance taken or skipped.
+    pub fn observe(&mut self, event: &Event) {
+        if let Event::Taken { .. } | Event::Unreachable { .. } | Event::Abandoned { .. } = event {
+            self.visited += 1;
+        }
     }
 }
 
@@ -563,5 +596,47 @@ mod tests {
         let last = sent.last().expect("commands");
         assert!(close(&lola::to_joint_angles(&last.position), &rest));
         assert!(last.stiffness.iter().all(|&s| s == 0.0));
+    }
+
+    /// The forecast moves on with every stance visited, taken or skipped, and not while
+    /// the motors cool; at the end only the return to rest is left.
+    #[test]
+    fn the_forecast_counts_down_the_stances_visited() {
+        let model = Model::default();
+        let options = CaptureOptions::default();
+        let rest = options.rest;
+        let mut head = rest;
+        head.set(Joint::HeadYaw, 0.5);
+        let raised = route::tucked(&rest);
+        let rows = [row(0, head), row(1, raised), row(2, head)];
+        let steps = predicted_steps(&model, &rows, &options);
+        assert_eq!(steps.len(), 4);
+        let mut forecast = Forecast::new(&model, &rows, &options);
+        assert_eq!(forecast.left(), steps.iter().sum::<f64>());
+        let events = [
+            Event::Started,
+            Event::Taken { id: 0, done: 1 },
+            Event::Cooling {
+                joint: Joint::LKneePitch,
+                temperature: 71.0,
+            },
+            Event::Abandoned {
+                id: 1,
+                reason: "obstructed".into(),
+            },
+        ];
+        for e in &events {
+            forecast.observe(e);
+        }
+        assert_eq!(forecast.left(), steps[2..].iter().sum::<f64>());
+        assert!(forecast.left() < steps.iter().sum::<f64>());
+        forecast.observe(&Event::Unreachable {
+            id: 2,
+            reason: "no way".into(),
+        });
+        assert_eq!(forecast.left(), steps[3]);
+        forecast.observe(&Event::Taken { id: 9, done: 3 });
+        assert_eq!(forecast.left(), steps[3]);
+        assert!(steps[3] > 0.0);
     }
 }
