@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::Ordering;
+use std::sync::mpsc;
 use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
@@ -10,9 +11,9 @@ use clap::Args;
 
 use naocalib::model::CameraId;
 use naocalib::robot::camera::CameraSpec;
-use naocalib::robot::capture::{self, check_plan, predicted_steps, read_plan};
+use naocalib::robot::capture::{self, Forecast};
 use naocalib::robot::lola::{self, Connection};
-use naocalib::robot::{CaptureOptions, DatasetOut, End, Event};
+use naocalib::robot::{CaptureOptions, End, Event, Report, Session, Start};
 
 use super::options::within;
 
@@ -54,77 +55,50 @@ pub struct CaptureArgs {
     camera_timeout: f64,
 }
 
-/// What the printer thread writes to the terminal.
-enum Print {
-    /// Captures in the dataset, and the bar's message.
-    Progress(u64, String),
-    /// A line above the bar.
-    Line(String),
+impl CaptureArgs {
+    /// The run's options from the flags.
+    fn options(&self) -> Result<CaptureOptions> {
+        let mut options = CaptureOptions::default();
+        options.motion.leg_speed = self.leg_speed.to_radians();
+        options.motion.head_speed = self.head_speed.to_radians();
+        options.motion.stiffness = self.stiffness;
+        options
+            .motion
+            .validate()
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        Ok(options)
+    }
+
+    /// The cameras of `--camera`, each once.
+    fn cameras(&self) -> Result<Vec<(CameraId, CameraSpec)>> {
+        let mut specs: Vec<(CameraId, CameraSpec)> = Vec::new();
+        for text in &self.camera {
+            let (id, spec) = CameraSpec::parse_named(text)?;
+            if specs.iter().any(|(c, _)| *c == id) {
+                bail!("--camera: the {id} camera is given twice");
+            }
+            specs.push((id, spec));
+        }
+        Ok(specs)
+    }
 }
 
 /// Runs `naocalib capture`.
 pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
-    let mut options = CaptureOptions::default();
-    options.motion.leg_speed = args.leg_speed.to_radians();
-    options.motion.head_speed = args.head_speed.to_radians();
-    options.motion.stiffness = args.stiffness;
-    options
-        .motion
-        .validate()
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
-    let mut specs: Vec<(CameraId, CameraSpec)> = Vec::new();
-    for text in &args.camera {
-        let (id, spec) = CameraSpec::parse_named(text)?;
-        if specs.iter().any(|(c, _)| *c == id) {
-            bail!("--camera: the {id} camera is given twice");
-        }
-        specs.push((id, spec));
-    }
-    let rows = read_plan(&args.plan)?;
-    let config_model = match &args.config {
-        Some(path) => Some(naocalib::dataset::read_model(path)?),
-        None => None,
-    };
-    let (out, model) = if args.resume {
-        let (out, model) = DatasetOut::resume(&args.out, &args.plan, &rows)?;
-        if config_model.is_some_and(|m| m != model) {
-            bail!(
-                "{}: its camera, sandals or geometry differ from {}'s dataset.toml; resume \
-                 with the same robot configuration",
-                args.config.as_ref().expect("given").display(),
-                args.out.display()
-            );
-        }
-        (Some(out), model)
-    } else {
-        let Some(model) = config_model else {
-            bail!("--config DATASET.toml is needed (the robot's camera intrinsics and sandals)");
-        };
-        DatasetOut::check_new(&args.out)?;
-        (None, model)
-    };
+    let options = args.options()?;
+    let specs = args.cameras()?;
+    let given: Vec<CameraId> = specs.iter().map(|(c, _)| *c).collect();
     // Every row checked before anything is written or moved.
-    check_plan(&args.plan, &model, &rows, options.joint_margin)?;
-    if let Some(out) = &out {
-        for (id, why) in out.retake() {
-            note!("capture {id} will be taken again ({why})");
-        }
-    }
-    let plan_bytes = std::fs::read(&args.plan)
-        .with_context(|| format!("{}: cannot read", args.plan.display()))?;
-    if let Some(row) = rows
-        .iter()
-        .find(|r| !specs.iter().any(|(c, _)| *c == r.camera))
-    {
-        bail!(
-            "{} line {}: capture {} is for the {} camera; give it with --camera {}=SPEC \
-             (nothing was moved)",
-            args.plan.display(),
-            row.line,
-            row.id,
-            row.camera,
-            row.camera
-        );
+    let mut start = Start::new(
+        &args.plan,
+        &args.out,
+        args.config.as_deref(),
+        args.resume,
+        &given,
+        options.joint_margin,
+    )?;
+    for (id, why) in start.retake() {
+        note!("capture {id} will be taken again ({why})");
     }
     let timeout = Duration::from_secs_f64(args.camera_timeout);
     let mut cameras = Vec::new();
@@ -133,98 +107,58 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     }
     let stop = capture::stop_on_signals().context("cannot watch for Ctrl-C, SIGTERM or SIGHUP")?;
     let mut link = Connection::connect(&args.lola, options.safety.silent_cycles)?;
-    let out = match out {
-        Some(out) => out,
-        None => DatasetOut::create(&args.out, &model, &plan_bytes)?,
-    };
-    let todo: Vec<_> = rows.iter().filter(|r| !out.has(r.id)).copied().collect();
-    let total = rows.len();
-    let bar = super::progress_bar(total as u64 as usize, "captures");
-    let steps = predicted_steps(&model, &todo, &options);
-    let predicted = |from: usize| steps[from.min(todo.len())..].iter().sum::<f64>();
-    // The terminal is written from a thread of its own: a terminal that stops reading (a
-    // stalled or silently lost ssh session) blocks that thread, never the robot's cycles.
-    let (print, printed) = std::sync::mpsc::channel::<Print>();
-    let printer = {
-        let bar = bar.clone();
-        std::thread::spawn(move || {
-            for p in printed {
-                match p {
-                    Print::Progress(done, message) => {
-                        bar.set_position(done);
-                        bar.set_message(message);
-                    }
-                    Print::Line(line) if bar.is_hidden() => note!("{line}"),
-                    Print::Line(line) => bar.println(line),
-                }
-            }
-        })
-    };
-    let _ = print.send(Print::Progress(
+    let out = start.open()?;
+    let (model, rows) = (&start.model, &start.rows);
+    let mut forecast = Forecast::new(model, &out.todo(rows), &options);
+    let terminal = Terminal::spawn(rows.len());
+    terminal.send(Print::Progress(
         out.len() as u64,
-        format!(", {:.0} s of robot time planned", predicted(0)),
+        format!(", {:.0} s of robot time planned", forecast.left()),
     ));
-    let mut visited = 0usize;
-    let mut events = |event: Event| {
-        let p = match event {
+    let mut events = |event: &Event| {
+        forecast.observe(event);
+        terminal.send(match event {
             Event::Started => return,
-            Event::Taken { done, .. } => {
-                visited += 1;
-                Print::Progress(
-                    done as u64,
-                    format!(", ~{:.0} s left by the plan", predicted(visited)),
-                )
-            }
-            Event::Skipped { id, reason } => {
-                visited += 1;
-                Print::Line(format!(
-                    "capture {id} skipped: {reason}; the leg returns to rest"
-                ))
-            }
-            Event::Cooling { joint, temperature } => Print::Line(format!(
-                "{} at {temperature:.1} °C: resting until the motors cool",
-                joint.name()
-            )),
-        };
-        let _ = print.send(p);
+            Event::Taken { done, .. } => Print::Progress(
+                *done as u64,
+                format!(", ~{:.0} s left by the plan", forecast.left()),
+            ),
+            _ => Print::Line(event.to_string()),
+        });
     };
-    let report = capture::run(
-        &model,
-        &rows,
-        out,
-        cameras,
-        &mut link,
-        &options,
-        &stop,
-        &mut events,
-    );
+    let report = Session::new(model, rows, &options)
+        .observe(&mut events)
+        .stop_on(&stop)
+        .run(out, cameras, &mut link);
     // The robot is limp (or gone): let LoLA go before anything may wait for the terminal.
     drop(link);
-    drop(print);
-    let _ = printer.join();
-    let report = report?;
-    bar.finish_and_clear();
+    terminal.close();
+    summary(args, &report?, rows.len(), stop.load(Ordering::Relaxed))
+}
+
+/// The account of the run, and the exit code: 0 when the plan was run to its end, 2 when
+/// a signal stopped it, an error when a fault did.
+fn summary(args: &CaptureArgs, report: &Report, total: usize, signalled: bool) -> Result<ExitCode> {
     let done = report.already + report.taken.len();
     note!(
         "{} captures taken in this run ({} before), {} skipped, {done} of {total} in {} \
          ({:.1} s of robot time)",
         report.taken.len(),
         report.already,
-        report.skipped.len(),
+        report.skipped(),
         args.out.display(),
         capture::cycles_to_seconds(report.cycles)
     );
-    for (id, reason) in &report.skipped {
-        note!("  skipped capture {id}: {reason}");
+    for (id, reason) in &report.unreachable {
+        note!("  skipped capture {id} before moving: {reason}");
     }
-    match report.end {
+    for (id, reason) in &report.abandoned {
+        note!("  skipped capture {id} on the way: {reason}");
+    }
+    match &report.end {
         End::Completed => Ok(ExitCode::SUCCESS),
         End::Interrupted => {
-            let signal = if stop.load(Ordering::Relaxed) {
-                "a signal"
-            } else {
-                "a stop"
-            };
+            let signal = if signalled { "a signal" } else { "a stop" };
             note!(
                 "naocalib: stopped by {signal}: the robot is at rest with its stiffness off; \
                  {} is a valid dataset; go on with --resume",
@@ -239,5 +173,58 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
                 args.out.display()
             )
         }
+    }
+}
+
+/// What the terminal thread writes.
+enum Print {
+    /// Captures in the dataset, and the bar's message.
+    Progress(u64, String),
+    /// A line above the bar.
+    Line(String),
+}
+
+/// The progress bar and the lines above it, written from a thread of its own: a terminal
+/// that stops reading (a stalled or silently lost ssh session) blocks that thread, never the
+/// robot's cycles.
+struct Terminal {
+    bar: indicatif::ProgressBar,
+    print: mpsc::Sender<Print>,
+    thread: std::thread::JoinHandle<()>,
+}
+
+impl Terminal {
+    /// The bar of a plan of `total` captures, and its thread.
+    fn spawn(total: usize) -> Terminal {
+        let bar = super::progress_bar(total, "captures");
+        let (print, printed) = mpsc::channel::<Print>();
+        let thread = {
+            let bar = bar.clone();
+            std::thread::spawn(move || {
+                for p in printed {
+                    match p {
+                        Print::Progress(done, message) => {
+                            bar.set_position(done);
+                            bar.set_message(message);
+                        }
+                        Print::Line(line) if bar.is_hidden() => note!("{line}"),
+                        Print::Line(line) => bar.println(line),
+                    }
+                }
+            })
+        };
+        Terminal { bar, print, thread }
+    }
+
+    /// Hands `p` to the thread, without waiting.
+    fn send(&self, p: Print) {
+        let _ = self.print.send(p);
+    }
+
+    /// Waits until everything is written, then clears the bar.
+    fn close(self) {
+        drop(self.print);
+        let _ = self.thread.join();
+        self.bar.finish_and_clear();
     }
 }

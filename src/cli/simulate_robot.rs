@@ -87,9 +87,7 @@ fn camera_id(name: &str) -> Result<CameraId, String> {
 }
 
 fn joint(name: &str) -> Result<Joint> {
-    Joint::ALL
-        .into_iter()
-        .find(|j| j.name() == name)
+    Joint::from_name(name)
         .ok_or_else(|| anyhow::anyhow!("unknown joint '{name}' (e.g. LKneePitch, HeadYaw)"))
 }
 

@@ -137,8 +137,7 @@ pub(crate) fn validate(
                 ),
             ));
         }
-        for joint in Joint::ALL {
-            let angle = capture.joints.get(joint);
+        for (joint, angle) in capture.joints.iter() {
             if !angle.is_finite() {
                 return Err(DatasetError::invalid(
                     at(joint.name()),
@@ -222,7 +221,7 @@ pub(crate) fn render(captures: &[Capture]) -> Result<Vec<u8>, csv::Error> {
         if with_camera {
             record.push(c.camera.name().to_string());
         }
-        record.extend(Joint::ALL.iter().map(|&j| csv_float(c.joints.get(j))));
+        record.extend(c.joints.iter().map(|(_, q)| csv_float(q)));
         w.write_record(&record)?;
     }
     w.into_inner().map_err(|e| e.into_error().into())

@@ -95,6 +95,11 @@ macro_rules! joints {
                 match self { $(Joint::$name => stringify!($name),)* }
             }
 
+            /// The joint named `name` (NAOqi), if any.
+            pub fn from_name(name: &str) -> Option<Joint> {
+                match name { $(stringify!($name) => Some(Joint::$name),)* _ => None }
+            }
+
             /// The calibration parameter that offsets this joint (`q = θ + α`).
             pub fn offset(self) -> Param {
                 match self { $(Joint::$name => Param::$name,)* }
@@ -170,6 +175,16 @@ impl Joint {
 pub struct JointAngles(pub [f64; JOINT_COUNT]);
 
 impl JointAngles {
+    /// The angle of every joint from `f(joint)`, called in [`Joint::ALL`] order.
+    pub fn from_fn(mut f: impl FnMut(Joint) -> f64) -> JointAngles {
+        JointAngles(Joint::ALL.map(&mut f))
+    }
+
+    /// Every joint at `angle`.
+    pub fn fill(angle: f64) -> JointAngles {
+        JointAngles([angle; JOINT_COUNT])
+    }
+
     /// The measured angle of `joint`.
     pub fn get(&self, joint: Joint) -> f64 {
         self.0[joint.index()]
@@ -178,6 +193,54 @@ impl JointAngles {
     /// Sets the measured angle of `joint`.
     pub fn set(&mut self, joint: Joint, angle: f64) {
         self.0[joint.index()] = angle;
+    }
+
+    /// Each joint with its angle, in [`Joint::ALL`] order.
+    pub fn iter(&self) -> impl Iterator<Item = (Joint, f64)> + '_ {
+        Joint::ALL.into_iter().zip(self.0)
+    }
+
+    /// `f` of every angle, called in [`Joint::ALL`] order.
+    pub fn map(&self, f: impl FnMut(f64) -> f64) -> JointAngles {
+        JointAngles(self.0.map(f))
+    }
+
+    /// `f(self, other)` joint by joint, called in [`Joint::ALL`] order.
+    pub fn zip_with(&self, other: &JointAngles, mut f: impl FnMut(f64, f64) -> f64) -> JointAngles {
+        JointAngles::from_fn(|j| f(self.get(j), other.get(j)))
+    }
+
+    /// The posture a fraction `t` of the straight way from `self` to `to`: every joint at
+    /// `a + t·(b − a)` (`self` at `t = 0`; `to` at `t = 1` up to rounding).
+    pub fn lerp(&self, to: &JointAngles, t: f64) -> JointAngles {
+        self.zip_with(to, |a, b| a + t * (b - a))
+    }
+}
+
+impl std::ops::Add for JointAngles {
+    type Output = JointAngles;
+
+    /// Joint by joint `self + other`.
+    fn add(self, other: JointAngles) -> JointAngles {
+        self.zip_with(&other, |a, b| a + b)
+    }
+}
+
+impl std::ops::Sub for JointAngles {
+    type Output = JointAngles;
+
+    /// Joint by joint `self − other`.
+    fn sub(self, other: JointAngles) -> JointAngles {
+        self.zip_with(&other, |a, b| a - b)
+    }
+}
+
+impl std::ops::Mul<f64> for JointAngles {
+    type Output = JointAngles;
+
+    /// Every angle times `factor`.
+    fn mul(self, factor: f64) -> JointAngles {
+        self.map(|a| a * factor)
     }
 }
 
@@ -341,5 +404,53 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn joint_angles_map_zip_and_lerp_joint_by_joint_in_order() {
+        let mut order = Vec::new();
+        let a = JointAngles::from_fn(|j| {
+            order.push(j);
+            0.1 * j.index() as f64 - 0.5
+        });
+        assert_eq!(order, Joint::ALL);
+        assert_eq!(a.get(Joint::HeadPitch), 0.1 - 0.5);
+        let b = a.map(|q| -2.0 * q + 0.3);
+        let sum = a + b;
+        let difference = b - a;
+        let scaled = a * 3.0;
+        for (j, q) in a.iter() {
+            assert_eq!(b.get(j), -2.0 * q + 0.3);
+            assert_eq!(sum.get(j), q + b.get(j));
+            assert_eq!(difference.get(j), b.get(j) - q);
+            assert_eq!(scaled.get(j), q * 3.0);
+            assert_eq!(a.zip_with(&b, f64::max).get(j), q.max(b.get(j)));
+        }
+        // lerp is a + t·(b − a), bit for bit: the moves of capture and the collision
+        // checks of the planner interpolate the same postures.
+        for t in [0.0, 0.25, 1.0 / 3.0, 0.9] {
+            let between = a.lerp(&b, t);
+            for (j, q) in a.iter() {
+                assert_eq!(between.get(j).to_bits(), (q + t * (b.get(j) - q)).to_bits());
+            }
+        }
+        assert_eq!(a.lerp(&b, 0.0), a);
+        assert!((a.lerp(&b, 1.0) - b).iter().all(|(_, d)| d.abs() < 1e-15));
+        assert_eq!(
+            JointAngles::fill(0.5)
+                .iter()
+                .filter(|&(_, q)| q == 0.5)
+                .count(),
+            14
+        );
+    }
+
+    #[test]
+    fn joints_are_found_by_name() {
+        for j in Joint::ALL {
+            assert_eq!(Joint::from_name(j.name()), Some(j));
+        }
+        assert_eq!(Joint::from_name("LKnee"), None);
+        assert_eq!(Joint::from_name("lkneepitch"), None);
     }
 }

@@ -478,9 +478,9 @@ pub fn random_stances(
 pub fn render_csv(captures: &[PlannedCapture]) -> Vec<u8> {
     let cameras = captures.iter().any(|c| c.camera != CameraId::Lower);
     let mut out = String::from("capture,board");
-    for j in Joint::ALL {
+    for name in Joint::ALL.map(Joint::name) {
         out.push(',');
-        out.push_str(j.name());
+        out.push_str(name);
     }
     if cameras {
         out.push_str(",camera");
@@ -488,9 +488,9 @@ pub fn render_csv(captures: &[PlannedCapture]) -> Vec<u8> {
     out.push('\n');
     for (id, c) in captures.iter().enumerate() {
         out.push_str(&format!("{id},{}", c.side.name()));
-        for j in Joint::ALL {
+        for (_, q) in c.joints.iter() {
             // Shortest text that reads back to the same number.
-            out.push_str(&format!(",{}", c.joints.get(j)));
+            out.push_str(&format!(",{q}"));
         }
         if cameras {
             out.push(',');

@@ -51,14 +51,7 @@ pub fn tucked(rest: &JointAngles) -> JointAngles {
 /// must have parted by the end.
 pub fn move_is_free(model: &Model, body: &BodyModel, from: &JointAngles, to: &JointAngles) -> bool {
     let n = steps(from, to);
-    let at = |k: usize| {
-        let t = k as f64 / n as f64;
-        let mut a = *from;
-        for j in Joint::ALL {
-            a.set(j, from.get(j) + t * (to.get(j) - from.get(j)));
-        }
-        a
-    };
+    let at = |k: usize| from.lerp(to, k as f64 / n as f64);
     let free = |a: &JointAngles| collision::collision(&model.robot, body, a).is_none();
     if free(from) {
         // The common case: the end first, then the points between in coarse-to-fine order,
@@ -95,9 +88,9 @@ pub fn move_is_free(model: &Model, body: &BodyModel, from: &JointAngles, to: &Jo
 
 /// The number of checked steps of the move from `from` to `to` (at least 1).
 fn steps(from: &JointAngles, to: &JointAngles) -> usize {
-    Joint::ALL
+    (*to - *from)
         .iter()
-        .map(|&j| ((to.get(j) - from.get(j)).abs() / CHECK_STEP).ceil() as usize)
+        .map(|(_, d)| (d.abs() / CHECK_STEP).ceil() as usize)
         .max()
         .unwrap_or(0)
         .max(1)
@@ -106,9 +99,9 @@ fn steps(from: &JointAngles, to: &JointAngles) -> usize {
 /// Whether `joints` may be commanded: every joint within its limits, HeadPitch within its
 /// HeadYaw-dependent range, one HipYawPitch angle (one motor).
 fn within_limits(joints: &JointAngles) -> bool {
-    let inside = Joint::ALL.iter().all(|&j| {
+    let inside = joints.iter().all(|(j, q)| {
         let (lo, hi) = j.limits();
-        (lo..=hi).contains(&joints.get(j))
+        (lo..=hi).contains(&q)
     });
     let (lo, hi) = head_pitch_limits(joints.get(Joint::HeadYaw));
     inside
@@ -204,24 +197,24 @@ impl Default for Timing {
 impl Timing {
     /// Time of the straight move from `a` to `b` (s), without settling.
     pub fn motion(&self, a: &JointAngles, b: &JointAngles) -> f64 {
-        Joint::ALL
+        (*a - *b)
             .iter()
-            .map(|&j| {
+            .map(|(j, d)| {
                 let speed = if j.leg_index().is_some() {
                     self.leg_speed
                 } else {
                     self.head_speed
                 };
-                (a.get(j) - b.get(j)).abs() / speed
+                d.abs() / speed
             })
             .fold(0.0, f64::max)
     }
 
     /// Time of the straight move from `a` to `b` and the wait for it to settle (s).
     pub fn settled(&self, a: &JointAngles, b: &JointAngles) -> f64 {
-        let legs_move = Joint::ALL
+        let legs_move = (*a - *b)
             .iter()
-            .any(|&j| j.leg_index().is_some() && (a.get(j) - b.get(j)).abs() > 1e-9);
+            .any(|(j, d)| j.leg_index().is_some() && d.abs() > 1e-9);
         let settle = if legs_move {
             self.leg_settle
         } else {

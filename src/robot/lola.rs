@@ -87,13 +87,19 @@ pub fn index(joint: Joint) -> usize {
     }
 }
 
-/// The measured joints' angles from one of LoLA's 25-value arrays.
-pub fn to_joint_angles(values: &[f32; JOINTS]) -> JointAngles {
-    let mut out = JointAngles::default();
-    for j in Joint::ALL {
-        out.set(j, values[index(j)] as f64);
+/// The measured joints' values from one of LoLA's 25-value arrays (both HipYawPitch
+/// angles from the one motor).
+pub fn to_joint_angles<T: Copy + Into<f64>>(values: &[T; JOINTS]) -> JointAngles {
+    JointAngles::from_fn(|j| values[index(j)].into())
+}
+
+/// `base`, one value per LoLA joint, with `f` of each measured joint's value of `joints` in
+/// its place (the one HipYawPitch motor gets RHipYawPitch's, the last written).
+pub fn put<T>(mut base: [T; JOINTS], joints: &JointAngles, f: impl Fn(f64) -> T) -> [T; JOINTS] {
+    for (j, q) in joints.iter() {
+        base[index(j)] = f(q);
     }
-    out
+    base
 }
 
 /// A LoLA sensor message as the robot writes it, every key of the V6 (HULKs `lola.rs`

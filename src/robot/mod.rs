@@ -11,4 +11,6 @@ pub mod plausible;
 pub mod safety;
 pub mod simulated;
 
-pub use capture::{CaptureError, CaptureOptions, DatasetOut, End, Event, PlanRow, Report};
+pub use capture::{
+    CaptureError, CaptureOptions, DatasetOut, End, Event, PlanRow, Report, Session, Start,
+};

@@ -116,21 +116,17 @@ impl MotionOptions {
     /// `to`: all joints interpolated together, each stepping at most its speed limit per
     /// cycle.
     pub fn path(&self, from: &JointAngles, to: &JointAngles) -> Vec<JointAngles> {
-        let steps = Joint::ALL
+        let steps = (*to - *from)
             .iter()
-            .map(|&j| ((to.get(j) - from.get(j)).abs() / (self.speed(j) * CYCLE_S)).ceil())
+            .map(|(j, d)| (d.abs() / (self.speed(j) * CYCLE_S)).ceil())
             .fold(0.0, f64::max) as usize;
         (1..=steps)
             .map(|k| {
-                let t = k as f64 / steps as f64;
-                let mut a = *from;
-                for j in Joint::ALL {
-                    a.set(j, from.get(j) + t * (to.get(j) - from.get(j)));
-                }
                 if k == steps {
-                    a = *to;
+                    *to
+                } else {
+                    from.lerp(to, k as f64 / steps as f64)
                 }
-                a
             })
             .collect()
     }
@@ -190,9 +186,9 @@ impl Settle {
         command: &JointAngles,
         reading: &JointAngles,
     ) -> SettleState {
-        let (worst, gap) = Joint::ALL
+        let (worst, gap) = (*reading - *command)
             .iter()
-            .map(|&j| (j, (reading.get(j) - command.get(j)).abs()))
+            .map(|(j, d)| (j, d.abs()))
             .fold((Joint::HeadYaw, 0.0), |a, b| if b.1 > a.1 { b } else { a });
         if gap > options.obstruction {
             self.far_cycles += 1;
@@ -211,16 +207,15 @@ impl Settle {
         if self.window.len() < options.settle_cycles as usize || self.far_cycles > 0 {
             return SettleState::Moving;
         }
-        let steady = Joint::ALL.iter().all(|&j| {
-            let (lo, hi) = self
-                .window
-                .iter()
-                .map(|r| r.get(j))
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
-                    (lo.min(x), hi.max(x))
-                });
-            hi - lo <= options.settle_threshold
+        let lo = (self.window.iter()).fold(JointAngles::fill(f64::INFINITY), |lo, r| {
+            lo.zip_with(r, f64::min)
         });
+        let hi = (self.window.iter()).fold(JointAngles::fill(f64::NEG_INFINITY), |hi, r| {
+            hi.zip_with(r, f64::max)
+        });
+        let steady = (hi - lo)
+            .iter()
+            .all(|(_, spread)| spread <= options.settle_threshold);
         if steady {
             SettleState::Settled
         } else {
@@ -238,21 +233,20 @@ impl Settle {
 #[derive(Debug, Clone, Default)]
 pub struct Readings {
     count: u32,
-    mean: [f64; crate::model::JOINT_COUNT],
-    m2: [f64; crate::model::JOINT_COUNT],
+    mean: JointAngles,
+    /// Sum of squared deviations from the mean, of every joint.
+    m2: JointAngles,
 }
 
 impl Readings {
     /// Adds one cycle's readings.
     pub fn push(&mut self, reading: &JointAngles) {
         self.count += 1;
-        for j in Joint::ALL {
-            let k = j.index();
-            let x = reading.get(j);
-            let d = x - self.mean[k];
-            self.mean[k] += d / self.count as f64;
-            self.m2[k] += d * (x - self.mean[k]);
-        }
+        let n = self.count as f64;
+        let d = *reading - self.mean;
+        self.mean = self.mean.zip_with(&d, |mean, d| mean + d / n);
+        let d_after = *reading - self.mean;
+        self.m2 = self.m2 + d.zip_with(&d_after, |d, e| d * e);
     }
 
     /// Readings added.
@@ -262,11 +256,7 @@ impl Readings {
 
     /// The mean of every joint (rad).
     pub fn mean(&self) -> JointAngles {
-        let mut out = JointAngles::default();
-        for j in Joint::ALL {
-            out.set(j, self.mean[j.index()]);
-        }
-        out
+        self.mean
     }
 
     /// The largest standard deviation of a joint's readings (rad).
@@ -276,7 +266,7 @@ impl Readings {
         }
         self.m2
             .iter()
-            .map(|m| (m / (self.count - 1) as f64).sqrt())
+            .map(|(_, m)| (m / (self.count - 1) as f64).sqrt())
             .fold(0.0, f64::max)
     }
 }

@@ -90,10 +90,8 @@ impl ReadingFault {
         let what = match self.why {
             Implausible::NotFinite => format!("{} reads {}", self.joint, self.value),
             Implausible::OutOfRange => {
-                let (lo, hi) = Joint::ALL
-                    .into_iter()
-                    .find(|j| j.name() == self.joint)
-                    .map_or((f64::NAN, f64::NAN), Joint::limits);
+                let (lo, hi) =
+                    Joint::from_name(self.joint).map_or((f64::NAN, f64::NAN), Joint::limits);
                 format!(
                     "{} reads {deg:.1}°, outside its range {:.1}° … {:.1}°",
                     self.joint,
@@ -175,11 +173,11 @@ impl Believed {
             }
         }
         let believed = first.joints();
-        for j in Joint::ALL {
-            if let Err(why) = in_range(&limits, j, believed.get(j)) {
+        for (j, value) in believed.iter() {
+            if let Err(why) = in_range(&limits, j, value) {
                 return Err(ReadingFault {
                     joint: j.name(),
-                    value: believed.get(j),
+                    value,
                     why,
                     repeated: false,
                 });
@@ -203,9 +201,8 @@ impl Believed {
         self.cycle += 1;
         self.all = true;
         let mut fault = None;
-        for j in Joint::ALL {
+        for (j, value) in message.joints().iter() {
             let k = j.index();
-            let value = message.position[lola::index(j)] as f64;
             let from = self.believed.get(j);
             let most = self.limits.max_step(j) * (self.since[k] + 1) as f64;
             let verdict = in_range(&self.limits, j, value).and_then(|()| {

@@ -93,26 +93,24 @@ impl SafetyLimits {
 
     /// The hottest head or leg motor and its temperature (°C).
     pub fn hottest(message: &SensorMessage) -> (Joint, f64) {
-        Joint::ALL
-            .iter()
-            .map(|&j| (j, message.temperature[lola::index(j)] as f64))
-            .fold((Joint::HeadYaw, f64::NEG_INFINITY), |a, b| {
+        lola::to_joint_angles(&message.temperature).iter().fold(
+            (Joint::HeadYaw, f64::NEG_INFINITY),
+            |a, b| {
                 if b.1 > a.1 { b } else { a }
-            })
+            },
+        )
     }
 }
 
 impl Watch {
     /// Checks one message against `limits`.
     pub fn check(&mut self, limits: &SafetyLimits, message: &SensorMessage) -> Verdict {
-        for j in Joint::ALL {
-            let k = lola::index(j);
-            for (what, value) in [
-                ("temperature", message.temperature[k]),
-                ("current", message.current[k]),
-            ] {
+        let temperatures = lola::to_joint_angles(&message.temperature);
+        let currents = lola::to_joint_angles(&message.current);
+        for ((j, t), (_, a)) in temperatures.iter().zip(currents.iter()) {
+            for (what, value) in [("temperature", t), ("current", a)] {
                 if !value.is_finite() {
-                    return Verdict::Unreadable(j, what, value as f64);
+                    return Verdict::Unreadable(j, what, value);
                 }
             }
         }
@@ -120,12 +118,12 @@ impl Watch {
         if temperature >= limits.stop_temperature {
             return Verdict::Overheated(joint, temperature);
         }
-        let (cjoint, current) = Joint::ALL
-            .iter()
-            .map(|&j| (j, (message.current[lola::index(j)] as f64).abs()))
-            .fold((Joint::HeadYaw, f64::NEG_INFINITY), |a, b| {
+        let (cjoint, current) = currents.iter().map(|(j, a)| (j, a.abs())).fold(
+            (Joint::HeadYaw, f64::NEG_INFINITY),
+            |a, b| {
                 if b.1 > a.1 { b } else { a }
-            });
+            },
+        );
         if current > limits.max_current {
             self.over_current += 1;
             if self.over_current >= limits.current_cycles {

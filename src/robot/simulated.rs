@@ -167,10 +167,7 @@ struct Body {
 
 impl Body {
     fn new(options: &RobotOptions) -> Body {
-        let mut pos = [0.0; JOINTS];
-        for j in Joint::ALL {
-            pos[lola::index(j)] = options.start.get(j);
-        }
+        let mut pos = lola::put([0.0; JOINTS], &options.start, |q| q);
         // Arms lying beside the body.
         pos[2] = 1.5;
         pos[18] = 1.5;
@@ -214,11 +211,7 @@ impl Body {
     }
 
     fn joints(&self) -> JointAngles {
-        let mut out = JointAngles::default();
-        for j in Joint::ALL {
-            out.set(j, self.pos[lola::index(j)]);
-        }
-        out
+        lola::to_joint_angles(&self.pos)
     }
 
     fn reading(&self, k: usize) -> f32 {
@@ -393,6 +386,25 @@ enum Session {
     Dropped,
 }
 
+/// A socket listening at `socket` that appears there only once it listens (bound under a
+/// name of its own beside it, then renamed): a client that sees the path never finds it
+/// refusing. A file already at `socket` is refused, as binding there would be.
+fn listen(socket: &Path) -> std::io::Result<UnixListener> {
+    let name = socket.file_name().unwrap_or_default().to_string_lossy();
+    let bound = socket.with_file_name(format!(".{name}.{}.binding", std::process::id()));
+    let listener = UnixListener::bind(&bound)?;
+    let placed = if socket.symlink_metadata().is_ok() {
+        Err(std::io::Error::from(std::io::ErrorKind::AddrInUse))
+    } else {
+        std::fs::rename(&bound, socket)
+    };
+    if let Err(e) = placed {
+        let _ = std::fs::remove_file(&bound);
+        return Err(e);
+    }
+    Ok(listener)
+}
+
 /// Serves LoLA at `socket` until the clients are served (or a dropped-connection fault);
 /// returns the cycles run.
 pub fn serve(socket: &Path, options: &RobotOptions) -> Result<u64, RobotError> {
@@ -402,7 +414,7 @@ pub fn serve(socket: &Path, options: &RobotOptions) -> Result<u64, RobotError> {
             let _ = std::fs::remove_file(socket);
         }
     }
-    let listener = UnixListener::bind(socket).map_err(|source| RobotError::Bind {
+    let listener = listen(socket).map_err(|source| RobotError::Bind {
         path: socket.to_path_buf(),
         source,
     })?;
@@ -511,9 +523,7 @@ fn session(
         }
         body.step(&options.model, motors);
         let joints = body.joints();
-        let moved = Joint::ALL
-            .iter()
-            .any(|&j| (joints.get(j) - last_state.get(j)).abs() > 1e-6);
+        let moved = (joints - last_state).iter().any(|(_, d)| d.abs() > 1e-6);
         if moved || body.cycle.is_multiple_of(50) {
             write_state(options, body)?;
             last_state = joints;
@@ -584,10 +594,7 @@ pub fn snap(
         camera: model.intrinsics_at(camera, &truth),
         ..model
     };
-    let mut joints = JointAngles::default();
-    for (k, j) in Joint::ALL.iter().enumerate() {
-        joints.set(*j, state.joints[k]);
-    }
+    let joints = JointAngles::from_fn(|j| state.joints[j.index()]);
     let (cx, cy) = (
         model.camera.width as f64 / 2.0,
         model.camera.height as f64 / 2.0,
@@ -745,5 +752,23 @@ mod tests {
             lola::encode(&body.frame()).len(),
             lola::SENSOR_MESSAGE_BYTES
         );
+    }
+
+    #[test]
+    fn the_socket_appears_listening_and_never_replaces_a_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let socket = dir.path().join("lola.sock");
+        let listener = listen(&socket).unwrap();
+        // At once connectable: it was listening before it had its name.
+        let client = std::os::unix::net::UnixStream::connect(&socket).unwrap();
+        assert!(listener.accept().is_ok());
+        drop(client);
+        let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(names.len(), 1, "only the socket: {names:?}");
+        let file = dir.path().join("notes.txt");
+        std::fs::write(&file, "kept").unwrap();
+        assert!(listen(&file).is_err());
+        assert_eq!(std::fs::read_to_string(&file).unwrap(), "kept");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
     }
 }

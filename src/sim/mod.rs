@@ -568,10 +568,7 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
         let camera = *camera;
         for logged in &stance.postures {
             let id = captures.len() as u64;
-            let mut actual = *logged;
-            for j in Joint::ALL {
-                actual.set(j, logged.get(j) + joint.sample(&mut noise_rng));
-            }
+            let actual = logged.map(|q| q + joint.sample(&mut noise_rng));
             let chains = model.chains_for(camera, stance.side, &actual);
             let projected = model.project(&chains, &truth, &vertices);
             for (v, uv) in vertices.iter().zip(projected) {

@@ -1,0 +1,307 @@
+//! The robot, cycle by cycle: every sensor message is answered with the command, its
+//! readings are checked (plausible, temperatures, currents) and the stop flag is watched.
+//! On the cycle stand the stiffness ramps, the bounded-speed moves that wait for the
+//! joints to settle, the rest that lets the motors cool, the way out (rest, then the
+//! ramp-down) and the blind ramp-down when LoLA's stream cannot be trusted.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use crate::model::{Joint, JointAngles};
+use crate::robot::lola::{self, ActuatorMessage, JOINTS, Link, LolaError, SensorMessage};
+use crate::robot::motion::{Settle, SettleState};
+use crate::robot::plausible::Believed;
+use crate::robot::safety::{SafetyLimits, Verdict, Watch};
+
+use super::{CaptureError, CaptureOptions, End};
+
+/// Why a stance or the run halts.
+#[derive(Debug)]
+pub(super) enum Halt {
+    /// LoLA failed: closed, silent or a message that does not parse.
+    Link(LolaError),
+    /// A fault: a safety limit, an implausible reading, the camera, the disk.
+    Fault(CaptureError),
+    /// The stop flag was set (a signal).
+    Interrupted,
+}
+
+impl From<LolaError> for Halt {
+    fn from(e: LolaError) -> Self {
+        Halt::Link(e)
+    }
+}
+
+/// How a move ended that did not settle at its target.
+#[derive(Debug)]
+pub(super) enum Unsettled {
+    /// A head or leg motor is hot (the joint, °C): the legs are to rest until it cools.
+    Hot(Joint, f64),
+    /// A joint was obstructed or the joints did not settle (why); the command holds the
+    /// joints where they are.
+    Abandoned(String),
+}
+
+/// The robot behind the link: one actuator message per sensor message.
+pub(super) struct Drive<'a> {
+    link: &'a mut dyn Link,
+    options: &'a CaptureOptions,
+    stop: &'a AtomicBool,
+    watch: Watch,
+    last: SensorMessage,
+    /// The readings believed ([`Believed`]).
+    believed: Believed,
+    /// Positions of the joints naocalib does not move (arms, hands), as first read.
+    base: [f32; JOINTS],
+    /// The commanded posture.
+    command: JointAngles,
+    /// The commanded stiffness of each motor (LoLA's order).
+    stiffness: [f64; JOINTS],
+    /// LoLA cycles so far.
+    pub(super) cycles: u64,
+    hot: Option<(Joint, f64)>,
+    /// On the way out: only a broken link stops the rest and ramp-down.
+    finishing: bool,
+    /// Whether the ramp-up ended and the robot was moved.
+    moved: bool,
+}
+
+impl<'a> Drive<'a> {
+    /// Takes over the robot from LoLA's first message: its readings must be plausible
+    /// ([`Believed::start`]); the command holds the posture they report, at the stiffness
+    /// the robot reports. Nothing is sent yet.
+    pub(super) fn start(
+        link: &'a mut dyn Link,
+        options: &'a CaptureOptions,
+        stop: &'a AtomicBool,
+    ) -> Result<Drive<'a>, CaptureError> {
+        let first = link.receive()?;
+        let believed =
+            Believed::start(options.safety.readings, &first).map_err(CaptureError::FirstReading)?;
+        Ok(Drive {
+            link,
+            options,
+            stop,
+            watch: Watch::default(),
+            base: first.position,
+            command: believed.readings(),
+            believed,
+            stiffness: first.stiffness.map(f64::from),
+            last: first,
+            cycles: 0,
+            hot: None,
+            finishing: false,
+            moved: false,
+        })
+    }
+
+    /// The command as LoLA takes it: the joints naocalib does not move where they were
+    /// first read.
+    fn message(&self) -> ActuatorMessage {
+        ActuatorMessage {
+            position: lola::put(self.base, &self.command, |q| q as f32),
+            stiffness: self.stiffness.map(|s| s as f32),
+        }
+    }
+
+    /// Answers the last message with the command and reads the next one.
+    pub(super) fn cycle(&mut self) -> Result<(), Halt> {
+        self.link.send(&self.message())?;
+        self.last = self.link.receive()?;
+        self.cycles += 1;
+        let fault = self.believed.check(&self.last);
+        if self.finishing {
+            return Ok(());
+        }
+        if let Some(fault) = fault {
+            return Err(Halt::Fault(CaptureError::Reading(fault)));
+        }
+        match self.watch.check(&self.options.safety, &self.last) {
+            Verdict::Fine => self.hot = None,
+            Verdict::Hot(j, t) => self.hot = Some((j, t)),
+            Verdict::Overheated(j, t) => {
+                return Err(Halt::Fault(CaptureError::Safety(format!(
+                    "{} reached {t:.1} °C (limit {:.0} °C)",
+                    j.name(),
+                    self.options.safety.stop_temperature
+                ))));
+            }
+            Verdict::Overcurrent(j, a) => {
+                return Err(Halt::Fault(CaptureError::Safety(format!(
+                    "{} drew {a:.2} A for {} cycles (limit {:.2} A)",
+                    j.name(),
+                    self.options.safety.current_cycles,
+                    self.options.safety.max_current
+                ))));
+            }
+            Verdict::Unreadable(j, what, value) => {
+                return Err(Halt::Fault(CaptureError::Safety(format!(
+                    "{} reports a {what} of {value}: its limits cannot be watched",
+                    j.name()
+                ))));
+            }
+        }
+        if self.stop.load(Ordering::Relaxed) {
+            return Err(Halt::Interrupted);
+        }
+        Ok(())
+    }
+
+    /// The commanded posture.
+    pub(super) fn command(&self) -> &JointAngles {
+        &self.command
+    }
+
+    /// The believed readings; a joint no longer believed reads as commanded (so that
+    /// nothing follows it on the way out).
+    pub(super) fn reading(&self) -> JointAngles {
+        let readings = self.believed.readings();
+        JointAngles::from_fn(|j| {
+            if self.believed.lost(j) {
+                self.command.get(j)
+            } else {
+                readings.get(j)
+            }
+        })
+    }
+
+    /// Whether every joint's reading of the last cycle was believed (a cycle with a
+    /// glitch is left out of a capture's readings).
+    pub(super) fn all_believed(&self) -> bool {
+        self.believed.all_believed()
+    }
+
+    /// Ramps each motor's stiffness from what the robot reported at the start to the
+    /// measuring stiffness (head and legs) or 0 (arms, hands), holding the posture measured
+    /// at the start: a leg that sags meanwhile does not drag the command along. The robot
+    /// counts as moved once the ramp is done.
+    pub(super) fn ramp_up(&mut self) -> Result<(), Halt> {
+        let m = self.options.motion;
+        let from = self.stiffness;
+        let to = lola::put([0.0; JOINTS], &JointAngles::fill(m.stiffness), |s| s);
+        for k in 0..=m.ramp_cycles {
+            self.stiffness = std::array::from_fn(|i| m.ramp(from[i], to[i], k));
+            self.cycle()?;
+        }
+        self.moved = true;
+        Ok(())
+    }
+
+    /// Ramps the stiffness down to 0, holding the command.
+    fn ramp_down(&mut self) -> Result<(), Halt> {
+        let m = self.options.motion;
+        let from = self.stiffness;
+        for k in 0..m.ramp_cycles {
+            self.stiffness = from.map(|s| m.ramp_down(s, k));
+            self.cycle()?;
+        }
+        Ok(())
+    }
+
+    /// Moves to `target` at bounded speed, then waits for the readings to settle.
+    /// `Ok(None)` when settled; else why not, after which the command holds the joints
+    /// where they are. A hot motor ends the move only when `watch_hot`.
+    pub(super) fn move_to(
+        &mut self,
+        target: &JointAngles,
+        watch_hot: bool,
+    ) -> Result<Option<Unsettled>, Halt> {
+        let m = self.options.motion;
+        let mut settle = Settle::new();
+        let path = m.path(&self.command, target);
+        let timeout = m.settle_timeout_cycles as usize;
+        for k in 0..path.len() + timeout {
+            self.command = *path.get(k).unwrap_or(target);
+            self.cycle()?;
+            if watch_hot && let Some((j, t)) = self.hot {
+                return Ok(Some(Unsettled::Hot(j, t)));
+            }
+            let reading = self.reading();
+            match settle.push(&m, &self.command, &reading) {
+                SettleState::Settled if k + 1 >= path.len() => return Ok(None),
+                SettleState::Obstructed(j, gap) => {
+                    // Stop pushing against what is in the way: the command comes back to
+                    // where the joints are, at bounded speed.
+                    for p in m.path(&self.command, &reading) {
+                        self.command = p;
+                        self.cycle()?;
+                    }
+                    return Ok(Some(Unsettled::Abandoned(format!(
+                        "{} stayed {:.1}° from its command for {} cycles (obstructed?)",
+                        j.name(),
+                        gap.to_degrees(),
+                        m.obstruction_cycles
+                    ))));
+                }
+                _ => {}
+            }
+        }
+        Ok(Some(Unsettled::Abandoned(format!(
+            "the joints did not settle within {} cycles",
+            timeout
+        ))))
+    }
+
+    /// Moves to the rest posture (a hot motor does not stop the way there).
+    pub(super) fn rest(&mut self) -> Result<(), Halt> {
+        let rest = self.options.rest;
+        self.move_to(&rest, false).map(|_| ())
+    }
+
+    /// Rests until the head and leg motors are at or below the resume temperature.
+    pub(super) fn cool(&mut self) -> Result<(), Halt> {
+        let limits = self.options.safety;
+        self.rest()?;
+        for _ in 0..limits.max_pause_cycles {
+            self.cycle()?;
+            if SafetyLimits::hottest(&self.last).1 <= limits.resume_temperature {
+                return Ok(());
+            }
+        }
+        let (j, t) = SafetyLimits::hottest(&self.last);
+        Err(Halt::Fault(CaptureError::Safety(format!(
+            "{} still at {t:.1} °C after {} cycles at rest",
+            j.name(),
+            limits.max_pause_cycles
+        ))))
+    }
+
+    /// The way out of a run that ends with `end`: back to rest (unless the robot never
+    /// moved: stopped during the ramp-up, it ramps down where it lies), then the stiffness
+    /// ramp-down; only a broken link stops them. After a message that did not parse the
+    /// ramp-down is sent blind.
+    pub(super) fn finish(&mut self, end: &End) {
+        self.finishing = true;
+        match end {
+            End::Stopped(CaptureError::Lola(LolaError::Parse(_))) => self.blind_ramp_down(),
+            End::Stopped(CaptureError::Lola(_)) => {}
+            _ => {
+                let back =
+                    if self.moved { self.rest() } else { Ok(()) }.and_then(|()| self.ramp_down());
+                if let Err(Halt::Link(LolaError::Parse(_))) = back {
+                    self.blind_ramp_down();
+                }
+            }
+        }
+    }
+
+    /// Sends a stiffness ramp-down without reading (after a message that did not parse,
+    /// the stream cannot be trusted): one message per 12 ms.
+    fn blind_ramp_down(&mut self) {
+        let options = &self.options.motion;
+        let mut message = self.message();
+        let from = message.stiffness;
+        for k in 0..options.ramp_cycles {
+            let f = options.ramp_down(1.0, k) as f32;
+            for (s, s0) in message.stiffness.iter_mut().zip(from) {
+                *s = s0 * f;
+            }
+            self.link.drain();
+            if self.link.send(&message).is_err() {
+                return;
+            }
+            std::thread::sleep(lola::CYCLE);
+        }
+        std::thread::sleep(lola::CYCLE);
+        self.link.drain();
+    }
+}
