@@ -20,9 +20,9 @@ pub struct ExportArgs {
     /// A result JSON (`naocalib solve --json`, a run file of `naocalib batch --out`) or a
     /// calibration TOML/JSON written by naocalib.
     input: PathBuf,
-    /// Write one file; the format comes from --format or the name (*.toml, *.json,
-    /// *camera*.cfg, *joint*.cfg). May be given several times.
-    #[arg(long, value_name = "FILE")]
+    /// Write one file; the format comes from --format or the name. May be given several
+    /// times.
+    #[arg(long, value_name = "FILE", help = out_help())]
     out: Vec<PathBuf>,
     /// Format of the --out / --update files (docs/EXPORTS.md).
     #[arg(long, value_name = "FORMAT", long_help = format_help())]
@@ -64,6 +64,15 @@ fn format_help() -> String {
     format!(
         "Format of the --out / --update files (docs/EXPORTS.md):\n{}",
         export::help()
+    )
+}
+
+/// The `--out` help, with the file names that imply a format ([`export::name_patterns`]).
+fn out_help() -> String {
+    format!(
+        "Write one file; the format comes from --format or the name ({}). May be given \
+         several times",
+        export::name_patterns()
     )
 }
 

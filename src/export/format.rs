@@ -15,8 +15,13 @@ use super::{Calibration, ExportError, FORMATS, Imported, parse_error, source};
 ///
 /// Each format is a unit struct in its team's module, beside the team's units, axes, sign
 /// conventions and the citations of the team's code; [`FORMATS`] lists them. A team format
-/// implements everything but [`Format::robot`]; naocalib's own formats keep the default
-/// [`Format::read`] and [`Format::update`], which refuse.
+/// implements [`Format::read`] and [`Format::update`] too (and [`Format::joints`],
+/// [`Format::file_names`] where they apply); naocalib's own formats answer `false` to
+/// [`Format::robot`] and keep the default `read` and `update`, which refuse.
+///
+/// Adding a format: its unit struct and `impl Format` in its team's module, one line in
+/// [`FORMATS`], and `NAOCALIB_BLESS=1 cargo test --test it docs_table` to write its row
+/// into docs/EXPORTS.md's table.
 pub trait Format: Sync {
     /// The `--format` name (`bhuman-camera`).
     fn name(&self) -> &'static str;
@@ -30,9 +35,9 @@ pub trait Format: Sync {
     /// layout: for `naocalib import` without `--format`, and to refuse an update of a file
     /// in another layout. Layouts are told by their keys, never by words in comments.
     fn recognise(&self, code: &str) -> bool;
-    /// The calibration as a fresh file of this format, starting with the header of
-    /// [`super::header`] (and its `NOT A CALIBRATION` marker when
-    /// [`Calibration::problems`] finds any).
+    /// The calibration as a fresh file of this format, starting with naocalib's header
+    /// where the format has comments (what wrote it, the units, the compensation rule) and
+    /// a `NOT A CALIBRATION` marker when [`Calibration::problems`] finds any.
     fn write(&self, cal: &Calibration) -> String;
     /// The values a file of this format holds, as naocalib parameters in report units
     /// ([`Imported`]: joint offsets as α = −stored, camera corrections converted to
@@ -179,6 +184,20 @@ pub fn from_path(path: &Path) -> Option<&'static dyn Format> {
     best.map(|(_, format)| format)
 }
 
+/// The patterns of the file names [`from_path`] knows, for `--out`'s help: `*.toml,
+/// *.json, *camera*.cfg, *joint*.cfg` (an exact name, one team's file, is not a pattern).
+pub fn name_patterns() -> String {
+    let patterns: Vec<String> = FORMATS
+        .iter()
+        .filter_map(|f| match f.file_names() {
+            NameRule::Ending(ending) => Some(format!("*{ending}")),
+            NameRule::Containing { ending, word } => Some(format!("*{word}*{ending}")),
+            NameRule::None | NameRule::Exactly(_) => None,
+        })
+        .collect();
+    patterns.join(", ")
+}
+
 /// The names [`from_path`] knows by their pattern, for the error of a name it does not:
 /// `.toml, .json, cameraCalibration.cfg or jointCalibration.cfg` (each ending, and the
 /// file of each format known by a word in its name).
@@ -227,4 +246,65 @@ pub fn table() -> String {
         ));
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_list_has_each_name_and_file_once() {
+        for (k, f) in FORMATS.iter().enumerate() {
+            assert_eq!(named(f.name()), Some(*f));
+            for g in &FORMATS[..k] {
+                assert_ne!(f.name(), g.name());
+                assert_ne!(f.file(), g.file(), "{} and {}", f.name(), g.name());
+            }
+        }
+        assert_eq!(named("nope"), None);
+    }
+
+    #[test]
+    fn naocalibs_own_formats_are_neither_imported_nor_updated() {
+        let own: Vec<&str> = FORMATS
+            .iter()
+            .filter(|f| !f.robot())
+            .map(|f| f.name())
+            .collect();
+        assert_eq!(own, ["toml", "json"]);
+        let path = Path::new("x.cfg");
+        for f in FORMATS.iter().filter(|f| !f.robot()) {
+            let read = f.read("", path).unwrap_err().to_string();
+            assert_eq!(
+                read,
+                format!("x.cfg: import is not supported for --format {}", f.name())
+            );
+            let cal = Calibration {
+                solver: None,
+                dataset: None,
+                converged: None,
+                rms_px: None,
+                parameters: Vec::new(),
+                angles: None,
+                posture: super::super::Posture::Lying,
+                standing: Default::default(),
+            };
+            let update = f.update("", path, &cal).unwrap_err().to_string();
+            assert!(update.contains("--update is not supported"), "{update}");
+        }
+    }
+
+    #[test]
+    fn the_name_rules_give_the_help_and_the_hint() {
+        assert_eq!(name_patterns(), "*.toml, *.json, *camera*.cfg, *joint*.cfg");
+        assert_eq!(
+            name_hints(),
+            ".toml, .json, cameraCalibration.cfg or jointCalibration.cfg"
+        );
+        assert_eq!(
+            NameRule::Exactly("cameramatrixoffset.cfg").rank("cameramatrixoffset.cfg"),
+            Some(3)
+        );
+        assert_eq!(NameRule::None.rank("a.cfg"), None);
+    }
 }

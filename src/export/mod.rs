@@ -81,7 +81,8 @@ pub use crate::calibration::{
 };
 pub use bhuman::BHUMAN_JOINTS;
 pub use format::{
-    DocRow, Format, NameRule, from_path, help, name_hints, named, names, recognised, table,
+    DocRow, Format, NameRule, from_path, help, name_hints, name_patterns, named, names, recognised,
+    table,
 };
 pub use read::{FileRead, import, import_calibration};
 pub use update::{Unchanged, Updated, update};
