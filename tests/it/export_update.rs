@@ -400,11 +400,16 @@ fn docs_table_and_help_follow_the_format_list() {
     if docs[start..end] != table && std::env::var_os("NAOCALIB_BLESS").is_some() {
         std::fs::write(&path, format!("{}{table}{}", &docs[..start], &docs[end..])).unwrap();
     } else {
-        assert_eq!(
-            docs[start..end],
-            table,
-            "docs/EXPORTS.md's table is the list's (NAOCALIB_BLESS=1 rewrites it)"
-        );
+        let (docs, list): (Vec<&str>, Vec<&str>) =
+            (docs[start..end].lines().collect(), table.lines().collect());
+        for k in 0..docs.len().max(list.len()) {
+            assert_eq!(
+                docs.get(k),
+                list.get(k),
+                "docs/EXPORTS.md's table, row {k}, is not the list's \
+                 (`NAOCALIB_BLESS=1 cargo test --test it docs_table` rewrites it)"
+            );
+        }
     }
     let help = naocalib().args(["export", "--help"]).output().unwrap();
     let help = String::from_utf8_lossy(&help.stdout);
