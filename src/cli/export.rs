@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 
 use naocalib::export::{
-    self, Calibration, ExportError, ExportFormat, Posture, Updated, Withheld, WriteOptions,
+    self, Calibration, ExportError, Format, Posture, Updated, Withheld, WriteOptions,
     read_calibration,
 };
 use naocalib::output::Staged;
@@ -20,9 +20,9 @@ pub struct ExportArgs {
     /// A result JSON (`naocalib solve --json`, a run file of `naocalib batch --out`) or a
     /// calibration TOML/JSON written by naocalib.
     input: PathBuf,
-    /// Write one file; the format comes from --format or the name (*.toml, *.json,
-    /// *camera*.cfg, *joint*.cfg). May be given several times.
-    #[arg(long, value_name = "FILE")]
+    /// Write one file; the format comes from --format or the name. May be given several
+    /// times.
+    #[arg(long, value_name = "FILE", help = out_help())]
     out: Vec<PathBuf>,
     /// Format of the --out / --update files (docs/EXPORTS.md).
     #[arg(long, value_name = "FORMAT", long_help = format_help())]
@@ -59,11 +59,20 @@ enum PostureArg {
     Lying,
 }
 
-/// The `--format` help: one line per registry row.
+/// The `--format` help: one line per format of the list ([`export::FORMATS`]).
 fn format_help() -> String {
     format!(
         "Format of the --out / --update files (docs/EXPORTS.md):\n{}",
-        ExportFormat::help()
+        export::help()
+    )
+}
+
+/// The `--out` help, with the file names that imply a format ([`export::name_patterns`]).
+fn out_help() -> String {
+    format!(
+        "Write one file; the format comes from --format or the name ({}). May be given \
+         several times",
+        export::name_patterns()
     )
 }
 
@@ -71,12 +80,12 @@ fn format_help() -> String {
 fn run_update(
     args: &ExportArgs,
     file: &Path,
-    format: Option<ExportFormat>,
+    format: Option<&'static dyn Format>,
     calibration: &Calibration,
 ) -> Result<ExitCode> {
     let (format, updated) =
         export::update(calibration, format, file, std::slice::from_ref(&args.input))?;
-    if !format.spec().joints {
+    if !format.joints() {
         let head = |p: naocalib::model::Param| calibration.value(p);
         note!(
             "note: the cameras' corrections hold for head offsets HeadYaw {} deg, \
@@ -122,11 +131,12 @@ fn run_update(
     Ok(ExitCode::SUCCESS)
 }
 
-/// The `--format NAME` of `export` and `import`, if given.
-pub(super) fn format_arg(name: Option<&str>) -> Result<Option<ExportFormat>> {
+/// The `--format NAME` of `export` and `import`, if given: a name of the list
+/// ([`export::named`]).
+pub(super) fn format_arg(name: Option<&str>) -> Result<Option<&'static dyn Format>> {
     name.map(|name| {
-        ExportFormat::from_name(name)
-            .with_context(|| format!("unknown --format '{name}' ({})", ExportFormat::names()))
+        export::named(name)
+            .with_context(|| format!("unknown --format '{name}' ({})", export::names()))
     })
     .transpose()
 }
@@ -167,20 +177,16 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
         force: args.force,
         inputs: vec![args.input.clone()],
     };
-    let mut targets: Vec<(ExportFormat, PathBuf)> = Vec::new();
+    let mut targets: Vec<(&'static dyn Format, PathBuf)> = Vec::new();
     for path in &args.out {
-        let format = match format.or_else(|| ExportFormat::from_path(path)) {
+        let format = match format.or_else(|| export::from_path(path)) {
             Some(f) => f,
             None => bail!(ExportError::UnknownFormat { path: path.clone() }),
         };
         targets.push((format, path.clone()));
     }
     if let Some(dir) = &args.dir {
-        targets.extend(
-            ExportFormat::ALL
-                .iter()
-                .map(|(format, _, name)| (*format, dir.join(name))),
-        );
+        targets.extend(export::every_file(dir));
     }
     // The library's outputs policy: every path is checked before any file is written, a
     // result that is not a calibration becomes no robot file without --allow-unconverged,

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use anyhow::{Result, bail};
 use clap::Args;
 
-use naocalib::export::{ExportFormat, WriteOptions, export, import_calibration};
+use naocalib::export::{WriteOptions, export, from_path, import_calibration};
 
 #[derive(Debug, Args)]
 pub struct ImportArgs {
@@ -31,8 +31,8 @@ pub struct ImportArgs {
 pub fn run(args: &ImportArgs) -> Result<ExitCode> {
     let format = super::export::format_arg(args.format.as_deref())?;
     let (calibration, read) = import_calibration(&args.files, format)?;
-    let out_format = match ExportFormat::from_path(&args.out) {
-        Some(f @ (ExportFormat::Toml | ExportFormat::Json)) => f,
+    let out_format = match from_path(&args.out) {
+        Some(f) if !f.robot() => f,
         _ => bail!(
             "{}: --out must be a .toml or .json calibration file",
             args.out.display()

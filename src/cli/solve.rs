@@ -191,7 +191,7 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
 
 /// The `--export` help: the files it writes, one per export format of the registry.
 fn export_dir_help() -> String {
-    let files: Vec<&str> = naocalib::export::REGISTRY.iter().map(|f| f.file).collect();
+    let files: Vec<&str> = naocalib::export::FORMATS.iter().map(|f| f.file()).collect();
     format!(
         "Write the calibration files into this directory, one per export format \
          (docs/EXPORTS.md, `naocalib export --help`): {}",

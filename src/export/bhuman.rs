@@ -22,7 +22,7 @@
 //!
 //! Releases up to 2018 read `lowerCameraRotationCorrection = {x; y; z;}` and
 //! `upperCameraRotationCorrection` instead (CodeRelease 2018, `CameraMatrix.cpp` lines
-//! 302–311; [`bhuman_camera_2016_cfg`], format `bhuman-camera-2016`).
+//! 302–311; [`Camera2016`], format `bhuman-camera-2016`).
 //!
 //! **Joints.** B-Human computes the true angle as the sensor reading minus the stored
 //! offset (`Src/Modules/Infrastructure/JointAnglesProvider/JointAnglesProvider.cpp`, line
@@ -35,6 +35,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::cfg::{self, Kind};
+use super::format::{DocRow, Format, NameRule};
+use super::source::has_key;
 use super::{Calibration, ExportError, Imported, header, num, parse_error};
 use crate::model::{CameraId, Param};
 
@@ -127,77 +129,245 @@ fn camera_notes(s: &mut String, cal: &Calibration) {
     }
 }
 
-/// B-Human's `cameraCalibration.cfg` as its framework reads it since 2019, with the
-/// cameras' rotation corrections (deg): the upper camera's zero unless the calibration
-/// knows it, the body correction zero (not calibrated here; [`update_camera`] keeps a
-/// robot's own).
-pub fn bhuman_camera_cfg(cal: &Calibration) -> String {
-    let mut s = String::new();
-    header(&mut s, "//", cal, UNITS);
-    camera_notes(&mut s, cal);
-    let _ = writeln!(s, "cameraRotationCorrections = {{");
-    let _ = writeln!(s, "  upper = {};", braces(cal, CameraId::Upper));
-    let _ = writeln!(s, "  lower = {};", braces(cal, CameraId::Lower));
-    let _ = writeln!(s, "}};");
-    let _ = writeln!(s, "bodyRotationCorrection = {{x = 0deg; y = 0deg;}};");
-    s
+/// B-Human's `cameraCalibration.cfg` as its framework reads it since 2019 (SPQR's too):
+/// the cameras' rotation corrections (deg), the upper camera's zero unless the calibration
+/// knows it, the body correction zero (not calibrated here; an update keeps a robot's own).
+#[derive(Debug, Clone, Copy)]
+pub struct Camera;
+
+impl Format for Camera {
+    fn name(&self) -> &'static str {
+        "bhuman-camera"
+    }
+    fn file(&self) -> &'static str {
+        "cameraCalibration.cfg"
+    }
+    fn description(&self) -> &'static str {
+        "B-Human (2019+), SPQR: cameraRotationCorrections.{lower,upper} {x; y; z} in deg"
+    }
+    fn doc_row(&self) -> DocRow {
+        DocRow {
+            carries: "`cameraRotationCorrections = { upper = {x; y; z;}; lower = {x; y; z;}; }; \
+                      bodyRotationCorrection = {x; y;};` (B-Human Code Release 2019+, SPQR)",
+            units: "deg",
+            axes: "x = CamRoll, y = CamPitch, z = CamYaw: `rotateY(tilt + y)·rotateX(x)·rotateZ(z)` \
+                   (`CameraMatrix.cpp:309–312`), identical; `upper` the same with UpperCam* and \
+                   `tiltNeckToUpperCamera` 1.2° (`CameraMatrix.cpp:301–304, 311–312`)",
+        }
+    }
+    fn recognise(&self, code: &str) -> bool {
+        has_key(code, "cameraRotationCorrections")
+    }
+    fn write(&self, cal: &Calibration) -> String {
+        let mut s = String::new();
+        header(&mut s, "//", cal, UNITS);
+        camera_notes(&mut s, cal);
+        let _ = writeln!(s, "cameraRotationCorrections = {{");
+        let _ = writeln!(s, "  upper = {};", braces(cal, CameraId::Upper));
+        let _ = writeln!(s, "  lower = {};", braces(cal, CameraId::Lower));
+        let _ = writeln!(s, "}};");
+        let _ = writeln!(s, "bodyRotationCorrection = {{x = 0deg; y = 0deg;}};");
+        s
+    }
+    fn read(&self, text: &str, path: &Path) -> Result<Imported, ExportError> {
+        read_cameras(text, path)
+    }
+    fn update(&self, text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
+        update_cameras(text, path, cal)
+    }
+    fn file_names(&self) -> NameRule {
+        NameRule::Containing {
+            ending: ".cfg",
+            word: "camera",
+        }
+    }
+}
+
+impl Camera {
+    /// `camera`'s correction `[x, y, z]` (deg; roll, pitch, yaw) as a B-Human camera file of
+    /// either layout stores it; `None` when the file has none for it.
+    pub fn stored(
+        text: &str,
+        path: &Path,
+        camera: CameraId,
+    ) -> Result<Option<[f64; 3]>, ExportError> {
+        camera_at(&cfg::parse(text, path)?, path, camera)
+    }
 }
 
 /// B-Human's `cameraCalibration.cfg` as its releases up to 2018 read it
-/// (`lowerCameraRotationCorrection`, `upperCameraRotationCorrection`), same values as
-/// [`bhuman_camera_cfg`].
-pub fn bhuman_camera_2016_cfg(cal: &Calibration) -> String {
-    let mut s = String::new();
-    header(&mut s, "//", cal, UNITS);
-    camera_notes(&mut s, cal);
-    let _ = writeln!(
-        s,
-        "lowerCameraRotationCorrection = {};",
-        braces(cal, CameraId::Lower)
-    );
-    let _ = writeln!(
-        s,
-        "upperCameraRotationCorrection = {};",
-        braces(cal, CameraId::Upper)
-    );
-    let _ = writeln!(s, "bodyRotationCorrection = {{x = 0deg; y = 0deg;}};");
-    s
+/// (`lowerCameraRotationCorrection`, `upperCameraRotationCorrection`), the values of
+/// [`Camera`].
+#[derive(Debug, Clone, Copy)]
+pub struct Camera2016;
+
+impl Format for Camera2016 {
+    fn name(&self) -> &'static str {
+        "bhuman-camera-2016"
+    }
+    fn file(&self) -> &'static str {
+        "bhuman2016/cameraCalibration.cfg"
+    }
+    fn description(&self) -> &'static str {
+        "B-Human up to 2018: lower/upperCameraRotationCorrection {x; y; z} in deg"
+    }
+    fn doc_row(&self) -> DocRow {
+        DocRow {
+            carries: "`lowerCameraRotationCorrection = {x; y; z;}`, \
+                      `upperCameraRotationCorrection` (B-Human up to 2018)",
+            units: "deg",
+            axes: "as `bhuman-camera` (CodeRelease 2018 `CameraMatrix.cpp:302–304, 309–311`)",
+        }
+    }
+    fn recognise(&self, code: &str) -> bool {
+        has_key(code, "lowerCameraRotationCorrection")
+    }
+    fn write(&self, cal: &Calibration) -> String {
+        let mut s = String::new();
+        header(&mut s, "//", cal, UNITS);
+        camera_notes(&mut s, cal);
+        let _ = writeln!(
+            s,
+            "lowerCameraRotationCorrection = {};",
+            braces(cal, CameraId::Lower)
+        );
+        let _ = writeln!(
+            s,
+            "upperCameraRotationCorrection = {};",
+            braces(cal, CameraId::Upper)
+        );
+        let _ = writeln!(s, "bodyRotationCorrection = {{x = 0deg; y = 0deg;}};");
+        s
+    }
+    fn read(&self, text: &str, path: &Path) -> Result<Imported, ExportError> {
+        read_cameras(text, path)
+    }
+    fn update(&self, text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
+        update_cameras(text, path, cal)
+    }
 }
 
-/// B-Human's 2025 `jointCalibration.cfg`: one offset per joint in its joint order
-/// (`waistYaw` after `headPitch`), the value stored being **−α** (deg): B-Human subtracts
-/// it from sensor readings and adds it to requests. Joints not calibrated (arms; the head
-/// unless its offsets were estimated or held at a robot's values; a parameter the data do
-/// not determine) are 0deg.
-pub fn bhuman_joint_cfg(cal: &Calibration) -> String {
-    let mut s = String::new();
-    header(&mut s, "//", cal, UNITS);
-    let _ = writeln!(
-        s,
-        "// Stored = -alpha: B-Human's true angle = sensor - stored; its motor command = request + stored."
-    );
-    let _ = writeln!(s, "// Joints not calibrated are 0deg.");
-    let _ = writeln!(s, "offsets = {{");
-    for (k, (name, param)) in BHUMAN_JOINTS.iter().enumerate() {
-        if k == 2 {
-            let _ = writeln!(s, "  waistYaw = 0deg; // not present on the NAO");
-        }
-        let entry = param.and_then(|p| cal.get(p));
-        let value = param.and_then(|p| cal.robot_value(p)).map_or(0.0, |a| -a);
-        let standing = param
-            .and_then(|p| cal.standing_offset(p))
-            .filter(|_| cal.posture == super::Posture::Standing)
-            .map(|s| format!("; standing alpha = {s} deg"))
-            .unwrap_or_default();
-        let note = match entry {
-            Some(e) if e.is_determined() => format!(" // alpha = {}{standing}", e.describe()),
-            Some(e) => format!(" // {}: written as 0", e.describe()),
-            None => " // not calibrated".to_string(),
-        };
-        let _ = writeln!(s, "  {name} = {};{note}", deg(value));
+/// B-Human's 2025 `jointCalibration.cfg` (SPQR's too): one offset per joint in its joint
+/// order (`waistYaw` after `headPitch`), the value stored being **−α** (deg): B-Human
+/// subtracts it from sensor readings and adds it to requests. Joints not calibrated (arms;
+/// the head unless its offsets were estimated or held at a robot's values; a parameter the
+/// data do not determine) are 0deg.
+#[derive(Debug, Clone, Copy)]
+pub struct Joints;
+
+impl Format for Joints {
+    fn name(&self) -> &'static str {
+        "bhuman-joints"
     }
-    let _ = writeln!(s, "}};");
-    s
+    fn file(&self) -> &'static str {
+        "jointCalibration.cfg"
+    }
+    fn description(&self) -> &'static str {
+        "B-Human, SPQR: offsets {<joint> = -alpha deg; ...}"
+    }
+    fn doc_row(&self) -> DocRow {
+        DocRow {
+            carries: "`offsets = {headYaw = …deg; headPitch; waistYaw; …}` in B-Human's 2025 joint \
+                      order, stored −α",
+            units: "deg",
+            axes: "—",
+        }
+    }
+    fn recognise(&self, code: &str) -> bool {
+        !code.trim_start().starts_with('{')
+            && has_key(code, "offsets")
+            && !code.contains("minAngle")
+    }
+    fn write(&self, cal: &Calibration) -> String {
+        let mut s = String::new();
+        header(&mut s, "//", cal, UNITS);
+        let _ = writeln!(
+            s,
+            "// Stored = -alpha: B-Human's true angle = sensor - stored; its motor command = request + stored."
+        );
+        let _ = writeln!(s, "// Joints not calibrated are 0deg.");
+        let _ = writeln!(s, "offsets = {{");
+        for (k, (name, param)) in BHUMAN_JOINTS.iter().enumerate() {
+            if k == 2 {
+                let _ = writeln!(s, "  waistYaw = 0deg; // not present on the NAO");
+            }
+            let entry = param.and_then(|p| cal.get(p));
+            let value = param.and_then(|p| cal.robot_value(p)).map_or(0.0, |a| -a);
+            let standing = param
+                .and_then(|p| cal.standing_offset(p))
+                .filter(|_| cal.posture == super::Posture::Standing)
+                .map(|s| format!("; standing alpha = {s} deg"))
+                .unwrap_or_default();
+            let note = match entry {
+                Some(e) if e.is_determined() => format!(" // alpha = {}{standing}", e.describe()),
+                Some(e) => format!(" // {}: written as 0", e.describe()),
+                None => " // not calibrated".to_string(),
+            };
+            let _ = writeln!(s, "  {name} = {};{note}", deg(value));
+        }
+        let _ = writeln!(s, "}};");
+        s
+    }
+    /// The joint offsets as naocalib parameters: α = −stored (deg).
+    fn read(&self, text: &str, path: &Path) -> Result<Imported, ExportError> {
+        Ok(Joints::stored(text, path)?
+            .into_iter()
+            .filter_map(|(name, stored)| joint_param(&name).map(|p| (p, 0.0 - stored)))
+            .collect())
+    }
+    /// `text` with the offsets this calibration determined replaced: stored = −α for raw
+    /// angles, stored_old − α for angles already corrected by this file
+    /// ([`Calibration::stored_joint_value`]); every other byte kept.
+    fn update(&self, text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
+        let root = cfg::parse(text, path)?;
+        let mut edits = Vec::new();
+        for (name, param) in BHUMAN_JOINTS {
+            let at = ["offsets", name];
+            let found = angle_at(&root, &at, path, super::JOINT_LIMIT_DEG)?;
+            let Some(param) = param else { continue };
+            if cal.determined_here(param).is_none() {
+                continue;
+            }
+            let (old, start, end) =
+                found.ok_or_else(|| parse_error(path, format!("offsets.{name}: missing")))?;
+            let new = cal.stored_joint_value(param, old, path)?;
+            edits.push((start, end, deg(new)));
+        }
+        Ok(cfg::splice(text, edits))
+    }
+    fn joints(&self) -> bool {
+        true
+    }
+    fn file_names(&self) -> NameRule {
+        NameRule::Containing {
+            ending: ".cfg",
+            word: "joint",
+        }
+    }
+}
+
+impl Joints {
+    /// The offsets as a B-Human `jointCalibration.cfg` stores them: joint name → stored
+    /// value (deg), in the file's order.
+    pub fn stored(text: &str, path: &Path) -> Result<Vec<(String, f64)>, ExportError> {
+        let root = cfg::parse(text, path)?;
+        let offsets = root
+            .get(&["offsets"])
+            .ok_or_else(|| parse_error(path, "no `offsets = {…};`"))?;
+        let Kind::Map(entries) = &offsets.kind else {
+            return Err(parse_error(
+                path,
+                format!("line {}: offsets: expected {{…}}", offsets.line),
+            ));
+        };
+        let mut out = Vec::new();
+        for (name, _) in entries {
+            let (deg, _, _) = angle_at(&root, &["offsets", name], path, super::JOINT_LIMIT_DEG)?
+                .expect("the entry exists");
+            out.push((name.clone(), deg));
+        }
+        Ok(out)
+    }
 }
 
 /// The path of `camera`'s correction in a camera file of either B-Human layout.
@@ -239,21 +409,9 @@ fn angle_at(
     Ok(Some((deg, v.start, v.end)))
 }
 
-/// Reads the lower camera correction `[x, y, z]` (deg; CamRoll, CamPitch, CamYaw) of a
-/// B-Human `cameraCalibration.cfg` of either layout.
-pub fn read_bhuman_camera_cfg(text: &str, path: &Path) -> Result<[f64; 3], ExportError> {
-    let root = cfg::parse(text, path)?;
-    read_camera(&root, path, CameraId::Lower)?.ok_or_else(|| {
-        parse_error(
-            path,
-            "no cameraRotationCorrections.lower (nor the pre-2019 lowerCameraRotationCorrection)",
-        )
-    })
-}
-
 /// The correction `[x, y, z]` (deg; roll, pitch, yaw) of `camera` in a parsed B-Human
 /// camera file of either layout; `None` when the file has none for it.
-pub fn read_camera(
+fn camera_at(
     root: &cfg::Value,
     path: &Path,
     camera: CameraId,
@@ -272,30 +430,9 @@ pub fn read_camera(
     Ok(Some(out))
 }
 
-/// Reads the offsets of a B-Human `jointCalibration.cfg`: joint name → stored value (deg).
-pub fn read_bhuman_joint_cfg(text: &str, path: &Path) -> Result<Vec<(String, f64)>, ExportError> {
-    let root = cfg::parse(text, path)?;
-    let offsets = root
-        .get(&["offsets"])
-        .ok_or_else(|| parse_error(path, "no `offsets = {…};`"))?;
-    let Kind::Map(entries) = &offsets.kind else {
-        return Err(parse_error(
-            path,
-            format!("line {}: offsets: expected {{…}}", offsets.line),
-        ));
-    };
-    let mut out = Vec::new();
-    for (name, _) in entries {
-        let (deg, _, _) = angle_at(&root, &["offsets", name], path, super::JOINT_LIMIT_DEG)?
-            .expect("the entry exists");
-        out.push((name.clone(), deg));
-    }
-    Ok(out)
-}
-
-/// The camera values of a B-Human camera file as naocalib parameters (deg): the lower
-/// camera's (required) and the upper camera's (when the file has it).
-pub fn import_camera(text: &str, path: &Path) -> Result<Imported, ExportError> {
+/// The camera values of a B-Human camera file of either layout as naocalib parameters
+/// (deg): the lower camera's (required) and the upper camera's (when the file has it).
+fn read_cameras(text: &str, path: &Path) -> Result<Imported, ExportError> {
     let root = cfg::parse(text, path)?;
     if camera_path(&root, CameraId::Lower).is_none() {
         return Err(parse_error(
@@ -305,7 +442,7 @@ pub fn import_camera(text: &str, path: &Path) -> Result<Imported, ExportError> {
     }
     let mut out = Vec::new();
     for camera in super::camera::CAMERAS {
-        if let Some([x, y, z]) = read_camera(&root, path, camera)? {
+        if let Some([x, y, z]) = camera_at(&root, path, camera)? {
             let [yaw, pitch, roll] = super::camera::params(camera);
             out.extend([(roll, x), (pitch, y), (yaw, z)]);
         }
@@ -313,17 +450,9 @@ pub fn import_camera(text: &str, path: &Path) -> Result<Imported, ExportError> {
     Ok(out)
 }
 
-/// The joint offsets of a B-Human joint file as naocalib parameters: α = −stored (deg).
-pub fn import_joints(text: &str, path: &Path) -> Result<Imported, ExportError> {
-    Ok(read_bhuman_joint_cfg(text, path)?
-        .into_iter()
-        .filter_map(|(name, stored)| joint_param(&name).map(|p| (p, 0.0 - stored)))
-        .collect())
-}
-
 /// `text` (a robot's `cameraCalibration.cfg`, either layout) with each camera's correction
 /// replaced where this calibration determined it; every other byte kept.
-pub fn update_camera(text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
+fn update_cameras(text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
     let root = cfg::parse(text, path)?;
     if camera_path(&root, CameraId::Lower).is_none() {
         return Err(parse_error(
@@ -357,27 +486,6 @@ pub fn update_camera(text: &str, path: &Path, cal: &Calibration) -> Result<Strin
                 edits.push((start, end, deg(value)));
             }
         }
-    }
-    Ok(cfg::splice(text, edits))
-}
-
-/// `text` (a robot's `jointCalibration.cfg`) with the offsets this calibration determined
-/// replaced: stored = −α for raw angles, stored_old − α for angles already corrected by
-/// this file ([`Calibration::stored_joint_value`]); every other byte kept.
-pub fn update_joints(text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
-    let root = cfg::parse(text, path)?;
-    let mut edits = Vec::new();
-    for (name, param) in BHUMAN_JOINTS {
-        let at = ["offsets", name];
-        let found = angle_at(&root, &at, path, super::JOINT_LIMIT_DEG)?;
-        let Some(param) = param else { continue };
-        if cal.determined_here(param).is_none() {
-            continue;
-        }
-        let (old, start, end) =
-            found.ok_or_else(|| parse_error(path, format!("offsets.{name}: missing")))?;
-        let new = cal.stored_joint_value(param, old, path)?;
-        edits.push((start, end, deg(new)));
     }
     Ok(cfg::splice(text, edits))
 }

@@ -28,8 +28,9 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
+use super::format::{DocRow, Format};
 use super::jsonedit;
 use super::{Calibration, ExportError, Imported, num, parse_error};
 use crate::model::{CameraId, Param, Side};
@@ -44,30 +45,26 @@ pub const LEG_JOINTS: [&str; 6] = [
     "ankle_roll",
 ];
 
-#[derive(Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Serialize)]
 struct HeadFile {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     naocalib_not_a_calibration: Option<Vec<String>>,
     camera_matrix_parameters: CameraMatrixParameters,
 }
 
-#[derive(Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Serialize)]
 struct CameraMatrixParameters {
     calibration: CameraCalibration,
 }
 
-#[derive(Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Serialize)]
 struct CameraCalibration {
     correction_in_camera_bottom: [f64; 3],
     #[serde(default, skip_serializing_if = "Option::is_none")]
     correction_in_camera_top: Option<[f64; 3]>,
 }
 
-#[derive(Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Serialize)]
 struct BodyFile {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     naocalib_not_a_calibration: Option<Vec<String>>,
@@ -83,21 +80,6 @@ fn pretty(value: &impl Serialize) -> String {
     let mut s = serde_json::to_string_pretty(value).expect("JSON of plain values");
     s.push('\n');
     s
-}
-
-/// The per-head JSON: the lower camera's correction `[x, y, z]` (rad), and the upper
-/// camera's when the calibration knows all three of its offsets.
-pub fn head_json(cal: &Calibration) -> String {
-    let upper = super::camera::complete(cal, CameraId::Upper).is_some();
-    pretty(&HeadFile {
-        naocalib_not_a_calibration: marker(cal),
-        camera_matrix_parameters: CameraMatrixParameters {
-            calibration: CameraCalibration {
-                correction_in_camera_bottom: super::camera::hulks(cal, CameraId::Lower),
-                correction_in_camera_top: upper.then(|| super::camera::hulks(cal, CameraId::Upper)),
-            },
-        },
-    })
 }
 
 /// Every joint naocalib calibrates: `(group, name, parameter)` in HULKs' names.
@@ -126,38 +108,6 @@ fn offsets(cal: &Calibration) -> BTreeMap<String, BTreeMap<String, f64>> {
         }
     }
     out
-}
-
-/// The per-body JSON: `joint_calibration_offsets` (rad), storing −α.
-pub fn body_json(cal: &Calibration) -> String {
-    pretty(&BodyFile {
-        naocalib_not_a_calibration: marker(cal),
-        joint_calibration_offsets: offsets(cal),
-    })
-}
-
-/// Reads back a [`head_json`] file: the lower camera's correction `[x, y, z]` (rad).
-pub fn read_head_json(text: &str, path: &Path) -> Result<[f64; 3], ExportError> {
-    Ok(read_head_json_both(text, path)?.0)
-}
-
-/// Reads back a [`head_json`] file: the lower camera's correction `[x, y, z]` (rad) and
-/// the upper camera's, when written.
-pub fn read_head_json_both(
-    text: &str,
-    path: &Path,
-) -> Result<([f64; 3], Option<[f64; 3]>), ExportError> {
-    let file: HeadFile = serde_json::from_str(text)
-        .map_err(|e| parse_error(path, format!("line {}: {e}", e.line())))?;
-    let c = file.camera_matrix_parameters.calibration;
-    Ok((c.correction_in_camera_bottom, c.correction_in_camera_top))
-}
-
-/// Reads the stored joint offsets of a HULKs body file (other keys allowed): each by
-/// naocalib parameter (rad), checked plausible.
-pub fn read_body_json(text: &str, path: &Path) -> Result<Vec<(Param, f64)>, ExportError> {
-    let root = jsonedit::parse(text, path)?;
-    stored(&root, path)
 }
 
 /// A number with the byte span of its text.
@@ -216,27 +166,8 @@ fn correction_at(
     Ok(Some(out))
 }
 
-/// Reads a HULKs head file (any other keys allowed): naocalib's offsets (deg) of the
-/// lower camera (required) and of the upper camera (when the file has it).
-pub fn import_head(text: &str, path: &Path) -> Result<Imported, ExportError> {
-    let root = jsonedit::parse(text, path)?;
-    let mut out = Vec::new();
-    for camera in super::camera::CAMERAS {
-        let Some(found) = correction_at(&root, path, camera)? else {
-            if camera == CameraId::Lower {
-                let key = correction_path(camera).join(".");
-                return Err(parse_error(path, format!("{key}: missing")));
-            }
-            continue;
-        };
-        let values = super::camera::from_hulks(found.map(|(v, _, _)| v), camera);
-        out.extend(super::camera::params(camera).into_iter().zip(values));
-    }
-    Ok(out)
-}
-
 /// The stored joint offsets (rad) of a parsed body file, checked plausible.
-fn stored(root: &jsonedit::Value, path: &Path) -> Result<Vec<(Param, f64)>, ExportError> {
+fn offsets_at(root: &jsonedit::Value, path: &Path) -> Result<Vec<(Param, f64)>, ExportError> {
     let mut out = Vec::new();
     for (group, name, param) in joints() {
         let at = ["joint_calibration_offsets", group, name];
@@ -260,70 +191,187 @@ fn stored(root: &jsonedit::Value, path: &Path) -> Result<Vec<(Param, f64)>, Expo
     Ok(out)
 }
 
-/// Reads a HULKs body file (any other keys allowed): α = −stored (deg) of each joint it
-/// lists.
-pub fn import_body(text: &str, path: &Path) -> Result<Imported, ExportError> {
-    let root = jsonedit::parse(text, path)?;
-    Ok(stored(&root, path)?
-        .into_iter()
-        .map(|(p, x)| (p, 0.0 - x.to_degrees()))
-        .collect())
-}
+/// HULKs' per-head parameter JSON (`head.<id>.json`): the lower camera's correction
+/// `[x, y, z]` (rad), and the upper camera's when the calibration knows all three of its
+/// offsets.
+#[derive(Debug, Clone, Copy)]
+pub struct Head;
 
-/// A robot's head file with each camera's correction (`correction_in_camera_bottom`,
-/// `correction_in_camera_top`) replaced (inserted when missing) when this calibration
-/// determined that camera; every other byte kept.
-pub fn update_head(text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
-    let root = jsonedit::parse(text, path)?;
-    for camera in super::camera::CAMERAS {
-        correction_at(&root, path, camera)?;
+impl Format for Head {
+    fn name(&self) -> &'static str {
+        "hulks-head"
     }
-    let mut out = text.to_string();
-    for camera in super::camera::CAMERAS {
-        if !super::camera::determined(cal, camera, path)? {
-            continue;
+    fn file(&self) -> &'static str {
+        "hulks/head.json"
+    }
+    fn description(&self) -> &'static str {
+        "HULKs head.<id>.json: correction_in_camera_bottom/_top [x, y, z] in rad"
+    }
+    fn doc_row(&self) -> DocRow {
+        DocRow {
+            carries: "`camera_matrix_parameters.calibration.correction_in_camera_bottom = [x, y, z]`, \
+                      `correction_in_camera_top`",
+            units: "rad",
+            axes: "`Rz(z)·Ry(y)·Rx(x)` applied before `head_to_camera`, in HULKs' optical camera \
+                   frame (z forward, x right, y down); small angles: x ≈ CamPitch, y ≈ CamYaw, \
+                   z ≈ −CamRoll; the top camera the same with its `camera_pitch` of −1.2° \
+                   (`camera_matrix_calculator.rs:67–73, 104–108, 115–116`)",
         }
-        let new = super::camera::hulks(cal, camera);
-        let root = jsonedit::parse(&out, path)?;
-        out = match correction_at(&root, path, camera)? {
-            Some(old) => super::cfg::splice(
-                &out,
-                old.iter()
-                    .zip(new)
-                    .map(|(&(_, s, e), x)| (s, e, num(x)))
-                    .collect(),
-            ),
-            None => {
-                let array = format!("[{}, {}, {}]", num(new[0]), num(new[1]), num(new[2]));
-                jsonedit::set(&out, &correction_path(camera), &array, path)?
+    }
+    fn recognise(&self, code: &str) -> bool {
+        code.contains("\"correction_in_camera_bottom\"")
+            || code.contains("\"correction_in_camera_top\"")
+    }
+    fn write(&self, cal: &Calibration) -> String {
+        let upper = super::camera::complete(cal, CameraId::Upper).is_some();
+        pretty(&HeadFile {
+            naocalib_not_a_calibration: marker(cal),
+            camera_matrix_parameters: CameraMatrixParameters {
+                calibration: CameraCalibration {
+                    correction_in_camera_bottom: super::camera::hulks(cal, CameraId::Lower),
+                    correction_in_camera_top: upper
+                        .then(|| super::camera::hulks(cal, CameraId::Upper)),
+                },
+            },
+        })
+    }
+    /// naocalib's offsets (deg) of the lower camera (required) and of the upper camera
+    /// (when the file has it); any other keys allowed.
+    fn read(&self, text: &str, path: &Path) -> Result<Imported, ExportError> {
+        let root = jsonedit::parse(text, path)?;
+        let mut out = Vec::new();
+        for camera in super::camera::CAMERAS {
+            let Some(found) = correction_at(&root, path, camera)? else {
+                if camera == CameraId::Lower {
+                    let key = correction_path(camera).join(".");
+                    return Err(parse_error(path, format!("{key}: missing")));
+                }
+                continue;
+            };
+            let values = super::camera::from_hulks(found.map(|(v, _, _)| v), camera);
+            out.extend(super::camera::params(camera).into_iter().zip(values));
+        }
+        Ok(out)
+    }
+    /// `text` with each camera's correction (`correction_in_camera_bottom`,
+    /// `correction_in_camera_top`) replaced (inserted when missing) when this calibration
+    /// determined that camera; every other byte kept.
+    fn update(&self, text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
+        let root = jsonedit::parse(text, path)?;
+        for camera in super::camera::CAMERAS {
+            correction_at(&root, path, camera)?;
+        }
+        let mut out = text.to_string();
+        for camera in super::camera::CAMERAS {
+            if !super::camera::determined(cal, camera, path)? {
+                continue;
             }
-        };
+            let new = super::camera::hulks(cal, camera);
+            let root = jsonedit::parse(&out, path)?;
+            out = match correction_at(&root, path, camera)? {
+                Some(old) => super::cfg::splice(
+                    &out,
+                    old.iter()
+                        .zip(new)
+                        .map(|(&(_, s, e), x)| (s, e, num(x)))
+                        .collect(),
+                ),
+                None => {
+                    let array = format!("[{}, {}, {}]", num(new[0]), num(new[1]), num(new[2]));
+                    jsonedit::set(&out, &correction_path(camera), &array, path)?
+                }
+            };
+        }
+        Ok(out)
     }
-    Ok(out)
 }
 
-/// A robot's body file with the joint offsets this calibration determined replaced
-/// (inserted when missing): stored = −α (rad) for raw angles, stored_old − α for
-/// corrected ones; every other byte kept.
-pub fn update_body(text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
-    let root = jsonedit::parse(text, path)?;
-    let old = stored(&root, path)?;
-    let mut out = text.to_string();
-    for (group, name, param) in joints() {
-        if cal.determined_here(param).is_none() {
-            continue;
-        }
-        let old_deg = old
-            .iter()
-            .find(|(p, _)| *p == param)
-            .map_or(0.0, |(_, x)| x.to_degrees());
-        let new = cal.stored_joint_value(param, old_deg, path)?.to_radians();
-        out = jsonedit::set(
-            &out,
-            &["joint_calibration_offsets", group, name],
-            &num(new),
-            path,
-        )?;
+impl Head {
+    /// `camera`'s correction `[x, y, z]` (rad) as a head file stores it, checked plausible;
+    /// `None` when the file has none for it.
+    pub fn stored(
+        text: &str,
+        path: &Path,
+        camera: CameraId,
+    ) -> Result<Option<[f64; 3]>, ExportError> {
+        let root = jsonedit::parse(text, path)?;
+        Ok(correction_at(&root, path, camera)?.map(|found| found.map(|(x, _, _)| x)))
     }
-    Ok(out)
+}
+
+/// HULKs' per-body parameter JSON (`body.<id>.json`): `joint_calibration_offsets` (rad),
+/// storing −α.
+#[derive(Debug, Clone, Copy)]
+pub struct Body;
+
+impl Format for Body {
+    fn name(&self) -> &'static str {
+        "hulks-body"
+    }
+    fn file(&self) -> &'static str {
+        "hulks/body.json"
+    }
+    fn description(&self) -> &'static str {
+        "HULKs body.<id>.json: joint_calibration_offsets = -alpha in rad"
+    }
+    fn doc_row(&self) -> DocRow {
+        DocRow {
+            carries: "`joint_calibration_offsets.{head,left_leg,right_leg}.<joint>`, stored −α",
+            units: "rad",
+            axes: "—",
+        }
+    }
+    fn recognise(&self, code: &str) -> bool {
+        code.contains("\"joint_calibration_offsets\"")
+    }
+    fn write(&self, cal: &Calibration) -> String {
+        pretty(&BodyFile {
+            naocalib_not_a_calibration: marker(cal),
+            joint_calibration_offsets: offsets(cal),
+        })
+    }
+    /// α = −stored (deg) of each joint the file lists; any other keys allowed.
+    fn read(&self, text: &str, path: &Path) -> Result<Imported, ExportError> {
+        let root = jsonedit::parse(text, path)?;
+        Ok(offsets_at(&root, path)?
+            .into_iter()
+            .map(|(p, x)| (p, 0.0 - x.to_degrees()))
+            .collect())
+    }
+    /// `text` with the joint offsets this calibration determined replaced (inserted when
+    /// missing): stored = −α (rad) for raw angles, stored_old − α for corrected ones; every
+    /// other byte kept.
+    fn update(&self, text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
+        let root = jsonedit::parse(text, path)?;
+        let old = offsets_at(&root, path)?;
+        let mut out = text.to_string();
+        for (group, name, param) in joints() {
+            if cal.determined_here(param).is_none() {
+                continue;
+            }
+            let old_deg = old
+                .iter()
+                .find(|(p, _)| *p == param)
+                .map_or(0.0, |(_, x)| x.to_degrees());
+            let new = cal.stored_joint_value(param, old_deg, path)?.to_radians();
+            out = jsonedit::set(
+                &out,
+                &["joint_calibration_offsets", group, name],
+                &num(new),
+                path,
+            )?;
+        }
+        Ok(out)
+    }
+    fn joints(&self) -> bool {
+        true
+    }
+}
+
+impl Body {
+    /// The joint offsets as a body file stores them (other keys allowed): each by naocalib
+    /// parameter (rad, −α), checked plausible.
+    pub fn stored(text: &str, path: &Path) -> Result<Vec<(Param, f64)>, ExportError> {
+        offsets_at(&jsonedit::parse(text, path)?, path)
+    }
 }

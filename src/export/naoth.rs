@@ -35,80 +35,12 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use super::format::{DocRow, Format, NameRule};
 use super::{Calibration, ExportError, Imported, header, num, parse_error};
 use crate::model::{CameraId, Param};
 
 /// The INI section NaoTH reads the offsets from.
 pub const SECTION: &str = "CameraMatrixOffset";
-
-/// The `CameraMatrixOffset.cfg` of `cal`: the bottom camera, the top camera when the
-/// calibration knows all three of its offsets, and the head offsets (`head_rot.y/z`,
-/// `head_rot.x` zero) when known.
-pub fn camera_matrix_offset_cfg(cal: &Calibration) -> String {
-    let mut s = String::new();
-    header(&mut s, "#", cal, "radians (rad)");
-    let upper = super::camera::complete(cal, CameraId::Upper).is_some();
-    if upper {
-        let _ = writeln!(
-            s,
-            "# Both cameras and the head offsets are calibrated; other keys keep their values."
-        );
-    } else {
-        let _ = writeln!(
-            s,
-            "# Only the lower (bottom) camera and the head offsets are calibrated; other keys keep \
-             their values."
-        );
-    }
-    let _ = writeln!(s, "[{SECTION}]");
-    for camera in super::camera::CAMERAS {
-        if camera == CameraId::Upper && !upper {
-            continue;
-        }
-        let values = super::camera::naoth(cal, camera);
-        for (key, x) in keys(camera).iter().zip(values) {
-            let _ = writeln!(s, "{key}={}", num(x));
-        }
-    }
-    if let (Some(yaw), Some(pitch)) = (
-        cal.robot_value(Param::HeadYaw),
-        cal.robot_value(Param::HeadPitch),
-    ) {
-        let _ = writeln!(s, "head_rot.x=0");
-        let _ = writeln!(s, "head_rot.y={}", num(pitch.to_radians()));
-        let _ = writeln!(s, "head_rot.z={}", num(yaw.to_radians()));
-    }
-    s
-}
-
-/// Reads back a [`camera_matrix_offset_cfg`] file: the bottom camera's `[x, y, z]` (rad).
-pub fn read_camera_matrix_offset_cfg(text: &str, path: &Path) -> Result<[f64; 3], ExportError> {
-    read_camera(text, path, CameraId::Lower)?
-        .ok_or_else(|| parse_error(path, format!("[{SECTION}] cam_rot.bottom.x: missing")))
-}
-
-/// Reads back `camera`'s `[x, y, z]` (rad) of a [`camera_matrix_offset_cfg`] file; `None`
-/// when it has none of its keys.
-pub fn read_camera(
-    text: &str,
-    path: &Path,
-    camera: CameraId,
-) -> Result<Option<[f64; 3]>, ExportError> {
-    let values = super::runswift::ini_section(text, SECTION, path)?;
-    let keys = keys(camera);
-    if !values.iter().any(|(name, _)| keys.contains(&name.as_str())) {
-        return Ok(None);
-    }
-    let mut out = [0.0; 3];
-    for (k, key) in keys.iter().enumerate() {
-        out[k] = values
-            .iter()
-            .find(|(name, _)| name == key)
-            .map(|(_, v)| *v)
-            .ok_or_else(|| parse_error(path, format!("[{SECTION}] {key}: missing")))?;
-    }
-    Ok(Some(out))
-}
 
 /// Each camera's keys: `cam_rot.bottom.x/y/z`, `cam_rot.top.x/y/z`
 /// (`CameraMatrixOffset.h` lines 37–43).
@@ -158,51 +90,147 @@ fn values(text: &str, path: &Path) -> Result<Values, ExportError> {
     Ok(Values { cameras, head })
 }
 
-/// Reads a NaoTH `CameraMatrixOffset.cfg` (other keys allowed): naocalib's offsets (deg)
-/// of the bottom camera and of the top camera when the file has it, `head_rot.x` folded
-/// into each, and the head offsets `α = head_rot.z, head_rot.y` (deg) when the file has
-/// them.
-pub fn import(text: &str, path: &Path) -> Result<Imported, ExportError> {
-    use super::camera::{nominal_tilt_deg, offsets_deg_of, rot_x, rot_y, rot_z};
-    let Values { cameras, head } = values(text, path)?;
-    let [head_x, head_y, head_z] = head;
-    let mut out = Vec::new();
-    for (camera, found) in super::camera::CAMERAS.into_iter().zip(cameras) {
-        let Some([x, y, z]) = found else { continue };
-        let tilt = nominal_tilt_deg(camera).to_radians();
-        let m = rot_x(head_x.unwrap_or(0.0)) * rot_z(z) * rot_y(tilt + y) * rot_x(x);
-        let offsets = offsets_deg_of(&m, camera);
-        out.extend(super::camera::params(camera).into_iter().zip(offsets));
+/// NaoTH's `CameraMatrixOffset.cfg`: the bottom camera, the top camera when the
+/// calibration knows all three of its offsets, and the head offsets (`head_rot.y/z`,
+/// `head_rot.x` zero) when known.
+#[derive(Debug, Clone, Copy)]
+pub struct Camera;
+
+impl Format for Camera {
+    fn name(&self) -> &'static str {
+        "naoth-camera"
     }
-    out.extend(head_z.map(|a| (Param::HeadYaw, a.to_degrees())));
-    out.extend(head_y.map(|a| (Param::HeadPitch, a.to_degrees())));
-    Ok(out)
+    fn file(&self) -> &'static str {
+        "naoth/CameraMatrixOffset.cfg"
+    }
+    fn description(&self) -> &'static str {
+        "NaoTH: [CameraMatrixOffset] cam_rot.bottom/top.x/y/z and head_rot.x/y/z in rad"
+    }
+    fn doc_row(&self) -> DocRow {
+        DocRow {
+            carries: "`[CameraMatrixOffset]` `cam_rot.bottom.x/y/z`, `cam_rot.top.x/y/z`, \
+                      `head_rot.x/y/z` (and `body_rot.x/y`, not calibrated; NaoTH \
+                      `CameraMatrixOffset.h:29–43`)",
+            units: "rad",
+            axes: "`rotateZ(HeadYaw + head_rot.z)·rotateY(HeadPitch + head_rot.y)·rotateX(head_rot.x)`\
+                   ·translate·`rotateZ(z)·rotateY(y + tilt)·rotateX(x)` (`CameraGeometry.cpp:316–334`): \
+                   head_rot.z/y are the head offsets (α = +head_rot), head_rot.x is folded into the \
+                   cameras on import and kept on update; the pan comes before the tilt, so z mixes \
+                   CamYaw and CamRoll; `cam_rot.top` the same with the top camera's `rotationY` of \
+                   1.2° (`Motion.cpp:473–482`, `NaoInfo.h:39`)",
+        }
+    }
+    fn recognise(&self, code: &str) -> bool {
+        code.contains("[CameraMatrixOffset]")
+    }
+    fn write(&self, cal: &Calibration) -> String {
+        let mut s = String::new();
+        header(&mut s, "#", cal, "radians (rad)");
+        let upper = super::camera::complete(cal, CameraId::Upper).is_some();
+        if upper {
+            let _ = writeln!(
+                s,
+                "# Both cameras and the head offsets are calibrated; other keys keep their values."
+            );
+        } else {
+            let _ = writeln!(
+                s,
+                "# Only the lower (bottom) camera and the head offsets are calibrated; other keys keep \
+                 their values."
+            );
+        }
+        let _ = writeln!(s, "[{SECTION}]");
+        for camera in super::camera::CAMERAS {
+            if camera == CameraId::Upper && !upper {
+                continue;
+            }
+            let values = super::camera::naoth(cal, camera);
+            for (key, x) in keys(camera).iter().zip(values) {
+                let _ = writeln!(s, "{key}={}", num(x));
+            }
+        }
+        if let (Some(yaw), Some(pitch)) = (
+            cal.robot_value(Param::HeadYaw),
+            cal.robot_value(Param::HeadPitch),
+        ) {
+            let _ = writeln!(s, "head_rot.x=0");
+            let _ = writeln!(s, "head_rot.y={}", num(pitch.to_radians()));
+            let _ = writeln!(s, "head_rot.z={}", num(yaw.to_radians()));
+        }
+        s
+    }
+    /// naocalib's offsets (deg) of the bottom camera and of the top camera when the file
+    /// has it, `head_rot.x` folded into each, and the head offsets `α = head_rot.z,
+    /// head_rot.y` (deg) when the file has them; other keys allowed.
+    fn read(&self, text: &str, path: &Path) -> Result<Imported, ExportError> {
+        use super::camera::{nominal_tilt_deg, offsets_deg_of, rot_x, rot_y, rot_z};
+        let Values { cameras, head } = values(text, path)?;
+        let [head_x, head_y, head_z] = head;
+        let mut out = Vec::new();
+        for (camera, found) in super::camera::CAMERAS.into_iter().zip(cameras) {
+            let Some([x, y, z]) = found else { continue };
+            let tilt = nominal_tilt_deg(camera).to_radians();
+            let m = rot_x(head_x.unwrap_or(0.0)) * rot_z(z) * rot_y(tilt + y) * rot_x(x);
+            let offsets = offsets_deg_of(&m, camera);
+            out.extend(super::camera::params(camera).into_iter().zip(offsets));
+        }
+        out.extend(head_z.map(|a| (Param::HeadYaw, a.to_degrees())));
+        out.extend(head_y.map(|a| (Param::HeadPitch, a.to_degrees())));
+        Ok(out)
+    }
+    /// `text` with each camera's offsets replaced when this calibration determined that
+    /// camera (written so that, with the file's `head_rot.x`, the rotation is naocalib's;
+    /// the top camera's keys added when missing), and `head_rot.y/z` when it estimated the
+    /// head offsets (entries added when missing); every other byte kept.
+    fn update(&self, text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
+        use super::camera::{head_from_camera, naoth_of, rot_x};
+        let head_x = values(text, path)?.head[0].unwrap_or(0.0);
+        let mut values: Vec<(&str, String)> = Vec::new();
+        for camera in super::camera::CAMERAS {
+            if super::camera::determined(cal, camera, path)? {
+                let new = naoth_of(&(rot_x(-head_x) * head_from_camera(cal, camera)), camera);
+                values.extend(keys(camera).iter().zip(new).map(|(k, x)| (*k, num(x))));
+            }
+        }
+        for (key, p) in [
+            (HEAD_KEYS[1], Param::HeadPitch),
+            (HEAD_KEYS[2], Param::HeadYaw),
+        ] {
+            if let Some(a) = cal.determined_here(p) {
+                values.push((key, num(a.to_radians())));
+            }
+        }
+        if values.is_empty() {
+            return Ok(text.to_string());
+        }
+        super::ini::set(text, SECTION, &values, path)
+    }
+    fn file_names(&self) -> NameRule {
+        NameRule::Exactly("cameramatrixoffset.cfg")
+    }
 }
 
-/// A robot's `CameraMatrixOffset.cfg` with each camera's offsets replaced when this
-/// calibration determined that camera (written so that, with the file's `head_rot.x`, the
-/// rotation is naocalib's; the top camera's keys added when missing), and `head_rot.y/z`
-/// when it estimated the head offsets (entries added when missing); every other byte kept.
-pub fn update(text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
-    use super::camera::{head_from_camera, naoth_of, rot_x};
-    let head_x = values(text, path)?.head[0].unwrap_or(0.0);
-    let mut values: Vec<(&str, String)> = Vec::new();
-    for camera in super::camera::CAMERAS {
-        if super::camera::determined(cal, camera, path)? {
-            let new = naoth_of(&(rot_x(-head_x) * head_from_camera(cal, camera)), camera);
-            values.extend(keys(camera).iter().zip(new).map(|(k, x)| (*k, num(x))));
+impl Camera {
+    /// `camera`'s `[x, y, z]` (rad) as the file stores it — as read, not checked plausible
+    /// (NaoTH's angles of a large correction may exceed the ±30° of an import); `None` when
+    /// the file has none of its keys.
+    pub fn stored(
+        text: &str,
+        path: &Path,
+        camera: CameraId,
+    ) -> Result<Option<[f64; 3]>, ExportError> {
+        let (entries, _) = super::ini::section(text, SECTION, path)?
+            .ok_or_else(|| parse_error(path, format!("no [{SECTION}] section")))?;
+        let keys = keys(camera);
+        if !entries.iter().any(|e| keys.contains(&e.key.as_str())) {
+            return Ok(None);
         }
-    }
-    for (key, p) in [
-        (HEAD_KEYS[1], Param::HeadPitch),
-        (HEAD_KEYS[2], Param::HeadYaw),
-    ] {
-        if let Some(a) = cal.determined_here(p) {
-            values.push((key, num(a.to_radians())));
+        let mut out = [0.0; 3];
+        for (k, key) in keys.iter().enumerate() {
+            out[k] = super::ini::number(&entries, key, path)?
+                .ok_or_else(|| parse_error(path, format!("[{SECTION}] {key}: missing")))?
+                .0;
         }
+        Ok(Some(out))
     }
-    if values.is_empty() {
-        return Ok(text.to_string());
-    }
-    super::ini::set(text, SECTION, &values, path)
 }

@@ -28,56 +28,12 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use super::format::{DocRow, Format};
 use super::{Calibration, ExportError, Imported, header, num, parse_error};
 use crate::model::CameraId;
 
 /// The INI section rUNSWift reads the entries from.
 pub const SECTION: &str = "kinematics";
-
-/// The `[kinematics]` camera entries of `cal`: the bottom camera's, and the top camera's
-/// (the same values for looking left, straight and right) when the calibration knows all
-/// three of its offsets.
-pub fn kinematics_cfg(cal: &Calibration) -> String {
-    let mut s = String::new();
-    header(&mut s, "#", cal, "degrees (deg)");
-    let upper = super::camera::complete(cal, CameraId::Upper).is_some();
-    if upper {
-        let _ = writeln!(
-            s,
-            "# Both cameras are calibrated (the top camera's one correction for every head yaw);"
-        );
-        let _ = writeln!(s, "# merge these entries into the head's config.");
-    } else {
-        let _ = writeln!(
-            s,
-            "# Only the bottom camera is calibrated; merge these entries into the head's config."
-        );
-    }
-    let _ = writeln!(s, "[{SECTION}]");
-    for camera in super::camera::CAMERAS {
-        if camera == CameraId::Upper && !upper {
-            continue;
-        }
-        for (key, x) in keys(camera).into_iter().zip(values(cal, camera)) {
-            let _ = writeln!(s, "{key}={}", num(x));
-        }
-    }
-    s
-}
-
-/// Reads back a [`kinematics_cfg`] file: the bottom camera's `[yaw, pitch, roll]` (deg).
-pub fn read_kinematics_cfg(text: &str, path: &Path) -> Result<[f64; 3], ExportError> {
-    let values = ini_section(text, SECTION, path)?;
-    let mut out = [0.0; 3];
-    for (k, key) in KEYS.iter().enumerate() {
-        out[k] = values
-            .iter()
-            .find(|(name, _)| name == key)
-            .map(|(_, v)| *v)
-            .ok_or_else(|| parse_error(path, format!("[{SECTION}] {key}: missing")))?;
-    }
-    Ok(out)
-}
 
 /// The top camera's keys for the head looking left, straight and right, by axis
 /// (`image/home/nao/data/configs/<head>.cfg`, read by `motion_launch.py` lines 117–130):
@@ -117,46 +73,6 @@ fn values(cal: &Calibration, camera: CameraId) -> Vec<f64> {
     }
 }
 
-/// The `key=number` entries of INI section `section` (comments `#` and `;`), in file
-/// order; an error names the line.
-pub fn ini_section(
-    text: &str,
-    section: &str,
-    path: &Path,
-) -> Result<Vec<(String, f64)>, ExportError> {
-    let mut inside = false;
-    let mut out = Vec::new();
-    for (n, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') || line.starts_with(';') {
-            continue;
-        }
-        if let Some(name) = line.strip_prefix('[').and_then(|l| l.strip_suffix(']')) {
-            inside = name.trim() == section;
-            continue;
-        }
-        if !inside {
-            continue;
-        }
-        let (key, value) = line
-            .split_once('=')
-            .ok_or_else(|| parse_error(path, format!("line {}: expected key=value", n + 1)))?;
-        let value: f64 = value.trim().parse().map_err(|_| {
-            parse_error(
-                path,
-                format!(
-                    "line {}: {}: '{}' is not a number",
-                    n + 1,
-                    key.trim(),
-                    value.trim()
-                ),
-            )
-        })?;
-        out.push((key.trim().to_string(), value));
-    }
-    Ok(out)
-}
-
 /// The bottom camera's keys: `[yaw, pitch, roll]`.
 const KEYS: [&str; 3] = ["cameraYawBottom", "cameraPitchBottom", "cameraRollBottom"];
 
@@ -190,49 +106,124 @@ fn triple(found: &[(&str, f64)], keys: &[&str]) -> Option<[f64; 3]> {
     Some([0, 1, 2].map(|k| get(keys[k]).unwrap_or(0.0)))
 }
 
-/// Reads a rUNSWift head config (other keys and sections allowed): naocalib's offsets (deg)
-/// of the bottom camera (required) and of the top camera when the config has it — the
-/// entries for the head looking straight (rUNSWift interpolates towards the left and right
-/// entries as the head turns; naocalib's model has one correction for every head yaw).
-pub fn import(text: &str, path: &Path) -> Result<Imported, ExportError> {
-    let found = entries(text, path)?;
-    let mut out = Vec::new();
-    for (camera, keys) in [(CameraId::Lower, &KEYS), (CameraId::Upper, &TOP_KEYS[0])] {
-        let Some(v) = triple(&found, keys) else {
-            if camera == CameraId::Lower {
-                return Err(parse_error(
-                    path,
-                    format!("[{SECTION}] {}: missing", KEYS[0]),
-                ));
-            }
-            continue;
-        };
-        let offsets = super::camera::from_runswift(v.map(f64::to_radians), camera);
-        out.extend(super::camera::params(camera).into_iter().zip(offsets));
-    }
-    Ok(out)
-}
+/// rUNSWift's `[kinematics]` camera entries of a head's config (deg): the bottom camera's,
+/// and the top camera's (the same values for looking left, straight and right) when the
+/// calibration knows all three of its offsets.
+#[derive(Debug, Clone, Copy)]
+pub struct Camera;
 
-/// A robot's head config with each camera's entries replaced when this calibration
-/// determined that camera (added when missing; the top camera's for every head direction,
-/// all alike); every other byte kept.
-pub fn update(text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
-    if super::ini::section(text, SECTION, path)?.is_some() {
-        entries(text, path)?;
+impl Format for Camera {
+    fn name(&self) -> &'static str {
+        "runswift-camera"
     }
-    let mut values_set: Vec<(&str, String)> = Vec::new();
-    for camera in super::camera::CAMERAS {
-        if super::camera::determined(cal, camera, path)? {
-            values_set.extend(
-                keys(camera)
-                    .into_iter()
-                    .zip(values(cal, camera))
-                    .map(|(k, x)| (k, num(x))),
-            );
+    fn file(&self) -> &'static str {
+        "runswift/kinematics.cfg"
+    }
+    fn description(&self) -> &'static str {
+        "rUNSWift: [kinematics] camera{Yaw,Pitch,Roll}Bottom, …TopWhenLooking{Straight,Left,Right} in deg"
+    }
+    fn doc_row(&self) -> DocRow {
+        DocRow {
+            carries: "`[kinematics]` `cameraYawBottom/cameraPitchBottom/cameraRollBottom`, \
+                      `camera{Yaw,Pitch,Roll}TopWhenLooking{Straight,Left,Right}`",
+            units: "deg",
+            axes: "Denavit-Hartenberg `DH(−π/2, π/2 + yaw) · DH(−π/2 + pitch, roll)` after the head \
+                   pitch, optical camera frame; small angles: pitch ≈ CamPitch; the top camera the \
+                   same with `camera_top_angle` 1.2° (`Kinematics.cpp:449–451`), its three sets \
+                   interpolated in the head yaw (`Kinematics.cpp:401–427`): naocalib writes its one \
+                   correction into all three and imports the straight set",
         }
     }
-    if values_set.is_empty() {
-        return Ok(text.to_string());
+    fn recognise(&self, code: &str) -> bool {
+        code.contains("[kinematics]")
     }
-    super::ini::set(text, SECTION, &values_set, path)
+    fn write(&self, cal: &Calibration) -> String {
+        let mut s = String::new();
+        header(&mut s, "#", cal, "degrees (deg)");
+        let upper = super::camera::complete(cal, CameraId::Upper).is_some();
+        if upper {
+            let _ = writeln!(
+                s,
+                "# Both cameras are calibrated (the top camera's one correction for every head yaw);"
+            );
+            let _ = writeln!(s, "# merge these entries into the head's config.");
+        } else {
+            let _ = writeln!(
+                s,
+                "# Only the bottom camera is calibrated; merge these entries into the head's config."
+            );
+        }
+        let _ = writeln!(s, "[{SECTION}]");
+        for camera in super::camera::CAMERAS {
+            if camera == CameraId::Upper && !upper {
+                continue;
+            }
+            for (key, x) in keys(camera).into_iter().zip(values(cal, camera)) {
+                let _ = writeln!(s, "{key}={}", num(x));
+            }
+        }
+        s
+    }
+    /// naocalib's offsets (deg) of the bottom camera (required) and of the top camera when
+    /// the config has it — the entries for the head looking straight (rUNSWift interpolates
+    /// towards the left and right entries as the head turns; naocalib's model has one
+    /// correction for every head yaw); other keys and sections allowed.
+    fn read(&self, text: &str, path: &Path) -> Result<Imported, ExportError> {
+        let found = entries(text, path)?;
+        let mut out = Vec::new();
+        for (camera, keys) in [(CameraId::Lower, &KEYS), (CameraId::Upper, &TOP_KEYS[0])] {
+            let Some(v) = triple(&found, keys) else {
+                if camera == CameraId::Lower {
+                    return Err(parse_error(
+                        path,
+                        format!("[{SECTION}] {}: missing", KEYS[0]),
+                    ));
+                }
+                continue;
+            };
+            let offsets = super::camera::from_runswift(v.map(f64::to_radians), camera);
+            out.extend(super::camera::params(camera).into_iter().zip(offsets));
+        }
+        Ok(out)
+    }
+    /// `text` with each camera's entries replaced when this calibration determined that
+    /// camera (added when missing; the top camera's for every head direction, all alike);
+    /// every other byte kept.
+    fn update(&self, text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
+        if super::ini::section(text, SECTION, path)?.is_some() {
+            entries(text, path)?;
+        }
+        let mut values_set: Vec<(&str, String)> = Vec::new();
+        for camera in super::camera::CAMERAS {
+            if super::camera::determined(cal, camera, path)? {
+                values_set.extend(
+                    keys(camera)
+                        .into_iter()
+                        .zip(values(cal, camera))
+                        .map(|(k, x)| (k, num(x))),
+                );
+            }
+        }
+        if values_set.is_empty() {
+            return Ok(text.to_string());
+        }
+        super::ini::set(text, SECTION, &values_set, path)
+    }
+}
+
+impl Camera {
+    /// `camera`'s `[yaw, pitch, roll]` (deg) as the config stores it (the top camera's set
+    /// for the head looking straight), checked plausible, a key missing beside the others
+    /// read as 0; `None` when the config has none of its keys.
+    pub fn stored(
+        text: &str,
+        path: &Path,
+        camera: CameraId,
+    ) -> Result<Option<[f64; 3]>, ExportError> {
+        let keys: &[&str] = match camera {
+            CameraId::Lower => &KEYS,
+            CameraId::Upper => &TOP_KEYS[0],
+        };
+        Ok(triple(&entries(text, path)?, keys))
+    }
 }

@@ -143,6 +143,16 @@ pub fn code(text: &str) -> String {
     out
 }
 
+/// Whether `code` (a text without comments, [`code`]) has an entry `key = …` (or `key=…`),
+/// `key` not the end of a longer name.
+pub fn has_key(code: &str, key: &str) -> bool {
+    code.match_indices(key).any(|(at, _)| {
+        let before = code[..at].chars().next_back();
+        let after = code[at + key.len()..].trim_start();
+        !before.is_some_and(|c| c.is_ascii_alphanumeric() || c == '_') && after.starts_with('=')
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

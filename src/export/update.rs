@@ -1,7 +1,7 @@
 //! `naocalib export --update`: a robot's own file with only what a calibration determined
 //! replaced, every other byte kept — and the robot's original never lost.
 //!
-//! - The file must be in the format's layout ([`super::FormatSpec::recognise`]): another
+//! - The file must be in the format's layout ([`super::Format::recognise`]): another
 //!   team's file is refused, nothing written.
 //! - The previous file is kept as `FILE.bak`; when that exists already (an earlier update),
 //!   as `FILE.bak.2`, `FILE.bak.3`, …: a backup is never replaced, so the robot's original
@@ -17,7 +17,10 @@
 
 use std::path::{Path, PathBuf};
 
-use super::{Calibration, ExportError, ExportFormat, check_usable, parse_error, source};
+use super::{
+    Calibration, ExportError, Format, check_usable, names, not_in_layout, parse_error, recognised,
+    source,
+};
 use crate::model::Param;
 use crate::output::WriteOptions;
 
@@ -106,38 +109,34 @@ pub fn backups(file: &Path) -> (Vec<PathBuf>, PathBuf) {
 /// refused with its name and line, and nothing is written.
 pub fn update(
     cal: &Calibration,
-    format: Option<ExportFormat>,
+    format: Option<&'static dyn Format>,
     path: &Path,
     inputs: &[PathBuf],
-) -> Result<(ExportFormat, Updated), ExportError> {
+) -> Result<(&'static dyn Format, Updated), ExportError> {
     check_usable(cal, || path.display().to_string())?;
     let src = source::read(path)?;
     let text = &src.text;
     let format = match format {
         Some(f) => f,
-        None => ExportFormat::recognise(text).ok_or_else(|| {
+        None => recognised(text).ok_or_else(|| {
             parse_error(
                 path,
-                format!(
-                    "layout not recognised; give --format ({})",
-                    ExportFormat::names()
-                ),
+                format!("layout not recognised; give --format ({})", names()),
             )
         })?,
     };
-    let spec = format.spec();
-    let (Some(update), Some(read)) = (spec.update, spec.read) else {
+    if !format.robot() {
         return Err(parse_error(
             path,
-            format!("--update is not supported for --format {}", spec.name),
+            format!("--update is not supported for --format {}", format.name()),
         ));
-    };
-    if !format.matches(text) {
-        return Err(super::not_in_layout(path, format, text));
     }
-    let new = update(text, path, cal)?;
+    if !format.matches(text) {
+        return Err(not_in_layout(path, format, text));
+    }
+    let new = format.update(text, path, cal)?;
     if new == *text {
-        let held = read(text, path).unwrap_or_default();
+        let held = format.read(text, path).unwrap_or_default();
         let why = if held.iter().any(|(p, _)| cal.determined_here(*p).is_some()) {
             Unchanged::AlreadyHolds
         } else {
@@ -197,14 +196,12 @@ pub fn update(
 /// to.
 fn applied_to(
     cal: &Calibration,
-    format: ExportFormat,
+    format: &dyn Format,
     text: &str,
     backups: &[PathBuf],
 ) -> Option<PathBuf> {
-    let spec = format.spec();
-    let (update, read) = (spec.update?, spec.read?);
     let here = Path::new("-");
-    let now = read(text, here).ok()?;
+    let now = format.read(text, here).ok()?;
     let determined: Vec<Param> = now
         .iter()
         .map(|(p, _)| *p)
@@ -218,7 +215,9 @@ fn applied_to(
         if !format.matches(&old) {
             return None;
         }
-        let applied = read(&update(&old, here, cal).ok()?, here).ok()?;
+        let applied = format
+            .read(&format.update(&old, here, cal).ok()?, here)
+            .ok()?;
         let same = determined.iter().all(|p| {
             let value = |v: &[(Param, f64)]| v.iter().find(|(q, _)| q == p).map(|(_, x)| *x);
             matches!((value(&applied), value(&now)), (Some(a), Some(b)) if (a - b).abs() < 1e-9)

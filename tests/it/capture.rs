@@ -429,7 +429,7 @@ fn capture_resume_and_solve_recover_the_robots_truth() {
 #[cfg(feature = "detect")]
 #[test]
 fn a_robot_as_the_teams_files_show_it_is_captured_and_calibrated() {
-    use naocalib::export::{self, Calibration, Entry, ExportFormat, WriteOptions};
+    use naocalib::export::{self, Calibration, Entry, WriteOptions};
     use naocalib::model::Param;
     let b = Bench::new();
     let truth = crate::detect_tilted::robot(-6.0, 3.0, 2.0);
@@ -459,7 +459,7 @@ fn a_robot_as_the_teams_files_show_it_is_captured_and_calibrated() {
         standing: Default::default(),
     };
     let cal = b.path("robot.toml");
-    export::export(&current, ExportFormat::Toml, &cal, &WriteOptions::default()).unwrap();
+    export::export(&current, &export::own::Toml, &cal, &WriteOptions::default()).unwrap();
     let plan = b.path("plan.csv");
     let out = crate::util::naocalib()
         .arg("plan")

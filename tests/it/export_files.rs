@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use naocalib::dataset::{AngleKind, AngleSource};
-use naocalib::export::{self, Calibration, Entry, ExportFormat, REGISTRY, Unchanged, Updated};
+use naocalib::export::{self, Calibration, Entry, FORMATS, Format, Unchanged, Updated};
 use naocalib::model::Param;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -26,23 +26,20 @@ fn fixture(name: &str) -> PathBuf {
 }
 
 /// Every robot layout's fixture, in its format.
-const FIXTURES: [(ExportFormat, &str); 10] = [
-    (ExportFormat::BHumanCamera, "bhuman/cameraCalibration.cfg"),
+const FIXTURES: [(&'static dyn Format, &str); 10] = [
+    (&export::bhuman::Camera, "bhuman/cameraCalibration.cfg"),
     (
-        ExportFormat::BHumanCamera2016,
+        &export::bhuman::Camera2016,
         "bhuman2016/cameraCalibration.cfg",
     ),
-    (ExportFormat::BHumanJoints, "bhuman/jointCalibration.cfg"),
-    (ExportFormat::HulksHead, "hulks/head.json"),
-    (ExportFormat::HulksBody, "hulks/body.json"),
-    (ExportFormat::NaothCamera, "naoth/CameraMatrixOffset.cfg"),
-    (ExportFormat::NomadzCamera, "nomadz/cameraCalibration.cfg"),
-    (ExportFormat::NomadzJoints, "nomadz/jointCalibration.cfg"),
-    (ExportFormat::RunswiftCamera, "runswift/nao.cfg"),
-    (
-        ExportFormat::BHumanJoints,
-        "bhuman2024/jointCalibration.cfg",
-    ),
+    (&export::bhuman::Joints, "bhuman/jointCalibration.cfg"),
+    (&export::hulks::Head, "hulks/head.json"),
+    (&export::hulks::Body, "hulks/body.json"),
+    (&export::naoth::Camera, "naoth/CameraMatrixOffset.cfg"),
+    (&export::nomadz::Camera, "nomadz/cameraCalibration.cfg"),
+    (&export::nomadz::Joints, "nomadz/jointCalibration.cfg"),
+    (&export::runswift::Camera, "runswift/nao.cfg"),
+    (&export::bhuman::Joints, "bhuman2024/jointCalibration.cfg"),
 ];
 
 /// A converged calibration of real sizes: lower camera tilt −2° to −8°, legs up to 2°,
@@ -89,29 +86,34 @@ fn an_update_of_a_file_in_another_layout_is_refused_untouched() {
     let cal = calibration(&mut rng);
     let dir = tempfile::tempdir().unwrap();
     let mut refused = 0;
-    for spec in REGISTRY.iter().filter(|s| s.update.is_some()) {
+    for &spec in FORMATS.iter().filter(|f| f.robot()) {
         for (owner, name) in FIXTURES {
-            if owner == spec.format {
+            if owner == spec {
                 continue;
             }
             let path = copy(dir.path(), name);
             let original = std::fs::read(&path).unwrap();
-            let e = export::update(&cal, Some(spec.format), &path, &[])
-                .expect_err(&format!("--format {} on {name}", spec.name))
+            let e = export::update(&cal, Some(spec), &path, &[])
+                .expect_err(&format!("--format {} on {name}", spec.name()))
                 .to_string();
             assert!(
-                e.contains(&format!("not a {} file", spec.name))
+                e.contains(&format!("not a {} file", spec.name()))
                     && e.contains(&format!("looks like a {} file", owner.name())),
                 "{} on {name}: {e}",
-                spec.name
+                spec.name()
             );
             assert_eq!(std::fs::read(&path).unwrap(), original, "{name} untouched");
             assert!(!backup_of(&path, 1).exists(), "{name}: no backup");
             refused += 1;
         }
     }
-    // Nine updatable formats, ten fixtures (two of B-Human's joint layout).
-    assert_eq!(refused, 8 * 9 + 8, "every foreign pair");
+    // Every updatable format on every fixture but its own (B-Human's joint layout has two).
+    let updatable = FORMATS.iter().filter(|f| f.robot()).count();
+    assert_eq!(
+        refused,
+        (updatable - 1) * FIXTURES.len(),
+        "every foreign pair"
+    );
     // From the command line: exit 1, the file named, nothing written.
     let result = dir.path().join("cal.json");
     std::fs::write(&result, serde_json::to_string(&cal.to_json()).unwrap()).unwrap();
@@ -168,9 +170,12 @@ fn an_update_of_corrected_angles_is_applied_once() {
     let mut rng = ChaCha8Rng::seed_from_u64(352);
     let dir = tempfile::tempdir().unwrap();
     for (format, name) in [
-        (ExportFormat::BHumanJoints, "bhuman/jointCalibration.cfg"),
-        (ExportFormat::HulksBody, "hulks/body.json"),
-        (ExportFormat::NomadzJoints, "nomadz/jointCalibration.cfg"),
+        (
+            &export::bhuman::Joints as &dyn Format,
+            "bhuman/jointCalibration.cfg",
+        ),
+        (&export::hulks::Body, "hulks/body.json"),
+        (&export::nomadz::Joints, "nomadz/jointCalibration.cfg"),
     ] {
         let path = copy(dir.path(), name).canonicalize().unwrap();
         let mut cal = calibration(&mut rng);
@@ -251,7 +256,7 @@ fn links_mode_and_owner_are_kept_and_a_read_only_file_is_refused() {
     let mut rng = ChaCha8Rng::seed_from_u64(353);
     let cal = calibration(&mut rng);
     let dir = tempfile::tempdir().unwrap();
-    let format = ExportFormat::BHumanJoints;
+    let format: &dyn Format = &export::bhuman::Joints;
     let name = "bhuman/jointCalibration.cfg";
 
     // A symbolic link: the file it points to is updated, the link stays a link.
@@ -354,7 +359,7 @@ fn a_calibration_that_determines_nothing_in_the_file_writes_nothing() {
             e.std = None;
         }
     }
-    for (format, name) in FIXTURES.iter().filter(|(f, _)| !f.spec().joints) {
+    for (format, name) in FIXTURES.iter().filter(|(f, _)| !f.joints()) {
         let path = copy(dir.path(), name);
         let (_, outcome) = export::update(&legs, Some(*format), &path, &[]).unwrap();
         assert_eq!(
@@ -470,21 +475,21 @@ fn deeply_nested_files_are_refused_with_a_message() {
 fn naocalibs_own_exports_are_recognised() {
     let mut rng = ChaCha8Rng::seed_from_u64(356);
     let cal = calibration(&mut rng);
-    for spec in REGISTRY.iter().filter(|s| s.read.is_some()) {
-        let text = spec.format.render(&cal);
+    for &spec in FORMATS.iter().filter(|f| f.robot()) {
+        let text = spec.write(&cal);
         assert_eq!(
-            ExportFormat::recognise(&text),
-            Some(spec.format),
+            export::recognised(&text),
+            Some(spec),
             "{}:\n{text}",
-            spec.name
+            spec.name()
         );
     }
     // And from the command line, without --format.
     let dir = tempfile::tempdir().unwrap();
     for name in ["naoth-camera", "runswift-camera", "nomadz-camera"] {
-        let format = ExportFormat::from_name(name).unwrap();
+        let format = export::named(name).unwrap();
         let path = dir.path().join(format!("{name}.cfg"));
-        std::fs::write(&path, format.render(&cal)).unwrap();
+        std::fs::write(&path, format.write(&cal)).unwrap();
         let out = naocalib()
             .arg("import")
             .arg(&path)
@@ -520,8 +525,8 @@ fn a_hulks_file_with_a_duplicate_key_is_refused() {
     let mut rng = ChaCha8Rng::seed_from_u64(357);
     let cal = calibration(&mut rng);
     for (path, format) in [
-        (&head, ExportFormat::HulksHead),
-        (&body, ExportFormat::HulksBody),
+        (&head, &export::hulks::Head as &dyn Format),
+        (&body, &export::hulks::Body),
     ] {
         let e = export::import(path, Some(format)).unwrap_err().to_string();
         assert!(e.contains("given twice") && e.contains("line "), "{e}");

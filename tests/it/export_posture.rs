@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use naocalib::export::{Calibration, ExportFormat, Posture, bhuman};
+use naocalib::export::{Calibration, Format, Posture, bhuman};
 use naocalib::model::gravity::{STAND_DEG, stand_joints, standing_leg_torques};
 use naocalib::model::{Family, FixedSet, Model, PARAMETER_COUNT, Param, RobotGeometry, Side};
 use naocalib::sim::{SimOptions, simulate};
@@ -70,8 +70,8 @@ fn standing_offsets_predict_the_standing_robots_joint_angles() {
 
     // Team files: standing by default, lying when asked; naocalib's TOML carries both.
     let stored = |cal: &Calibration| {
-        let text = ExportFormat::BHumanJoints.render(cal);
-        bhuman::read_bhuman_joint_cfg(&text, Path::new("-"))
+        let text = bhuman::Joints.write(cal);
+        bhuman::Joints::stored(&text, Path::new("-"))
             .unwrap()
             .into_iter()
             .find(|(n, _)| n == "lKneePitch")

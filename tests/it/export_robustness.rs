@@ -6,9 +6,7 @@ use std::path::Path;
 use std::sync::mpsc;
 use std::time::Duration;
 
-use naocalib::export::{
-    self, Calibration, ExportError, ExportFormat, WriteOptions, read_calibration,
-};
+use naocalib::export::{self, Calibration, ExportError, Format, WriteOptions, read_calibration};
 use naocalib::model::{FixedSet, Model, Param, Side};
 use naocalib::report::plot;
 use naocalib::sim::{SimOptions, simulate};
@@ -73,7 +71,7 @@ fn exports_carry_converged_and_refuse_what_is_not_a_calibration() {
     let dir = tempfile::tempdir().unwrap();
     let opts = WriteOptions::default();
     let path = dir.path().join("good.toml");
-    export::export(&good, ExportFormat::Toml, &path, &opts).unwrap();
+    export::export(&good, &export::own::Toml, &path, &opts).unwrap();
     let text = std::fs::read_to_string(&path).unwrap();
     assert!(text.contains("converged = true"), "{text}");
     assert_eq!(read_calibration(&path).unwrap().converged, Some(true));
@@ -83,15 +81,14 @@ fn exports_carry_converged_and_refuse_what_is_not_a_calibration() {
     assert_eq!(bad.problems(), vec!["the solver did not converge"]);
     // naocalib's own files are written, and say so.
     let path = dir.path().join("bad.json");
-    export::export(&bad, ExportFormat::Json, &path, &opts).unwrap();
+    export::export(&bad, &export::own::Json, &path, &opts).unwrap();
     let back = read_calibration(&path).unwrap();
     assert_eq!(back.converged, Some(false));
     assert!(!back.problems().is_empty());
     // Files robots load are refused, one by one and all together, and nothing is written.
-    for (format, _, name) in ExportFormat::ALL {
-        let target = dir.path().join("robot").join(name);
+    for (format, target) in export::every_file(&dir.path().join("robot")) {
         let result = export::export(&bad, format, &target, &opts);
-        if format.is_robot_format() {
+        if format.robot() {
             let e = result.unwrap_err();
             assert!(matches!(e, ExportError::NotACalibration { .. }), "{e}");
             assert!(e.to_string().contains("did not converge"), "{e}");
@@ -104,7 +101,7 @@ fn exports_carry_converged_and_refuse_what_is_not_a_calibration() {
     assert!(export::export_all(&bad, &all, &opts).is_err());
     assert!(!all.exists());
     // Rendered anyway, a team file starts with the marker.
-    let text = ExportFormat::BHumanCamera.render(&bad);
+    let text = export::bhuman::Camera.write(&bad);
     assert!(text.starts_with("// NOT A CALIBRATION"), "{text}");
 
     // Residuals far beyond any plausible noise, and non-finite values, are no calibration.
@@ -159,7 +156,7 @@ fn undetermined_parameters_are_not_written_as_zero_plus_minus_zero() {
         Calibration::from_toml(&toml, Path::new("x.toml")).unwrap(),
         cal
     );
-    let joints = export::bhuman_joint_cfg(&cal);
+    let joints = export::bhuman::Joints.write(&cal);
     let line = joints.lines().find(|l| l.contains("rKneePitch")).unwrap();
     assert!(line.contains("NOT determined"), "{line}");
 

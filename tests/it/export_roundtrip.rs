@@ -6,10 +6,9 @@ use std::path::Path;
 use crate::util::solve;
 use assert_cmd::Command;
 use naocalib::export::{
-    self, Calibration, ExportError, ExportFormat, WriteOptions, read_bhuman_camera_cfg,
-    read_bhuman_joint_cfg, read_calibration,
+    self, Calibration, ExportError, Format, WriteOptions, bhuman, read_calibration,
 };
-use naocalib::model::{FixedSet, Model, Param};
+use naocalib::model::{CameraId, FixedSet, Model, Param};
 use naocalib::sim::{SimOptions, simulate};
 use naocalib::solve::{Problem, Solution, backend};
 
@@ -33,7 +32,7 @@ fn toml_and_json_round_trip() {
     let toml_path = dir.path().join("calibration.toml");
     export::export(
         &cal,
-        ExportFormat::Toml,
+        &export::own::Toml,
         &toml_path,
         &WriteOptions::default(),
     )
@@ -48,7 +47,7 @@ fn toml_and_json_round_trip() {
     let json_path = dir.path().join("calibration.json");
     export::export(
         &cal,
-        ExportFormat::Json,
+        &export::own::Json,
         &json_path,
         &WriteOptions::default(),
     )
@@ -70,8 +69,10 @@ fn toml_and_json_round_trip() {
 fn bhuman_files_carry_the_offsets() {
     let s = solution();
     let cal = Calibration::from_solution(&s, None);
-    let camera = export::bhuman_camera_cfg(&cal);
-    let [x, y, z] = read_bhuman_camera_cfg(&camera, Path::new("-")).unwrap();
+    let camera = bhuman::Camera.write(&cal);
+    let [x, y, z] = bhuman::Camera::stored(&camera, Path::new("-"), CameraId::Lower)
+        .unwrap()
+        .unwrap();
     let close = |a: f64, b: f64| (a - b).abs() <= 5.1e-5;
     assert!(close(x, s.report_value(Param::CamRoll)), "{camera}");
     assert!(close(y, s.report_value(Param::CamPitch)), "{camera}");
@@ -79,8 +80,8 @@ fn bhuman_files_carry_the_offsets() {
     assert!(camera.contains("cameraRotationCorrections = {\n  upper = {x = 0deg;"));
     assert!(camera.contains("\n  lower = {x = "));
 
-    let joints = export::bhuman_joint_cfg(&cal);
-    let offsets = read_bhuman_joint_cfg(&joints, Path::new("-")).unwrap();
+    let joints = bhuman::Joints.write(&cal);
+    let offsets = bhuman::Joints::stored(&joints, Path::new("-")).unwrap();
     assert_eq!(offsets.len(), 27);
     let get = |n: &str| offsets.iter().find(|(k, _)| k == n).unwrap().1;
     assert!(close(get("lKneePitch"), -s.report_value(Param::LKneePitch)));
@@ -96,8 +97,8 @@ fn refuses_inputs_and_existing_files() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("calibration.toml");
     let opts = WriteOptions::default();
-    export::export(&cal, ExportFormat::Toml, &path, &opts).unwrap();
-    let e = export::export(&cal, ExportFormat::Toml, &path, &opts).unwrap_err();
+    export::export(&cal, &export::own::Toml, &path, &opts).unwrap();
+    let e = export::export(&cal, &export::own::Toml, &path, &opts).unwrap_err();
     assert!(
         matches!(
             e,
@@ -109,7 +110,7 @@ fn refuses_inputs_and_existing_files() {
         force: true,
         inputs: vec![path.clone()],
     };
-    let e = export::export(&cal, ExportFormat::Json, &path, &input).unwrap_err();
+    let e = export::export(&cal, &export::own::Json, &path, &input).unwrap_err();
     assert!(
         matches!(
             e,
@@ -178,7 +179,8 @@ fn cli_solve_export_and_export_command() {
     for (a, b) in from_result.parameters.iter().zip(&from_solve.parameters) {
         assert_eq!(a.value, b.value, "{}", a.param);
     }
-    for (_, _, name) in ExportFormat::ALL {
+    for format in export::FORMATS {
+        let name = format.file();
         assert!(exports.join(name).is_file(), "{name}");
     }
     // `export` refuses to overwrite its input, and writes by file name.

@@ -19,7 +19,7 @@
 use std::path::Path;
 
 use naocalib::dataset::{AngleKind, AngleSource};
-use naocalib::export::{self, Calibration, Entry, ExportFormat, bhuman, hulks, nomadz};
+use naocalib::export::{self, Calibration, Entry, Format, bhuman, hulks, nomadz};
 use naocalib::model::Param;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -36,16 +36,16 @@ fn calibration(rng: &mut impl Rng) -> Calibration {
 }
 
 /// The stored value (rad) of each joint a team file carries, by naocalib parameter.
-fn stored(format: ExportFormat, text: &str) -> Vec<(Param, f64)> {
+fn stored(format: &'static dyn Format, text: &str) -> Vec<(Param, f64)> {
     let path = Path::new("-");
-    match format {
-        ExportFormat::BHumanJoints => bhuman::read_bhuman_joint_cfg(text, path)
+    match format.name() {
+        "bhuman-joints" => bhuman::Joints::stored(text, path)
             .unwrap()
             .into_iter()
             .filter_map(|(n, v)| bhuman::joint_param(&n).map(|p| (p, v.to_radians())))
             .collect(),
-        ExportFormat::HulksBody => hulks::read_body_json(text, path).unwrap(),
-        ExportFormat::NomadzJoints => nomadz::read_joint_calibration_cfg(text, path)
+        "hulks-body" => hulks::Body::stored(text, path).unwrap(),
+        "nomadz-joints" => nomadz::Joints::stored(text, path)
             .unwrap()
             .into_iter()
             .filter_map(|(n, e)| bhuman::joint_param(&n).map(|p| (p, e.offset.to_radians())))
@@ -61,10 +61,10 @@ fn fixture(name: &str) -> std::path::PathBuf {
         .join(name)
 }
 
-const JOINT_FORMATS: [ExportFormat; 3] = [
-    ExportFormat::BHumanJoints,
-    ExportFormat::HulksBody,
-    ExportFormat::NomadzJoints,
+const JOINT_FORMATS: [&'static dyn Format; 3] = [
+    &export::bhuman::Joints,
+    &export::hulks::Body,
+    &export::nomadz::Joints,
 ];
 
 /// The team's compensation (all three alike, cited above): corrected reading and command.
@@ -103,7 +103,7 @@ fn fresh_joint_files_compensate_through_each_teams_code() {
     for _ in 0..10 {
         let cal = calibration(&mut rng);
         for format in JOINT_FORMATS {
-            let values = stored(format, &format.render(&cal));
+            let values = stored(format, &format.write(&cal));
             // Every offset naocalib estimates is in the file: legs and head.
             let offsets: Vec<Param> = naocalib::model::Joint::ALL
                 .iter()
@@ -125,14 +125,11 @@ fn fresh_joint_files_compensate_through_each_teams_code() {
 #[test]
 fn updated_joint_files_compensate_for_raw_and_corrected_angles() {
     let mut rng = ChaCha8Rng::seed_from_u64(25);
-    let fixtures = [
-        (ExportFormat::BHumanJoints, "bhuman/jointCalibration.cfg"),
-        (
-            ExportFormat::BHumanJoints,
-            "bhuman2024/jointCalibration.cfg",
-        ),
-        (ExportFormat::HulksBody, "hulks/body.json"),
-        (ExportFormat::NomadzJoints, "nomadz/jointCalibration.cfg"),
+    let fixtures: [(&dyn Format, &str); 4] = [
+        (&export::bhuman::Joints, "bhuman/jointCalibration.cfg"),
+        (&export::bhuman::Joints, "bhuman2024/jointCalibration.cfg"),
+        (&export::hulks::Body, "hulks/body.json"),
+        (&export::nomadz::Joints, "nomadz/jointCalibration.cfg"),
     ];
     for (format, name) in fixtures {
         let original = std::fs::read_to_string(fixture(name)).unwrap();
@@ -143,8 +140,7 @@ fn updated_joint_files_compensate_for_raw_and_corrected_angles() {
                 kind,
                 corrected_by: (kind == AngleKind::Corrected).then(|| name.to_string()),
             });
-            let spec = format.spec();
-            let text = (spec.update.unwrap())(&original, Path::new(name), &cal).unwrap();
+            let text = format.update(&original, Path::new(name), &cal).unwrap();
             let new = stored(format, &text);
             for (p, s_new) in &new {
                 let s_old = old.iter().find(|(q, _)| q == p).map_or(0.0, |(_, s)| *s);
@@ -185,7 +181,7 @@ fn a_fresh_joint_file_of_corrected_angles_is_refused() {
     let path = dir.path().join("camera.cfg");
     export::export(
         &cal,
-        ExportFormat::BHumanCamera,
+        &export::bhuman::Camera,
         &path,
         &export::WriteOptions::default(),
     )

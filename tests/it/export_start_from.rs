@@ -6,8 +6,10 @@
 
 use std::path::Path;
 
-use naocalib::export::{self, Calibration, ExportFormat, bhuman};
-use naocalib::model::{FixedSet, Joint, JointAngles, Model, PARAMETER_COUNT, Param, RobotGeometry};
+use naocalib::export::{self, Calibration, Format, bhuman};
+use naocalib::model::{
+    CameraId, FixedSet, Joint, JointAngles, Model, PARAMETER_COUNT, Param, RobotGeometry,
+};
 use naocalib::sim::{SimOptions, simulate};
 use naocalib::solve::{Problem, UncertaintyOptions, backend, calibrate};
 
@@ -109,10 +111,12 @@ fn start_from_holds_the_robots_head_offsets_so_the_camera_correction_fits_the_fr
         }
         let solution = calibrate(&problem, lm.as_ref(), &UncertaintyOptions::plain()).unwrap();
         let cal = Calibration::from_solution(&solution, None);
-        let text = ExportFormat::BHumanCamera.render(&cal);
+        let text = bhuman::Camera.write(&cal);
         (
             cal,
-            bhuman::read_bhuman_camera_cfg(&text, Path::new("-")).unwrap(),
+            bhuman::Camera::stored(&text, Path::new("-"), CameraId::Lower)
+                .unwrap()
+                .unwrap(),
         )
     };
     let (held, correction) = solve(Some(&imported));

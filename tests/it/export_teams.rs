@@ -5,9 +5,7 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::Path;
 
-use naocalib::export::{
-    self, Calibration, Entry, ExportFormat, bhuman, hulks, naoth, nomadz, runswift,
-};
+use naocalib::export::{self, Calibration, Entry, Format, bhuman, hulks, naoth, nomadz, runswift};
 use naocalib::model::{CameraId, JointAngles, Param, RobotGeometry};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -109,8 +107,9 @@ fn bhuman_camera_convention() {
     // Src/Representations/Configuration/CameraCalibration.h line 17); camera frame x
     // forward, y left, z up (naocalib's).
     for cal in calibrations() {
-        let text = export::bhuman_camera_cfg(&cal);
-        let [x, y, z] = bhuman::read_bhuman_camera_cfg(&text, Path::new("-"))
+        let text = bhuman::Camera.write(&cal);
+        let [x, y, z] = bhuman::Camera::stored(&text, Path::new("-"), CameraId::Lower)
+            .unwrap()
             .unwrap()
             .map(f64::to_radians);
         let team = mul(&mul(&ry(TILT_DEG.to_radians() + y), &rx(x)), &rz(z));
@@ -126,7 +125,7 @@ fn nomadz_camera_convention() {
     // CameraCalibration.h); camera frame x forward, y left, z up. The keys are read from the
     // text here, not through naocalib's importer.
     for cal in calibrations() {
-        let text = nomadz::camera_calibration_cfg(&cal);
+        let text = nomadz::Camera.write(&cal);
         let key = |name: &str| -> f64 {
             let line = text
                 .lines()
@@ -157,9 +156,11 @@ fn naoth_camera_convention() {
     // .rotateY(cam_rot.y + rotationOffsetY).rotateX(cam_rot.x); camera frame x forward,
     // y left, z up (CameraGeometry::relativePointToImage divides by x).
     for cal in calibrations() {
-        let text = naoth::camera_matrix_offset_cfg(&cal);
+        let text = naoth::Camera.write(&cal);
         assert!(text.contains("[CameraMatrixOffset]"), "{text}");
-        let [x, y, z] = naoth::read_camera_matrix_offset_cfg(&text, Path::new("-")).unwrap();
+        let [x, y, z] = naoth::Camera::stored(&text, Path::new("-"), CameraId::Lower)
+            .unwrap()
+            .unwrap();
         let team = mul(&mul(&rz(z), &ry(y + TILT_DEG.to_radians())), &rx(x));
         assert_close(&team, &naocalib_camera(&cal, 0.0), "NaoTH");
     }
@@ -185,8 +186,10 @@ fn hulks_camera_convention() {
         "HULKs camera frame",
     );
     for cal in calibrations() {
-        let text = hulks::head_json(&cal);
-        let [x, y, z] = hulks::read_head_json(&text, Path::new("-")).unwrap();
+        let text = hulks::Head.write(&cal);
+        let [x, y, z] = hulks::Head::stored(&text, Path::new("-"), CameraId::Lower)
+            .unwrap()
+            .unwrap();
         let correction = mul(&mul(&rz(z), &ry(y)), &rx(x));
         let head_to_camera = mul(&correction, &uncorrected);
         assert_close(
@@ -210,9 +213,10 @@ fn runswift_camera_convention() {
     let tilt = TILT_DEG.to_radians();
     let mut rng = ChaCha8Rng::seed_from_u64(8);
     for cal in calibrations() {
-        let text = runswift::kinematics_cfg(&cal);
+        let text = runswift::Camera.write(&cal);
         assert!(text.contains("[kinematics]") && text.contains("cameraPitchBottom="));
-        let [yaw, pitch, roll] = runswift::read_kinematics_cfg(&text, Path::new("-"))
+        let [yaw, pitch, roll] = runswift::Camera::stored(&text, Path::new("-"), CameraId::Lower)
+            .unwrap()
             .unwrap()
             .map(f64::to_radians);
         // The head pitch turns both chains alike.
@@ -242,8 +246,8 @@ fn joint_formats_round_trip() {
         .collect();
 
     // B-Human: degrees, exactly, stored = -alpha (the sign is proven in export_signs.rs).
-    let text = export::bhuman_joint_cfg(&cal);
-    let back = bhuman::read_bhuman_joint_cfg(&text, Path::new("-")).unwrap();
+    let text = bhuman::Joints.write(&cal);
+    let back = bhuman::Joints::stored(&text, Path::new("-")).unwrap();
     assert_eq!(back.len(), 27, "the 2025 layout, waistYaw included");
     for (name, param) in bhuman::BHUMAN_JOINTS {
         let value = back.iter().find(|(n, _)| n == name).unwrap().1;
@@ -251,18 +255,20 @@ fn joint_formats_round_trip() {
     }
 
     // HULKs: radians, every calibrated joint.
-    let text = hulks::body_json(&cal);
-    let back = hulks::read_body_json(&text, Path::new("-")).unwrap();
+    let text = hulks::Body.write(&cal);
+    let back = hulks::Body::stored(&text, Path::new("-")).unwrap();
     assert_eq!(back.len(), legs.len());
     for (param, value) in back {
         assert_eq!(value, -cal.value(param).to_radians(), "{param}");
     }
-    let head = hulks::read_head_json(&hulks::head_json(&cal), Path::new("-")).unwrap();
+    let head = hulks::Head::stored(&hulks::Head.write(&cal), Path::new("-"), CameraId::Lower)
+        .unwrap()
+        .unwrap();
     assert_eq!(head, export::camera::hulks(&cal, CameraId::Lower));
 
     // NomadZ: offset and jointPlay in degrees; jointPlay from the play family.
-    let text = nomadz::joint_calibration_cfg(&cal);
-    let back = nomadz::read_joint_calibration_cfg(&text, Path::new("-")).unwrap();
+    let text = nomadz::Joints.write(&cal);
+    let back = nomadz::Joints::stored(&text, Path::new("-")).unwrap();
     assert_eq!(back.len(), 26);
     for ((name, param), (read_name, entry)) in bhuman::BHUMAN_JOINTS.iter().zip(&back) {
         assert_eq!(name, read_name);
@@ -280,14 +286,17 @@ fn joint_formats_round_trip() {
     assert_ne!(knee.joint_play, 0.0);
 
     // Camera formats read back what was written.
-    let naoth = naoth::read_camera_matrix_offset_cfg(
-        &naoth::camera_matrix_offset_cfg(&cal),
-        Path::new("-"),
-    )
-    .unwrap();
+    let naoth = naoth::Camera::stored(&naoth::Camera.write(&cal), Path::new("-"), CameraId::Lower)
+        .unwrap()
+        .unwrap();
     assert_eq!(naoth, export::camera::naoth(&cal, CameraId::Lower));
-    let runswift =
-        runswift::read_kinematics_cfg(&runswift::kinematics_cfg(&cal), Path::new("-")).unwrap();
+    let runswift = runswift::Camera::stored(
+        &runswift::Camera.write(&cal),
+        Path::new("-"),
+        CameraId::Lower,
+    )
+    .unwrap()
+    .unwrap();
     assert_eq!(
         runswift,
         export::camera::runswift(&cal, CameraId::Lower).map(f64::to_degrees)
@@ -300,9 +309,10 @@ fn every_format_is_written_by_export_all_and_says_its_units() {
     let cal = random_calibration(&mut rng, 3.0);
     let dir = tempfile::tempdir().unwrap();
     let files = export::export_all(&cal, dir.path(), &export::WriteOptions::default()).unwrap();
-    assert_eq!(files.len(), ExportFormat::ALL.len());
-    for (format, name, file) in ExportFormat::ALL {
-        assert_eq!(ExportFormat::from_name(name), Some(format));
+    assert_eq!(files.len(), export::FORMATS.len());
+    for &format in export::FORMATS {
+        let file = format.file();
+        assert_eq!(export::named(format.name()), Some(format));
         let text = std::fs::read_to_string(dir.path().join(file)).unwrap();
         assert!(!text.contains("NOT A CALIBRATION"), "{file}");
         if !file.ends_with(".json") {
@@ -343,7 +353,7 @@ fn naoth_head_keys_through_naoths_camera_matrix() {
         let cal = random_calibration(&mut rng, if k % 2 == 0 { 4.0 } else { 15.0 });
         let path = dir.path().join(format!("CameraMatrixOffset{k}.cfg"));
         std::fs::copy(&fixture, &path).unwrap();
-        crate::util::updated(&cal, ExportFormat::NaothCamera, &path);
+        crate::util::updated(&cal, &export::naoth::Camera, &path);
         let text = std::fs::read_to_string(&path).unwrap();
         let key = |name: &str| -> f64 {
             text.lines()
@@ -384,7 +394,7 @@ fn naoth_head_keys_through_naoths_camera_matrix() {
                 }
             }
         }
-        let (_, imported) = export::import(&path, Some(ExportFormat::NaothCamera)).unwrap();
+        let (_, imported) = export::import(&path, Some(&export::naoth::Camera)).unwrap();
         for p in NAOTH_HEAD_AND_CAMERA {
             let v = imported.iter().find(|(q, _)| *q == p).unwrap().1;
             assert!(

@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use naocalib::export::{self, Calibration, Entry, ExportFormat, REGISTRY};
+use naocalib::export::{self, Calibration, Entry, FORMATS, Format};
 use naocalib::model::Param;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -42,14 +42,14 @@ fn calibration(rng: &mut impl Rng) -> Calibration {
 
 /// Each layout's fixture, and the keys an update may change in it (a changed line must
 /// contain one of them).
-const CASES: [(ExportFormat, &str, &[&str]); 9] = [
+const CASES: [(&'static dyn Format, &str, &[&str]); 9] = [
     (
-        ExportFormat::BHumanCamera,
+        &export::bhuman::Camera,
         "bhuman/cameraCalibration.cfg",
         &["lower = {", "upper = {"],
     ),
     (
-        ExportFormat::BHumanCamera2016,
+        &export::bhuman::Camera2016,
         "bhuman2016/cameraCalibration.cfg",
         &[
             "x = -0.6deg",
@@ -61,40 +61,40 @@ const CASES: [(ExportFormat, &str, &[&str]); 9] = [
         ],
     ),
     (
-        ExportFormat::BHumanJoints,
+        &export::bhuman::Joints,
         "bhuman/jointCalibration.cfg",
         &["Hip", "Knee", "Ankle"],
     ),
     (
-        ExportFormat::BHumanJoints,
+        &export::bhuman::Joints,
         "bhuman2024/jointCalibration.cfg",
         &["Hip", "Knee", "Ankle"],
     ),
     (
-        ExportFormat::NomadzCamera,
+        &export::nomadz::Camera,
         "nomadz/cameraCalibration.cfg",
         &["cameraTilt", "cameraRoll", "cameraPan", "upperCamera"],
     ),
     (
-        ExportFormat::NomadzJoints,
+        &export::nomadz::Joints,
         "nomadz/jointCalibration.cfg",
         &["offset = ", "jointPlay = "],
     ),
-    (ExportFormat::HulksHead, "hulks/head.json", &["        "]),
+    (&export::hulks::Head, "hulks/head.json", &["        "]),
     (
-        ExportFormat::NaothCamera,
+        &export::naoth::Camera,
         "naoth/CameraMatrixOffset.cfg",
         &["cam_rot.bottom.", "cam_rot.top."],
     ),
     (
-        ExportFormat::RunswiftCamera,
+        &export::runswift::Camera,
         "runswift/nao.cfg",
         &["Bottom=", "TopWhenLooking"],
     ),
 ];
 
 /// The values of a file, as import reads them.
-fn imported(format: ExportFormat, path: &Path) -> Vec<(Param, f64)> {
+fn imported(format: &'static dyn Format, path: &Path) -> Vec<(Param, f64)> {
     export::import(path, Some(format)).unwrap().1
 }
 
@@ -108,7 +108,7 @@ fn update_changes_exactly_the_calibrated_entries_and_keeps_a_backup() {
         let original = std::fs::read_to_string(fixture(name)).unwrap();
         std::fs::write(&path, &original).unwrap();
         assert_eq!(
-            ExportFormat::recognise(&original).map(|f| f.spec().read.is_some()),
+            export::recognised(&original).map(|f| f.robot()),
             Some(true),
             "{name} is recognised"
         );
@@ -149,8 +149,8 @@ fn update_changes_exactly_the_calibrated_entries_and_keeps_a_backup() {
             );
         }
         // What naocalib does not read is kept too.
-        match format {
-            ExportFormat::HulksHead => {
+        match format.name() {
+            "hulks-head" => {
                 let (o, u): (serde_json::Value, serde_json::Value) = (
                     serde_json::from_str(&original).unwrap(),
                     serde_json::from_str(&updated).unwrap(),
@@ -165,10 +165,9 @@ fn update_changes_exactly_the_calibrated_entries_and_keeps_a_backup() {
                 );
                 assert_eq!(c(&o, "correction_in_robot"), c(&u, "correction_in_robot"));
             }
-            ExportFormat::NomadzJoints => {
-                let read = |t: &str| {
-                    naocalib::export::nomadz::read_joint_calibration_cfg(t, Path::new("-")).unwrap()
-                };
+            "nomadz-joints" => {
+                let read =
+                    |t: &str| naocalib::export::nomadz::Joints::stored(t, Path::new("-")).unwrap();
                 for ((name, o), (_, u)) in read(&original).iter().zip(read(&updated)) {
                     assert_eq!(
                         (o.min_angle, o.max_angle),
@@ -194,9 +193,9 @@ fn update_changes_exactly_the_calibrated_entries_and_keeps_a_backup() {
 }
 
 /// Writes `cal` fresh in `format` into `dir` and returns the path.
-fn write_fresh(cal: &Calibration, format: ExportFormat, dir: &Path) -> PathBuf {
+fn write_fresh(cal: &Calibration, format: &'static dyn Format, dir: &Path) -> PathBuf {
     let path = dir.join(format!("fresh-{}", format.name()));
-    std::fs::write(&path, format.render(cal)).unwrap();
+    std::fs::write(&path, format.write(cal)).unwrap();
     path
 }
 
@@ -208,7 +207,7 @@ fn hulks_body_update_inserts_missing_joints_and_keeps_other_keys() {
     let path = dir.path().join("body.P0000073A03S83I00015.json");
     let original = std::fs::read_to_string(fixture("hulks/body.json")).unwrap();
     std::fs::write(&path, &original).unwrap();
-    crate::util::updated(&cal, ExportFormat::HulksBody, &path);
+    crate::util::updated(&cal, &export::hulks::Body, &path);
     let updated = std::fs::read_to_string(&path).unwrap();
     let json: serde_json::Value = serde_json::from_str(&updated).unwrap();
     assert_eq!(json["walking_engine"]["foot_lift_apex"], 0.012, "{updated}");
@@ -249,19 +248,20 @@ fn corrupt_and_unparsable_files_are_refused_untouched() {
     let mut rng = ChaCha8Rng::seed_from_u64(242);
     let cal = calibration(&mut rng);
     let dir = tempfile::tempdir().unwrap();
-    for (format, name, needles) in [
+    let cases: [(&dyn Format, &str, &[&str]); 3] = [
         (
-            ExportFormat::NomadzCamera,
+            &export::nomadz::Camera,
             "nomadz_corrupt/cameraCalibration.cfg",
             &["line 1", "cameraTiltCorrection", "plausible"][..],
         ),
         (
-            ExportFormat::BHumanCamera,
+            &export::bhuman::Camera,
             "broken/cameraCalibration.cfg",
             &["line 5", "missing '}'"][..],
         ),
-        (ExportFormat::HulksBody, "broken/body.json", &["line 3"][..]),
-    ] {
+        (&export::hulks::Body, "broken/body.json", &["line 3"][..]),
+    ];
+    for (format, name, needles) in cases {
         let path = dir.path().join(name.replace('/', "_"));
         let original = std::fs::read(fixture(name)).unwrap();
         std::fs::write(&path, &original).unwrap();
@@ -286,12 +286,11 @@ fn corrupt_and_unparsable_files_are_refused_untouched() {
 #[test]
 fn import_then_export_round_trips_every_value_of_every_layout() {
     let dir = tempfile::tempdir().unwrap();
-    for (format, name, _) in
-        CASES
-            .iter()
-            .copied()
-            .chain([(ExportFormat::HulksBody, "hulks/body.json", &[][..])])
-    {
+    for (format, name, _) in CASES.iter().copied().chain([(
+        &export::hulks::Body as &dyn Format,
+        "hulks/body.json",
+        &[][..],
+    )]) {
         let (recognised, values) = export::import(&fixture(name), None).unwrap();
         assert_eq!(recognised, format, "{name} recognised");
         let (cal, _) = export::import_calibration(&[fixture(name)], None).unwrap();
@@ -305,7 +304,7 @@ fn import_then_export_round_trips_every_value_of_every_layout() {
             );
         }
         // Joints: α = −stored.
-        if format == ExportFormat::BHumanJoints && name.starts_with("bhuman/") {
+        if format.name() == "bhuman-joints" && name.starts_with("bhuman/") {
             let knee = values
                 .iter()
                 .find(|(p, _)| *p == Param::RKneePitch)
@@ -383,42 +382,86 @@ fn import_and_update_from_the_command_line() {
     assert!(!dir.path().join("x.toml").exists());
 }
 
+/// docs/EXPORTS.md's table of formats is the one [`export::table`] renders from the list
+/// (`NAOCALIB_BLESS=1 cargo test --test it docs_table` rewrites it); `export --help` and
+/// `solve --help` name every format of the list.
 #[test]
-fn docs_list_exactly_the_registry() {
-    let docs =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/EXPORTS.md"))
-            .unwrap();
-    let rows: Vec<(String, String)> = docs
-        .lines()
-        .filter(|l| l.starts_with("| `") && !l.starts_with("| `--"))
-        .map(|l| {
-            let cells: Vec<&str> = l.split('|').map(str::trim).collect();
-            (
-                cells[1].trim_matches('`').to_string(),
-                cells[2].trim_matches('`').to_string(),
-            )
-        })
-        .collect();
-    let registry: Vec<(String, String)> = REGISTRY
-        .iter()
-        .map(|s| (s.name.to_string(), s.file.to_string()))
-        .collect();
-    assert_eq!(rows, registry, "docs/EXPORTS.md's table, in registry order");
+fn docs_table_and_help_follow_the_format_list() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/EXPORTS.md");
+    let docs = std::fs::read_to_string(&path).unwrap();
+    let start = docs
+        .find("| `--format` |")
+        .expect("docs/EXPORTS.md has the table");
+    let end = docs[start..]
+        .find("\n\n")
+        .map_or(docs.len(), |n| start + n + 1);
+    let table = export::table();
+    assert_eq!(table.lines().count(), FORMATS.len() + 2, "a row per format");
+    if docs[start..end] != table && std::env::var_os("NAOCALIB_BLESS").is_some() {
+        std::fs::write(&path, format!("{}{table}{}", &docs[..start], &docs[end..])).unwrap();
+    } else {
+        let (docs, list): (Vec<&str>, Vec<&str>) =
+            (docs[start..end].lines().collect(), table.lines().collect());
+        for k in 0..docs.len().max(list.len()) {
+            assert_eq!(
+                docs.get(k),
+                list.get(k),
+                "docs/EXPORTS.md's table, row {k}, is not the list's \
+                 (`NAOCALIB_BLESS=1 cargo test --test it docs_table` rewrites it)"
+            );
+        }
+    }
     let help = naocalib().args(["export", "--help"]).output().unwrap();
     let help = String::from_utf8_lossy(&help.stdout);
-    for s in REGISTRY {
-        assert!(
-            help.contains(s.name) && help.contains(s.file),
-            "--help lists {}",
-            s.name
-        );
+    for f in FORMATS {
+        let line = format!("{}: {} ({})", f.name(), f.description(), f.file());
+        assert!(help.contains(&line), "--help lists {line}");
     }
-    // solve --export writes one file per row: its help names them all.
+    // solve --export writes one file per format: its help names them all.
     let help = naocalib().args(["solve", "--help"]).output().unwrap();
     let help = String::from_utf8_lossy(&help.stdout);
-    for s in REGISTRY {
-        assert!(help.contains(s.file), "solve --help names {}", s.file);
+    for f in FORMATS {
+        assert!(help.contains(f.file()), "solve --help names {}", f.file());
     }
+}
+
+/// The format a file name implies: the most specific rule of the list, the first of the
+/// list among equals; other names need --format, and the error says which names work.
+#[test]
+fn a_file_name_implies_its_format() {
+    for (name, expected) in [
+        ("calibration.toml", Some("toml")),
+        ("dir.cfg/CAL.TOML", Some("toml")),
+        ("head.json", Some("json")),
+        ("hulks/body.json", Some("json")),
+        ("cameraCalibration.cfg", Some("bhuman-camera")),
+        ("nomadz/cameraCalibration.cfg", Some("bhuman-camera")),
+        ("my_camera.cfg", Some("bhuman-camera")),
+        ("jointCalibration.cfg", Some("bhuman-joints")),
+        ("cameraJoint.cfg", Some("bhuman-camera")),
+        ("CameraMatrixOffset.cfg", Some("naoth-camera")),
+        ("naoth/cameramatrixoffset.CFG", Some("naoth-camera")),
+        ("xCameraMatrixOffset.cfg", Some("bhuman-camera")),
+        ("kinematics.cfg", None),
+        ("nao.cfg", None),
+        ("camera.ini", None),
+        ("calibration", None),
+        ("/", None),
+    ] {
+        assert_eq!(
+            export::from_path(Path::new(name)).map(|f| f.name()),
+            expected,
+            "{name}"
+        );
+    }
+    let e = export::ExportError::UnknownFormat {
+        path: PathBuf::from("nao.cfg"),
+    };
+    assert_eq!(
+        e.to_string(),
+        "nao.cfg: unknown export format (use .toml, .json, cameraCalibration.cfg or \
+         jointCalibration.cfg, or give --format)"
+    );
 }
 
 #[test]
@@ -469,9 +512,8 @@ fn solve_records_corrected_angles_and_update_composes_with_the_robots_file() {
     // --update composes stored_new = stored_old − α.
     let joints = dir.path().join("jointCalibration.cfg");
     std::fs::copy(fixture("bhuman/jointCalibration.cfg"), &joints).unwrap();
-    let old =
-        export::bhuman::read_bhuman_joint_cfg(&std::fs::read_to_string(&joints).unwrap(), &joints)
-            .unwrap();
+    let old = export::bhuman::Joints::stored(&std::fs::read_to_string(&joints).unwrap(), &joints)
+        .unwrap();
     let out = naocalib()
         .arg("export")
         .arg(&result_path)
@@ -484,9 +526,8 @@ fn solve_records_corrected_angles_and_update_composes_with_the_robots_file() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let new =
-        export::bhuman::read_bhuman_joint_cfg(&std::fs::read_to_string(&joints).unwrap(), &joints)
-            .unwrap();
+    let new = export::bhuman::Joints::stored(&std::fs::read_to_string(&joints).unwrap(), &joints)
+        .unwrap();
     let mut checked = 0;
     for ((name, s_old), (_, s_new)) in old.iter().zip(&new) {
         match export::bhuman::joint_param(name) {

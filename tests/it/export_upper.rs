@@ -45,7 +45,7 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::{Path, PathBuf};
 
-use naocalib::export::{self, Calibration, Entry, ExportFormat, Unchanged, Updated};
+use naocalib::export::{self, Calibration, Entry, Format, Unchanged, Updated};
 use naocalib::model::{CameraId, Joint, JointAngles, Param, RobotGeometry};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -157,19 +157,18 @@ fn naocalib_upper(cal: &Calibration, yaw: f64, pitch: f64, head: bool) -> M3 {
 /// (format `format`), for head angles `yaw`, `pitch` (rad): the team's head chain (NaoTH's
 /// with its `head_rot` keys) and its camera chain, in naocalib's camera frame. Keys are
 /// read from the text (for B-Human with its config reader).
-fn team_upper(format: ExportFormat, text: &str, yaw: f64, pitch: f64) -> M3 {
+fn team_upper(format: &'static dyn Format, text: &str, yaw: f64, pitch: f64) -> M3 {
     let tilt = UPPER_TILT_DEG.to_radians();
     let head = mul(&rz(yaw), &ry(pitch));
-    match format {
-        ExportFormat::BHumanCamera | ExportFormat::BHumanCamera2016 => {
-            let root = export::cfg::parse(text, Path::new("-")).unwrap();
-            let [x, y, z] = export::bhuman::read_camera(&root, Path::new("-"), CameraId::Upper)
+    match format.name() {
+        "bhuman-camera" | "bhuman-camera-2016" => {
+            let [x, y, z] = export::bhuman::Camera::stored(text, Path::new("-"), CameraId::Upper)
                 .unwrap()
                 .expect("the upper camera's correction")
                 .map(f64::to_radians);
             product(&[head, ry(tilt + y), rx(x), rz(z)])
         }
-        ExportFormat::NomadzCamera => {
+        "nomadz-camera" => {
             let key = |name: &str| cfg_number(text, name);
             product(&[
                 head,
@@ -178,7 +177,7 @@ fn team_upper(format: ExportFormat, text: &str, yaw: f64, pitch: f64) -> M3 {
                 rz(key("upperCameraPanCorrection")),
             ])
         }
-        ExportFormat::NaothCamera => {
+        "naoth-camera" => {
             let key = |name: &str| ini_number(text, name).unwrap_or(0.0);
             product(&[
                 rz(yaw + key("head_rot.z")),
@@ -189,7 +188,7 @@ fn team_upper(format: ExportFormat, text: &str, yaw: f64, pitch: f64) -> M3 {
                 rx(key("cam_rot.top.x")),
             ])
         }
-        ExportFormat::HulksHead => {
+        "hulks-head" => {
             let json: serde_json::Value = serde_json::from_str(text).unwrap();
             let c: Vec<f64> =
                 json["camera_matrix_parameters"]["calibration"]["correction_in_camera_top"]
@@ -206,7 +205,7 @@ fn team_upper(format: ExportFormat, text: &str, yaw: f64, pitch: f64) -> M3 {
             // Optical camera → head, then into naocalib's camera frame.
             product(&[head, transpose(&head_to_camera), transpose(&OPTICAL)])
         }
-        ExportFormat::RunswiftCamera => {
+        "runswift-camera" => {
             let key = |name: &str| ini_number(text, name).unwrap().to_radians();
             // Kinematics.cpp 401–427: interpolation towards left (yaw > 0) or right.
             let limit = 70f64.to_radians();
@@ -229,7 +228,7 @@ fn team_upper(format: ExportFormat, text: &str, yaw: f64, pitch: f64) -> M3 {
             ]);
             mul(&chain, &transpose(&OPTICAL))
         }
-        other => panic!("{} has no upper camera", other.name()),
+        other => panic!("{other} has no upper camera"),
     }
 }
 
@@ -255,23 +254,23 @@ fn ini_number(text: &str, name: &str) -> Option<f64> {
 }
 
 /// Every format with an upper camera, with its fixture (a robot's file).
-const UPPER_FORMATS: [(ExportFormat, &str); 6] = [
-    (ExportFormat::BHumanCamera, "bhuman/cameraCalibration.cfg"),
+const UPPER_FORMATS: [(&'static dyn Format, &str); 6] = [
+    (&export::bhuman::Camera, "bhuman/cameraCalibration.cfg"),
     (
-        ExportFormat::BHumanCamera2016,
+        &export::bhuman::Camera2016,
         "bhuman2016/cameraCalibration.cfg",
     ),
-    (ExportFormat::HulksHead, "hulks/head.json"),
-    (ExportFormat::NaothCamera, "naoth/CameraMatrixOffset.cfg"),
-    (ExportFormat::NomadzCamera, "nomadz/cameraCalibration.cfg"),
-    (ExportFormat::RunswiftCamera, "runswift/nao.cfg"),
+    (&export::hulks::Head, "hulks/head.json"),
+    (&export::naoth::Camera, "naoth/CameraMatrixOffset.cfg"),
+    (&export::nomadz::Camera, "nomadz/cameraCalibration.cfg"),
+    (&export::runswift::Camera, "runswift/nao.cfg"),
 ];
 
 /// Whether the team's chain carries the head offsets (NaoTH's `head_rot` in the camera
 /// file); the others' head offsets are in their joint calibration, applied to the joint
 /// angles before the camera matrix.
-fn with_head(format: ExportFormat) -> bool {
-    format == ExportFormat::NaothCamera
+fn with_head(format: &'static dyn Format) -> bool {
+    format.name() == "naoth-camera"
 }
 
 #[test]
@@ -282,7 +281,7 @@ fn every_upper_camera_key_fresh_and_updated_is_naocalibs_rotation_through_the_te
     for k in 0..30 {
         let cal = calibration(&mut rng, k % 3 == 2);
         for (format, name) in UPPER_FORMATS {
-            let fresh = format.render(&cal);
+            let fresh = format.write(&cal);
             let path = dir.path().join(format!("{k}-{}", name.replace('/', "_")));
             std::fs::copy(fixture(name), &path).unwrap();
             crate::util::updated(&cal, format, &path);
@@ -372,7 +371,7 @@ fn update_changes_the_upper_keys_only_when_the_upper_camera_was_calibrated() {
             }
             // Fresh, the upper camera is zero (B-Human, NomadZ) or absent.
             let fresh = dir.path().join(format!("fresh-{held}-{}", format.name()));
-            std::fs::write(&fresh, format.render(&cal)).unwrap();
+            std::fs::write(&fresh, format.write(&cal)).unwrap();
             for (p, v) in export::import(&fresh, Some(format)).unwrap().1 {
                 if p.name().starts_with("UpperCam") {
                     assert_eq!(v, 0.0, "{} fresh: {p}", format.name());
@@ -389,9 +388,9 @@ fn update_changes_the_upper_keys_only_when_the_upper_camera_was_calibrated() {
         }
     }
     for (format, name) in [
-        (ExportFormat::HulksHead, "hulks/head.json"),
-        (ExportFormat::NaothCamera, "naoth/CameraMatrixOffset.cfg"),
-        (ExportFormat::RunswiftCamera, "runswift/nao.cfg"),
+        (&export::hulks::Head as &dyn Format, "hulks/head.json"),
+        (&export::naoth::Camera, "naoth/CameraMatrixOffset.cfg"),
+        (&export::runswift::Camera, "runswift/nao.cfg"),
     ] {
         let path = dir
             .path()

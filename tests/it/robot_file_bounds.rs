@@ -5,7 +5,8 @@
 
 use std::path::Path;
 
-use naocalib::export::{BHUMAN_JOINTS, Calibration, read_bhuman_camera_cfg, read_bhuman_joint_cfg};
+use naocalib::export::{BHUMAN_JOINTS, Calibration, Format, bhuman};
+use naocalib::model::CameraId;
 use naocalib::model::Param;
 use naocalib::model::bounds::bound;
 use proptest::prelude::*;
@@ -59,13 +60,15 @@ proptest! {
             // Refused for robot files (what `export` does without --allow-unconverged).
             return Ok(());
         }
-        let camera = naocalib::export::bhuman_camera_cfg(&cal);
-        let [x, y, z] = read_bhuman_camera_cfg(&camera, Path::new("c.cfg")).unwrap();
+        let camera = bhuman::Camera.write(&cal);
+        let [x, y, z] = bhuman::Camera::stored(&camera, Path::new("c.cfg"), CameraId::Lower)
+            .unwrap()
+            .unwrap();
         for (p, v) in [(Param::CamRoll, x), (Param::CamPitch, y), (Param::CamYaw, z)] {
             prop_assert!(bound(p).contains(v), "{p} = {v} in {camera}");
         }
-        let joints = naocalib::export::bhuman_joint_cfg(&cal);
-        for (name, v) in read_bhuman_joint_cfg(&joints, Path::new("j.cfg")).unwrap() {
+        let joints = bhuman::Joints.write(&cal);
+        for (name, v) in bhuman::Joints::stored(&joints, Path::new("j.cfg")).unwrap() {
             let param = BHUMAN_JOINTS
                 .iter()
                 .find(|(n, _)| *n == name)

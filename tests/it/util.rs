@@ -155,7 +155,7 @@ pub fn converged_calibration(
 /// backup kept.
 pub fn updated(
     cal: &naocalib::calibration::Calibration,
-    format: naocalib::export::ExportFormat,
+    format: &'static dyn naocalib::export::Format,
     path: &Path,
 ) -> PathBuf {
     use naocalib::export::{Updated, update};
