@@ -398,6 +398,91 @@ pub fn turn_check(found: &[[f64; 2]], predicted: &[[f64; 2]]) -> Result<f64, Str
 #[cfg(test)]
 mod tests {
     use super::*;
+    use opencv::core::Mat;
+    use opencv::prelude::*;
+
+    /// A board seen face-on: board plane (mm) to pixels, `sx` and `sy` px per mm, the
+    /// board's centre at (320, 240).
+    fn face_on(sx: f64, sy: f64) -> Matrix3<f64> {
+        Matrix3::new(sx, 0.0, 320.0, 0.0, sy, 240.0, 0.0, 0.0, 1.0)
+    }
+
+    /// The 640 × 480 image of `model`'s pattern on a white plate through `h` (no lens
+    /// distortion), as an integral image.
+    fn render(model: &Model, h: &Matrix3<f64>) -> Integral {
+        let b = &model.board;
+        let (half_x, half_y) = (
+            b.squares_x as f64 * b.square / 2.0,
+            b.squares_y as f64 * b.square / 2.0,
+        );
+        let (sx, sy) = (h[(0, 0)], h[(1, 1)]);
+        let mut grey: Vec<u8> = Vec::with_capacity(640 * 480);
+        for v in 0..480 {
+            for u in 0..640 {
+                let (x, y) = ((u as f64 - 320.0) / sx, (v as f64 - 240.0) / sy);
+                let pattern = x.abs() < half_x && y.abs() < half_y;
+                grey.push(if pattern && is_black(model, x, y) {
+                    30
+                } else {
+                    220
+                });
+            }
+        }
+        let image = Mat::new_rows_cols_with_data(480, 640, &grey)
+            .unwrap()
+            .try_clone()
+            .unwrap();
+        Integral::new(&image).unwrap()
+    }
+
+    /// The middle 2 × 2 inner vertices (col, row) of `model`'s board.
+    fn middle() -> Vec<(i32, i32)> {
+        vec![(2, 1), (3, 1), (2, 2), (3, 2)]
+    }
+
+    #[test]
+    fn the_image_corrects_a_numbering_off_by_whole_squares() {
+        let model = Model::default();
+        let camera = Camera::default();
+        let truth = face_on(2.0, 2.0);
+        let img = render(&model, &truth);
+        for (a, b) in [(0, 0), (1, 0), (0, -1), (2, 1), (-1, -1)] {
+            // A tentative numbering whose lattice point (i, j) is the board's (i + a, j + b).
+            let h = shifted(&model, &truth, (a, b));
+            let found: Vec<(i32, i32)> = middle().iter().map(|&(c, r)| (c - a, r - b)).collect();
+            let d = decide(&img, &camera, &model, &h, &found).unwrap();
+            assert_eq!(d.shift, (-a, -b), "tentative shift ({a}, {b})");
+            assert_eq!(d.disagree, 0);
+            // The 24 inner vertices and the 20 ring points off its corners.
+            assert_eq!(d.agree, 44);
+            assert_eq!(d.edges, [true; 4]);
+            // Columns 2 and 3 fit 5 placements, rows 1 and 2 fit 3.
+            assert_eq!(d.candidates, 15);
+            assert!(d.runner_up.is_some_and(|r| r >= MARGIN), "{d:?}");
+            // Corrected, the homography is the board's.
+            let back = shifted(&model, &h, d.shift);
+            assert!((back - truth).abs().max() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn a_board_seen_only_in_its_middle_is_not_numbered() {
+        let model = Model::default();
+        let camera = Camera::default();
+        // 8 px per mm across: columns 2 and 3 in view, the pattern's left and right edges
+        // far outside the image; its top and bottom in view.
+        let truth = face_on(8.0, 2.0);
+        let img = render(&model, &truth);
+        let e = decide(&img, &camera, &model, &truth, &middle()).unwrap_err();
+        // Shifts by 0 or ±2 columns keep the saddles' colours and see no edge to tell them
+        // apart; an odd shift turns every colour round.
+        assert!(e.contains("fits 3 numberings"), "{e}");
+        // Seen whole (2 px per mm), the same vertices are numbered.
+        let whole = face_on(2.0, 2.0);
+        let img = render(&model, &whole);
+        let d = decide(&img, &camera, &model, &whole, &middle()).unwrap();
+        assert_eq!((d.shift, d.disagree), ((0, 0), 0));
+    }
 
     #[test]
     fn turn_is_measured_about_the_centroid() {

@@ -21,8 +21,9 @@ pub struct Staged {
 }
 
 impl Staged {
-    /// A stage for the directory `target`, refusing at once what [`check_outputs`] would
-    /// (an input, a file where the directory should be).
+    /// A stage for the directory `target`, refusing at once what
+    /// [`check_outputs`](super::check_outputs) would (an input, a file where the directory
+    /// should be).
     pub fn new(target: &Path, options: &WriteOptions) -> Result<Self, WriteError> {
         check_dir(target, options)?;
         let parent = parent_dir(target);

@@ -5,7 +5,7 @@
 //!
 //! 1. **Prediction.** Every vertex and four points around it (0.3 of a square along the
 //!    board's diagonals, two on black squares and two on white ones) are projected with
-//!    the model ([`pattern`]).
+//!    the model (`pattern.rs`).
 //! 2. **Alignment.** The model's error moves the whole board by up to about a square.
 //!    The shift of the predicted pattern that best matches the image is searched (a
 //!    saddle with the predicted colours scores up to ½, a vertex predicted in the image
@@ -23,7 +23,7 @@
 //! 5. **Numbering.** The image decides each alignment's (row, col) ([`numbering`]); the
 //!    prediction only rules out the pattern's 180° turn.
 //!
-//! One image's search is a [`Search`]: the image, the prediction and the settings every
+//! One image's search is a `Search`: the image, the prediction and the settings every
 //! step shares.
 //!
 //! Vertices too close to the image border for a window of [`MIN_HALF_WINDOW`] pixels are
