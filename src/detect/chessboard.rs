@@ -151,122 +151,25 @@ pub(super) fn chessboard(
     options: &DetectOptions,
     search: Search,
 ) -> opencv::Result<Outcome> {
-    let model = &dataset.model;
-    let intrinsics = model.intrinsics(capture.camera);
-    let camera = [intrinsics.width, intrinsics.height];
-    let check = |points: Option<Vec<[f64; 2]>>| -> opencv::Result<Option<Checked>> {
-        match points {
-            None => Ok(None),
-            Some(points) => checked(grey, points, grid, options, intrinsics).map(Some),
-        }
+    let finder = Finder {
+        dataset,
+        capture,
+        grey,
+        grid,
+        options,
     };
-    let mut whole_image = false;
-    let found = match search {
-        Search::Whole { half: true } => match check(find::find_board_half(grey, grid)?)? {
-            Some(Ok(points)) => Some(Ok(points)),
-            _ => None,
-        },
-        Search::Whole { half: false } => check(find::find_board(grey, grid, None)?)?,
-        Search::Predicted => {
-            let roi = if options.use_model {
-                predicted_roi(model, capture, &options.prediction())
-            } else {
-                None
-            };
-            let mut found = match roi {
-                Some(rect) => check(find::find_board(grey, grid, Some(rect))?)?,
-                None => None,
-            };
-            if found.is_none() {
-                whole_image = roi.is_some();
-                let half = options.use_model
-                    && grid == board_grid(model)
-                    && predicted_square(dataset, capture, grid, &options.prediction())
-                        .is_some_and(|s| s >= 2.0 * MIN_SQUARE);
-                if half {
-                    found = check(find::find_board_half(grey, grid)?)?;
-                }
-                // At full resolution when not tried at half, or when what was found there
-                // does not hold up at full resolution.
-                if !half || found.as_ref().is_some_and(|f| f.is_err()) {
-                    found = check(find::find_board(grey, grid, None)?)?.or(found);
-                }
-            }
-            found
-        }
-    };
-    // Nothing found quickly, but a calibrated prediction (the re-predict loop's, or
-    // `--start-from`) puts the whole board well inside the image: the finder's full search
-    // (without its fast check) finds oblique boards the quick one gives up on. It is slow
-    // where there is no board, so not tried on the nominal model's word.
-    let found = match found {
-        None if options.use_model
-            && options.params.is_some()
-            && search == Search::Predicted
-            && wholly_in_view(dataset, capture, grid, options) =>
-        {
-            // The calibrated prediction is good to a few pixels: its region suffices.
-            let roi = predicted_roi(model, capture, &options.prediction());
-            check(find::find_board_with(
-                grey,
-                grid,
-                roi,
-                find::EXHAUSTIVE_FLAGS,
-            )?)?
-        }
-        found => found,
-    };
+    let (found, whole_image) = finder.find(search)?;
     let points = match found {
         None => return Ok(Outcome::NotFound),
         Some(Err(reason)) => return Ok(Outcome::Rejected { reason }),
         Some(Ok(points)) => points,
     };
-
-    let (vertices, order, numbered) = if options.use_model {
-        if grid != board_grid(model) {
-            return Ok(Outcome::Rejected {
-                reason: format!(
-                    "the pattern {}x{} is not the board's {}x{} (use --no-model)",
-                    grid.cols,
-                    grid.rows,
-                    model.board.cols(),
-                    model.board.rows()
-                ),
-            });
-        }
-        let Some(predicted) = predict(model, capture, &options.prediction()) else {
-            return Ok(Outcome::Rejected {
-                reason: "the model puts the board behind the camera".into(),
-            });
-        };
-        match assign::assign(
-            &points,
-            &predicted,
-            grid,
-            [camera[0] as f64, camera[1] as f64],
-        ) {
-            Ok(a) => {
-                let numbered = format!(
-                    "numbered by OpenCV's whole {}×{} grid, its 180° turn ruled out by the \
-                     prediction (turned {:.0}° against it)",
-                    grid.cols, grid.rows, a.rotation_deg
-                );
-                (a.vertices, a.order, numbered)
-            }
-            Err(reason) => return Ok(Outcome::Rejected { reason }),
-        }
-    } else {
-        let order = (0..grid.len() as u32)
-            .map(|k| (k / grid.cols, k % grid.cols))
-            .collect();
-        (
-            order,
-            assign::Order::Same,
-            "in OpenCV's order (no model)".to_string(),
-        )
+    let numbering = match finder.number(&points) {
+        Ok(n) => n,
+        Err(reason) => return Ok(Outcome::Rejected { reason }),
     };
-    let order = Some(order);
-    let mut corners: Vec<Corner> = vertices
+    let mut corners: Vec<Corner> = numbering
+        .vertices
         .iter()
         .zip(&points)
         .map(|(&(row, col), p)| Corner {
@@ -279,10 +182,157 @@ pub(super) fn chessboard(
     corners.sort_by_key(|c| c.vertex);
     Ok(Outcome::Found {
         corners,
-        order,
+        order: Some(numbering.order),
         whole_image,
-        numbered,
+        numbered: numbering.numbered,
     })
+}
+
+/// OpenCV's chessboard finder on one capture's image: what it searches and how.
+struct Finder<'a> {
+    /// The dataset (its model predicts the board).
+    dataset: &'a Dataset,
+    /// The capture whose image is searched.
+    capture: &'a Capture,
+    /// The image (8-bit grey).
+    grey: &'a Mat,
+    /// The pattern looked for.
+    grid: Grid,
+    /// How to detect.
+    options: &'a DetectOptions,
+}
+
+/// The (row, col) OpenCV's points get.
+struct Numbering {
+    /// (row, col) of each point, in OpenCV's order.
+    vertices: Vec<(u32, u32)>,
+    /// How OpenCV's order relates to the board's.
+    order: assign::Order,
+    /// How the numbering was decided (for the log).
+    numbered: String,
+}
+
+impl Finder<'_> {
+    /// Refines and checks the points OpenCV found, if any ([`checked`]).
+    fn check(&self, points: Option<Vec<[f64; 2]>>) -> opencv::Result<Option<Checked>> {
+        let intrinsics = self.dataset.model.intrinsics(self.capture.camera);
+        match points {
+            None => Ok(None),
+            Some(points) => {
+                checked(self.grey, points, self.grid, self.options, intrinsics).map(Some)
+            }
+        }
+    }
+
+    /// The points found where `search` says, refined and checked (`None` when nothing is
+    /// found), and whether the whole image was searched after the predicted region.
+    fn find(&self, search: Search) -> opencv::Result<(Option<Checked>, bool)> {
+        let (grey, grid, options) = (self.grey, self.grid, self.options);
+        let (found, whole_image) = match search {
+            Search::Whole { half: true } => match self.check(find::find_board_half(grey, grid)?)? {
+                Some(Ok(points)) => (Some(Ok(points)), false),
+                _ => (None, false),
+            },
+            Search::Whole { half: false } => {
+                (self.check(find::find_board(grey, grid, None)?)?, false)
+            }
+            Search::Predicted => self.predicted()?,
+        };
+        // Nothing found quickly, but a calibrated prediction (the re-predict loop's, or
+        // `--start-from`) puts the whole board well inside the image: the finder's full
+        // search (without its fast check) finds oblique boards the quick one gives up on.
+        // It is slow where there is no board, so not tried on the nominal model's word.
+        let found = match found {
+            None if options.use_model
+                && options.params.is_some()
+                && search == Search::Predicted
+                && wholly_in_view(self.dataset, self.capture, grid, options) =>
+            {
+                // The calibrated prediction is good to a few pixels: its region suffices.
+                let roi = predicted_roi(&self.dataset.model, self.capture, &options.prediction());
+                self.check(find::find_board_with(
+                    grey,
+                    grid,
+                    roi,
+                    find::EXHAUSTIVE_FLAGS,
+                )?)?
+            }
+            found => found,
+        };
+        Ok((found, whole_image))
+    }
+
+    /// The points found where the model predicts the board, else in the whole image (at
+    /// half resolution when the predicted squares are large enough), and whether the
+    /// whole image was searched after a predicted region.
+    fn predicted(&self) -> opencv::Result<(Option<Checked>, bool)> {
+        let (dataset, grey, grid, options) = (self.dataset, self.grey, self.grid, self.options);
+        let model = &dataset.model;
+        let roi = if options.use_model {
+            predicted_roi(model, self.capture, &options.prediction())
+        } else {
+            None
+        };
+        if let Some(rect) = roi
+            && let Some(found) = self.check(find::find_board(grey, grid, Some(rect))?)?
+        {
+            return Ok((Some(found), false));
+        }
+        let half = options.use_model
+            && grid == board_grid(model)
+            && predicted_square(dataset, self.capture, grid, &options.prediction())
+                .is_some_and(|s| s >= 2.0 * MIN_SQUARE);
+        let mut found = None;
+        if half {
+            found = self.check(find::find_board_half(grey, grid)?)?;
+        }
+        // At full resolution when not tried at half, or when what was found there does
+        // not hold up at full resolution.
+        if !half || found.as_ref().is_some_and(|f| f.is_err()) {
+            found = self.check(find::find_board(grey, grid, None)?)?.or(found);
+        }
+        Ok((found, roi.is_some()))
+    }
+
+    /// The (row, col) of the `points` OpenCV found (its order): by the model's orientation
+    /// (OpenCV's order without the model), or why the model cannot number them.
+    fn number(&self, points: &[[f64; 2]]) -> Result<Numbering, String> {
+        let (grid, options) = (self.grid, self.options);
+        let model = &self.dataset.model;
+        if !options.use_model {
+            return Ok(Numbering {
+                vertices: (0..grid.len() as u32)
+                    .map(|k| (k / grid.cols, k % grid.cols))
+                    .collect(),
+                order: assign::Order::Same,
+                numbered: "in OpenCV's order (no model)".to_string(),
+            });
+        }
+        if grid != board_grid(model) {
+            return Err(format!(
+                "the pattern {}x{} is not the board's {}x{} (use --no-model)",
+                grid.cols,
+                grid.rows,
+                model.board.cols(),
+                model.board.rows()
+            ));
+        }
+        let Some(predicted) = predict(model, self.capture, &options.prediction()) else {
+            return Err("the model puts the board behind the camera".into());
+        };
+        let camera = model.intrinsics(self.capture.camera);
+        let size = [camera.width as f64, camera.height as f64];
+        let a = assign::assign(points, &predicted, grid, size)?;
+        Ok(Numbering {
+            numbered: format!(
+                "numbered by OpenCV's whole {}×{} grid, its 180° turn ruled out by the \
+                 prediction (turned {:.0}° against it)",
+                grid.cols, grid.rows, a.rotation_deg
+            ),
+            vertices: a.vertices,
+            order: a.order,
+        })
+    }
 }
 
 #[cfg(test)]

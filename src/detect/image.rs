@@ -34,8 +34,37 @@ pub fn read_grey(path: &Path) -> Result<Mat, DetectError> {
     decode_grey(path, &read_bytes(path)?)
 }
 
+/// Reads an image file as 8-bit greyscale, refusing one whose size is not `size` (the
+/// camera's resolution): from the header, before any pixel is decoded, and again after
+/// decoding.
+pub(super) fn read_sized(path: &Path, size: [u32; 2]) -> Result<Mat, DetectError> {
+    let camera = size;
+    let bytes = read_bytes(path)?;
+    if !bytes.is_empty() {
+        let size = check_header(path, &bytes)?;
+        if size != camera {
+            return Err(DetectError::Size {
+                path: path.to_path_buf(),
+                size,
+                camera,
+            });
+        }
+    }
+    let grey = decode_grey(path, &bytes)?;
+    drop(bytes);
+    let size = [grey.cols() as u32, grey.rows() as u32];
+    if size != camera {
+        return Err(DetectError::Size {
+            path: path.to_path_buf(),
+            size,
+            camera,
+        });
+    }
+    Ok(grey)
+}
+
 /// Reads an image file's bytes.
-pub(super) fn read_bytes(path: &Path) -> Result<Vec<u8>, DetectError> {
+fn read_bytes(path: &Path) -> Result<Vec<u8>, DetectError> {
     match std::fs::read(path) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(DetectError::Missing {
             path: path.to_path_buf(),
@@ -77,7 +106,7 @@ pub fn header_size(path: &Path, bytes: &[u8]) -> Result<[u32; 2], DetectError> {
 
 /// Refuses an image whose header claims more than [`MAX_SIDE`] or [`MAX_PIXELS`] (and one
 /// that is no PNG, JPEG, BMP or PGM).
-pub(super) fn check_header(path: &Path, bytes: &[u8]) -> Result<[u32; 2], DetectError> {
+fn check_header(path: &Path, bytes: &[u8]) -> Result<[u32; 2], DetectError> {
     const KNOWN: [&[u8]; 5] = [b"\x89PNG", b"\xff\xd8\xff", b"BM", b"P5", b"P2"];
     if !KNOWN.iter().any(|m| bytes.starts_with(m)) {
         return Err(DetectError::Decode {

@@ -37,14 +37,14 @@ mod predict;
 
 use std::path::Path;
 
-use opencv::prelude::*;
+use opencv::core::Mat;
 use rayon::prelude::*;
 
 use crate::dataset::{Capture, Corner, Dataset};
 use crate::model::{Model, PARAMETER_COUNT};
 use assign::Grid;
+use image::read_sized;
 pub use image::{MAX_PIXELS, MAX_SIDE, decode_grey, header_size, read_grey, resolve_image};
-use image::{check_header, read_bytes};
 pub use outcome::{DetectError, Detection, ImageResult, NoCorners, Outcome, Summary};
 pub use predict::predict;
 
@@ -225,6 +225,8 @@ fn detect_capture_in(
     }
 }
 
+/// Detects the board in the image `image` of `capture`: first by the model-guided search
+/// (with the model), then by OpenCV's chessboard finder where that finds no whole board.
 fn detect_image(
     dataset: &Dataset,
     capture: &Capture,
@@ -234,85 +236,23 @@ fn detect_image(
 ) -> Result<Outcome, DetectError> {
     let model = &dataset.model;
     let path = resolve_image(&dataset.dir, image)?;
-    let bytes = read_bytes(&path)?;
-    // The size is checked from the header, before any pixel is decoded.
     let intrinsics = model.intrinsics(capture.camera);
-    let camera = [intrinsics.width, intrinsics.height];
-    if !bytes.is_empty() {
-        let size = check_header(&path, &bytes)?;
-        if size != camera {
-            return Err(DetectError::Size { path, size, camera });
-        }
-    }
-    let grey = decode_grey(&path, &bytes)?;
-    drop(bytes);
+    let grey = read_sized(&path, [intrinsics.width, intrinsics.height])?;
     let cv = |e: opencv::Error| DetectError::OpenCv {
         path: path.clone(),
         message: e.message,
     };
-    let size = [grey.cols() as u32, grey.rows() as u32];
-    if size != camera {
-        return Err(DetectError::Size { path, size, camera });
-    }
     let grid = options.pattern.unwrap_or_else(|| board_grid(model));
     let mut search = chessboard::Search::Predicted;
     let mut guided_partial = None;
     if options.use_model && options.guided && grid == board_grid(model) {
-        let params = options.prediction();
-        let pose = model
-            .chains_for(capture.camera, capture.side, &capture.joints)
-            .camera_to_board(&params);
-        let integral = guided::Integral::new(&grey).map_err(cv)?;
-        let camera = model.intrinsics_at(capture.camera, &params);
-        let found = guided::detect(
-            &grey,
-            &integral,
-            model,
-            &camera,
-            &pose,
-            options.subpix_factor,
-            match mode {
-                Mode::Quick => 0.0,
-                Mode::Full => options.uncertainty_deg(),
-            },
-        )
-        .map_err(cv)?;
-        // What the guided search found, as the capture's outcome.
-        let outcome_of = |board: &guided::Board| Outcome::Found {
-            corners: board
-                .vertices
-                .iter()
-                .map(|&(vertex, pixel)| Corner {
-                    capture: capture.id,
-                    vertex,
-                    pixel,
-                    line: 0,
-                })
-                .collect(),
-            order: None,
-            whole_image: false,
-            numbered: board.numbered.clone(),
-        };
-        if mode == Mode::Quick {
-            return Ok(found.map_or(Outcome::NotFound, |board| outcome_of(&board)));
-        }
-        if let Ok(board) = found {
-            let complete = board.vertices.len() == grid.len();
-            let found = outcome_of(&board);
-            if complete {
-                return Ok(found);
+        match guided_search(dataset, capture, &grey, options, mode).map_err(cv)? {
+            Guided::Done(outcome) => return Ok(outcome),
+            Guided::Partial { found, half } => {
+                search = chessboard::Search::Whole { half };
+                guided_partial = Some(found);
             }
-            // Part of the board: OpenCV's chessboard finder may still find all of it, but
-            // only where every vertex is in view, and it gives up slowly where one is not.
-            if !chessboard::worth_trying(&board, intrinsics, options.subpix_factor) {
-                return Ok(found);
-            }
-            search = chessboard::Search::Whole {
-                half: board
-                    .square()
-                    .is_some_and(|s| s >= 2.0 * chessboard::MIN_SQUARE),
-            };
-            guided_partial = Some(found);
+            Guided::NotFound => {}
         }
     }
     let outcome =
@@ -321,6 +261,92 @@ fn detect_image(
         (found @ Outcome::Found { .. }, _) => found,
         (_, Some(partial)) => partial,
         (other, None) => other,
+    })
+}
+
+/// What the model-guided search makes of one image.
+enum Guided {
+    /// The outcome to keep.
+    Done(Outcome),
+    /// Part of the board, which OpenCV's chessboard finder may complete by searching the
+    /// whole image (at half resolution with `half`).
+    Partial {
+        /// The part found, kept when the finder finds no whole board.
+        found: Outcome,
+        /// The board's squares are large enough for the finder at half resolution.
+        half: bool,
+    },
+    /// No board: the chessboard finder searches where the model predicts it.
+    NotFound,
+}
+
+/// The model-guided search ([`guided::detect`]) in `grey`, the image of `capture`; in the
+/// quick `mode`, its outcome is final.
+fn guided_search(
+    dataset: &Dataset,
+    capture: &Capture,
+    grey: &Mat,
+    options: &DetectOptions,
+    mode: Mode,
+) -> opencv::Result<Guided> {
+    let model = &dataset.model;
+    let params = options.prediction();
+    let pose = model
+        .chains_for(capture.camera, capture.side, &capture.joints)
+        .camera_to_board(&params);
+    let integral = guided::Integral::new(grey)?;
+    let camera = model.intrinsics_at(capture.camera, &params);
+    let uncertainty_deg = match mode {
+        Mode::Quick => 0.0,
+        Mode::Full => options.uncertainty_deg(),
+    };
+    let found = guided::detect(
+        grey,
+        &integral,
+        model,
+        &camera,
+        &pose,
+        options.subpix_factor,
+        uncertainty_deg,
+    )?;
+    // What the guided search found, as the capture's outcome.
+    let outcome_of = |board: &guided::Board| Outcome::Found {
+        corners: board
+            .vertices
+            .iter()
+            .map(|&(vertex, pixel)| Corner {
+                capture: capture.id,
+                vertex,
+                pixel,
+                line: 0,
+            })
+            .collect(),
+        order: None,
+        whole_image: false,
+        numbered: board.numbered.clone(),
+    };
+    if mode == Mode::Quick {
+        return Ok(Guided::Done(
+            found.map_or(Outcome::NotFound, |board| outcome_of(&board)),
+        ));
+    }
+    let Ok(board) = found else {
+        return Ok(Guided::NotFound);
+    };
+    let found = outcome_of(&board);
+    // Part of the board: OpenCV's chessboard finder may still find all of it, but only
+    // where every vertex is in view, and it gives up slowly where one is not.
+    let intrinsics = model.intrinsics(capture.camera);
+    if board.vertices.len() == board_grid(model).len()
+        || !chessboard::worth_trying(&board, intrinsics, options.subpix_factor)
+    {
+        return Ok(Guided::Done(found));
+    }
+    Ok(Guided::Partial {
+        found,
+        half: board
+            .square()
+            .is_some_and(|s| s >= 2.0 * chessboard::MIN_SQUARE),
     })
 }
 
@@ -338,86 +364,87 @@ pub fn detect_dataset(
     if options.jobs > 1 {
         let _ = opencv::core::set_num_threads(1);
     }
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(options.jobs.clamp(1, max_jobs()))
-        .build()
-        .ok();
-    let run = |options: &DetectOptions, which: &[usize], mode: Mode| -> Vec<ImageResult> {
+    let passes = Passes {
+        dataset,
+        pool: rayon::ThreadPoolBuilder::new()
+            .num_threads(options.jobs.clamp(1, max_jobs()))
+            .build()
+            .ok(),
+        grid: options
+            .pattern
+            .unwrap_or_else(|| board_grid(&dataset.model)),
+    };
+    let all: Vec<usize> = (0..dataset.captures.len()).collect();
+    let repredict = options.use_model
+        && options.guided
+        && options.repredict
+        && passes.grid == board_grid(&dataset.model);
+    // With the re-predict loop, the first pass is quick: what it misses, the calibrated
+    // prediction finds near where it says, and the rest gets the full search at the end.
+    let first = if repredict { Mode::Quick } else { Mode::Full };
+    let mut results = passes.run(options, &all, first);
+    if repredict {
+        passes.repredict(options, &mut results);
+    }
+    for r in &results {
+        done(r);
+    }
+    results
+}
+
+/// Passes over a dataset's images, several images at once.
+struct Passes<'a> {
+    /// The dataset.
+    dataset: &'a Dataset,
+    /// The threads the images are searched on (rayon's global pool when `None`).
+    pool: Option<rayon::ThreadPool>,
+    /// The pattern looked for.
+    grid: Grid,
+}
+
+impl Passes<'_> {
+    /// The results of the captures `which` (indices), searched with `options` in `mode`.
+    fn run(&self, options: &DetectOptions, which: &[usize], mode: Mode) -> Vec<ImageResult> {
+        let dataset = self.dataset;
         let go = || {
             which
                 .par_iter()
                 .map(|&i| detect_capture_in(dataset, &dataset.captures[i], options, mode))
                 .collect()
         };
-        match &pool {
+        match &self.pool {
             Some(pool) => pool.install(go),
             None => go(),
         }
-    };
-    let all: Vec<usize> = (0..dataset.captures.len()).collect();
-    let grid = options
-        .pattern
-        .unwrap_or_else(|| board_grid(&dataset.model));
-    let repredict = options.use_model
-        && options.guided
-        && options.repredict
-        && grid == board_grid(&dataset.model);
-    // With the re-predict loop, the first pass is quick: what it misses, the calibrated
-    // prediction finds near where it says, and the rest gets the full search at the end.
-    let first = if repredict { Mode::Quick } else { Mode::Full };
-    let mut results = run(options, &all, first);
-    let mut quick = vec![first == Mode::Quick; results.len()];
-    if repredict {
+    }
+
+    /// The re-predict loop after a quick first pass over every capture (`results`):
+    /// calibrates from the boards found, predicts again and searches again where no whole
+    /// board was found, until nothing changes; then gives what only the quick pass looked
+    /// at the full search, with the best prediction there is.
+    fn repredict(&self, options: &DetectOptions, results: &mut [ImageResult]) {
+        let mut quick = vec![true; results.len()];
         let mut options = options.clone();
         for _ in 1..MAX_PASSES {
             // Nothing to look for again: every image holds a whole board (or none).
-            if results.iter().all(|r| whole(r, grid)) {
+            if results.iter().all(|r| whole(r, self.grid)) {
                 break;
             }
-            let Some(params) = calibrate_from(dataset, &results) else {
+            let Some(params) = calibrate_from(self.dataset, results) else {
                 break;
             };
             options.params = Some(params);
-            let redo: Vec<usize> = all
-                .iter()
-                .copied()
-                .filter(|&i| {
-                    // A board found in part is searched in full once; an image without a
-                    // board again with every better prediction.
-                    (quick[i] || found_count(&results[i]) == 0)
-                        && worth_again(dataset, &dataset.captures[i], &results[i], grid, &params)
-                })
-                .collect();
-            if redo.is_empty() {
-                break;
-            }
-            // A result is replaced only by one with more vertices (both are numbered by
-            // the image; the new prediction may find more, never needs fewer).
-            let mut changed = false;
-            let again = run(&options, &redo, Mode::Full);
-            for (i, r) in redo.into_iter().zip(again) {
-                if found_count(&r) > found_count(&results[i]) {
-                    changed = true;
-                    results[i] = r;
-                } else if found_count(&results[i]) == 0 {
-                    // Why the full search found nothing.
-                    results[i] = r;
-                }
-                quick[i] = false;
-            }
-            if !changed {
+            if !self.again(&options, results, &mut quick) {
                 break;
             }
         }
         // What only the quick pass looked at and it did not find whole: the full search,
         // with the best prediction there is.
-        let rest: Vec<usize> = all
-            .iter()
-            .copied()
-            .filter(|&i| quick[i] && !whole(&results[i], grid))
+        let rest: Vec<usize> = (0..results.len())
+            .filter(|&i| quick[i] && !whole(&results[i], self.grid))
             .collect();
         if !rest.is_empty() {
-            let again = run(&options, &rest, Mode::Full);
+            let again = self.run(&options, &rest, Mode::Full);
             for (i, r) in rest.into_iter().zip(again) {
                 if found_count(&r) > found_count(&results[i]) || found_count(&results[i]) == 0 {
                     results[i] = r;
@@ -425,10 +452,50 @@ pub fn detect_dataset(
             }
         }
     }
-    for r in &results {
-        done(r);
+
+    /// One pass of the re-predict loop with the calibrated prediction of `options`: the
+    /// captures worth it are searched again in full (`quick` marks those only the quick
+    /// pass has searched). Returns whether a result changed.
+    fn again(
+        &self,
+        options: &DetectOptions,
+        results: &mut [ImageResult],
+        quick: &mut [bool],
+    ) -> bool {
+        let (dataset, params) = (self.dataset, options.prediction());
+        let redo: Vec<usize> = (0..results.len())
+            .filter(|&i| {
+                // A board found in part is searched in full once; an image without a
+                // board again with every better prediction.
+                (quick[i] || found_count(&results[i]) == 0)
+                    && worth_again(
+                        dataset,
+                        &dataset.captures[i],
+                        &results[i],
+                        self.grid,
+                        &params,
+                    )
+            })
+            .collect();
+        if redo.is_empty() {
+            return false;
+        }
+        // A result is replaced only by one with more vertices (both are numbered by
+        // the image; the new prediction may find more, never needs fewer).
+        let mut changed = false;
+        let again = self.run(options, &redo, Mode::Full);
+        for (i, r) in redo.into_iter().zip(again) {
+            if found_count(&r) > found_count(&results[i]) {
+                changed = true;
+                results[i] = r;
+            } else if found_count(&results[i]) == 0 {
+                // Why the full search found nothing.
+                results[i] = r;
+            }
+            quick[i] = false;
+        }
+        changed
     }
-    results
 }
 
 /// Whether `result` leaves nothing to search again: a whole board, no image, or an image

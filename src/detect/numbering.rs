@@ -19,7 +19,7 @@
 use nalgebra::Matrix3;
 
 use super::assign;
-use super::guided::Integral;
+use super::guided::{self, Integral, is_black};
 use crate::model::{Camera, Model};
 
 /// What the image shows at one lattice point.
@@ -108,22 +108,9 @@ fn lattice(model: &Model, i: i32, j: i32) -> [f64; 2] {
     ]
 }
 
-/// Whether the square at board position `(x, y)` (mm) is black on the checkerboard
-/// extended beyond the pattern (the four corner squares are black).
-fn is_black(model: &Model, x: f64, y: f64) -> bool {
-    let b = &model.board;
-    let ix = (x / b.square + b.squares_x as f64 / 2.0).floor() as i64;
-    let iy = (y / b.square + b.squares_y as f64 / 2.0).floor() as i64;
-    (ix + iy).rem_euclid(2) == 0
-}
-
-/// The (distorted) pixel of undistorted pixel `p`.
+/// The (distorted) pixel of undistorted pixel `p`, or `None` when it is not finite.
 fn distorted(camera: &Camera, p: [f64; 2]) -> Option<[f64; 2]> {
-    let a = (p[0] - camera.cx) / camera.fx;
-    let b = (p[1] - camera.cy) / camera.fy;
-    camera
-        .project(&[1.0, -a, -b])
-        .filter(|q| q[0].is_finite() && q[1].is_finite())
+    guided::distorted(camera, p).filter(|q| q[0].is_finite() && q[1].is_finite())
 }
 
 /// What the image shows at lattice point `(i, j)` of the board mapped by `h` (board plane
@@ -179,6 +166,106 @@ fn look(img: &Integral, camera: &Camera, model: &Model, h: &Matrix3<f64>, i: i32
     }
 }
 
+/// How one numbering (the tentative one shifted by whole squares) fares against the image.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Score {
+    /// The shift (columns, rows) from the tentative numbering (see [`Decided::shift`]).
+    shift: (i32, i32),
+    /// Lattice points whose look agrees with this numbering.
+    agree: usize,
+    /// Lattice points whose look contradicts it.
+    disagree: usize,
+    /// Pattern edges (left, right, top, bottom) seen as edges (no saddle on the ring).
+    edges: [bool; 4],
+}
+
+/// What the image shows on a rectangle of lattice points, each looked at once.
+struct Looks {
+    /// Lattice point (col, row) of the rectangle's first entry.
+    origin: (i32, i32),
+    /// Columns of the rectangle.
+    width: usize,
+    /// Row by row.
+    seen: Vec<Seen>,
+}
+
+impl Looks {
+    /// What the image shows at every lattice point `(i, j)` with `i` in `cols`, `j` in
+    /// `rows`, of the board mapped by `h` ([`look`]).
+    fn new(
+        img: &Integral,
+        camera: &Camera,
+        model: &Model,
+        h: &Matrix3<f64>,
+        cols: std::ops::Range<i32>,
+        rows: std::ops::Range<i32>,
+    ) -> Looks {
+        let seen = rows
+            .clone()
+            .flat_map(|j| cols.clone().map(move |i| (i, j)))
+            .map(|(i, j)| look(img, camera, model, h, i, j))
+            .collect();
+        Looks {
+            origin: (cols.start, rows.start),
+            width: cols.len(),
+            seen,
+        }
+    }
+
+    /// What the image shows at lattice point `(i, j)` (inside the rectangle).
+    fn at(&self, i: i32, j: i32) -> Seen {
+        let (i0, j0) = self.origin;
+        self.seen[(j - j0) as usize * self.width + (i - i0) as usize]
+    }
+
+    /// How the numbering shifted by `(a, b)` fares: its `cols` × `rows` inner vertices
+    /// must show saddles of its colours, the ring just outside them none.
+    fn score(&self, (a, b): (i32, i32), cols: i32, rows: i32) -> Score {
+        let parity = (a + b).rem_euclid(2) == 0;
+        let mut score = Score {
+            shift: (a, b),
+            agree: 0,
+            disagree: 0,
+            edges: [false; 4],
+        };
+        for j in b - 1..=b + rows {
+            for i in a - 1..=a + cols {
+                let inner = i >= a && i < a + cols && j >= b && j < b + rows;
+                let ring = !inner;
+                // The ring's corners touch a single square: not looked at.
+                if ring && (i == a - 1 || i == a + cols) && (j == b - 1 || j == b + rows) {
+                    continue;
+                }
+                let ok = match (inner, self.at(i, j)) {
+                    (_, Seen::Unknown) => None,
+                    (true, Seen::Saddle(p)) => Some(p == parity),
+                    (true, Seen::Plain) => Some(false),
+                    (false, Seen::Plain) => Some(true),
+                    (false, Seen::Saddle(_)) => Some(false),
+                };
+                match ok {
+                    Some(true) => score.agree += 1,
+                    Some(false) => score.disagree += 1,
+                    None => {}
+                }
+                if ring && ok == Some(true) {
+                    let side = if i == a - 1 {
+                        0
+                    } else if i == a + cols {
+                        1
+                    } else if j == b - 1 {
+                        2
+                    } else {
+                        3
+                    };
+                    score.edges[side] = true;
+                }
+            }
+        }
+        score
+    }
+}
+
 /// Decides the numbering of a board whose vertices were found at lattice points `found`
 /// (col, row of the tentative numbering) with homography `h` (board plane of the
 /// tentative numbering, mm, to undistorted pixels): the shift to the numbering the image
@@ -212,86 +299,46 @@ pub fn decide(
         ));
     }
     // What the image shows on every lattice point any candidate looks at.
-    let (i0, j0) = (a_lo - 1, b_lo - 1);
-    let (ni, nj) = (
-        (a_hi + cols + 1 - i0) as usize,
-        (b_hi + rows + 1 - j0) as usize,
+    let looks = Looks::new(
+        img,
+        camera,
+        model,
+        h,
+        a_lo - 1..a_hi + cols + 1,
+        b_lo - 1..b_hi + rows + 1,
     );
-    let mut seen = vec![Seen::Unknown; ni * nj];
-    for jj in 0..nj {
-        for ii in 0..ni {
-            seen[jj * ni + ii] = look(img, camera, model, h, i0 + ii as i32, j0 + jj as i32);
-        }
-    }
-    let at = |i: i32, j: i32| seen[(j - j0) as usize * ni + (i - i0) as usize];
-    let mut scored = Vec::new();
-    for b in b_lo..=b_hi {
-        for a in a_lo..=a_hi {
-            let parity = (a + b).rem_euclid(2) == 0;
-            let (mut agree, mut disagree) = (0, 0);
-            let mut edges = [false; 4];
-            for j in b - 1..=b + rows {
-                for i in a - 1..=a + cols {
-                    let inner = i >= a && i < a + cols && j >= b && j < b + rows;
-                    let ring = !inner;
-                    // The ring's corners touch a single square: not looked at.
-                    if ring && (i == a - 1 || i == a + cols) && (j == b - 1 || j == b + rows) {
-                        continue;
-                    }
-                    let s = at(i, j);
-                    let ok = match (inner, s) {
-                        (_, Seen::Unknown) => None,
-                        (true, Seen::Saddle(p)) => Some(p == parity),
-                        (true, Seen::Plain) => Some(false),
-                        (false, Seen::Plain) => Some(true),
-                        (false, Seen::Saddle(_)) => Some(false),
-                    };
-                    match ok {
-                        Some(true) => agree += 1,
-                        Some(false) => disagree += 1,
-                        None => {}
-                    }
-                    if ring && ok == Some(true) {
-                        let side = if i == a - 1 {
-                            0
-                        } else if i == a + cols {
-                            1
-                        } else if j == b - 1 {
-                            2
-                        } else {
-                            3
-                        };
-                        edges[side] = true;
-                    }
-                }
-            }
-            scored.push(((a, b), agree, disagree, edges));
-        }
-    }
-    scored.sort_by_key(|s| (s.2, std::cmp::Reverse(s.1)));
-    let (shift, agree, disagree, edges) = scored[0];
-    let runner_up = scored.get(1).map(|s| s.2);
-    if disagree > MAX_DISAGREE {
+    let mut scored: Vec<Score> = (b_lo..=b_hi)
+        .flat_map(|b| (a_lo..=a_hi).map(move |a| (a, b)))
+        .map(|shift| looks.score(shift, cols, rows))
+        .collect();
+    scored.sort_by_key(|s| (s.disagree, std::cmp::Reverse(s.agree)));
+    let best = scored[0];
+    let runner_up = scored.get(1).map(|s| s.disagree);
+    if best.disagree > MAX_DISAGREE {
         return Err(format!(
-            "no numbering fits the image: the best disagrees at {disagree} lattice points"
+            "no numbering fits the image: the best disagrees at {} lattice points",
+            best.disagree
         ));
     }
     if let Some(r) = runner_up
-        && r < disagree + MARGIN
+        && r < best.disagree + MARGIN
     {
-        let close = scored.iter().filter(|s| s.2 < disagree + MARGIN).count();
+        let close = scored
+            .iter()
+            .filter(|s| s.disagree < best.disagree + MARGIN)
+            .count();
         return Err(format!(
             "the visible part fits {close} numberings (shifted by whole squares): the \
              pattern's edges are not seen on enough sides"
         ));
     }
     Ok(Decided {
-        shift,
-        agree,
-        disagree,
+        shift: best.shift,
+        agree: best.agree,
+        disagree: best.disagree,
         candidates: scored.len(),
         runner_up,
-        edges,
+        edges: best.edges,
     })
 }
 
@@ -351,6 +398,91 @@ pub fn turn_check(found: &[[f64; 2]], predicted: &[[f64; 2]]) -> Result<f64, Str
 #[cfg(test)]
 mod tests {
     use super::*;
+    use opencv::core::Mat;
+    use opencv::prelude::*;
+
+    /// A board seen face-on: board plane (mm) to pixels, `sx` and `sy` px per mm, the
+    /// board's centre at (320, 240).
+    fn face_on(sx: f64, sy: f64) -> Matrix3<f64> {
+        Matrix3::new(sx, 0.0, 320.0, 0.0, sy, 240.0, 0.0, 0.0, 1.0)
+    }
+
+    /// The 640 × 480 image of `model`'s pattern on a white plate through `h` (no lens
+    /// distortion), as an integral image.
+    fn render(model: &Model, h: &Matrix3<f64>) -> Integral {
+        let b = &model.board;
+        let (half_x, half_y) = (
+            b.squares_x as f64 * b.square / 2.0,
+            b.squares_y as f64 * b.square / 2.0,
+        );
+        let (sx, sy) = (h[(0, 0)], h[(1, 1)]);
+        let mut grey: Vec<u8> = Vec::with_capacity(640 * 480);
+        for v in 0..480 {
+            for u in 0..640 {
+                let (x, y) = ((u as f64 - 320.0) / sx, (v as f64 - 240.0) / sy);
+                let pattern = x.abs() < half_x && y.abs() < half_y;
+                grey.push(if pattern && is_black(model, x, y) {
+                    30
+                } else {
+                    220
+                });
+            }
+        }
+        let image = Mat::new_rows_cols_with_data(480, 640, &grey)
+            .unwrap()
+            .try_clone()
+            .unwrap();
+        Integral::new(&image).unwrap()
+    }
+
+    /// The middle 2 × 2 inner vertices (col, row) of `model`'s board.
+    fn middle() -> Vec<(i32, i32)> {
+        vec![(2, 1), (3, 1), (2, 2), (3, 2)]
+    }
+
+    #[test]
+    fn the_image_corrects_a_numbering_off_by_whole_squares() {
+        let model = Model::default();
+        let camera = Camera::default();
+        let truth = face_on(2.0, 2.0);
+        let img = render(&model, &truth);
+        for (a, b) in [(0, 0), (1, 0), (0, -1), (2, 1), (-1, -1)] {
+            // A tentative numbering whose lattice point (i, j) is the board's (i + a, j + b).
+            let h = shifted(&model, &truth, (a, b));
+            let found: Vec<(i32, i32)> = middle().iter().map(|&(c, r)| (c - a, r - b)).collect();
+            let d = decide(&img, &camera, &model, &h, &found).unwrap();
+            assert_eq!(d.shift, (-a, -b), "tentative shift ({a}, {b})");
+            assert_eq!(d.disagree, 0);
+            // The 24 inner vertices and the 20 ring points off its corners.
+            assert_eq!(d.agree, 44);
+            assert_eq!(d.edges, [true; 4]);
+            // Columns 2 and 3 fit 5 placements, rows 1 and 2 fit 3.
+            assert_eq!(d.candidates, 15);
+            assert!(d.runner_up.is_some_and(|r| r >= MARGIN), "{d:?}");
+            // Corrected, the homography is the board's.
+            let back = shifted(&model, &h, d.shift);
+            assert!((back - truth).abs().max() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn a_board_seen_only_in_its_middle_is_not_numbered() {
+        let model = Model::default();
+        let camera = Camera::default();
+        // 8 px per mm across: columns 2 and 3 in view, the pattern's left and right edges
+        // far outside the image; its top and bottom in view.
+        let truth = face_on(8.0, 2.0);
+        let img = render(&model, &truth);
+        let e = decide(&img, &camera, &model, &truth, &middle()).unwrap_err();
+        // Shifts by 0 or ±2 columns keep the saddles' colours and see no edge to tell them
+        // apart; an odd shift turns every colour round.
+        assert!(e.contains("fits 3 numberings"), "{e}");
+        // Seen whole (2 px per mm), the same vertices are numbered.
+        let whole = face_on(2.0, 2.0);
+        let img = render(&model, &whole);
+        let d = decide(&img, &camera, &model, &whole, &middle()).unwrap();
+        assert_eq!((d.shift, d.disagree), ((0, 0), 0));
+    }
 
     #[test]
     fn turn_is_measured_about_the_centroid() {

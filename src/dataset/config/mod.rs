@@ -1,40 +1,26 @@
 //! `dataset.toml`: camera intrinsics, board and robot geometry (docs/MODEL.md §7).
 //!
 //! The file is a [`DatasetToml`], read and written with serde; every key is named once, in
-//! that struct. [`validate`] is the one check of a model's values (finite, and within the
-//! ranges a NAO can have), for models read from a file and for models about to be written.
+//! that struct and its tables (`tables.rs`). [`validate`] (`check.rs`) is the one check of
+//! a model's values (finite, and within the ranges a NAO can have), for models read from a
+//! file and for models about to be written.
+
+mod check;
+mod tables;
 
 use std::path::Path;
 
-use std::fmt;
-
-use serde::de::{self, Deserializer, SeqAccess, Visitor};
-use serde::{Deserialize, Serialize, Serializer};
+use serde::{Deserialize, Serialize};
 
 use crate::model::{Board, Camera, Model, RobotGeometry};
-
-use super::{AngleKind, AngleSource};
 
 use super::error::{DatasetError, Location};
 use super::toml_doc::TomlDoc;
 use super::units::degrees_for;
-
-/// Image width and height (px).
-pub(crate) const IMAGE_SIZE: (u32, u32) = (16, 8192);
-/// Focal lengths fx, fy (px).
-pub(crate) const FOCAL: (f64, f64) = (50.0, 20000.0);
-/// Squares of the board along either side.
-pub(crate) const SQUARES: (u32, u32) = (3, 64);
-/// Edge length of one square (mm).
-pub(crate) const SQUARE_MM: (f64, f64) = (1.0, 500.0);
-/// Link lengths (mm).
-pub(crate) const LINK_MM: (f64, f64) = (1.0, 1000.0);
-/// Largest magnitude of a position (board mount, centre of mass, camera offset) (mm).
-pub(crate) const POSITION_MM: f64 = 1000.0;
-/// Largest magnitude of a fixed angle (board mount, camera tilt) (deg).
-pub(crate) const ANGLE_DEG: f64 = 360.0;
-/// Largest sandal mass (g).
-pub(crate) const MASS_G: f64 = 10_000.0;
+use super::{AngleKind, AngleSource};
+use check::check;
+pub(crate) use check::validate;
+use tables::{BoardToml, CameraToml, JointsToml, Numbers, RobotToml};
 
 /// The content of `dataset.toml`.
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
@@ -55,180 +41,8 @@ pub(crate) struct DatasetToml {
     joints: JointsToml,
 }
 
-/// `[joints]`: whether `captures.csv` holds raw encoder readings or angles a framework has
-/// already corrected with the robot's joint calibration (docs/MODEL.md §7).
-#[derive(Debug, Clone, PartialEq, Default, Deserialize, Serialize)]
-#[serde(deny_unknown_fields, default)]
-struct JointsToml {
-    angles: AngleKind,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    corrected_by: Option<String>,
-}
-
-/// `[camera]` and `[upper_camera]`: a camera's a-priori intrinsics.
-#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-struct CameraToml {
-    width: u32,
-    height: u32,
-    fx: f64,
-    fy: f64,
-    cx: f64,
-    cy: f64,
-    /// OpenCV's `[k1, k2, p1, p2, k3]`; zero when absent.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    distortion: Option<Numbers<5>>,
-}
-
-/// `[board]`: the sandal pattern, its mount and its mass; every key optional.
-#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields, default)]
-struct BoardToml {
-    squares_x: u32,
-    squares_y: u32,
-    square_mm: f64,
-    mount_origin_mm: Numbers<3>,
-    /// Roll, pitch, yaw.
-    mount_rpy_deg: Numbers<3>,
-    mass_g: f64,
-    com_mm: Numbers<3>,
-}
-
-/// `[robot]`: link lengths, the cameras' mountings and gravity; every key optional. The
-/// upper camera's mounting is written only when it differs from the default or the model
-/// has an upper camera, so that a lower-camera dataset is written as before.
-#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields, default)]
-struct RobotToml {
-    hip_offset_y_mm: f64,
-    hip_to_neck_z_mm: f64,
-    thigh_mm: f64,
-    tibia_mm: f64,
-    foot_height_mm: f64,
-    lower_camera_offset_mm: Numbers<3>,
-    lower_camera_tilt_deg: f64,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    upper_camera_offset_mm: Option<Numbers<3>>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    upper_camera_tilt_deg: Option<f64>,
-    /// The direction of gravity in the origin frame; normalised when read.
-    gravity: Numbers<3>,
-}
-
-impl Default for BoardToml {
-    fn default() -> Self {
-        BoardToml::from(&Board::default())
-    }
-}
-
-impl Default for RobotToml {
-    fn default() -> Self {
-        RobotToml::from(&RobotGeometry::default())
-    }
-}
-
-impl From<&Camera> for CameraToml {
-    fn from(c: &Camera) -> Self {
-        CameraToml {
-            width: c.width,
-            height: c.height,
-            fx: c.fx,
-            fy: c.fy,
-            cx: c.cx,
-            cy: c.cy,
-            distortion: Some(Numbers(c.distortion)),
-        }
-    }
-}
-
-impl From<CameraToml> for Camera {
-    fn from(c: CameraToml) -> Self {
-        Camera {
-            width: c.width,
-            height: c.height,
-            fx: c.fx,
-            fy: c.fy,
-            cx: c.cx,
-            cy: c.cy,
-            distortion: c.distortion.map_or([0.0; 5], |d| d.0),
-        }
-    }
-}
-
-impl From<&Board> for BoardToml {
-    fn from(b: &Board) -> Self {
-        BoardToml {
-            squares_x: b.squares_x,
-            squares_y: b.squares_y,
-            square_mm: b.square,
-            mount_origin_mm: Numbers(b.mount_origin),
-            mount_rpy_deg: Numbers(b.mount_rpy.map(degrees_for)),
-            mass_g: b.mass_g,
-            com_mm: Numbers(b.com_mm),
-        }
-    }
-}
-
-impl From<&RobotGeometry> for RobotToml {
-    fn from(r: &RobotGeometry) -> Self {
-        let nominal = RobotGeometry::default();
-        RobotToml {
-            hip_offset_y_mm: r.hip_offset_y,
-            hip_to_neck_z_mm: r.hip_to_neck_z,
-            thigh_mm: r.thigh,
-            tibia_mm: r.tibia,
-            foot_height_mm: r.foot_height,
-            lower_camera_offset_mm: Numbers(r.lower_camera_offset),
-            lower_camera_tilt_deg: degrees_for(r.lower_camera_tilt),
-            upper_camera_offset_mm: (r.upper_camera_offset != nominal.upper_camera_offset)
-                .then_some(Numbers(r.upper_camera_offset)),
-            upper_camera_tilt_deg: (r.upper_camera_tilt != nominal.upper_camera_tilt)
-                .then(|| degrees_for(r.upper_camera_tilt)),
-            gravity: Numbers(r.gravity),
-        }
-    }
-}
-
 /// A problem with one key: its TOML key path and what is wrong.
 type KeyError = (String, String);
-
-/// Exactly `N` numbers: a TOML array of that length (serde's own arrays would accept a
-/// longer one and drop the rest).
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Numbers<const N: usize>([f64; N]);
-
-impl<'de, const N: usize> Deserialize<'de> for Numbers<N> {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct Expect<const N: usize>;
-        impl<'de, const N: usize> Visitor<'de> for Expect<N> {
-            type Value = Numbers<N>;
-            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-                write!(f, "an array of {N} numbers")
-            }
-            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
-                let mut out = [0.0; N];
-                let mut n = 0;
-                while let Some(x) = seq.next_element::<f64>()? {
-                    if let Some(slot) = out.get_mut(n) {
-                        *slot = x;
-                    }
-                    n += 1;
-                }
-                if n != N {
-                    return Err(de::Error::invalid_length(n, &self));
-                }
-                Ok(Numbers(out))
-            }
-        }
-        d.deserialize_seq(Expect::<N>)
-    }
-}
-
-impl<const N: usize> Serialize for Numbers<N> {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.collect_seq(self.0.iter())
-    }
-}
 
 impl DatasetToml {
     /// The file for `model`, every value written out.
@@ -359,166 +173,6 @@ pub(crate) fn parse_with_angles(
     let model = file.into_model().map_err(at)?;
     check(&model).map_err(|(key, message)| doc.error(&key, message))?;
     Ok((model, angles))
-}
-
-/// Checks a model in memory against the same rules as [`parse`]; errors name `path` and the
-/// TOML key.
-pub(crate) fn validate(path: &Path, model: &Model) -> Result<(), DatasetError> {
-    check(model)
-        .map_err(|(key, message)| DatasetError::invalid(Location::file(path).field(key), message))
-}
-
-/// The one check of a model's values: every number finite, and within the ranges a NAO team
-/// would accept (the ranges are in the messages).
-fn check(model: &Model) -> Result<(), KeyError> {
-    let fail = |key: &str, message: String| Err((key.to_string(), message));
-    let Model {
-        robot,
-        camera,
-        board,
-        upper_camera,
-    } = model;
-    let finite = |key: &str, values: &[f64]| -> Result<(), KeyError> {
-        match values.iter().position(|x| !x.is_finite()) {
-            None => Ok(()),
-            Some(i) if values.len() == 1 => {
-                fail(key, format!("{} is not a finite number", values[i]))
-            }
-            Some(i) => fail(
-                &format!("{key}[{i}]"),
-                format!("{} is not a finite number", values[i]),
-            ),
-        }
-    };
-    let within = |key: &str, x: f64, (lo, hi): (f64, f64), what: &str| -> Result<(), KeyError> {
-        finite(key, &[x])?;
-        if x < lo || x > hi {
-            return fail(key, format!("must be {lo} … {hi} {what}, got {x}"));
-        }
-        Ok(())
-    };
-    let each_within = |key: &str, values: &[f64], limit: f64, what: &str| {
-        finite(key, values)?;
-        match values.iter().position(|x| x.abs() > limit) {
-            None => Ok(()),
-            Some(i) => fail(
-                &format!("{key}[{i}]"),
-                format!("must be within ±{limit} {what}, got {}", values[i]),
-            ),
-        }
-    };
-    let check_camera = |table: &str, camera: &Camera| -> Result<(), KeyError> {
-        let (lo, hi) = IMAGE_SIZE;
-        for (key, n) in [
-            (format!("{table}.width"), camera.width),
-            (format!("{table}.height"), camera.height),
-        ] {
-            if n < lo || n > hi {
-                return fail(&key, format!("must be {lo} … {hi} px, got {n}"));
-            }
-        }
-        within(
-            &format!("{table}.fx"),
-            camera.fx,
-            FOCAL,
-            "px (a camera's focal length)",
-        )?;
-        within(
-            &format!("{table}.fy"),
-            camera.fy,
-            FOCAL,
-            "px (a camera's focal length)",
-        )?;
-        for (key, c, size) in [
-            (format!("{table}.cx"), camera.cx, camera.width),
-            (format!("{table}.cy"), camera.cy, camera.height),
-        ] {
-            let size = f64::from(size);
-            within(
-                &key,
-                c,
-                (-0.5 * size, 1.5 * size),
-                "px (the principal point lies within the image ± 50 %)",
-            )?;
-        }
-        finite(&format!("{table}.distortion"), &camera.distortion)?;
-        Ok(())
-    };
-    check_camera("camera", camera)?;
-    if let Some(upper) = upper_camera {
-        check_camera("upper_camera", upper)?;
-    }
-    let (lo, hi) = SQUARES;
-    for (key, n) in [
-        ("board.squares_x", board.squares_x),
-        ("board.squares_y", board.squares_y),
-    ] {
-        if n < lo || n > hi {
-            return fail(
-                key,
-                format!(
-                    "must be {lo} … {hi} squares (the vertex finder needs at least 2 × 2 inner vertices), got {n}"
-                ),
-            );
-        }
-    }
-    within("board.square_mm", board.square, SQUARE_MM, "mm")?;
-    each_within(
-        "board.mount_origin_mm",
-        &board.mount_origin,
-        POSITION_MM,
-        "mm",
-    )?;
-    each_within(
-        "board.mount_rpy_deg",
-        &board.mount_rpy.map(f64::to_degrees),
-        ANGLE_DEG,
-        "°",
-    )?;
-    within("board.mass_g", board.mass_g, (0.0, MASS_G), "g")?;
-    each_within("board.com_mm", &board.com_mm, POSITION_MM, "mm")?;
-    for (key, x) in [
-        ("robot.hip_offset_y_mm", robot.hip_offset_y),
-        ("robot.hip_to_neck_z_mm", robot.hip_to_neck_z),
-        ("robot.thigh_mm", robot.thigh),
-        ("robot.tibia_mm", robot.tibia),
-        ("robot.foot_height_mm", robot.foot_height),
-    ] {
-        within(key, x, LINK_MM, "mm (a link length)")?;
-    }
-    each_within(
-        "robot.lower_camera_offset_mm",
-        &robot.lower_camera_offset,
-        POSITION_MM,
-        "mm",
-    )?;
-    within(
-        "robot.lower_camera_tilt_deg",
-        robot.lower_camera_tilt.to_degrees(),
-        (-ANGLE_DEG, ANGLE_DEG),
-        "°",
-    )?;
-    each_within(
-        "robot.upper_camera_offset_mm",
-        &robot.upper_camera_offset,
-        POSITION_MM,
-        "mm",
-    )?;
-    within(
-        "robot.upper_camera_tilt_deg",
-        robot.upper_camera_tilt.to_degrees(),
-        (-ANGLE_DEG, ANGLE_DEG),
-        "°",
-    )?;
-    finite("robot.gravity", &robot.gravity)?;
-    let norm = robot.gravity.iter().map(|x| x * x).sum::<f64>().sqrt();
-    if (norm - 1.0).abs() > 1e-9 {
-        return fail(
-            "robot.gravity",
-            format!("must be a unit vector, got one of length {norm}"),
-        );
-    }
-    Ok(())
 }
 
 /// `dataset.toml` for `model`, every value written out. Floats round-trip exactly; angles
@@ -699,56 +353,6 @@ mod tests {
                 .unwrap()
                 .contains("lower_camera_tilt_deg = 39.7\n"),
             "{text}"
-        );
-    }
-
-    #[test]
-    fn validate_in_memory() {
-        let path = Path::new("o/dataset.toml");
-        assert!(validate(path, &Model::default()).is_ok());
-        let mut m = Model::default();
-        m.camera.fx = 0.0;
-        let e = validate(path, &m).unwrap_err().to_string();
-        assert_eq!(
-            e,
-            "o/dataset.toml, field camera.fx: must be 50 … 20000 px (a camera's focal length), \
-             got 0"
-        );
-        let mut m = Model::default();
-        m.camera.distortion[3] = f64::NAN;
-        let e = validate(path, &m).unwrap_err().to_string();
-        assert_eq!(
-            e,
-            "o/dataset.toml, field camera.distortion[3]: NaN is not a finite number"
-        );
-        let mut m = Model::default();
-        m.board.squares_x = 1;
-        let e = validate(path, &m).unwrap_err().to_string();
-        assert_eq!(
-            e,
-            "o/dataset.toml, field board.squares_x: must be 3 … 64 squares (the vertex finder \
-             needs at least 2 × 2 inner vertices), got 1"
-        );
-        let mut m = Model::default();
-        m.robot.tibia = -102.9;
-        let e = validate(path, &m).unwrap_err().to_string();
-        assert_eq!(
-            e,
-            "o/dataset.toml, field robot.tibia_mm: must be 1 … 1000 mm (a link length), got -102.9"
-        );
-        let mut m = Model::default();
-        m.robot.gravity = [0.0, 0.0, 2.0];
-        let e = validate(path, &m).unwrap_err().to_string();
-        assert_eq!(
-            e,
-            "o/dataset.toml, field robot.gravity: must be a unit vector, got one of length 2"
-        );
-        let mut m = Model::default();
-        m.board.mass_g = -1.0;
-        let e = validate(path, &m).unwrap_err().to_string();
-        assert_eq!(
-            e,
-            "o/dataset.toml, field board.mass_g: must be 0 … 10000 g, got -1"
         );
     }
 

@@ -1,0 +1,84 @@
+//! Why a file was not written.
+
+use std::io;
+use std::path::{Path, PathBuf};
+
+/// Why a file was not written. The message names the file; the operating system's error
+/// is part of the message (and deliberately not also a `source`, so that a printed error
+/// chain does not repeat it).
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    /// Creating the directory, the temporary file, writing or renaming failed.
+    #[error("{}: cannot {action}: {error}", path.display())]
+    Io {
+        /// The file being written.
+        path: PathBuf,
+        /// What was attempted.
+        action: &'static str,
+        /// The operating system's error.
+        error: io::Error,
+    },
+    /// The file exists and `force` was not given.
+    #[error("{}: already exists; use --force to overwrite", path.display())]
+    Exists {
+        /// The existing file.
+        path: PathBuf,
+    },
+    /// The path is one of the inputs.
+    #[error("{}: is an input file; refusing to overwrite it", path.display())]
+    Input {
+        /// The input file.
+        path: PathBuf,
+    },
+    /// Something other than a regular file or a symbolic link is in the way.
+    #[error("{}: exists and is not a regular file; refusing to replace it", path.display())]
+    NotAFile {
+        /// The path.
+        path: PathBuf,
+    },
+    /// The file to change is read-only.
+    #[error("{}: is read-only; refusing to change it (make it writable first)", path.display())]
+    ReadOnly {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A directory on the way to the file cannot be made: a file is in the way.
+    #[error("{}", in_the_way_message(path, in_the_way))]
+    InTheWay {
+        /// The file being written.
+        path: PathBuf,
+        /// The existing non-directory where a directory is needed.
+        in_the_way: PathBuf,
+    },
+}
+
+impl WriteError {
+    /// The file the error is about.
+    pub fn path(&self) -> &Path {
+        match self {
+            WriteError::Io { path, .. }
+            | WriteError::Exists { path }
+            | WriteError::Input { path }
+            | WriteError::NotAFile { path }
+            | WriteError::ReadOnly { path }
+            | WriteError::InTheWay { path, .. } => path,
+        }
+    }
+}
+
+/// The message of [`WriteError::InTheWay`].
+fn in_the_way_message(path: &Path, in_the_way: &Path) -> String {
+    if path == in_the_way {
+        format!(
+            "{}: exists and is not a directory: a file is in the way of the directory to \
+             write into",
+            path.display()
+        )
+    } else {
+        format!(
+            "{}: exists and is not a directory: a file is in the way of the directory for {}",
+            in_the_way.display(),
+            path.display()
+        )
+    }
+}

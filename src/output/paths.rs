@@ -1,0 +1,70 @@
+//! Which file a path names: links and `..` resolved, and what is in the way of a
+//! directory to create.
+
+use std::path::{Path, PathBuf};
+
+/// Whether `a` and `b` name the same file: the same path after resolving symbolic links
+/// and `..` (for a path that does not exist: its resolved directory and its name), or, on
+/// Unix, the same device and inode.
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let (Ok(x), Ok(y)) = (std::fs::metadata(a), std::fs::metadata(b))
+            && x.dev() == y.dev()
+            && x.ino() == y.ino()
+        {
+            return true;
+        }
+    }
+    match (resolve(a), resolve(b)) {
+        (Some(x), Some(y)) => x == y,
+        _ => a == b,
+    }
+}
+
+/// `p` with symbolic links and `..` resolved, also when `p` itself does not exist (then
+/// its directory is resolved and its name kept; a dangling symbolic link is followed to
+/// where it points).
+fn resolve(p: &Path) -> Option<PathBuf> {
+    if let Ok(c) = p.canonicalize() {
+        return Some(c);
+    }
+    if let Ok(target) = std::fs::read_link(p) {
+        let dir = parent_dir(p);
+        let target = if target.is_absolute() {
+            target
+        } else {
+            dir.join(target)
+        };
+        // One level: a chain of dangling links resolves no further than this.
+        let parent = parent_dir(&target).canonicalize().ok()?;
+        return Some(parent.join(target.file_name()?));
+    }
+    Some(parent_dir(p).canonicalize().ok()?.join(p.file_name()?))
+}
+
+/// The nearest existing ancestor of `path` that is not a directory (a file where a
+/// directory would have to be created), if any.
+pub fn file_in_the_way(path: &Path) -> Option<PathBuf> {
+    for dir in path.ancestors().skip(1) {
+        if dir.as_os_str().is_empty() {
+            return None;
+        }
+        match std::fs::metadata(dir) {
+            Ok(m) if m.is_dir() => return None,
+            Ok(_) => return Some(dir.to_path_buf()),
+            // Missing (to be created), or below a file (found further up).
+            Err(_) => continue,
+        }
+    }
+    None
+}
+
+/// The directory `p` is in (`.` for a bare name).
+pub(super) fn parent_dir(p: &Path) -> &Path {
+    match p.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir,
+        _ => Path::new("."),
+    }
+}
