@@ -203,7 +203,7 @@ fn estimates(result: &serde_json::Value) -> Vec<(Param, f64, f64)> {
         .iter()
         .filter_map(|p| {
             let e = &result["parameters"][p.name()];
-            if e["fixed"] != false {
+            if e["fixed"] == true {
                 return None;
             }
             Some((*p, e["value"].as_f64()?, e["std"].as_f64()?))
