@@ -125,13 +125,15 @@ batch() { # NAME ARGS...
     run "$name.txt" batch "$@"
     run "$name.json" batch --json "$@"
 }
-batch batch-all "$data" "$repo/data/sample" --out batch-all.out --no-progress
+# (--force: the text and the JSON run write the same files.)
+batch batch-all "$data" "$repo/data/sample" --out batch-all.out --force --no-progress
 # shellcheck disable=SC2046
 batch batch-effects $(for s in $subset; do echo "$data/s$s"; done) \
-    --free compliance,play --solver lm --no-progress
+    --free compliance,play --solver lm --report batch-effects.html --force --no-progress
 # shellcheck disable=SC2046
 batch batch-drift $(for s in $(seq 1 5); do echo "$data/s$s"; done) --robots all \
-    --drift first --drift-threshold 2 --plain-std --report batch-drift.html --no-progress
+    --drift first --drift-threshold 2 --plain-std --report batch-drift.html --force \
+    --no-progress
 
 # compare, every solver of this build.
 run compare-sample.txt compare "$repo/data/sample"
@@ -166,7 +168,7 @@ if [ "$mode" = check ]; then
         *.json)
             sed -E 's/^( *"(seconds|seconds_mean|wall_seconds|solver_seconds)": )[^,]*(,?)$/\10\3/' "$1"
             ;;
-        compare-*.txt) awk '$2 == "yes" || $2 == "NO" || $2 == "FAILED" { $7 = "-"; $8 = "-" } { print }' "$1" ;;
+        */compare-*.txt) awk '$2 == "yes" || $2 == "NO" || $2 == "FAILED" { $7 = "-"; $8 = "-" } { print }' "$1" ;;
         *.txt | *.html) grep -v '^time ' "$1" || true ;;
         *) cat "$1" ;;
         esac

@@ -58,8 +58,11 @@ impl BatchFiles {
 
     /// The write options protecting the files of `datasets`.
     fn options<'a>(&self, datasets: impl Iterator<Item = &'a Path>) -> WriteOptions {
-        WriteOptions::new(self.force)
-            .protecting(datasets.flat_map(crate::output::dataset_files).collect::<Vec<_>>())
+        WriteOptions::new(self.force).protecting(
+            datasets
+                .flat_map(crate::output::dataset_files)
+                .collect::<Vec<_>>(),
+        )
     }
 
     /// Writes the files of `batch` (drift as `drift` says); `note` is told, one line each,

@@ -345,7 +345,7 @@ impl Batch {
             .iter()
             .map(|r| r.dataset())
             .chain(self.failures.iter().map(|f| f.dataset.as_path()))
-            .flat_map(|d| dataset_files(d))
+            .flat_map(dataset_files)
             .collect()
     }
 }

@@ -2,7 +2,6 @@
 //! stand, `α + κ·τ_stand + ½π·sgn τ_stand` with the compliance `κ` and play `π` a
 //! calibration estimated, with their one-sigma and the lying torques they rest on.
 
-
 use super::{Calibration, StandingFile};
 use crate::model::Param;
 use crate::solve::Solution;
@@ -203,5 +202,4 @@ impl Calibration {
         };
         Some(alpha + kappa * tau + 0.5 * play * sign)
     }
-
 }

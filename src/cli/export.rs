@@ -8,8 +8,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 
 use naocalib::export::{
-    self, Calibration, ExportError, ExportFormat, Posture, Updated, WriteOptions,
-    read_calibration,
+    self, Calibration, ExportError, ExportFormat, Posture, Updated, WriteOptions, read_calibration,
 };
 
 #[derive(Debug, Args)]

@@ -377,8 +377,7 @@ pub fn standing_notes(cal: &crate::calibration::Calibration) -> Vec<String> {
         cal.standing_caveats()
             .into_iter()
             .map(|caveat| format!("warning: standing leg offset {caveat}")),
-    )
-    ;
+    );
     notes
 }
 

@@ -130,7 +130,19 @@ fn plots(
 ) -> Result<Vec<PathBuf>, PlotError> {
     let stage = Staged::new(dir, options)?;
     let staged = stage.options();
-    plot::solution_plots(&run.solution, Some(&run.sides), stage.dir(), "solve", &staged)?;
-    crate::report::misfit_plot::misfit_plots(&run.solution, dataset, stage.dir(), "misfit", &staged)?;
+    plot::solution_plots(
+        &run.solution,
+        Some(&run.sides),
+        stage.dir(),
+        "solve",
+        &staged,
+    )?;
+    crate::report::misfit_plot::misfit_plots(
+        &run.solution,
+        dataset,
+        stage.dir(),
+        "misfit",
+        &staged,
+    )?;
     Ok(stage.publish()?)
 }

@@ -161,8 +161,8 @@ pub fn calibrate(dataset: &Dataset, options: &RunOptions) -> Result<Run, RunErro
 impl Run {
     /// The run of `solution`, fitted to `dataset` (from `start_from`, when given).
     pub fn new(dataset: &Dataset, solution: Solution, start_from: Option<Calibration>) -> Self {
-        let mut calibration = Calibration::from_solution(&solution, Some(&dataset.dir))
-            .with_lying_torques(dataset);
+        let mut calibration =
+            Calibration::from_solution(&solution, Some(&dataset.dir)).with_lying_torques(dataset);
         calibration.angles = Some(dataset.angles.clone());
         let changes = start_from
             .as_ref()
