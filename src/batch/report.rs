@@ -239,11 +239,10 @@ impl Batch {
         out
     }
 
-    /// One run's result JSON: docs/MODEL.md §8 ([`crate::report::json`]) with its `dataset`.
+    /// One run's result JSON: docs/MODEL.md §8, as `naocalib solve --json` prints it
+    /// ([`ResultJson::from_run`]), keys in alphabetical order.
     pub fn run_json(run: &Run) -> Value {
-        let mut value = crate::report::json(&run.solution, run.truth.as_ref().map(|t| &t[..]));
-        value["dataset"] = Value::String(run.dataset().display().to_string());
-        value
+        ResultJson::from_run(run).to_value()
     }
 
     /// The summary as JSON: counts, per-parameter statistics, failures and drift (no

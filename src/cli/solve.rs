@@ -98,7 +98,7 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     };
     if let Some(path) = &args.start_from {
         options.start_from = Some(
-            naocalib::export::read_start_from(path)
+            naocalib::calibration::read_start_from(path)
                 .with_context(|| format!("--start-from {}", path.display()))?,
         );
     }
@@ -129,7 +129,7 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     })
 }
 
-/// [`calibrate`], with a progress bar for a long bootstrap on a terminal.
+/// [`run::calibrate`], with a progress bar for a long bootstrap on a terminal.
 fn calibrate(dataset: &Dataset, options: &RunOptions) -> Result<Run, RunError> {
     let refits = options.uncertainty.bootstrap;
     if refits == 0 || !std::io::stderr().is_terminal() {
