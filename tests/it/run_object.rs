@@ -56,13 +56,20 @@ fn batch_json_runs_are_solve_json_results() {
     }
     // Compliance and play freed: the runs have standing leg offsets.
     let options = ["--free", "compliance,play", "--solver", "lm"];
+    let out = tmp.path().join("out");
     let batch = json(
-        &[&["batch", "--json", "--no-progress"][..], &options].concat(),
-        &[&robot],
+        &[&["batch", "--json", "--no-progress"][..], &options, &["--out"]].concat(),
+        &[&out, &robot],
     );
     // The batch's JSON is one type: its runs read as the result JSON of `solve --json`.
     let batch: BatchJson = serde_json::from_value(batch).expect("a batch JSON");
     assert_eq!(batch.runs.len(), 2);
+    // Its run files (`--out`) are the same results.
+    for (run, name) in batch.runs.iter().zip(["a.json", "b.json"]) {
+        let text = std::fs::read_to_string(out.join(name)).unwrap();
+        let file: ResultJson = serde_json::from_str(&text).expect("a result JSON");
+        assert_eq!(&file, run, "{name}");
+    }
     for (run, dir) in batch.runs.iter().zip(&datasets) {
         let solve = json(&[&["solve", "--json"][..], &options].concat(), &[dir]);
         let keys = |v: &Value| v.as_object().unwrap().keys().cloned().collect::<Vec<_>>();
