@@ -29,7 +29,7 @@ fn bench_batch(c: &mut Criterion) {
     let options = BatchOptions::default();
     let mut group = c.benchmark_group("batch_100_paper_sized");
     group.sample_size(10);
-    group.bench_function(options.solver.clone(), |b| {
+    group.bench_function(options.run.solver.clone(), |b| {
         b.iter(|| {
             let batch = solve_datasets(&datasets, &options, &|_| {});
             assert_eq!(batch.runs.len(), 100, "{:?}", batch.failures.first());
@@ -41,7 +41,7 @@ fn bench_batch(c: &mut Criterion) {
         noise_model: false,
         ..UncertaintyOptions::default()
     });
-    group.bench_function(format!("{}_plain_std", plain.solver), |b| {
+    group.bench_function(format!("{}_plain_std", plain.run.solver), |b| {
         b.iter(|| solve_datasets(&datasets, &plain, &|_| {}))
     });
     group.finish();

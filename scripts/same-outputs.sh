@@ -1,11 +1,24 @@
 #!/usr/bin/env bash
-# Record, then check, that `naocalib solve` prints the same results (JSON and text) on the
-# bundled sample and on N simulated datasets with a variety of options; only wall times
-# (the JSON's "seconds", the text's "time …" line) are left out of the comparison; what
-# it prints on stderr and its exit code are compared too.
+# Record, then check, that naocalib's commands print and write the same results on the
+# bundled sample and on N simulated datasets with a variety of options:
+#
+# - `solve` (JSON and text) on every dataset; `--export`, `--report` and `--plots` on a
+#   subset; `--start-from` a calibration imported from team files;
+# - `batch` (text, `--json`, `--out`, `--report`) over all datasets and over subsets with
+#   options (compliance and play freed, drift against the first run of one robot);
+# - `compare` (text and JSON) on the subset;
+# - `export` (`--dir`, every format; `--out` TOML, standing and lying) of recorded results;
+# - `import` of the exported team files.
+#
+# Only wall times are left out of the comparison (the JSON's "seconds", "seconds_mean",
+# "wall_seconds", "solver_seconds"; the text's "time" lines; compare's solver and wall ms
+# columns). What each command prints on stderr and its exit code are compared too.
 #
 #   scripts/same-outputs.sh record DIR [N]   # before a change: datasets and outputs into DIR
 #   scripts/same-outputs.sh check DIR        # after it: the same commands, compared byte for byte
+#
+# A batch JSON whose runs differ only by keys the runs gained (present after, absent
+# before) is counted apart, with the keys named.
 #
 # Uses target/release/naocalib (build it first: cargo build --release), or $NAOCALIB.
 set -euo pipefail
@@ -14,6 +27,7 @@ dir=${2:?directory for datasets and outputs}
 n=${3:-100}
 bin=${NAOCALIB:-$(cd "$(dirname "$0")/.." && pwd)/target/release/naocalib}
 repo=$(cd "$(dirname "$0")/.." && pwd)
+dir=$(mkdir -p "$dir" && cd "$dir" && pwd)
 
 # The solve options of case `seed mod 10`, and whether its dataset has realistic effects.
 options() {
@@ -36,10 +50,6 @@ effects() {
     *) echo "" ;;
     esac
 }
-
-# The JSON without "seconds", the text without its "time" line.
-strip_json() { grep -v '^  "seconds": ' "$1"; }
-strip_text() { grep -v '^time ' "$1"; }
 
 case $mode in
 record)
@@ -67,41 +77,152 @@ esac
 
 out=$dir/out
 [ "$mode" = check ] && out=$dir/out.check
+rm -rf "$out.tmp"
+if [ "$mode" = check ]; then rm -rf "$out"; fi
 mkdir -p "$out"
 save=$dir/out
-# `solve` as JSON and as text, stdout then stderr and the exit code, into $out/NAME.*
-solve() { # NAME DATASET OPTIONS...
-    local name=$1 data=$2
-    shift 2
-    local code=0
-    "$bin" solve "$data" --json "$@" >"$out/$name.json" 2>"$out/$name.json.err" || code=$?
-    echo "exit $code" >>"$out/$name.json.err"
-    code=0
-    "$bin" solve "$data" "$@" >"$out/$name.txt" 2>"$out/$name.txt.err" || code=$?
-    echo "exit $code" >>"$out/$name.txt.err"
+data=$dir/data
+# Outputs are named relative to $out, so that what the commands print of them is the same
+# in both modes.
+cd "$out"
+
+# One command: stdout into NAME, stderr and the exit code into NAME.err.
+run() { # NAME ARGS...
+    local name=$1 code=0
+    shift
+    "$bin" "$@" >"$name" 2>"$name.err" || code=$?
+    echo "exit $code" >>"$name.err"
 }
+# `solve` as JSON and as text.
+solve() { # NAME DATASET OPTIONS...
+    local name=$1 d=$2
+    shift 2
+    run "$name.json" solve "$d" --json "$@"
+    run "$name.txt" solve "$d" "$@"
+}
+# The subset for the slower commands: cases 0 and 8 (plain, and compliance and play freed).
+subset=$(awk '$1 % 10 == 0 || $1 % 10 == 8 { print $1 }' "$dir/cases")
+
 solve sample "$repo/data/sample"
 while read -r seed opts; do
     # shellcheck disable=SC2086
-    solve "s$seed" "$dir/data/s$seed" $opts
+    solve "s$seed" "$data/s$seed" $opts
 done <"$dir/cases"
 
+# solve's files: calibration files, the HTML report, plots.
+run solve-files-sample.txt solve "$repo/data/sample" --export solve-files-sample.export \
+    --report solve-files-sample.html --plots solve-files-sample.plots
+for seed in $subset; do
+    # shellcheck disable=SC2046
+    run "solve-files-s$seed.txt" solve "$data/s$seed" $(options "$seed") \
+        --export "solve-files-s$seed.export" --report "solve-files-s$seed.html"
+done
+
+# batch: everything; the subset with options; drift of one robot against its first run.
+batch() { # NAME ARGS...
+    local name=$1
+    shift
+    run "$name.txt" batch "$@"
+    run "$name.json" batch --json "$@"
+}
+# (--force: the text and the JSON run write the same files.)
+batch batch-all "$data" "$repo/data/sample" --out batch-all.out --force --no-progress
+# shellcheck disable=SC2046
+batch batch-effects $(for s in $subset; do echo "$data/s$s"; done) \
+    --free compliance,play --solver lm --report batch-effects.html --force --no-progress
+# shellcheck disable=SC2046
+batch batch-drift $(for s in $(seq 1 5); do echo "$data/s$s"; done) --robots all \
+    --drift first --drift-threshold 2 --plain-std --report batch-drift.html --force \
+    --no-progress
+
+# compare, every solver of this build.
+run compare-sample.txt compare "$repo/data/sample"
+run compare-sample.json compare "$repo/data/sample" --json
+for seed in $subset; do
+    run "compare-s$seed.txt" compare "$data/s$seed"
+    run "compare-s$seed.json" compare "$data/s$seed" --json --loss huber
+done
+
+# export of the recorded results (the same input before and after), and import of the
+# team files it wrote; then a solve starting from that import.
+for name in sample $(for s in $subset; do echo "s$s"; done); do
+    run "export-$name.txt" export "$save/$name.json" --dir "export-$name.dir"
+    run "export-$name.lying.txt" export "$save/$name.json" --posture lying \
+        --out "export-$name.lying.toml" --out "export-$name.bhuman-joints.cfg"
+    run "import-$name.txt" import "export-$name.dir/cameraCalibration.cfg" \
+        "export-$name.dir/jointCalibration.cfg" --out "import-$name.toml"
+    run "import-$name.nomadz.txt" import "export-$name.dir/nomadz/cameraCalibration.cfg" \
+        "export-$name.dir/nomadz/jointCalibration.cfg" --out "import-$name.nomadz.json"
+done
+for seed in $subset; do
+    # shellcheck disable=SC2046
+    solve "start-s$seed" "$data/s$seed" $(options "$seed") --start-from "import-s$seed.toml"
+done
+
 if [ "$mode" = check ]; then
-    same=0 differ=0
-    for f in "$save"/*; do
-        g=$out/$(basename "$f")
-        case $f in
-        *.json) a=$(strip_json "$f") b=$(strip_json "$g") ;;
-        *.txt) a=$(strip_text "$f") b=$(strip_text "$g") ;;
-        *) a=$(cat "$f") b=$(cat "$g") ;;
+    tmp=$(mktemp -d)
+    trap 'rm -rf "$tmp"' EXIT
+    # A file without its wall times.
+    strip() { # FILE
+        case $1 in
+        *.json)
+            sed -E 's/^( *"(seconds|seconds_mean|wall_seconds|solver_seconds)": )[^,]*(,?)$/\10\3/' "$1"
+            ;;
+        */compare-*.txt) awk '$2 == "yes" || $2 == "NO" || $2 == "FAILED" { $7 = "-"; $8 = "-" } { print }' "$1" ;;
+        *.txt | *.html) grep -v '^time ' "$1" || true ;;
+        *) cat "$1" ;;
         esac
-        if [ "$a" = "$b" ]; then
-            same=$((same + 1))
-        else
+    }
+    # The keys each batch run gained (in the run after, not before).
+    gained() { # BEFORE AFTER
+        local runs='if (.runs? | type) == "array" then .runs else [.] end'
+        jq -r "[$runs | .[] | keys[]] | unique | .[]" "$1" | sort -u >"$tmp/before.keys"
+        jq -r "[$runs | .[] | keys[]] | unique | .[]" "$2" | sort -u >"$tmp/after.keys"
+        comm -13 "$tmp/before.keys" "$tmp/after.keys" | tr '\n' ' '
+    }
+    # The file without the keys its runs gained.
+    without() { # FILE KEYS...
+        local file=$1
+        shift
+        local filter
+        filter=$(printf 'del(.%s) | ' "$@")
+        filter="${filter% | }"
+        jq "if (.runs? | type) == \"array\" then .runs |= map($filter) elif has(\"solver\") then $filter else . end" "$file"
+    }
+    same=0 differ=0 grew=0
+    declare -A keys_gained=()
+    while IFS= read -r rel; do
+        f=$save/$rel g=$out/$rel
+        if [ ! -e "$g" ]; then
             differ=$((differ + 1))
-            echo "differs: $(basename "$f")"
+            echo "missing: $rel"
+            continue
         fi
-    done
-    echo "$same outputs identical, $differ differ (wall times left out)"
+        strip "$f" >"$tmp/a"
+        strip "$g" >"$tmp/b"
+        if cmp -s "$tmp/a" "$tmp/b"; then
+            same=$((same + 1))
+            continue
+        fi
+        case $rel in
+        batch-*.json | batch-*.out/*.json)
+            k=$(gained "$tmp/a" "$tmp/b")
+            # shellcheck disable=SC2086
+            if [ -n "$k" ] && cmp -s <(without "$tmp/a" $k) <(without "$tmp/b" $k); then
+                grew=$((grew + 1))
+                keys_gained["$k"]=1
+                continue
+            fi
+            ;;
+        esac
+        differ=$((differ + 1))
+        echo "differs: $rel"
+    done < <(cd "$save" && find . -type f | sed 's|^\./||' | sort)
+    extra=$(comm -13 <(cd "$save" && find . -type f | sort) <(cd "$out" && find . -type f | sort) | wc -l)
+    total=$((same + grew + differ))
+    echo "$same of $total outputs identical, $differ differ (wall times left out); $extra new files"
+    if [ "$grew" -gt 0 ]; then
+        echo "$grew batch JSON files identical but for keys their runs gained: ${!keys_gained[*]}"
+    fi
     [ "$differ" = 0 ]
 fi

@@ -5,7 +5,9 @@
 //! sandals on its feet in many stances, and a non-linear least-squares fit finds the joint,
 //! camera and board offsets that make the kinematic model explain the images.
 //!
-//! Data flows one way: [`dataset`] → [`solve::Problem`] → [`solve::Solution`] → [`report`].
+//! Data flows one way: [`dataset`] → [`solve::Problem`] → [`solve::Solution`] →
+//! [`run::Run`] (the solution with its [`calibration`], change and provenance) → [`report`],
+//! [`export`] and [`batch`].
 //!
 //! Calibrating a dataset from Rust, as `naocalib solve` does:
 //!
@@ -42,6 +44,7 @@ pub mod output;
 pub mod plan;
 pub mod report;
 pub mod robot;
+pub mod run;
 pub mod sandal;
 pub mod sim;
 pub mod solve;

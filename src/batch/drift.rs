@@ -151,7 +151,7 @@ pub fn batch_drift(runs: &[Run], options: &DriftOptions) -> Vec<DriftPair> {
     }
     let mut groups: Vec<(String, Vec<usize>)> = Vec::new();
     for (i, run) in runs.iter().enumerate() {
-        let robot = robot_of(&run.dataset, options.grouping);
+        let robot = robot_of(run.dataset(), options.grouping);
         match groups.iter_mut().find(|(r, _)| *r == robot) {
             Some((_, members)) => members.push(i),
             None => groups.push((robot, vec![i])),

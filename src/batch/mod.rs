@@ -5,12 +5,15 @@
 //!   `captures.csv` or `dataset.toml` is a dataset, any other directory stands for its
 //!   immediate subdirectories that are datasets.
 //! - [`solve_dirs`] (from disk) and [`solve_datasets`] (in memory) solve every dataset on
-//!   all cores, each exactly as `naocalib solve` does ([`solve_one`]); a broken dataset
-//!   becomes a [`Failure`] with its reason and never stops the batch.
+//!   all cores into its [`Run`], each exactly as `naocalib solve` does
+//!   ([`crate::run::calibrate`] with [`BatchOptions::run`]); a broken dataset becomes a
+//!   [`Failure`] with its reason and never stops the batch.
 //! - [`Batch::summary`] gives mean ± std across runs and the mean reported one-sigma
 //!   ([`stats`]); [`Batch::drift`] the z-scores of the changes between runs ([`mod@drift`]).
-//! - [`Batch::table`] and [`Batch::json`] are the reports; [`Batch::write`] writes every
-//!   run's result JSON and the summary into a directory, atomically.
+//! - [`Batch::table`] and [`Batch::json`] are the reports (every run's JSON is its
+//!   [`crate::report::ResultJson`], as `solve --json` prints it); [`Batch::write`] writes
+//!   every run's result JSON and the summary into a directory, atomically; [`BatchFiles`] is
+//!   the policy of `naocalib batch`'s files.
 //!
 //! ```
 //! use naocalib::batch::{BatchOptions, solve_datasets};
@@ -25,7 +28,8 @@
 //!         d
 //!     })
 //!     .collect();
-//! let options = BatchOptions { solver: "lm".into(), ..BatchOptions::default() };
+//! let mut options = BatchOptions::default();
+//! options.run.solver = "lm".into();
 //! let batch = solve_datasets(&datasets, &options, &|_| {});
 //! assert_eq!(batch.runs.len(), 2);
 //! assert!(batch.failures.is_empty());
@@ -35,92 +39,47 @@
 //! ```
 
 pub mod drift;
+mod files;
 mod report;
 pub mod stats;
 
-use std::collections::BTreeMap;
 use std::panic::AssertUnwindSafe;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex};
 
 use crate::dataset::{CAPTURES_CSV, DATASET_TOML, Dataset, DatasetError};
-use crate::model::{FixedSet, PARAMETER_COUNT, Side};
-use crate::report::plot::capture_sides;
-use crate::solve::{Backend, Loss, Problem, Solution, SolveError, UncertaintyOptions};
+pub use crate::run::Run;
+use crate::run::{RunError, RunOptions};
+use crate::solve::{Solution, UncertaintyOptions};
 
 pub use drift::{DriftMode, DriftOptions, DriftPair, Grouping, ParamDrift, drift};
+pub use files::{BatchFiles, BatchFilesError};
 pub use stats::{ParamStats, Summary, summarize};
 
-/// How one dataset's problem is solved: the function [`solve_one`] calls with the problem
-/// and a backend. The default is [`crate::solve::calibrate`] with the default
-/// [`UncertaintyOptions`], what `naocalib solve` runs without options; see
-/// [`BatchOptions::with_uncertainty`].
-pub type SolveFn = dyn Fn(&Problem, &dyn Backend) -> Result<Solution, SolveError> + Send + Sync;
-
 /// What a batch solves with.
-#[derive(Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct BatchOptions {
-    /// Backend name (see [`crate::solve::backend_names`]).
-    pub solver: String,
-    /// Parameters held fixed in every run.
-    pub fixed: FixedSet,
+    /// How every dataset is solved: what `naocalib solve` takes from the same flags.
+    pub run: RunOptions,
     /// Worker threads; 0 for one per core.
     pub threads: usize,
-    /// Let the backend log progress.
-    pub verbose: bool,
-    /// The loss of every problem (robust first fit with outliers left out, as
-    /// `naocalib solve --loss`); [`Loss::Squared`] by default.
-    pub loss: Loss,
-    /// How a problem is solved (default: [`crate::solve::calibrate`] with default options).
-    pub method: Arc<SolveFn>,
     /// Drift options for the reports.
     pub drift: DriftOptions,
 }
 
-impl std::fmt::Debug for BatchOptions {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("BatchOptions")
-            .field("solver", &self.solver)
-            .field("fixed", &self.fixed)
-            .field("threads", &self.threads)
-            .field("verbose", &self.verbose)
-            .field("loss", &self.loss)
-            .field("drift", &self.drift)
-            .finish_non_exhaustive()
-    }
-}
-
-impl Default for BatchOptions {
-    fn default() -> Self {
-        BatchOptions {
-            solver: crate::solve::backend_names()[0].to_string(),
-            fixed: FixedSet::default(),
-            threads: 0,
-            verbose: false,
-            loss: Loss::Squared,
-            method: Arc::new(|problem: &Problem, backend: &dyn Backend| {
-                crate::solve::calibrate(problem, backend, &UncertaintyOptions::default())
-            }),
-            drift: DriftOptions::default(),
-        }
-    }
-}
-
 impl BatchOptions {
-    /// These options, solving each dataset with [`crate::solve::calibrate`] and `uncertainty`
-    /// (as `naocalib solve` does with the corresponding options).
+    /// These options, solving each dataset with `uncertainty` (as `naocalib solve` does
+    /// with the corresponding options).
     pub fn with_uncertainty(mut self, uncertainty: UncertaintyOptions) -> Self {
-        self.method = Arc::new(move |problem: &Problem, backend: &dyn Backend| {
-            crate::solve::calibrate(problem, backend, &uncertainty)
-        });
+        self.run.uncertainty = uncertainty;
         self
     }
 }
 
 /// Why one dataset of a batch has no result.
 #[derive(Debug, thiserror::Error)]
-pub enum RunError {
+pub enum BatchError {
     /// The path is not a dataset, nor a directory holding datasets.
     #[error("{reason}")]
     NotADataset {
@@ -132,28 +91,12 @@ pub enum RunError {
     /// The dataset could not be read.
     #[error(transparent)]
     Dataset(#[from] DatasetError),
-    /// The calibration could not be solved.
+    /// The dataset could not be solved.
     #[error(transparent)]
-    Solve(#[from] SolveError),
-    /// No backend of that name.
-    #[error("unknown solver '{0}'")]
-    UnknownSolver(String),
+    Run(#[from] RunError),
     /// The solve panicked (a bug); the batch goes on.
     #[error("internal error (panic): {0}")]
     Panic(String),
-}
-
-/// One solved dataset.
-#[derive(Debug, Clone)]
-pub struct Run {
-    /// The dataset directory.
-    pub dataset: PathBuf,
-    /// The calibration.
-    pub solution: Solution,
-    /// The dataset's true parameters (simulated datasets), internal units.
-    pub truth: Option<[f64; PARAMETER_COUNT]>,
-    /// Which board each capture shows (for plots).
-    pub sides: BTreeMap<u64, Side>,
 }
 
 /// One dataset that could not be solved.
@@ -162,7 +105,7 @@ pub struct Failure {
     /// The dataset directory (or the argument that held none).
     pub dataset: PathBuf,
     /// Why.
-    pub error: RunError,
+    pub error: BatchError,
 }
 
 /// The outcome of a batch: the solved runs and the failures, each in input order.
@@ -207,7 +150,7 @@ pub fn find_datasets(paths: &[PathBuf]) -> (Vec<PathBuf>, Vec<Failure>) {
     for path in paths {
         let fail = |reason: String| Failure {
             dataset: path.clone(),
-            error: RunError::NotADataset {
+            error: BatchError::NotADataset {
                 path: path.clone(),
                 reason,
             },
@@ -250,19 +193,9 @@ pub fn find_datasets(paths: &[PathBuf]) -> (Vec<PathBuf>, Vec<Failure>) {
     (found, failures)
 }
 
-/// Solves one dataset exactly as `naocalib solve` does: [`Problem::from_dataset`] with
-/// `options.fixed` and `options.loss`, then `options.method` with the backend
-/// `options.solver`.
-pub fn solve_one(dataset: &Dataset, options: &BatchOptions) -> Result<Solution, RunError> {
-    let backend = crate::solve::backend(&options.solver, options.verbose)
-        .ok_or_else(|| RunError::UnknownSolver(options.solver.clone()))?;
-    let mut problem = Problem::from_dataset(dataset, options.fixed.clone())?;
-    problem.loss = options.loss;
-    Ok((options.method)(&problem, backend.as_ref())?)
-}
-
-/// Solves the datasets in the directories `dirs` on all cores (see [`solve_one`]);
-/// `progress` is called after each one. Results are in the order of `dirs`.
+/// Solves the datasets in the directories `dirs` on all cores (see
+/// [`crate::run::calibrate`]); `progress` is called after each one. Results are in the
+/// order of `dirs`.
 pub fn solve_dirs(
     dirs: &[PathBuf],
     options: &BatchOptions,
@@ -270,32 +203,20 @@ pub fn solve_dirs(
 ) -> Batch {
     let results = par_map(dirs, options.threads, progress, |dir: &PathBuf| {
         let dataset = Dataset::load(dir)?;
-        let solution = solve_one(&dataset, options)?;
-        Ok(Run {
-            sides: capture_sides(&dataset),
-            dataset: dir.clone(),
-            solution,
-            truth: dataset.truth.map(|t| t.values),
-        })
+        Ok(crate::run::calibrate(&dataset, &options.run)?)
     });
     collect(dirs.iter().cloned(), results)
 }
 
-/// Solves datasets already in memory on all cores (see [`solve_one`]); each run is named
-/// by its dataset's [`Dataset::dir`].
+/// Solves datasets already in memory on all cores (see [`crate::run::calibrate`]); each run
+/// is named by its dataset's [`Dataset::dir`].
 pub fn solve_datasets(
     datasets: &[Dataset],
     options: &BatchOptions,
     progress: &(dyn Fn(Progress<'_>) + Sync),
 ) -> Batch {
     let results = par_map(datasets, options.threads, progress, |dataset: &Dataset| {
-        let solution = solve_one(dataset, options)?;
-        Ok(Run {
-            sides: capture_sides(dataset),
-            dataset: dataset.dir.clone(),
-            solution,
-            truth: dataset.truth.as_ref().map(|t| t.values),
-        })
+        Ok(crate::run::calibrate(dataset, &options.run)?)
     });
     collect(datasets.iter().map(|d| d.dir.clone()), results)
 }
@@ -314,7 +235,7 @@ pub fn run(
     batch
 }
 
-fn collect(names: impl Iterator<Item = PathBuf>, results: Vec<Result<Run, RunError>>) -> Batch {
+fn collect(names: impl Iterator<Item = PathBuf>, results: Vec<Result<Run, BatchError>>) -> Batch {
     let mut batch = Batch::default();
     for (dataset, result) in names.zip(results) {
         match result {
@@ -344,13 +265,13 @@ impl Named for Dataset {
 
 /// Maps `f` over `items` on `threads` worker threads (0: one per core), taking the next
 /// item from a shared counter, so that slow and fast datasets balance out. A panic in `f`
-/// becomes a [`RunError::Panic`] for that item.
+/// becomes a [`BatchError::Panic`] for that item.
 fn par_map<T: Named + Sync, R: Send>(
     items: &[T],
     threads: usize,
     progress: &(dyn Fn(Progress<'_>) + Sync),
-    f: impl Fn(&T) -> Result<R, RunError> + Sync,
-) -> Vec<Result<R, RunError>> {
+    f: impl Fn(&T) -> Result<R, BatchError> + Sync,
+) -> Vec<Result<R, BatchError>> {
     let threads = if threads == 0 {
         std::thread::available_parallelism().map_or(1, |n| n.get())
     } else {
@@ -360,14 +281,14 @@ fn par_map<T: Named + Sync, R: Send>(
     .max(1);
     let next = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
-    let slots: Mutex<Vec<Option<Result<R, RunError>>>> =
+    let slots: Mutex<Vec<Option<Result<R, BatchError>>>> =
         Mutex::new((0..items.len()).map(|_| None).collect());
     let work = || {
         loop {
             let i = next.fetch_add(1, Ordering::Relaxed);
             let Some(item) = items.get(i) else { break };
             let result = std::panic::catch_unwind(AssertUnwindSafe(|| f(item)))
-                .unwrap_or_else(|panic| Err(RunError::Panic(panic_message(&*panic))));
+                .unwrap_or_else(|panic| Err(BatchError::Panic(panic_message(&*panic))));
             let ok = result.is_ok();
             slots.lock().unwrap_or_else(|e| e.into_inner())[i] = Some(result);
             let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
@@ -392,7 +313,7 @@ fn par_map<T: Named + Sync, R: Send>(
         .into_inner()
         .unwrap_or_else(|e| e.into_inner())
         .into_iter()
-        .map(|slot| slot.unwrap_or_else(|| Err(RunError::Panic("no result".into()))))
+        .map(|slot| slot.unwrap_or_else(|| Err(BatchError::Panic("no result".into()))))
         .collect()
 }
 
@@ -429,4 +350,4 @@ impl Batch {
     }
 }
 
-pub use report::{OutputFiles, run_file_names};
+pub use report::{BatchJson, OutputFiles, run_file_names};

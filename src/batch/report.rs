@@ -4,12 +4,14 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value, json};
 
 use super::drift::{DriftMode, DriftOptions, DriftPair, Grouping};
 use super::{Batch, Run};
 use crate::export::ExportError;
 use crate::output::{WriteOptions, dataset_files, write_atomic};
+use crate::report::ResultJson;
 
 /// Most runs shown as columns of the text table; with more, only the summary columns are
 /// shown (every run is in the JSON).
@@ -41,12 +43,12 @@ pub fn run_file_names(runs: &[Run]) -> Vec<String> {
             _ => name,
         }
     };
-    let simple: Vec<String> = runs.iter().map(|r| base(&r.dataset, false)).collect();
+    let simple: Vec<String> = runs.iter().map(|r| base(r.dataset(), false)).collect();
     let mut names: Vec<String> = Vec::new();
     for (i, run) in runs.iter().enumerate() {
         let clash = simple.iter().filter(|s| **s == simple[i]).count() > 1;
         let mut name = if clash {
-            base(&run.dataset, true)
+            base(run.dataset(), true)
         } else {
             simple[i].clone()
         };
@@ -62,6 +64,16 @@ pub fn run_file_names(runs: &[Run]) -> Vec<String> {
         names.push(candidate);
     }
     names.into_iter().map(|n| format!("{n}.json")).collect()
+}
+
+/// The JSON of a batch (`naocalib batch --json`): every run's result JSON, the type
+/// `naocalib solve --json` prints, and the summary ([`Batch::summary_json`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BatchJson {
+    /// Every solved run, in input order.
+    pub runs: Vec<ResultJson>,
+    /// Counts, per-parameter statistics, failures and drift.
+    pub summary: Value,
 }
 
 fn fmt_or_dash(x: f64, decimals: usize) -> String {
@@ -89,7 +101,7 @@ impl Batch {
                     out,
                     "  {:>3}  {}{}",
                     i + 1,
-                    run.dataset.display(),
+                    run.dataset().display(),
                     if s.converged { "" } else { "  (NOT converged)" }
                 );
             }
@@ -227,11 +239,10 @@ impl Batch {
         out
     }
 
-    /// One run's result JSON: docs/MODEL.md §8 ([`crate::report::json`]) with its `dataset`.
+    /// One run's result JSON: docs/MODEL.md §8, as `naocalib solve --json` prints it
+    /// ([`ResultJson::from_run`]), keys in alphabetical order.
     pub fn run_json(run: &Run) -> Value {
-        let mut value = crate::report::json(&run.solution, run.truth.as_ref().map(|t| &t[..]));
-        value["dataset"] = Value::String(run.dataset.display().to_string());
-        value
+        ResultJson::from_run(run).to_value()
     }
 
     /// The summary as JSON: counts, per-parameter statistics, failures and drift (no
@@ -268,7 +279,7 @@ impl Batch {
             "runs": summary.runs,
             "converged": summary.converged,
             "failed": self.failures.len(),
-            "datasets": self.runs.iter().map(|r| r.dataset.display().to_string()).collect::<Vec<_>>(),
+            "datasets": self.runs.iter().map(|r| r.dataset().display().to_string()).collect::<Vec<_>>(),
             "iterations_mean": summary.iterations,
             "rms_px_mean": summary.rms_px,
             "seconds_mean": summary.seconds,
@@ -283,12 +294,13 @@ impl Batch {
         })
     }
 
-    /// The whole batch as JSON: `{"runs": [docs/MODEL.md 7 result + dataset, …], "summary": …}`.
+    /// The whole batch as JSON ([`BatchJson`]), keys in alphabetical order at every level.
     pub fn json(&self, drift: &DriftOptions) -> Value {
-        json!({
-            "runs": self.runs.iter().map(Batch::run_json).collect::<Vec<_>>(),
-            "summary": self.summary_json(drift),
-        })
+        let batch = BatchJson {
+            runs: self.runs.iter().map(ResultJson::from_run).collect(),
+            summary: self.summary_json(drift),
+        };
+        serde_json::to_value(batch).expect("JSON of plain values")
     }
 
     /// Writes every run's result JSON (names from [`run_file_names`]) and `summary.json`
@@ -330,9 +342,9 @@ impl Batch {
     pub fn input_files(&self) -> Vec<PathBuf> {
         self.runs
             .iter()
-            .map(|r| &r.dataset)
-            .chain(self.failures.iter().map(|f| &f.dataset))
-            .flat_map(|d| dataset_files(d))
+            .map(|r| r.dataset())
+            .chain(self.failures.iter().map(|f| f.dataset.as_path()))
+            .flat_map(dataset_files)
             .collect()
     }
 }
@@ -359,8 +371,8 @@ fn drift_json(batch: &Batch, pair: &DriftPair) -> Value {
     }
     json!({
         "robot": pair.robot,
-        "from": batch.runs[pair.from].dataset.display().to_string(),
-        "to": batch.runs[pair.to].dataset.display().to_string(),
+        "from": batch.runs[pair.from].dataset().display().to_string(),
+        "to": batch.runs[pair.to].dataset().display().to_string(),
         "flagged": pair.flagged().map(|d| d.param.name()).collect::<Vec<_>>(),
         "parameters": Value::Object(params),
     })

@@ -5,12 +5,13 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::{Args, ValueEnum};
 
-use super::options::{ProblemArgs, SolverArgs, UncertaintyArgs};
-use naocalib::batch::{self, BatchOptions, DriftMode, DriftOptions, Grouping, Progress};
-use naocalib::export::WriteOptions;
+use super::options::{ProblemArgs, SolverArgs, UncertaintyArgs, run_options};
+use naocalib::batch::{
+    self, BatchFiles, BatchOptions, DriftMode, DriftOptions, Grouping, Progress,
+};
 
 /// Which runs are compared for drift.
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -81,52 +82,19 @@ pub struct BatchArgs {
 
 /// Runs `naocalib batch`.
 pub fn run(args: &BatchArgs, verbose: bool) -> Result<ExitCode> {
-    let fixed = args.problem.fixed_set()?;
-    if !(args.drift_threshold.is_finite() && args.drift_threshold > 0.0) {
-        anyhow::bail!(
-            "--drift-threshold must be a positive number, got {}",
-            args.drift_threshold
-        );
-    }
     let options = BatchOptions {
-        solver: args.solver.solver.clone(),
-        loss: args.problem.loss(),
-        fixed,
+        run: run_options(&args.problem, &args.solver, &args.uncertainty, verbose)?,
         threads: args.threads,
-        verbose,
-        drift: DriftOptions {
-            mode: match args.drift {
-                DriftArg::Consecutive => DriftMode::Consecutive,
-                DriftArg::First => DriftMode::First,
-            },
-            threshold: args.drift_threshold,
-            grouping: match args.robots {
-                RobotsArg::Parent => Grouping::Parent,
-                RobotsArg::All => Grouping::All,
-                RobotsArg::None => Grouping::None,
-            },
-        },
-        ..BatchOptions::default()
-    }
-    .with_uncertainty(args.uncertainty.options());
+        drift: drift_options(args)?,
+    };
+    let files = BatchFiles {
+        out: args.out.clone(),
+        plots: args.plots.clone(),
+        report: args.report.clone(),
+        force: args.force,
+    };
     // Every output against every dataset's files, before anything is solved or written.
-    let (found, _) = batch::find_datasets(&args.datasets);
-    let write_options = WriteOptions::new(args.force).protecting(
-        found
-            .iter()
-            .flat_map(|d| naocalib::output::dataset_files(d))
-            .collect::<Vec<_>>(),
-    );
-    naocalib::output::check_outputs(
-        &args.report.as_deref().into_iter().collect::<Vec<_>>(),
-        &args
-            .out
-            .iter()
-            .chain(&args.plots)
-            .map(PathBuf::as_path)
-            .collect::<Vec<_>>(),
-        &write_options,
-    )?;
+    files.check(&batch::find_datasets(&args.datasets).0)?;
     let show = !args.no_progress && !verbose && std::io::stderr().is_terminal();
     let bar = show.then(|| super::progress_bar(0, "datasets"));
     let failed = AtomicUsize::new(0);
@@ -143,26 +111,7 @@ pub fn run(args: &BatchArgs, verbose: bool) -> Result<ExitCode> {
     if let Some(bar) = &bar {
         bar.finish_and_clear();
     }
-    let write_options = write_options.protecting(result.input_files());
-    if let Some(dir) = &args.out {
-        let files = result
-            .write(dir, &options.drift, &write_options)
-            .context("--out")?;
-        note!(
-            "wrote {} run results and {}",
-            files.runs.len(),
-            files.summary.display()
-        );
-    }
-    if let Some(dir) = &args.plots {
-        let files = result.plots(dir, &write_options).context("--plots")?;
-        note!("wrote {} plot files into {}", files.len(), dir.display());
-    }
-    if let Some(path) = &args.report {
-        naocalib::report::html::write_batch_report(&result, &options.drift, path, &write_options)
-            .context("--report")?;
-        note!("wrote {}", path.display());
-    }
+    files.write(&result, &options.drift, &mut |line| note!("{line}"))?;
     super::print_out(if args.json {
         format!(
             "{}\n",
@@ -180,5 +129,27 @@ pub fn run(args: &BatchArgs, verbose: bool) -> Result<ExitCode> {
         ExitCode::from(3)
     } else {
         ExitCode::SUCCESS
+    })
+}
+
+/// The drift options of the flags.
+fn drift_options(args: &BatchArgs) -> Result<DriftOptions> {
+    if !(args.drift_threshold.is_finite() && args.drift_threshold > 0.0) {
+        anyhow::bail!(
+            "--drift-threshold must be a positive number, got {}",
+            args.drift_threshold
+        );
+    }
+    Ok(DriftOptions {
+        mode: match args.drift {
+            DriftArg::Consecutive => DriftMode::Consecutive,
+            DriftArg::First => DriftMode::First,
+        },
+        threshold: args.drift_threshold,
+        grouping: match args.robots {
+            RobotsArg::Parent => Grouping::Parent,
+            RobotsArg::All => Grouping::All,
+            RobotsArg::None => Grouping::None,
+        },
     })
 }

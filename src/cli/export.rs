@@ -1,5 +1,5 @@
 //! `naocalib export`: turn a result or calibration file into the calibration files robots
-//! load; and the `--plots`/`--export` outputs of `naocalib solve`.
+//! load.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -8,12 +8,8 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 
 use naocalib::export::{
-    self, Calibration, ExportError, Format, Posture, Updated, Withheld, WriteOptions,
-    read_calibration,
+    self, Calibration, ExportError, Format, Posture, Updated, WriteOptions, read_calibration,
 };
-use naocalib::output::Staged;
-use naocalib::report::plot;
-use naocalib::solve::Solution;
 
 #[derive(Debug, Args)]
 pub struct ExportArgs {
@@ -209,83 +205,4 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
     }
     super::print_out(out)?;
     Ok(ExitCode::SUCCESS)
-}
-
-/// The extra outputs of `naocalib solve`: plots into `plots`, the calibration files of
-/// `calibration` (the solution's, with the dataset's angles and lying torques) into
-/// `export_dir` and the HTML report into `report`, never over a file of the dataset in
-/// `dataset`. Reports on stderr. A result that is not a calibration gets only naocalib's
-/// own calibration.toml/.json (which say so), with a warning, and no robot files.
-#[allow(clippy::too_many_arguments)] // the run, its dataset and each optional output
-pub fn solve_outputs(
-    solution: &Solution,
-    calibration: &Calibration,
-    dataset: &naocalib::dataset::Dataset,
-    plots: Option<&Path>,
-    export_dir: Option<&Path>,
-    report: Option<&Path>,
-    changes: Option<&[naocalib::report::Change]>,
-    force: bool,
-) -> Result<()> {
-    let options = WriteOptions::protecting_dataset(&dataset.dir, force);
-    naocalib::output::check_outputs(
-        &report.into_iter().collect::<Vec<_>>(),
-        &plots.into_iter().chain(export_dir).collect::<Vec<_>>(),
-        &options,
-    )?;
-    if let Some(dir) = plots {
-        // All or nothing: staged beside `dir`, published when every plot is drawn.
-        let stage = Staged::new(dir, &options).context("--plots")?;
-        let sides = plot::capture_sides(dataset);
-        let staged = stage.options();
-        plot::solution_plots(solution, Some(&sides), stage.dir(), "solve", &staged)
-            .context("--plots")?;
-        naocalib::report::misfit_plot::misfit_plots(
-            solution,
-            dataset,
-            stage.dir(),
-            "misfit",
-            &staged,
-        )
-        .context("--plots")?;
-        let files = stage.publish().context("--plots")?;
-        note!("wrote {} plot files into {}", files.len(), dir.display());
-    }
-    if let Some(dir) = export_dir {
-        if let Some(summary) = naocalib::report::standing_summary(calibration) {
-            note!(
-                "standing leg offsets for the team files (α + κ·τ_stand + ½π·sgn τ_stand): {summary}"
-            );
-        }
-        for caveat in calibration.standing_caveats() {
-            note!("warning: standing leg offset {caveat}");
-        }
-        let (files, withheld) = export::dir_files(calibration, dir);
-        match withheld {
-            Withheld::Nothing => {}
-            Withheld::JointFiles => note!(
-                "warning: the dataset's joint angles were already corrected by the robot's \
-                 joint calibration: --export writes no joint files (their offsets are changes \
-                 to the robot's file: use `naocalib export --update FILE`)"
-            ),
-            Withheld::RobotFiles(problems) => note!(
-                "warning: not a calibration ({}); --export writes only calibration.toml and \
-                 calibration.json, marked so, and no robot files",
-                problems.join("; ")
-            ),
-        }
-        let files = export::write_files(calibration, &files, Some(dir), &options, false)
-            .context("--export")?;
-        for f in files {
-            note!("wrote {}", f.display());
-        }
-    }
-    if let Some(path) = report {
-        naocalib::report::html::write_report_with_changes(
-            solution, dataset, changes, path, &options,
-        )
-        .context("--report")?;
-        note!("wrote {}", path.display());
-    }
-    Ok(())
 }

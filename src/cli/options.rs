@@ -1,11 +1,12 @@
 //! Flags shared by several commands, each defined once and flattened where it is used
 //! (`solve`, `batch`, `compare`), with their checks in clap's value parsers.
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 
 use naocalib::model::FixedSet;
-use naocalib::solve::{self, Backend, Loss, ModelChoice, UncertaintyOptions, noise::NoiseOptions};
+use naocalib::run::RunOptions;
+use naocalib::solve::{self, Loss, ModelChoice, UncertaintyOptions, noise::NoiseOptions};
 
 /// The backend used when `--solver` is not given.
 pub const DEFAULT_SOLVER: &str = if cfg!(feature = "ceres") {
@@ -62,6 +63,24 @@ impl ProblemArgs {
     }
 }
 
+/// The library's options for one run (`solve`, and every run of `batch`) from the flags
+/// both share: the problem's, the backend and the uncertainty's.
+pub fn run_options(
+    problem: &ProblemArgs,
+    solver: &SolverArgs,
+    uncertainty: &UncertaintyArgs,
+    verbose: bool,
+) -> Result<RunOptions> {
+    Ok(RunOptions {
+        solver: solver.solver.clone(),
+        fixed: problem.fixed_set()?,
+        loss: problem.loss(),
+        uncertainty: uncertainty.options(),
+        verbose,
+        start_from: None,
+    })
+}
+
 /// Which backend solves.
 #[derive(Debug, Clone, Args)]
 pub struct SolverArgs {
@@ -69,14 +88,6 @@ pub struct SolverArgs {
     /// (tiny-solver).
     #[arg(long, default_value = DEFAULT_SOLVER, value_parser = parse_solver)]
     pub solver: String,
-}
-
-impl SolverArgs {
-    /// The chosen backend.
-    pub fn backend(&self, verbose: bool) -> Result<Box<dyn Backend>> {
-        solve::backend(&self.solver, verbose)
-            .with_context(|| format!("unknown solver '{}'", self.solver))
-    }
 }
 
 /// Which families `--model` fits.

@@ -7,9 +7,11 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::Args;
 
-use super::options::{ProblemArgs, SolverArgs, UncertaintyArgs};
+use super::options::{ProblemArgs, SolverArgs, UncertaintyArgs, run_options};
 use naocalib::dataset::Dataset;
-use naocalib::solve::{self, Problem};
+use naocalib::report::ResultJson;
+use naocalib::run::{self, Run, RunError, RunFiles, RunOptions};
+use naocalib::solve::{self, uncertainty::with_bootstrap_progress};
 
 #[derive(Debug, Args)]
 pub struct SolveArgs {
@@ -49,10 +51,6 @@ pub struct SolveArgs {
     start_from: Option<PathBuf>,
 }
 
-fn load(path: &Path) -> Result<Dataset> {
-    Ok(Dataset::load(path)?)
-}
-
 /// The dataset with the vertices detected in its images instead of its corners.csv.
 #[cfg(feature = "detect")]
 fn load_detected(path: &Path, verbose: bool, start_from: Option<&Path>) -> Result<Dataset> {
@@ -84,109 +82,65 @@ fn detect_guard(_: &solve::Solution) -> bool {
 /// Runs `naocalib solve`.
 pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     // The options first: a mistake in them should not wait for a detection run.
-    let fixed = args.problem.fixed_set()?;
-    let backend = args.solver.backend(verbose)?;
-    // Every output against the dataset's files, before the solve.
-    naocalib::output::check_outputs(
-        &args.report.as_deref().into_iter().collect::<Vec<_>>(),
-        &args
-            .plots
-            .iter()
-            .chain(&args.export)
-            .map(PathBuf::as_path)
-            .collect::<Vec<_>>(),
-        &naocalib::output::WriteOptions::protecting_dataset(&args.dataset, args.force),
-    )?;
+    let mut options = run_options(&args.problem, &args.solver, &args.uncertainty, verbose)?;
+    let files = RunFiles {
+        plots: args.plots.clone(),
+        export: args.export.clone(),
+        report: args.report.clone(),
+        force: args.force,
+        inputs: args.start_from.iter().cloned().collect(),
+    };
+    files.check(&args.dataset)?;
     let dataset = if args.detect {
         load_detected(&args.dataset, verbose, args.start_from.as_deref())?
     } else {
-        load(&args.dataset)?
+        Dataset::load(&args.dataset)?
     };
-    let mut problem = Problem::from_dataset(&dataset, fixed)?;
-    problem.loss = args.problem.loss();
-    let corrected = dataset.angles.kind == naocalib::dataset::AngleKind::Corrected;
-    let previous = match &args.start_from {
-        Some(path) => {
-            let previous = naocalib::export::read_start_from(path)
-                .with_context(|| format!("--start-from {}", path.display()))?;
-            let values: Vec<_> = previous
-                .parameters
-                .iter()
-                .filter(|e| e.is_determined())
-                .map(|e| (e.param, e.value))
-                .collect();
-            problem.start_from(&values, corrected);
-            Some(previous)
-        }
-        None => None,
-    };
-    let options = args.uncertainty.options();
-    let calibrate = || solve::calibrate(&problem, backend.as_ref(), &options);
-    let solution = if options.bootstrap > 0 && std::io::stderr().is_terminal() {
-        // A long bootstrap shows its progress.
-        let bar = super::progress_bar(options.bootstrap, "bootstrap refits");
-        let shown = bar.clone();
-        let hook = Box::new(move |done: usize, _: usize| shown.set_position(done as u64));
-        let solution = solve::uncertainty::with_bootstrap_progress(hook, calibrate);
-        bar.finish_and_clear();
-        solution
-    } else {
-        calibrate()
+    if let Some(path) = &args.start_from {
+        options.start_from = Some(
+            naocalib::calibration::read_start_from(path)
+                .with_context(|| format!("--start-from {}", path.display()))?,
+        );
     }
-    .with_context(|| format!("solving {}", args.dataset.display()))?;
-    let changes = previous
-        .as_ref()
-        .map(|p| naocalib::report::changes(&solution, p, corrected));
-    let mut calibration =
-        naocalib::calibration::Calibration::from_solution(&solution, Some(&dataset.dir))
-            .with_lying_torques(&dataset);
-    calibration.angles = Some(dataset.angles.clone());
-    super::export::solve_outputs(
-        &solution,
-        &calibration,
-        &dataset,
-        args.plots.as_deref(),
-        args.export.as_deref(),
-        args.report.as_deref(),
-        changes.as_deref(),
-        args.force,
-    )?;
+    let run = calibrate(&dataset, &options).map_err(|e| match e {
+        RunError::Solve(_) => {
+            anyhow::Error::new(e).context(format!("solving {}", args.dataset.display()))
+        }
+        e => e.into(),
+    })?;
+    files.write(&run, &dataset, &mut |line| note!("{line}"))?;
     // A capture whose residuals are many times the others' is named, and the run marked.
-    let marked = args.detect && detect_guard(&solution);
-    let truth = dataset.truth.as_ref().map(|t| &t.values[..]);
-    use std::fmt::Write as _;
-    let mut out = String::new();
-    if args.json {
-        let mut result =
-            naocalib::report::ResultJson::new(&solution, truth).with_standing(&calibration);
-        result.dataset = Some(args.dataset.display().to_string());
-        result.angles = Some(dataset.angles.kind);
-        result.corrected_by = dataset.angles.corrected_by.clone();
-        if let Some(changes) = &changes {
-            result = result.with_changes(changes);
-        }
-        let value = result.to_value();
-        writeln!(out, "{}", serde_json::to_string_pretty(&value)?)?;
+    let marked = args.detect && detect_guard(&run.solution);
+    super::print_out(if args.json {
+        let value = ResultJson::from_run(&run).to_value();
+        format!("{}\n", serde_json::to_string_pretty(&value)?)
+    } else if marked {
+        format!(
+            "{}MARKED: captures with residuals many times the others' (see the warnings above)\n",
+            naocalib::report::run_text(&run)
+        )
     } else {
-        writeln!(out, "{}", args.dataset.display())?;
-        write!(out, "{}", naocalib::report::table(&solution, truth))?;
-        write!(out, "{}", naocalib::report::standing_table(&calibration))?;
-        if let Some(changes) = &changes {
-            write!(out, "{}", naocalib::report::changes_table(changes))?;
-        }
-    }
-    if marked && !args.json {
-        writeln!(
-            out,
-            "MARKED: captures with residuals many times the others' (see the warnings above)"
-        )?;
-    }
-    super::print_out(out)?;
-    Ok(if solution.is_calibration() && !marked {
+        naocalib::report::run_text(&run)
+    })?;
+    Ok(if run.solution.is_calibration() && !marked {
         ExitCode::SUCCESS
     } else {
         ExitCode::from(3)
     })
+}
+
+/// [`run::calibrate`], with a progress bar for a long bootstrap on a terminal.
+fn calibrate(dataset: &Dataset, options: &RunOptions) -> Result<Run, RunError> {
+    let refits = options.uncertainty.bootstrap;
+    if refits == 0 || !std::io::stderr().is_terminal() {
+        return run::calibrate(dataset, options);
+    }
+    let bar = super::progress_bar(refits, "bootstrap refits");
+    let shown = bar.clone();
+    let hook = Box::new(move |done: usize, _: usize| shown.set_position(done as u64));
+    let run = with_bootstrap_progress(hook, || run::calibrate(dataset, options));
+    bar.finish_and_clear();
+    run
 }
 
 /// The `--export` help: the files it writes, one per export format of the registry.

@@ -54,6 +54,7 @@ pub fn import_calibration(
         .collect();
     let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
     let cal = Calibration {
+        origin: crate::calibration::Origin::Imported,
         solver: Some(format!(
             "{} of {}",
             crate::calibration::IMPORT_SOLVER,

@@ -21,6 +21,7 @@ use crate::batch::drift::DriftOptions;
 use crate::dataset::Dataset;
 use crate::model::{Side, Vertex};
 use crate::output::{WriteError, WriteOptions, write_atomic};
+use crate::run::{Change, Run};
 use crate::solve::Solution;
 
 /// How many of the worst captures get an overlay.
@@ -93,29 +94,23 @@ figcaption{color:#555;font-size:.9em}svg,img{max-width:100%;height:auto}\
 .captures{max-height:24em;overflow:auto;display:inline-block}\
 .overlays{display:flex;flex-wrap:wrap;gap:1em}.overlays figure{flex:1 1 30%;margin:0}";
 
-/// One solution's part of a page.
-pub struct Section<'a> {
+/// One run's part of a page.
+struct Section<'a> {
     /// Heading (the dataset).
-    pub title: String,
-    /// The fit.
-    pub solution: &'a Solution,
-    /// The dataset, for the boards of the captures and the overlays.
-    pub dataset: Option<&'a Dataset>,
-    /// The board of each capture, when the dataset is not at hand.
-    pub sides: Option<&'a BTreeMap<u64, Side>>,
-    /// True parameter values (internal units), when known.
-    pub truth: Option<&'a [f64]>,
+    title: String,
+    /// The run: its solution, calibration, change and truth.
+    run: &'a Run,
+    /// The dataset, for the cameras of the captures and the overlays.
+    dataset: Option<&'a Dataset>,
     /// Whether to draw overlays of the worst captures (needs `dataset`).
-    pub overlays: bool,
+    overlays: bool,
     /// Appended to the section's element ids, to keep them unique on a page of several.
-    pub id_suffix: String,
-    /// What changed since the robot's previous calibration (`solve --start-from`).
-    pub changes: Option<&'a [super::Change]>,
+    id_suffix: String,
 }
 
 /// The change since the robot's previous calibration as a table: previous, now, change
 /// and `z = change/σ`, rows with |z| > 3 marked.
-fn change_table(out: &mut String, changes: &[super::Change], id_suffix: &str) {
+fn change_table(out: &mut String, changes: &[Change], id_suffix: &str) {
     let _ = writeln!(
         out,
         "<h3>Change since the previous calibration</h3>\n<table id=\"changes{id_suffix}\">\n\
@@ -353,21 +348,18 @@ pub fn overlay_png(
 }
 
 fn section(out: &mut String, s: &Section<'_>) -> Result<(), ReportError> {
-    let sides_owned = s.dataset.map(plot::capture_sides);
-    let sides = sides_owned.as_ref().or(s.sides);
+    let run = s.run;
+    let solution = &run.solution;
+    let sides = Some(&run.sides);
     let _ = writeln!(out, "<h2>{}</h2>", escape(&s.title));
     out.push_str("<h3>Parameters</h3>\n");
-    parameter_table(out, s.solution, s.truth);
-    if let Some(changes) = s.changes {
+    parameter_table(out, solution, run.truth());
+    if let Some(changes) = &run.changes {
         change_table(out, changes, &s.id_suffix);
     }
     // With compliance or play estimated: the leg offsets the robot needs standing (what the
     // team files carry), beside the lying ones, with their one-sigma and caveats.
-    let mut calibration = crate::calibration::Calibration::from_solution(s.solution, None);
-    if let Some(dataset) = s.dataset {
-        calibration = calibration.with_lying_torques(dataset);
-    }
-    let standing = super::standing_table(&calibration);
+    let standing = super::standing_table(&run.calibration);
     if !standing.is_empty() {
         let _ = writeln!(
             out,
@@ -376,7 +368,7 @@ fn section(out: &mut String, s: &Section<'_>) -> Result<(), ReportError> {
         );
     }
     out.push_str("<h3>Diagnosis</h3>\n<div class=\"diag\">");
-    for line in super::diagnosis(s.solution) {
+    for line in super::diagnosis(solution) {
         let class = if line.contains("NOT") {
             " class=\"bad\""
         } else {
@@ -385,7 +377,7 @@ fn section(out: &mut String, s: &Section<'_>) -> Result<(), ReportError> {
         let _ = writeln!(out, "<span{class}>{}</span>", escape(&line));
     }
     out.push_str("</div>\n<h3>Residuals</h3>\n");
-    let scatter = plot::residual_scatter_svg(s.solution, sides)?;
+    let scatter = plot::residual_scatter_svg(solution, sides)?;
     let _ = writeln!(
         out,
         "<figure id=\"residuals{}\">{}<figcaption>Residual (projection − detection) of every \
@@ -394,7 +386,7 @@ fn section(out: &mut String, s: &Section<'_>) -> Result<(), ReportError> {
         inline_svg(&scatter)
     );
     out.push_str("<h3>RMS residual per capture</h3>\n");
-    let captures = plot::capture_rms_svg(s.solution, sides)?;
+    let captures = plot::capture_rms_svg(solution, sides)?;
     let _ = writeln!(
         out,
         "<figure id=\"captures{}\">{}<figcaption>RMS residual of each capture after the solve.\
@@ -402,11 +394,11 @@ fn section(out: &mut String, s: &Section<'_>) -> Result<(), ReportError> {
         s.id_suffix,
         inline_svg(&captures)
     );
-    capture_table(out, s.solution, sides, s.dataset);
+    capture_table(out, solution, sides, s.dataset);
     if let (true, Some(dataset)) = (s.overlays, s.dataset) {
         out.push_str("<h3>Worst captures</h3>\n<div class=\"overlays\">\n");
-        for (id, rms) in worst_captures(s.solution, OVERLAYS) {
-            let png = overlay_png(s.solution, dataset, id)?;
+        for (id, rms) in worst_captures(solution, OVERLAYS) {
+            let png = overlay_png(solution, dataset, id)?;
             let _ = writeln!(
                 out,
                 "<figure class=\"overlay\"><img alt=\"overlay of capture {id}\" \
@@ -422,34 +414,21 @@ fn section(out: &mut String, s: &Section<'_>) -> Result<(), ReportError> {
     Ok(())
 }
 
-/// The report of one solve: parameters, diagnosis, plots, per-capture RMS and overlays of
-/// the [`OVERLAYS`] worst captures.
-pub fn solve_page(solution: &Solution, dataset: &Dataset) -> Result<String, ReportError> {
-    solve_page_with_changes(solution, dataset, None)
-}
-
-/// [`solve_page`] with the table of what changed since the robot's previous calibration
-/// (`solve --start-from`, [`super::changes`]) when `changes` is given.
-pub fn solve_page_with_changes(
-    solution: &Solution,
-    dataset: &Dataset,
-    changes: Option<&[super::Change]>,
-) -> Result<String, ReportError> {
-    let title = format!("naocalib calibration of {}", dataset.dir.display());
+/// The report of one run: parameters, the change since the previous calibration
+/// (`solve --start-from`), standing leg offsets, diagnosis, plots, per-capture RMS and
+/// overlays of the [`OVERLAYS`] worst captures of `dataset`, the dataset it was fitted to.
+pub fn solve_page(run: &Run, dataset: &Dataset) -> Result<String, ReportError> {
+    let title = format!("naocalib calibration of {}", run.dataset().display());
     let mut out = String::new();
     page_start(&mut out, &title);
-    let truth = dataset.truth.as_ref().map(|t| &t.values[..]);
     section(
         &mut out,
         &Section {
-            title: dataset.dir.display().to_string(),
-            solution,
+            title: run.dataset().display().to_string(),
+            run,
             dataset: Some(dataset),
-            sides: None,
-            truth,
             overlays: true,
             id_suffix: String::new(),
-            changes,
         },
     )?;
     page_end(&mut out);
@@ -484,14 +463,11 @@ pub fn batch_page(batch: &Batch, drift: &DriftOptions) -> Result<String, ReportE
         section(
             &mut out,
             &Section {
-                title: run.dataset.display().to_string(),
-                solution: &run.solution,
+                title: run.dataset().display().to_string(),
+                run,
                 dataset: None,
-                sides: Some(&run.sides),
-                truth: run.truth.as_ref().map(|t| &t[..]),
                 overlays: false,
                 id_suffix: format!("-{}", k + 1),
-                changes: None,
             },
         )?;
     }
@@ -501,23 +477,12 @@ pub fn batch_page(batch: &Batch, drift: &DriftOptions) -> Result<String, ReportE
 
 /// Writes [`solve_page`] to `path` (atomically; never over an input).
 pub fn write_report(
-    solution: &Solution,
+    run: &Run,
     dataset: &Dataset,
     path: &Path,
     options: &WriteOptions,
 ) -> Result<(), ReportError> {
-    write_report_with_changes(solution, dataset, None, path, options)
-}
-
-/// Writes [`solve_page_with_changes`] to `path` (atomically; never over an input).
-pub fn write_report_with_changes(
-    solution: &Solution,
-    dataset: &Dataset,
-    changes: Option<&[super::Change]>,
-    path: &Path,
-    options: &WriteOptions,
-) -> Result<(), ReportError> {
-    let page = solve_page_with_changes(solution, dataset, changes)?;
+    let page = solve_page(run, dataset)?;
     Ok(write_atomic(path, page.as_bytes(), options)?)
 }
 

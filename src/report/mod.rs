@@ -1,6 +1,9 @@
-//! Reports of a [`Solution`]: the paper's Table 2 as text, and the result JSON of docs/MODEL.md
-//! section 7. A report sees a solution (and optionally the truth), never a solver.
+//! Reports of a run ([`crate::run::Run`]) and its [`Solution`]: the paper's Table 2 as text
+//! ([`run_text`], [`table`]), the result JSON of docs/MODEL.md §8 ([`ResultJson`]), the HTML
+//! report ([`html`]), plots, and the comparison of solvers ([`compare`]). A report sees a
+//! run or a solution, never a solver.
 
+pub mod compare;
 pub mod html;
 pub mod misfit_plot;
 pub mod plot;
@@ -13,6 +16,7 @@ use std::fmt::Write as _;
 use serde_json::Value;
 
 use crate::model::Param;
+use crate::run::{Change, Run};
 use crate::solve::Solution;
 
 /// Parameters shown in reports: the paper's 21, the upper camera's when the dataset has
@@ -107,6 +111,19 @@ pub fn table(solution: &Solution, truth: Option<&[f64]>) -> String {
         solution.seconds * 1e3,
         s.seconds * 1e3
     );
+    out
+}
+
+/// The text report of a run, as `naocalib solve` prints it: the dataset, the [`table`], the
+/// standing leg offsets ([`standing_table`]) and the change since the previous calibration
+/// ([`changes_table`]).
+pub fn run_text(run: &Run) -> String {
+    let mut out = format!("{}\n", run.dataset().display());
+    out.push_str(&table(&run.solution, run.truth()));
+    out.push_str(&standing_table(&run.calibration));
+    if let Some(changes) = &run.changes {
+        out.push_str(&changes_table(changes));
+    }
     out
 }
 
@@ -284,59 +301,8 @@ pub fn identifiability_text(solution: &Solution) -> String {
     out
 }
 
-/// One parameter's change since the robot's previous calibration (report units).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Change {
-    /// The parameter.
-    pub param: Param,
-    /// Its value in the previous calibration.
-    pub previous: f64,
-    /// Its value now (for offsets estimated on already-corrected angles: previous + the
-    /// estimated change).
-    pub value: f64,
-    /// `value − previous`.
-    pub change: f64,
-    /// `change / σ`, σ combining this calibration's and the previous one's one-sigma.
-    pub z: f64,
-}
-
-/// What changed since the robot's previous calibration (`solve --start-from`): every
-/// parameter estimated now (free and determined) that the previous calibration holds with
-/// a known value. With `corrected_angles` the joint offsets estimated are changes to the
-/// previous ones.
-pub fn changes(
-    solution: &Solution,
-    previous: &crate::calibration::Calibration,
-    corrected_angles: bool,
-) -> Vec<Change> {
-    Param::ALL
-        .iter()
-        .filter(|&&p| !solution.fixed.is_fixed(p) && solution.is_determined(p))
-        .filter_map(|&p| {
-            let before = previous.get(p).filter(|e| e.is_determined())?;
-            let estimate = solution.report_value(p);
-            let (value, change) = if corrected_angles && crate::solve::problem::is_joint_offset(p) {
-                (before.value + estimate, estimate)
-            } else {
-                (estimate, estimate - before.value)
-            };
-            let sigma = solution.report_std(p).hypot(before.std.unwrap_or(0.0));
-            Some(Change {
-                param: p,
-                previous: before.value,
-                value,
-                change,
-                z: if sigma > 0.0 {
-                    change / sigma
-                } else {
-                    f64::NAN
-                },
-            })
-        })
-        .collect()
-}
-
-/// [`changes`] as a text table (`parameter previous now change z unit`), largest |z| marked.
+/// The change since the previous calibration ([`crate::run::changes`]) as a text table
+/// (`parameter previous now change z unit`), largest |z| marked.
 pub fn changes_table(changes: &[Change]) -> String {
     let mut out = String::new();
     let _ = writeln!(
@@ -393,6 +359,26 @@ pub fn standing_summary(cal: &crate::calibration::Calibration) -> Option<String>
             .collect::<Vec<_>>()
             .join(", ")
     })
+}
+
+/// What `export` and `solve --export` say of the standing leg offsets before writing team
+/// files: the [`standing_summary`] and a warning for every
+/// [`crate::calibration::Calibration::standing_caveats`], one line each.
+pub fn standing_notes(cal: &crate::calibration::Calibration) -> Vec<String> {
+    let mut notes: Vec<String> = standing_summary(cal)
+        .map(|summary| {
+            format!(
+                "standing leg offsets for the team files (α + κ·τ_stand + ½π·sgn τ_stand): {summary}"
+            )
+        })
+        .into_iter()
+        .collect();
+    notes.extend(
+        cal.standing_caveats()
+            .into_iter()
+            .map(|caveat| format!("warning: standing leg offset {caveat}")),
+    );
+    notes
 }
 
 /// [`standing_offsets`] as a text table (empty when there are none), with the joints

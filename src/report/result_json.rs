@@ -1,5 +1,6 @@
 //! The result JSON of `naocalib solve --json` (docs/MODEL.md §8) as one type, [`ResultJson`]:
-//! written by `solve --json` and `batch`, read back by `naocalib export` and
+//! the JSON of a run ([`ResultJson::from_run`]), written by `solve --json` and for every run
+//! of `batch` (`--json`, `--out`), read back by `naocalib export` and
 //! `solve --start-from` ([`crate::calibration::Calibration::from_json`]), so that what is
 //! written and what is read are the same keys.
 //!
@@ -14,10 +15,10 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::Change;
 use crate::calibration::{StandingIn, UniqueMap};
 use crate::dataset::AngleKind;
 use crate::model::Param;
+use crate::run::{Change, Run};
 use crate::solve::Solution;
 use crate::solve::uncertainty::Direction;
 
@@ -296,6 +297,23 @@ impl From<&Direction> for DirectionJson {
 }
 
 impl ResultJson {
+    /// The result JSON of `run`: its solution (with the truth, when known), dataset, the
+    /// dataset's joint-angle source, standing leg offsets and the change since the previous
+    /// calibration.
+    pub fn from_run(run: &Run) -> Self {
+        let mut result =
+            ResultJson::new(&run.solution, run.truth()).with_standing(&run.calibration);
+        result.dataset = Some(run.dataset().display().to_string());
+        if let Some(angles) = &run.calibration.angles {
+            result.angles = Some(angles.kind);
+            result.corrected_by = angles.corrected_by.clone();
+        }
+        if let Some(changes) = &run.changes {
+            result = result.with_changes(changes);
+        }
+        result
+    }
+
     /// The result of `solution` (with each parameter's `truth` when given), without the
     /// keys only a dataset or a command knows (`dataset`, `angles`, `changes`, …).
     pub fn new(solution: &Solution, truth: Option<&[f64]>) -> Self {
@@ -398,7 +416,7 @@ impl ResultJson {
         }
     }
 
-    /// Adds the change since the previous calibration ([`super::changes`]).
+    /// Adds the change since the previous calibration ([`crate::run::changes`]).
     pub fn with_changes(mut self, changes: &[Change]) -> Self {
         self.changes = Some(
             changes

@@ -76,12 +76,12 @@ fn batch_solves_like_solve_reports_failures_and_summarises() {
     let result = batch::run(std::slice::from_ref(&robot), &options, &|_| {});
 
     // Every good dataset, exactly as solve does.
-    let got: Vec<&Path> = result.runs.iter().map(|r| r.dataset.as_path()).collect();
+    let got: Vec<&Path> = result.runs.iter().map(|r| r.dataset()).collect();
     assert_eq!(got, good.iter().map(PathBuf::as_path).collect::<Vec<_>>());
     for run in &result.runs {
-        let dataset = Dataset::load(&run.dataset).unwrap();
+        let dataset = Dataset::load(run.dataset()).unwrap();
         let problem = Problem::from_dataset(&dataset, FixedSet::default()).unwrap();
-        let backend = solve::backend(&options.solver, false).unwrap();
+        let backend = solve::backend(&options.run.solver, false).unwrap();
         let direct =
             solve::calibrate(&problem, backend.as_ref(), &UncertaintyOptions::default()).unwrap();
         for i in 0..PARAMETER_COUNT {
@@ -216,10 +216,8 @@ fn out_writes_atomically_and_never_over_inputs() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("robot/run1");
     small(21, None).write(&dir, false).unwrap();
-    let options = BatchOptions {
-        solver: "lm".into(),
-        ..BatchOptions::default()
-    };
+    let mut options = BatchOptions::default();
+    options.run.solver = "lm".into();
     let result = batch::run(std::slice::from_ref(&dir), &options, &|_| {});
     assert_eq!(result.runs.len(), 1);
     let out = tmp.path().join("out");

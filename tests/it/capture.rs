@@ -440,6 +440,7 @@ fn a_robot_as_the_teams_files_show_it_is_captured_and_calibrated() {
     std::fs::write(b.path("truth.toml"), toml).unwrap();
     // The robot's calibration as its team last had it: close, not the truth.
     let current = Calibration {
+        origin: naocalib::calibration::Origin::Imported,
         solver: Some("naocalib import of the robot's files".into()),
         dataset: None,
         converged: None,

@@ -48,6 +48,7 @@ mod pure_rust_cli;
 mod readme;
 mod report_html;
 mod robot_file_bounds;
+mod run_object;
 mod sandal;
 mod spec_reference;
 #[cfg(feature = "ceres")]

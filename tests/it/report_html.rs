@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use naocalib::dataset::Dataset;
 use naocalib::model::FixedSet;
 use naocalib::report::{self, html, shown_parameters};
+use naocalib::run::Run;
 use naocalib::solve::{Problem, UncertaintyOptions, backend, calibrate};
 
 use crate::util::{naocalib, stderr};
@@ -43,7 +44,8 @@ fn sample_report_is_well_formed_and_complete() {
     let problem = Problem::from_dataset(&dataset, FixedSet::default()).unwrap();
     let lm = backend("lm", false).unwrap();
     let solution = calibrate(&problem, lm.as_ref(), &UncertaintyOptions::default()).unwrap();
-    let page = html::solve_page(&solution, &dataset).unwrap();
+    let run = Run::new(&dataset, solution.clone(), None);
+    let page = html::solve_page(&run, &dataset).unwrap();
     let doc = roxmltree::Document::parse_with_options(
         &page,
         roxmltree::ParsingOptions {
@@ -188,7 +190,7 @@ fn element_ids_are_unique() {
     let problem = Problem::from_dataset(&dataset, FixedSet::default()).unwrap();
     let lm = backend("lm", false).unwrap();
     let solution = calibrate(&problem, lm.as_ref(), &UncertaintyOptions::plain()).unwrap();
-    let page = html::solve_page(&solution, &dataset).unwrap();
+    let page = html::solve_page(&Run::new(&dataset, solution, None), &dataset).unwrap();
     let mut ids: Vec<&str> = page
         .match_indices(" id=\"")
         .map(|(i, m)| {

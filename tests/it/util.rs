@@ -140,6 +140,7 @@ pub fn converged_calibration(
     entry: impl FnMut(naocalib::model::Param) -> naocalib::export::Entry,
 ) -> naocalib::calibration::Calibration {
     naocalib::calibration::Calibration {
+        origin: naocalib::calibration::Origin::Solved,
         solver: Some("test".into()),
         dataset: None,
         converged: Some(true),
