@@ -58,7 +58,12 @@ fn batch_json_runs_are_solve_json_results() {
     let options = ["--free", "compliance,play", "--solver", "lm"];
     let out = tmp.path().join("out");
     let batch = json(
-        &[&["batch", "--json", "--no-progress"][..], &options, &["--out"]].concat(),
+        &[
+            &["batch", "--json", "--no-progress"][..],
+            &options,
+            &["--out"],
+        ]
+        .concat(),
         &[&out, &robot],
     );
     // The batch's JSON is one type: its runs read as the result JSON of `solve --json`.
