@@ -280,6 +280,7 @@ mod tests {
                 format!("x.cfg: import is not supported for --format {}", f.name())
             );
             let cal = Calibration {
+                origin: crate::calibration::Origin::Solved,
                 solver: None,
                 dataset: None,
                 converged: None,

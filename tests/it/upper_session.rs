@@ -13,12 +13,10 @@ use std::sync::OnceLock;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use naocalib::dataset::Dataset;
-use naocalib::model::{CameraId, Model, PAPER_PARAMETERS, PARAMETER_COUNT, Param};
-use naocalib::robot::simulated::read_record;
+use naocalib::model::{Model, PAPER_PARAMETERS, PARAMETER_COUNT, Param};
 use naocalib::sim::camera::CameraPreset;
 
-use crate::capture::{Bench, check_safety, finish};
+use crate::capture::Bench;
 use crate::util::{naocalib, stderr};
 
 /// The robot's camera file (B-Human 2019+ layout, degrees; B-Human's `y` is naocalib's
@@ -69,7 +67,9 @@ struct Session {
     bench: Bench,
     /// The robot's calibration as its files have it (internal units).
     files: [f64; PARAMETER_COUNT],
-    /// The default plan for both cameras, and its prediction.
+    /// The default plan for both cameras (run by `capture`, which needs detection), and its
+    /// prediction.
+    #[cfg_attr(not(feature = "detect"), allow(dead_code))]
     plan: PathBuf,
     predicted: Predicted,
     /// The lower-only plan's prediction.
@@ -260,7 +260,7 @@ fn the_upper_first_plan_is_honest_and_gives_the_upper_camera_0_025() {
         assert!(sigma <= 0.025, "{name}: predicted σ {sigma}");
     }
     let mut z = Vec::new();
-    let mut upper_std: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
+    let mut reported: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
     for seed in 1..=16u64 {
         let dir = s.bench.path(&format!("run{seed:02}"));
         let truth = truth(&s.files, 100 + seed);
@@ -289,7 +289,7 @@ fn the_upper_first_plan_is_honest_and_gives_the_upper_camera_0_025() {
         for (p, value, sigma) in estimates(&result) {
             z.push((value - p.unit().to_report(truth[p.index()])) / sigma);
             if let Some(name) = upper.iter().find(|n| **n == p.name()) {
-                upper_std.entry(name).or_default().push(sigma);
+                reported.entry(name).or_default().push(sigma);
             }
         }
     }
@@ -302,7 +302,7 @@ fn the_upper_first_plan_is_honest_and_gives_the_upper_camera_0_025() {
     assert!((0.85..=1.15).contains(&rms), "rms err/σ {rms}");
     assert!(beyond3 as f64 <= 0.01 * n, "{beyond3} of {n} beyond 3σ");
     for (name, predicted) in upper.iter().zip(upper_std(&s.upper_first_predicted)) {
-        let mut stds = upper_std[name].clone();
+        let mut stds = reported[*name].clone();
         assert_eq!(stds.len(), 16, "{name} free in every run");
         stds.sort_by(f64::total_cmp);
         let (median, worst) = ((stds[7] + stds[8]) / 2.0, stds[15]);
@@ -321,6 +321,10 @@ fn the_upper_first_plan_is_honest_and_gives_the_upper_camera_0_025() {
 #[cfg(feature = "detect")]
 #[test]
 fn a_planned_session_for_both_cameras_runs_as_written() {
+    use crate::capture::{check_safety, finish};
+    use naocalib::dataset::Dataset;
+    use naocalib::model::CameraId;
+    use naocalib::robot::simulated::read_record;
     let s = session();
     let bench = &s.bench;
     let truth = truth(&s.files, 7);
