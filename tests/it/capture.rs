@@ -102,6 +102,23 @@ impl Bench {
         cmd
     }
 
+    /// `naocalib capture PLAN OUT` against the robot at `sock`, each row's picture rendered
+    /// by the simulated robot's camera that the row names (lower or upper).
+    pub(crate) fn capture_both(&self, plan: &Path, out: &str, sock: &str) -> Command {
+        let snap = format!(
+            "command:'{}' simulate-robot snap {{path}} --state '{}' --camera {{camera}}",
+            bin().display(),
+            self.path("state.json").display()
+        );
+        self.capture(
+            plan,
+            out,
+            sock,
+            &format!("lower={snap}"),
+            &["--camera", &format!("upper={snap}")],
+        )
+    }
+
     /// The camera of the simulated robot.
     fn snap_camera(&self) -> String {
         format!(
@@ -433,11 +450,7 @@ fn a_robot_as_the_teams_files_show_it_is_captured_and_calibrated() {
     use naocalib::model::Param;
     let b = Bench::new();
     let truth = crate::detect_tilted::robot(-6.0, 3.0, 2.0);
-    let mut toml = String::from("[parameters]\n");
-    for p in Param::ALL {
-        toml += &format!("{} = {}\n", p.name(), p.unit().to_report(truth[p.index()]));
-    }
-    std::fs::write(b.path("truth.toml"), toml).unwrap();
+    crate::util::write_truth(&b.path("truth.toml"), &truth);
     // The robot's calibration as its team last had it: close, not the truth.
     let current = Calibration {
         origin: naocalib::calibration::Origin::Imported,

@@ -248,21 +248,7 @@ fn the_simulated_robot_renders_both_cameras() {
     let plan = b.path("plan.csv");
     plan_with_cameras(&plan, &rows, &[2, 3]);
     let robot = b.robot("a.sock", "a.csv", &["--speed", "0"]);
-    let snap = format!(
-        "command:'{}' simulate-robot snap {{path}} --state '{}' --camera {{camera}}",
-        assert_cmd::cargo::cargo_bin("naocalib").display(),
-        b.path("state.json").display()
-    );
-    let out = b
-        .capture(
-            &plan,
-            "ds",
-            "a.sock",
-            &format!("lower={snap}"),
-            &["--camera", &format!("upper={snap}")],
-        )
-        .output()
-        .unwrap();
+    let out = b.capture_both(&plan, "ds", "a.sock").output().unwrap();
     assert!(out.status.success(), "{}", stderr(&out));
     finish(robot);
     let ds = Dataset::load_without_corners(&b.path("ds")).unwrap();
@@ -343,11 +329,7 @@ fn both_cameras_end_to_end_recover_the_robots_truth() {
     ] {
         truth[p.index()] = f64::to_radians(deg);
     }
-    let mut toml = String::from("[parameters]\n");
-    for p in Param::ALL {
-        toml += &format!("{} = {}\n", p.name(), p.unit().to_report(truth[p.index()]));
-    }
-    std::fs::write(b.path("truth.toml"), toml).unwrap();
+    crate::util::write_truth(&b.path("truth.toml"), &truth);
     let truth_arg = b.path("truth.toml");
     let robot = b.robot(
         "a.sock",
@@ -356,21 +338,7 @@ fn both_cameras_end_to_end_recover_the_robots_truth() {
         // silence limit.
         &["--speed", "10", "--truth", truth_arg.to_str().unwrap()],
     );
-    let snap = format!(
-        "command:'{}' simulate-robot snap {{path}} --state '{}' --camera {{camera}}",
-        assert_cmd::cargo::cargo_bin("naocalib").display(),
-        b.path("state.json").display()
-    );
-    let out = b
-        .capture(
-            &plan,
-            "ds",
-            "a.sock",
-            &format!("lower={snap}"),
-            &["--camera", &format!("upper={snap}")],
-        )
-        .output()
-        .unwrap();
+    let out = b.capture_both(&plan, "ds", "a.sock").output().unwrap();
     let err = stderr(&out);
     assert!(out.status.success(), "{err}");
     finish(robot);

@@ -17,7 +17,7 @@ use naocalib::model::{Model, PAPER_PARAMETERS, PARAMETER_COUNT, Param};
 use naocalib::sim::camera::CameraPreset;
 
 use crate::capture::Bench;
-use crate::util::{naocalib, stderr};
+use crate::util::{naocalib, stderr, write_truth};
 
 /// The robot's camera file (B-Human 2019+ layout, degrees; B-Human's `y` is naocalib's
 /// pitch, `x` its roll, `z` its yaw: docs/EXPORTS.md).
@@ -188,15 +188,6 @@ fn truth(files: &[f64; PARAMETER_COUNT], seed: u64) -> [f64; PARAMETER_COUNT] {
     truth
 }
 
-/// `truth` as a truth.toml at `path`.
-fn write_truth(path: &Path, truth: &[f64; PARAMETER_COUNT]) {
-    let mut toml = String::from("[parameters]\n");
-    for p in Param::ALL {
-        toml += &format!("{} = {}\n", p.name(), p.unit().to_report(truth[p.index()]));
-    }
-    std::fs::write(path, toml).unwrap();
-}
-
 /// The free parameters of a result JSON: (name, value, σ), report units.
 fn estimates(result: &serde_json::Value) -> Vec<(Param, f64, f64)> {
     Param::ALL
@@ -335,19 +326,8 @@ fn a_planned_session_for_both_cameras_runs_as_written() {
         "a.csv",
         &["--speed", "10", "--truth", truth_path.to_str().unwrap()],
     );
-    let snap = format!(
-        "command:'{}' simulate-robot snap {{path}} --state '{}' --camera {{camera}}",
-        assert_cmd::cargo::cargo_bin("naocalib").display(),
-        bench.path("state.json").display()
-    );
     let out = bench
-        .capture(
-            &s.plan,
-            "ds",
-            "a.sock",
-            &format!("lower={snap}"),
-            &["--camera", &format!("upper={snap}")],
-        )
+        .capture_both(&s.plan, "ds", "a.sock")
         .output()
         .unwrap();
     let err = stderr(&out);

@@ -165,3 +165,12 @@ pub fn updated(
         other => panic!("{}: not updated: {other:?}", path.display()),
     }
 }
+
+/// Writes `truth` (internal units, every parameter) as a truth.toml at `path`.
+pub fn write_truth(path: &Path, truth: &[f64; naocalib::model::PARAMETER_COUNT]) {
+    let mut toml = String::from("[parameters]\n");
+    for p in naocalib::model::Param::ALL {
+        toml += &format!("{} = {}\n", p.name(), p.unit().to_report(truth[p.index()]));
+    }
+    std::fs::write(path, toml).unwrap();
+}
