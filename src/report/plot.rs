@@ -11,7 +11,7 @@
 //! Files are written atomically and never replace an existing file unless `force`.
 //!
 //! ```
-//! use naocalib::report::{export::WriteOptions, plot};
+//! use naocalib::{export::WriteOptions, report::plot};
 //! # use naocalib::model::{FixedSet, Model};
 //! # use naocalib::sim::{SimOptions, simulate};
 //! # use naocalib::solve::{Problem, UncertaintyOptions, backend, calibrate};
