@@ -9,7 +9,8 @@
 //! [`run::Run`] (the solution with its [`calibration`], change and provenance) → [`report`],
 //! [`export`] and [`batch`].
 //!
-//! Calibrating a dataset from Rust, as `naocalib solve` does:
+//! The least-squares fit of a dataset from Rust ([`run::calibrate`] wraps it into the run
+//! `naocalib solve` prints: calibration, change and provenance):
 //!
 //! ```
 //! use std::path::Path;
