@@ -43,8 +43,9 @@ pub struct Feasibility {
     pub upper_offset: f64,
     /// For upper-camera captures, the distance of the head joints from their limits (rad),
     /// in place of [`Feasibility::joint_margin`]: the upper camera sees a sandal only with
-    /// the head pitched near its ceiling, and a robot whose upper camera looks down by a
-    /// team-sized correction (−8.5°) would have none left under a 5° margin. The head's
+    /// the head pitched near its ceiling, and a robot whose upper camera pitch correction
+    /// is a team-sized −8.5° (the camera looks 8.5° higher than nominal) would have none
+    /// left under a 5° margin. The head's
     /// offsets are bounded by [`Feasibility::head_offset`] (0.5°), and capture refuses a
     /// posture within 2° of a limit, so 2° keeps every commanded head angle safe.
     pub upper_head_margin: f64,
