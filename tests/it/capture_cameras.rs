@@ -202,6 +202,31 @@ fn a_plan_needing_a_camera_not_given_is_refused_before_anything_moves() {
     );
 }
 
+/// Up to `take` postures of the measured leg `side` in which the upper camera sees a whole
+/// sandal (the simulator's search over `pool` stances, at zero offsets) and that capture
+/// finds safe (2° from every limit); written as lower-camera rows, for the caller to mark.
+fn safe_upper_stances(
+    model: &Model,
+    side: Side,
+    pool: usize,
+    take: usize,
+    rng: &mut rand_chacha::ChaCha8Rng,
+) -> Vec<PlannedCapture> {
+    let zero = [0.0; naocalib::model::PARAMETER_COUNT];
+    naocalib::sim::choose_stances_for(model, CameraId::Upper, side, &zero, pool, 1, false, rng)
+        .unwrap()
+        .iter()
+        .flat_map(|s| s.postures.iter().map(|p| (s.side, *p)))
+        .filter(|(_, j)| unsafe_posture(model, j, 2f64.to_radians()).is_none())
+        .map(|(side, joints)| PlannedCapture {
+            camera: CameraId::Lower,
+            side,
+            joints,
+        })
+        .take(take)
+        .collect()
+}
+
 /// Stances in which the upper camera sees a whole sandal (the simulator's search), and
 /// lower-camera ones: the simulated robot renders each through the camera its row names
 /// (`simulate-robot snap … --camera {camera}`), and every picture shows the sandal at its
@@ -214,33 +239,10 @@ fn the_simulated_robot_renders_both_cameras() {
         ..Model::default()
     };
     let b = Bench::with_model(model);
-    let zero = [0.0; naocalib::model::PARAMETER_COUNT];
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(34);
     let mut upper: Vec<PlannedCapture> = Vec::new();
     for side in Side::BOTH {
-        let stances = naocalib::sim::choose_stances_for(
-            &model,
-            CameraId::Upper,
-            side,
-            &zero,
-            20,
-            1,
-            false,
-            &mut rng,
-        )
-        .unwrap();
-        upper.extend(
-            stances
-                .iter()
-                .flat_map(|s| s.postures.iter().map(|p| (s.side, *p)))
-                .filter(|(_, j)| unsafe_posture(&model, j, 2f64.to_radians()).is_none())
-                .map(|(side, joints)| PlannedCapture {
-                    camera: naocalib::model::CameraId::Lower,
-                    side,
-                    joints,
-                })
-                .take(1),
-        );
+        upper.extend(safe_upper_stances(&model, side, 20, 1, &mut rng));
     }
     assert_eq!(upper.len(), 2, "two safe upper stances");
     let mut rows = plan_file(&b.path("lower-only.csv"), 2, 35);
@@ -289,33 +291,10 @@ fn both_cameras_end_to_end_recover_the_robots_truth() {
     };
     let b = Bench::with_model(model);
     let mut rows = crate::capture::designed_plan(&b, &b.path("lower.csv"), 40, 41, "paper");
-    let zero = [0.0; naocalib::model::PARAMETER_COUNT];
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(42);
     let first_upper = rows.len();
     for side in Side::BOTH {
-        let stances = naocalib::sim::choose_stances_for(
-            &model,
-            CameraId::Upper,
-            side,
-            &zero,
-            120,
-            1,
-            false,
-            &mut rng,
-        )
-        .unwrap();
-        rows.extend(
-            stances
-                .iter()
-                .flat_map(|s| s.postures.iter().map(|p| (s.side, *p)))
-                .filter(|(_, j)| unsafe_posture(&model, j, 2f64.to_radians()).is_none())
-                .map(|(side, joints)| PlannedCapture {
-                    camera: naocalib::model::CameraId::Lower,
-                    side,
-                    joints,
-                })
-                .take(5),
-        );
+        rows.extend(safe_upper_stances(&model, side, 120, 5, &mut rng));
     }
     let upper: Vec<usize> = (first_upper..rows.len()).collect();
     assert!(upper.len() >= 8, "{} upper stances", upper.len());
@@ -362,39 +341,11 @@ fn both_cameras_end_to_end_recover_the_robots_truth() {
         .unwrap();
     assert!(out.status.success(), "solve: {}", stderr(&out));
     let result: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let mut worst = 0.0f64;
-    let checked = Param::ALL
-        .iter()
-        .take(naocalib::model::PAPER_PARAMETERS)
-        .chain(&[
-            Param::UpperCamYaw,
-            Param::UpperCamPitch,
-            Param::UpperCamRoll,
-        ]);
-    for p in checked {
-        let entry = &result["parameters"][p.name()];
-        if entry["fixed"] == true {
-            continue;
-        }
-        let value = entry["value"].as_f64().unwrap();
-        let std = entry["std"].as_f64().unwrap();
-        let error = value - p.unit().to_report(truth[p.index()]);
-        worst = worst.max(error.abs() / std);
-        assert!(
-            error.abs() < 4.0 * std,
-            "{}: error {error:.4} (σ {std:.4})",
-            p.name()
-        );
-        if matches!(
-            p,
-            Param::UpperCamYaw | Param::UpperCamPitch | Param::UpperCamRoll
-        ) {
-            eprintln!(
-                "{}: {value:.4} (truth {:.4}, σ {std:.4})",
-                p.name(),
-                p.unit().to_report(truth[p.index()])
-            );
-        }
-    }
-    eprintln!("worst error {worst:.2} σ");
+    let mut checked = Param::ALL[..naocalib::model::PAPER_PARAMETERS].to_vec();
+    checked.extend([
+        Param::UpperCamYaw,
+        Param::UpperCamPitch,
+        Param::UpperCamRoll,
+    ]);
+    crate::capture::assert_recovers(&result, &truth, &checked);
 }
