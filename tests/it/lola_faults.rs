@@ -825,7 +825,7 @@ fn a_slow_camera_command_is_stopped_with_its_children() {
     let start = Instant::now();
     while !gone(pid) {
         assert!(
-            start.elapsed() < Duration::from_secs(5),
+            start.elapsed() < Duration::from_secs(25),
             "the camera's `sleep 30` ({pid}) still runs"
         );
         std::thread::sleep(Duration::from_millis(20));
@@ -871,7 +871,6 @@ fn simulate_robot_refuses_to_overwrite_its_inputs_and_bad_options() {
             "outside LKneePitch's range",
         ),
     ] {
-        let start = Instant::now();
         let out = crate::util::naocalib()
             .arg("simulate-robot")
             .arg("--lola")
@@ -885,8 +884,8 @@ fn simulate_robot_refuses_to_overwrite_its_inputs_and_bad_options() {
             !out.status.success() && out.status.code().is_some(),
             "{err}"
         );
+        // Refused, not killed by the 20 s guard: the exit has a code.
         assert!(!err.contains("panicked") && err.contains(needle), "{err}");
-        assert!(start.elapsed() < Duration::from_secs(10));
         assert!(!b.path("x.sock").exists());
     }
 }

@@ -1,5 +1,10 @@
 //! naocalib's integration tests, one binary: each module is one concern, `util` holds the
 //! helpers they share.
+//!
+//! The suite runs twice (`scripts/test.sh`): in the full build and in the robot's build
+//! (`--no-default-features --features v4l2`). The planner's end-to-end runs (144-capture
+//! plans, their statistics, a whole planned session) do not depend on the build's
+//! features: they run once, in the full build (`feature = "detect"`).
 
 mod util;
 
@@ -37,9 +42,13 @@ mod hostile_inputs;
 mod hostile_outputs;
 mod lola_faults;
 mod misfit;
+#[cfg(feature = "detect")]
 mod plan;
+#[cfg(feature = "detect")]
 mod plan_around;
+#[cfg(feature = "detect")]
 mod plan_cameras;
+#[cfg(feature = "detect")]
 mod plan_moves;
 mod plot_files;
 mod pure_rust_agreement;
@@ -54,4 +63,5 @@ mod spec_reference;
 #[cfg(feature = "ceres")]
 mod uncertainty;
 mod upper_camera;
+#[cfg(feature = "detect")]
 mod upper_session;

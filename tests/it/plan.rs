@@ -2,8 +2,6 @@
 //! offsets better than the simulator's random stances, free compliance and play, and run
 //! through the CLI and `simulate --stance-file`.
 
-use std::sync::OnceLock;
-
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -12,13 +10,7 @@ use naocalib::plan::{self, Feasibility, Infeasible, Plan, PlanOptions, feasible}
 use naocalib::sim::{self, SimOptions};
 use naocalib::solve::{Problem, UncertaintyOptions, backend, backend_names, calibrate};
 
-use crate::util::{assert_clean_failure, naocalib, stderr};
-
-/// The paper-sized plan (144 captures, paper family, defaults), made once.
-fn paper_plan() -> &'static Plan {
-    static PLAN: OnceLock<Plan> = OnceLock::new();
-    PLAN.get_or_init(|| plan::plan(&Model::default(), &PlanOptions::default()).expect("plan"))
-}
+use crate::util::{assert_clean_failure, naocalib, paper_plan, stderr};
 
 /// The 15 angle offsets: camera rotation and the 12 leg joints.
 fn angle_offsets() -> Vec<Param> {

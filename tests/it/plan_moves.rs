@@ -72,11 +72,20 @@ pub(crate) fn assert_every_move_is_free(model: &Model, postures: &[JointAngles])
 fn every_move_of_planned_48_and_144_capture_plans_is_collision_free() {
     let model = Model::default();
     for captures in [48, 144] {
-        let options = PlanOptions {
-            captures,
-            ..PlanOptions::default()
+        let made;
+        let plan = if captures == 144 {
+            crate::util::paper_plan()
+        } else {
+            made = plan::plan(
+                &model,
+                &PlanOptions {
+                    captures,
+                    ..PlanOptions::default()
+                },
+            )
+            .expect("plan");
+            &made
         };
-        let plan = plan::plan(&model, &options).expect("plan");
         let postures: Vec<JointAngles> = plan.captures.iter().map(|c| c.joints).collect();
         let via = assert_every_move_is_free(&model, &postures);
         // The predicted duration is that of these moves, every one of them counted: at
@@ -189,7 +198,7 @@ fn capture_with_fixed_camera(
         .expect("robot started");
     let start = Instant::now();
     while !socket.exists() {
-        assert!(start.elapsed() < Duration::from_secs(20), "no socket");
+        assert!(start.elapsed() < Duration::from_secs(60), "no socket");
         std::thread::sleep(Duration::from_millis(10));
     }
     let png = dir.join("fixed.png");

@@ -308,7 +308,9 @@ fn the_upper_first_plan_is_honest_and_gives_the_upper_camera_0_025() {
 
 /// The plan for both cameras, run as written by `capture` on the simulated robot (its
 /// truth hidden, 10× real time) with both cameras rendered, then `solve --detect`: no
-/// stance skipped, at most 300 s of robot time, every parameter within 4σ of the truth.
+/// stance skipped, every parameter within 4σ of the truth. (The robot time the run takes
+/// is a figure of docs/PERFORMANCE.md: the simulated robot turns every delay of the
+/// machine running it, the rendering of the pictures among them, into robot time.)
 #[cfg(feature = "detect")]
 #[test]
 fn a_planned_session_for_both_cameras_runs_as_written() {
@@ -335,17 +337,6 @@ fn a_planned_session_for_both_cameras_runs_as_written() {
     finish(robot);
     check_safety(&read_record(&bench.path("a.csv")).unwrap(), true);
     assert!(!err.contains("skipped capture"), "{err}");
-    let seconds: f64 = err
-        .split(" s of robot time")
-        .next()
-        .and_then(|head| head.rsplit('(').next())
-        .and_then(|s| s.parse().ok())
-        .unwrap_or_else(|| panic!("no robot time in {err}"));
-    eprintln!(
-        "robot time {seconds:.1} s (predicted {:.0} s); {err}",
-        s.predicted.seconds
-    );
-    assert!(seconds <= 300.0, "{seconds} s of robot time");
     let ds = Dataset::load_without_corners(&bench.path("ds")).unwrap();
     assert_eq!(ds.captures.len(), 144);
     let upper = ds

@@ -174,3 +174,16 @@ pub fn write_truth(path: &Path, truth: &[f64; naocalib::model::PARAMETER_COUNT])
     }
     std::fs::write(path, toml).unwrap();
 }
+
+/// The paper-sized plan (144 captures, the paper's family, the default model and options),
+/// made once per test binary for every module that needs it.
+pub fn paper_plan() -> &'static naocalib::plan::Plan {
+    static PLAN: std::sync::OnceLock<naocalib::plan::Plan> = std::sync::OnceLock::new();
+    PLAN.get_or_init(|| {
+        naocalib::plan::plan(
+            &naocalib::model::Model::default(),
+            &naocalib::plan::PlanOptions::default(),
+        )
+        .expect("plan")
+    })
+}
