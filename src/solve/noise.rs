@@ -75,12 +75,18 @@ impl CaptureNoise {
     /// The whitening `Σ_c^{-1/2}` (symmetric, low rank plus identity) for the given noise
     /// levels.
     pub fn whitening(&self, levels: NoiseLevels) -> Whitening {
+        self.clone().into_whitening(levels)
+    }
+
+    /// [`CaptureNoise::whitening`], keeping the decomposition's directions instead of a
+    /// copy of them.
+    pub fn into_whitening(self, levels: NoiseLevels) -> Whitening {
         let a = levels.px * levels.px;
         let b = levels.joint * levels.joint;
         // Σ = a·I + U·diag(b·s²)·Uᵀ ⇒ Σ^{-1/2} = (I − U·diag(1 − sqrt(a/(a + b·s²)))·Uᵀ)/√a.
         Whitening::LowRank {
-            u: self.u.clone(),
             shrink: self.s2.map(|s2| 1.0 - (a / (a + b * s2)).sqrt()),
+            u: self.u,
             scale: 1.0 / a.sqrt(),
         }
     }

@@ -209,19 +209,35 @@ fn to_ffi(problem: &Problem) -> Result<ffi::FfiProblem, SolveError> {
     for (i, p) in free.iter().enumerate() {
         free_index[p.index()] = Some(i);
     }
+    let frozen = problem.frozen_chains();
+    // Every vector at its final size at once: grown step by step, the weights (some
+    // hundred kB) would be copied and their fresh pages touched several times over.
+    let steps: usize = frozen
+        .iter()
+        .map(|c| c.camera.steps().len() + c.board.steps().len())
+        .sum();
+    let weights: usize = problem
+        .captures
+        .iter()
+        .map(|term| match &term.whitening {
+            None => 0,
+            Some(Whitening::Dense(w)) => w.len(),
+            Some(Whitening::LowRank { u, shrink, .. }) => 1 + u.len() + shrink.len(),
+        })
+        .sum();
     let mut out = ffi::FfiProblem {
         params: free.iter().map(|p| problem.initial[p.index()]).collect(),
         param_block: free.iter().map(|p| p.group().id()).collect(),
-        steps: Vec::new(),
+        steps: Vec::with_capacity(steps),
         captures: Vec::with_capacity(problem.captures.len()),
         points: Vec::with_capacity(3 * problem.observation_count()),
         pixels: Vec::with_capacity(2 * problem.observation_count()),
-        weights: Vec::new(),
+        weights: Vec::with_capacity(weights),
         projections: Vec::new(),
     };
     // The distinct projections (one per camera), each shipped once.
     let mut projections: Vec<Projection> = Vec::new();
-    for (term, chains) in problem.captures.iter().zip(problem.frozen_chains()) {
+    for (term, chains) in problem.captures.iter().zip(frozen) {
         let projection = match projections.iter().position(|p| *p == chains.projection) {
             Some(k) => k,
             None => {

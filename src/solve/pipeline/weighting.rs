@@ -165,8 +165,8 @@ pub(super) fn whiten(
     }
     let mut weighted = problem.clone();
     weighted.initial = *at.values();
-    for (term, cn) in weighted.captures.iter_mut().zip(&captures) {
-        term.whitening = Some(cn.whitening(levels));
+    for (term, cn) in weighted.captures.iter_mut().zip(captures) {
+        term.whitening = Some(cn.into_whitening(levels));
     }
     Some((weighted, levels))
 }
