@@ -5,6 +5,7 @@ mod util;
 
 mod batch_solve;
 mod capture;
+mod capture_body;
 mod capture_cameras;
 #[cfg(feature = "ceres")]
 mod ceres_agreement;
