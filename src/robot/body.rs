@@ -235,9 +235,10 @@ pub enum BodyStop {
     },
     /// The torso turned too far from how it lay at the start.
     #[error(
-        "the robot rolled over: its torso turned {:.0}° (limit {:.0}°) and it now lies \
-         {}; lay it on its back, clear what made it roll, and go on with --resume",
-        turn.to_degrees(), limit.to_degrees(), lying.words()
+        "the robot rolled over: its torso turned {:.0}° from how it lay at the start (limit \
+         {:.0}°){}; lay it on its back, clear what made it roll, and go on with --resume",
+        turn.to_degrees(), limit.to_degrees(),
+        if *lying == Lying::OnBack { String::new() } else { format!(", it now lies {}", lying.words()) }
     )]
     Rolled {
         /// The turn (rad).

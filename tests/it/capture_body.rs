@@ -4,6 +4,10 @@
 //! so far a valid dataset; `capture --check` moves nothing and says what holds.
 
 use naocalib::dataset::Dataset;
+use naocalib::model::Model;
+use naocalib::robot::CaptureOptions;
+use naocalib::robot::capture::{predicted_steps, read_plan};
+use naocalib::robot::lola::CYCLE_S;
 use naocalib::robot::simulated::{RecordRow, read_record};
 
 use crate::capture::{Bench, captures_of, check_safety, finish, plan_file};
@@ -57,18 +61,32 @@ fn a_robot_not_on_its_back_is_not_made_stiff() {
 /// and the captures taken before are a valid dataset.
 #[test]
 fn rolling_over_the_chest_button_a_status_and_a_low_battery_end_the_run_at_rest() {
-    let at = "900";
+    // The fault comes after the ramp-up and the first two stances by the plan's timing,
+    // with half as much again for settling (at 10 times real time, so that a picture, taken
+    // in real time, passes few cycles).
+    let scratch = Bench::new();
+    let plan = scratch.path("plan.csv");
+    plan_file(&plan, 6, 32);
+    let options = CaptureOptions::default();
+    let rows = read_plan(&plan).unwrap();
+    let steps = predicted_steps(&Model::default(), &rows, &options);
+    let at = (options.motion.ramp_cycles as f64 + 1.5 * (steps[0] + steps[1]) / CYCLE_S) as u64;
+    let at = at.to_string();
     let status = format!("RKneePitch=2@{at}");
     for (fault, value, message) in [
-        ("--roll-at", at, "the robot rolled over"),
-        ("--chest-at", at, "the chest button was pressed"),
+        ("--roll-at", at.as_str(), "the robot rolled over"),
+        ("--chest-at", at.as_str(), "the chest button was pressed"),
         ("--status", status.as_str(), "RKneePitch reports status 2"),
-        ("--low-battery-at", at, "the battery is at 3 % (limit 5 %)"),
+        (
+            "--low-battery-at",
+            at.as_str(),
+            "the battery is at 3 % (limit 5 %)",
+        ),
     ] {
         let b = Bench::new();
         let plan = b.path("plan.csv");
         plan_file(&plan, 6, 32);
-        let robot = b.robot("a.sock", "a.csv", &["--speed", "0", fault, value]);
+        let robot = b.robot("a.sock", "a.csv", &["--speed", "10", fault, value]);
         let out = b
             .capture(&plan, "ds", "a.sock", &b.fixed_camera(), &[])
             .output()
@@ -79,6 +97,7 @@ fn rolling_over_the_chest_button_a_status_and_a_low_battery_end_the_run_at_rest(
         check_safety(&record, true);
         ramps_down_steadily(&record);
         let taken = captures_of(&b.path("ds"));
+        eprintln!("{fault}: {} captures before the stop", taken.len());
         assert!(
             !taken.is_empty() && taken.len() < 6,
             "{fault}: {} captures: {}",
@@ -180,7 +199,8 @@ fn the_dry_run_moves_nothing_and_says_what_holds() {
     let table = String::from_utf8_lossy(&out.stdout).to_string();
     assert_eq!(out.status.code(), Some(1), "{table}{}", stderr(&out));
     for (item, text) in [
-        ("lower camera", "brightness 6 of 255: too dark"),
+        ("lower camera", "brightness 6 of 255"),
+        ("lower camera", "too dark (at least 30)"),
         ("lying", "the robot lies upright"),
         ("battery", "3 % (at least 5 %)"),
     ] {
