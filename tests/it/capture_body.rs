@@ -216,3 +216,28 @@ fn the_dry_run_moves_nothing_and_says_what_holds() {
     let record = read_record(&b.path("b.csv")).unwrap();
     assert!(record.iter().all(|r| r.stiffness.iter().all(|&s| s == 0.0)));
 }
+
+/// A robot that falls silent mid-run: the run stops, and the stiffness is still ramped
+/// down (sent blind, holding the posture) rather than left at the measuring stiffness.
+#[test]
+fn a_silent_robot_is_still_ramped_down() {
+    let b = Bench::new();
+    let plan = b.path("plan.csv");
+    plan_file(&plan, 2, 34);
+    let robot = b.robot(
+        "a.sock",
+        "a.csv",
+        &["--speed", "0", "--silent-after", "300"],
+    );
+    let out = b
+        .capture(&plan, "ds", "a.sock", &b.fixed_camera(), &[])
+        .output()
+        .unwrap();
+    assert_clean_failure(&out, &["no message from LoLA for 25 cycles", "--resume"]);
+    finish(robot);
+    let record = read_record(&b.path("a.csv")).unwrap();
+    let after: Vec<&RecordRow> = record.iter().filter(|r| r.cycle >= 300).collect();
+    assert!(after.len() as u32 >= naocalib::robot::motion::MIN_RAMP_CYCLES);
+    assert_eq!(after.last().unwrap().stiffness[10], 0.0, "left stiff");
+    ramps_down_steadily(&record);
+}
