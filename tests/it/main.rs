@@ -16,6 +16,8 @@ mod dataset_io;
 #[cfg(feature = "detect")]
 mod detect_border;
 #[cfg(feature = "detect")]
+mod detect_dark;
+#[cfg(feature = "detect")]
 mod detect_files;
 #[cfg(feature = "detect")]
 mod detect_render;
