@@ -183,7 +183,6 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         .stop_on(&stop)
         .run(out, cameras, &mut link);
     // The robot is limp (or gone): let LoLA go before anything may wait for the terminal.
-    drop(link);
     drop(connection);
     terminal.close();
     summary(dir, &report?, rows.len(), stop.load(Ordering::Relaxed))

@@ -291,7 +291,11 @@ fn norm(v: &[f32; 3]) -> f64 {
 /// [`Lying::Tilted`] when `Angles` do not agree that the torso lies back.
 pub fn lying(limits: &BodyLimits, message: &SensorMessage) -> Lying {
     match Lying::of(up(message), limits.facing) {
-        Lying::OnBack if !((message.angles[1] as f64) <= limits.max_pitch) => Lying::Tilted,
+        Lying::OnBack
+            if (message.angles[1] as f64 > limits.max_pitch) || message.angles[1].is_nan() =>
+        {
+            Lying::Tilted
+        }
         l => l,
     }
 }
@@ -383,7 +387,7 @@ impl BodyWatch {
             self.filtered = std::array::from_fn(|k| (1.0 - a) * self.filtered[k] + a * now[k]);
         }
         let turn = angle(self.start, self.filtered);
-        if !(turn <= self.limits.max_turn) {
+        if turn > self.limits.max_turn || turn.is_nan() {
             return Err(BodyStop::Rolled {
                 turn,
                 limit: self.limits.max_turn,
