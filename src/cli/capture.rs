@@ -1,6 +1,6 @@
 //! `naocalib capture`: the measurement phase on a NAO V6 over LoLA (docs/CAPTURE.md).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::Ordering;
 use std::sync::mpsc;
@@ -11,8 +11,9 @@ use clap::Args;
 
 use naocalib::model::CameraId;
 use naocalib::robot::camera::CameraSpec;
-use naocalib::robot::capture::{self, Forecast};
-use naocalib::robot::lola::{self, Connection};
+use naocalib::robot::capture::{self, CaptureError, Forecast};
+use naocalib::robot::check::{self, CheckReport};
+use naocalib::robot::lola::{self, Connection, Replay};
 use naocalib::robot::{CaptureOptions, End, Event, Report, Session, Start};
 
 use super::options::within;
@@ -22,8 +23,10 @@ pub struct CaptureArgs {
     /// The stance schedule (`naocalib plan`'s CSV: capture,board,HeadYaw,…,RAnkleRoll and
     /// an optional camera column, lower or upper).
     plan: PathBuf,
-    /// The dataset directory to write (dataset.toml, captures.csv, images/).
-    out: PathBuf,
+    /// The dataset directory to write (dataset.toml, captures.csv, images/); not with
+    /// --check.
+    #[arg(required_unless_present = "check")]
+    out: Option<PathBuf>,
     /// The robot's dataset.toml (camera intrinsics, [upper_camera] for upper rows, sandals,
     /// geometry), copied into OUT; with --resume, OUT's own is used (and this one must
     /// agree).
@@ -53,6 +56,11 @@ pub struct CaptureArgs {
     /// Longest a picture may take (s, 0.1 … 120).
     #[arg(long, default_value_t = 10.0, value_parser = within(0.1, 120.0, " s"))]
     camera_timeout: f64,
+    /// Move nothing: check the plan, each camera (one picture each saved into DIR, with
+    /// its size and brightness), LoLA and the robot (on its back, battery, temperatures,
+    /// stiffness off); print what holds; exit 0 only when a capture can start.
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["out", "resume"])]
+    check: Option<PathBuf>,
 }
 
 impl CaptureArgs {
@@ -83,15 +91,52 @@ impl CaptureArgs {
     }
 }
 
+/// Runs `naocalib capture --check DIR`: prints the table; exit 1 when something does not
+/// hold.
+fn dry_run(args: &CaptureArgs, save: &Path) -> Result<ExitCode> {
+    let options = args.options()?;
+    let specs = args.cameras()?;
+    let Some(config) = &args.config else {
+        bail!("--check needs --config DATASET_TOML (the robot's cameras)");
+    };
+    let model = naocalib::dataset::read_model(config)?;
+    let report = check::dry_run(
+        &args.plan,
+        &model,
+        &specs,
+        Duration::from_secs_f64(args.camera_timeout),
+        &args.lola,
+        &options,
+        save,
+    )?;
+    print!("{}", report.table());
+    if report.ready() {
+        note!("naocalib: the day can start: every check holds, nothing was moved");
+        Ok(ExitCode::SUCCESS)
+    } else {
+        note!(
+            "naocalib: not ready (nothing was moved): {}",
+            report.failed()
+        );
+        Ok(ExitCode::from(1))
+    }
+}
+
 /// Runs `naocalib capture`.
 pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
+    if let Some(save) = &args.check {
+        return dry_run(args, save);
+    }
+    let Some(dir) = &args.out else {
+        bail!("OUT is needed (the dataset directory to write)");
+    };
     let options = args.options()?;
     let specs = args.cameras()?;
     let given: Vec<CameraId> = specs.iter().map(|(c, _)| *c).collect();
     // Every row checked before anything is written or moved.
     let mut start = Start::new(
         &args.plan,
-        &args.out,
+        dir,
         args.config.as_deref(),
         args.resume,
         &given,
@@ -106,7 +151,14 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         cameras.push((*id, spec.open(id.name(), timeout)?));
     }
     let stop = capture::stop_on_signals().context("cannot watch for Ctrl-C, SIGTERM or SIGHUP")?;
-    let mut link = Connection::connect(&args.lola, options.safety.silent_cycles)?;
+    let mut connection = Connection::connect(&args.lola, options.safety.silent_cycles)?;
+    // The robot's checks on LoLA's first message, before anything is written or sent.
+    let (first, checks) = check::first_message(&mut connection, &options.safety)?;
+    let report = CheckReport { checks };
+    if !report.can_move() {
+        return Err(CaptureError::NotReady(report.blocking()).into());
+    }
+    let mut link = Replay::new(first, &mut connection);
     let out = start.open()?;
     let (model, rows) = (&start.model, &start.rows);
     let mut forecast = Forecast::new(model, &out.todo(rows), &options);
@@ -131,14 +183,14 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         .stop_on(&stop)
         .run(out, cameras, &mut link);
     // The robot is limp (or gone): let LoLA go before anything may wait for the terminal.
-    drop(link);
+    drop(connection);
     terminal.close();
-    summary(args, &report?, rows.len(), stop.load(Ordering::Relaxed))
+    summary(dir, &report?, rows.len(), stop.load(Ordering::Relaxed))
 }
 
 /// The account of the run, and the exit code: 0 when the plan was run to its end, 2 when
 /// a signal stopped it, an error when a fault did.
-fn summary(args: &CaptureArgs, report: &Report, total: usize, signalled: bool) -> Result<ExitCode> {
+fn summary(out: &Path, report: &Report, total: usize, signalled: bool) -> Result<ExitCode> {
     let done = report.already + report.taken.len();
     note!(
         "{} captures taken in this run ({} before), {} skipped, {done} of {total} in {} \
@@ -146,7 +198,7 @@ fn summary(args: &CaptureArgs, report: &Report, total: usize, signalled: bool) -
         report.taken.len(),
         report.already,
         report.skipped(),
-        args.out.display(),
+        out.display(),
         capture::cycles_to_seconds(report.cycles)
     );
     for (id, reason) in &report.unreachable {
@@ -162,7 +214,7 @@ fn summary(args: &CaptureArgs, report: &Report, total: usize, signalled: bool) -
             note!(
                 "naocalib: stopped by {signal}: the robot is at rest with its stiffness off; \
                  {} is a valid dataset; go on with --resume",
-                args.out.display()
+                out.display()
             );
             Ok(ExitCode::from(2))
         }
@@ -170,7 +222,7 @@ fn summary(args: &CaptureArgs, report: &Report, total: usize, signalled: bool) -
             bail!(
                 "{e}; the run stopped ({} is a valid dataset of the {done} captures taken; \
                  go on with --resume)",
-                args.out.display()
+                out.display()
             )
         }
     }

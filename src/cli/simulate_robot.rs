@@ -1,4 +1,5 @@
-//! `naocalib simulate-robot`: a simulated NAO V6 lying on its back that serves LoLA, and
+//! `naocalib simulate-robot`: a simulated NAO V6 (on its back unless `--lying` says
+//! otherwise) that serves LoLA, and
 //! `simulate-robot snap`, its cameras (for `capture --camera 'lower=command:…'`).
 
 use std::path::PathBuf;
@@ -10,8 +11,11 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use naocalib::model::{CameraId, Family, Joint, JointAngles, Model, PARAMETER_COUNT};
+use naocalib::robot::body::Lying;
 use naocalib::robot::simulated::{self, Faults, RobotOptions};
 use naocalib::sim::render::RenderOptions;
+
+use super::options::within;
 
 #[derive(Debug, Args)]
 #[command(args_conflicts_with_subcommands = true)]
@@ -61,6 +65,26 @@ pub struct SimulateRobotArgs {
     /// Fault: send a message that does not parse in this cycle.
     #[arg(long, value_name = "CYCLE")]
     garbage_at: Option<u64>,
+    /// How the robot lies: back (the default), front, left-side, right-side, standing,
+    /// upside-down or tilted (its IMU says so).
+    #[arg(long, default_value = "back", value_parser = lying)]
+    lying: Lying,
+    /// Its battery's charge (%, 0 … 100).
+    #[arg(long, default_value_t = 90.0, value_parser = within(0.0, 100.0, " %"))]
+    battery: f64,
+    /// Fault: roll over onto the right side from this cycle on.
+    #[arg(long, value_name = "CYCLE")]
+    roll_at: Option<u64>,
+    /// Fault: the chest button pressed from this cycle on.
+    #[arg(long, value_name = "CYCLE")]
+    chest_at: Option<u64>,
+    /// Fault: a motor reports this temperature status (1 … 3) from this cycle on (e.g.
+    /// LKneePitch=2@300).
+    #[arg(long, value_name = "JOINT=STATUS@CYCLE")]
+    status: Option<String>,
+    /// Fault: the battery down to 3 % from this cycle on.
+    #[arg(long, value_name = "CYCLE")]
+    low_battery_at: Option<u64>,
     /// Serve this many clients one after the other before exiting (at least 1).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     clients: u32,
@@ -84,6 +108,30 @@ enum SnapCommand {
 
 fn camera_id(name: &str) -> Result<CameraId, String> {
     CameraId::from_name(name).ok_or_else(|| format!("'{name}': expected lower or upper"))
+}
+
+fn lying(name: &str) -> Result<Lying, String> {
+    Lying::from_name(name).ok_or_else(|| {
+        let names: Vec<&str> = Lying::NAMED.iter().map(|(_, n, _)| *n).collect();
+        format!("'{name}': expected one of {}", names.join(", "))
+    })
+}
+
+/// `JOINT=STATUS@CYCLE` of `--status`.
+fn status(text: &str) -> Result<(Joint, i32, u64)> {
+    let bad = || {
+        anyhow::anyhow!(
+            "--status: expected JOINT=STATUS@CYCLE (e.g. LKneePitch=2@300), got '{text}'"
+        )
+    };
+    let (name, rest) = text.split_once('=').ok_or_else(bad)?;
+    let (value, cycle) = rest.split_once('@').ok_or_else(bad)?;
+    let value: i32 = value.trim().parse().map_err(|_| bad())?;
+    if !(1..=3).contains(&value) {
+        bail!("--status: a status is 1, 2 or 3, got {value}");
+    }
+    let cycle: u64 = cycle.trim().parse().map_err(|_| bad())?;
+    Ok((joint(name.trim())?, value, cycle))
 }
 
 fn joint(name: &str) -> Result<Joint> {
@@ -155,6 +203,7 @@ pub fn run(args: &SimulateRobotArgs) -> Result<ExitCode> {
         None => None,
     };
     let overheat = args.overheat.as_deref().map(joint).transpose()?;
+    let status_at = args.status.as_deref().map(status).transpose()?;
     // Lying on its back, legs nearly straight, as a robot is put down.
     let mut start = JointAngles::default();
     start.set(Joint::LKneePitch, 0.03);
@@ -169,6 +218,8 @@ pub fn run(args: &SimulateRobotArgs) -> Result<ExitCode> {
         truth,
         speed: args.speed,
         start,
+        lying: args.lying,
+        battery: (args.battery / 100.0) as f32,
         state: args.state.clone(),
         record: args.record.clone(),
         faults: Faults {
@@ -178,6 +229,10 @@ pub fn run(args: &SimulateRobotArgs) -> Result<ExitCode> {
             silent_after: args.silent_after,
             garbage_at: args.garbage_at,
             drop_on_signal: args.drop_on_sigusr1,
+            roll_at: args.roll_at,
+            chest_at: args.chest_at,
+            status_at,
+            low_battery_at: args.low_battery_at,
         },
         clients: args.clients as usize,
         seed: args.seed,

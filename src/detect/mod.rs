@@ -21,7 +21,8 @@
 //! ([`DetectOptions::params`], `--start-from`), else the nominal model; then (with
 //! [`DetectOptions::repredict`]) the paper's calibration from the boards found predicts
 //! again, and the images without a whole board are searched again, until nothing
-//! changes. Nothing here stops a run: every image gets an [`Outcome`] (`outcome.rs`);
+//! changes. An image with no board that is too dark to show one says so (its camera and
+//! brightness). Nothing here stops a run: every image gets an [`Outcome`] (`outcome.rs`);
 //! [`guard`] names the captures whose residuals after a fit stand out.
 
 pub mod assign;
@@ -257,11 +258,23 @@ fn detect_image(
     }
     let outcome =
         chessboard::chessboard(dataset, capture, &grey, grid, options, search).map_err(cv)?;
-    Ok(match (outcome, guided_partial) {
+    let outcome = match (outcome, guided_partial) {
         (found @ Outcome::Found { .. }, _) => found,
         (_, Some(partial)) => partial,
         (other, None) => other,
-    })
+    };
+    if mode == Mode::Full && matches!(outcome, Outcome::NotFound) {
+        // No board at all: say so when the picture is too dark to show one.
+        let bytes = opencv::prelude::MatTraitConstManual::data_bytes(&grey).map_err(cv)?;
+        let brightness = bytes.iter().map(|&b| b as f64).sum::<f64>() / bytes.len().max(1) as f64;
+        if brightness < crate::robot::check::MIN_BRIGHTNESS {
+            return Ok(Outcome::TooDark {
+                camera: capture.camera,
+                brightness,
+            });
+        }
+    }
+    Ok(outcome)
 }
 
 /// What the model-guided search makes of one image.
@@ -502,7 +515,7 @@ impl Passes<'_> {
 /// that cannot be used.
 fn whole(result: &ImageResult, grid: Grid) -> bool {
     match &result.outcome {
-        Outcome::NoImage | Outcome::Failed(_) => true,
+        Outcome::NoImage | Outcome::Failed(_) | Outcome::TooDark { .. } => true,
         Outcome::Found { corners, .. } => corners.len() == grid.len(),
         Outcome::NotFound | Outcome::Rejected { .. } => false,
     }
@@ -526,7 +539,7 @@ fn worth_again(
     params: &[f64; PARAMETER_COUNT],
 ) -> bool {
     match &result.outcome {
-        Outcome::NoImage | Outcome::Failed(_) => false,
+        Outcome::NoImage | Outcome::Failed(_) | Outcome::TooDark { .. } => false,
         Outcome::NotFound | Outcome::Rejected { .. } => true,
         Outcome::Found { corners, .. } => {
             corners.len() < grid.len()

@@ -6,6 +6,8 @@ use std::path::PathBuf;
 use super::assign;
 use super::image::{MAX_PIXELS, MAX_SIDE};
 use crate::dataset::Corner;
+use crate::model::CameraId;
+use crate::robot::check::MIN_BRIGHTNESS;
 
 /// Why an image could not be used at all (as opposed to a board not found in it).
 #[derive(Debug, thiserror::Error)]
@@ -111,6 +113,14 @@ pub enum Outcome {
     Failed(DetectError),
     /// The capture names no image.
     NoImage,
+    /// No board, and the picture is too dark to show one (the camera; its mean
+    /// brightness, 0 … 255).
+    TooDark {
+        /// The camera.
+        camera: CameraId,
+        /// The picture's mean brightness.
+        brightness: f64,
+    },
 }
 
 /// The result for one capture.
@@ -155,6 +165,12 @@ impl fmt::Display for ImageResult {
             Outcome::Rejected { reason } => write!(f, ": rejected: {reason}"),
             Outcome::Failed(e) => write!(f, ": error: {e}"),
             Outcome::NoImage => write!(f, ": no image"),
+            Outcome::TooDark { camera, brightness } => write!(
+                f,
+                ": too dark: the {camera} camera's picture has a mean brightness of \
+                 {brightness:.0} of 255 (at least {MIN_BRIGHTNESS:.0} is needed); raise \
+                 its exposure or gain"
+            ),
         }
     }
 }
@@ -182,7 +198,7 @@ impl Summary {
             match r.outcome {
                 Outcome::Found { .. } => s.found += 1,
                 Outcome::NotFound => s.not_found += 1,
-                Outcome::Rejected { .. } => s.rejected += 1,
+                Outcome::Rejected { .. } | Outcome::TooDark { .. } => s.rejected += 1,
                 Outcome::Failed(_) => s.failed += 1,
                 Outcome::NoImage => s.no_image += 1,
             }

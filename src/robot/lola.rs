@@ -103,44 +103,51 @@ pub fn put<T>(mut base: [T; JOINTS], joints: &JointAngles, f: impl Fn(f64) -> T)
 }
 
 /// A LoLA sensor message as the robot writes it, every key of the V6 (HULKs `lola.rs`
-/// lines 5–33): the joint arrays naocalib reads ([`SensorMessage`], first, in LoLA's key
-/// order) and the rest. naocalib's simulated robot writes it.
+/// lines 5–33): what naocalib reads ([`SensorMessage`], first) and the rest. naocalib's
+/// simulated robot writes it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SensorFrame {
-    /// `Stiffness`, `Position`, `Temperature`, `Current`.
+    /// The joint arrays, the IMU, the buttons, the motors' status and the battery.
     #[serde(flatten)]
     pub joints: SensorMessage,
-    /// Battery: charge, status, current, temperature.
-    #[serde(rename = "Battery")]
-    pub battery: [f32; 4],
-    /// Accelerometer (m/s²).
-    #[serde(rename = "Accelerometer")]
-    pub accelerometer: [f32; 3],
     /// Gyroscope (rad/s).
     #[serde(rename = "Gyroscope")]
     pub gyroscope: [f32; 3],
-    /// Torso angles x, y (rad).
-    #[serde(rename = "Angles")]
-    pub angles: [f32; 2],
     /// Sonar distances (m).
     #[serde(rename = "Sonar")]
     pub sonar: [f32; 2],
     /// Foot pressure sensors (kg).
     #[serde(rename = "FSR")]
     pub fsr: [f32; 8],
-    /// Buttons and touch sensors.
-    #[serde(rename = "Touch")]
-    pub touch: [f32; 14],
-    /// Temperature status of each motor (0 normal … 3 critical).
-    #[serde(rename = "Status")]
-    pub status: [i32; JOINTS],
     /// Body id, body version, head id, head version.
     #[serde(rename = "RobotConfig")]
     pub robot_config: [String; 4],
 }
 
-/// What naocalib reads of a sensor message: the joint arrays (required, 25 values each);
-/// other keys are ignored.
+/// Index of the chest button in LoLA's `Touch` array (B-Human `NaoProvider.cpp` line 69,
+/// `keyMappings[0] = KeyStates::chest`; nao_lola `lola_enums.hpp` line 79,
+/// `ChestBoard_Button` first; NaoTH `LolaDataConverter.h` line 255).
+pub const CHEST_BUTTON: usize = 0;
+
+/// Index of the charge (0 … 1) in LoLA's `Battery` array: charge, status, current,
+/// temperature (B-Human `NaoProvider.cpp` lines 386–395, HULKs `hulk_nao/src/hula.rs`
+/// lines 24–29; nao_lola `lola_enums.hpp` line 55 orders the other three differently, all
+/// three put the charge first).
+pub const BATTERY_CHARGE: usize = 0;
+
+/// What naocalib reads of a sensor message (every array required, at its length; other
+/// keys are ignored).
+///
+/// The IMU as LoLA gives it: `Accelerometer` reads gravity itself, not the floor's push,
+/// so about (0, 0, −9.81) m/s² when the robot stands upright — B-Human negates it on
+/// reading (`NaoProvider.cpp` lines 294–295, `acc *= -1`), HULKs too
+/// (`hulk_nao/src/hula.rs` line 69, `linear_acceleration: -accelerometer`), after which
+/// upright is (0, 0, +g) and lying on the back, face up, (+g, 0, 0) (HULKs
+/// `fall_state_estimation.rs` lines 110–121, `gravitational_force_up` is `FacingUp`); so
+/// a V6 on its back reads about (−9.81, 0, 0) here. `Angles` are the torso's roll and
+/// pitch (rad), pitch positive leaning forward (nao_lola `Angle.msg`: "Forward is positive
+/// angle, Backwards is negative"; B-Human `FallEngine.cpp` line 66: falling back is
+/// `angle.y() < 0`): about (0, −π/2) on the back.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SensorMessage {
     /// Stiffness of each joint, 0 … 1.
@@ -155,9 +162,56 @@ pub struct SensorMessage {
     /// Motor currents (A).
     #[serde(rename = "Current")]
     pub current: [f32; JOINTS],
+    /// Battery: charge (0 … 1), status, current, temperature ([`BATTERY_CHARGE`]).
+    #[serde(rename = "Battery")]
+    pub battery: [f32; 4],
+    /// Accelerometer (m/s²), gravity as LoLA reads it (see above).
+    #[serde(rename = "Accelerometer")]
+    pub accelerometer: [f32; 3],
+    /// Torso roll and pitch (rad).
+    #[serde(rename = "Angles")]
+    pub angles: [f32; 2],
+    /// Buttons and touch sensors, 0 or 1 ([`CHEST_BUTTON`] first).
+    #[serde(rename = "Touch")]
+    pub touch: [f32; 14],
+    /// Temperature status of each motor: 0 normal, 1 hot (the firmware starts reducing
+    /// its stiffness), 2 very hot (stiffness reduced by over 30 %), 3 critical (stiffness
+    /// 0) (nao_lola `JointStatuses.msg` lines 1–5). LoLA writes small integers (B-Human
+    /// `NaoProvider.cpp` line 401); a float is read as well (nao_lola
+    /// `msgpack_parser.cpp` line 144 reads them as floats).
+    #[serde(rename = "Status", deserialize_with = "statuses")]
+    pub status: [i32; JOINTS],
+}
+
+/// Reads `Status`, integers or floats.
+fn statuses<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[i32; JOINTS], D::Error> {
+    let values = <[f64; JOINTS]>::deserialize(d)?;
+    Ok(values.map(|v| {
+        if v.is_finite() {
+            v.round() as i32
+        } else {
+            i32::MAX
+        }
+    }))
 }
 
 impl SensorMessage {
+    /// A limp robot lying on its back, its joints at `position`, temperatures 35 °C, a full
+    /// battery, nothing pressed.
+    pub fn on_back(position: [f32; JOINTS]) -> SensorMessage {
+        SensorMessage {
+            stiffness: [0.0; JOINTS],
+            position,
+            temperature: [35.0; JOINTS],
+            current: [0.0; JOINTS],
+            battery: [0.9, 0.0, -0.5, 30.0],
+            accelerometer: [-9.81, 0.0, 0.0],
+            angles: [0.0, -std::f32::consts::FRAC_PI_2],
+            touch: [0.0; 14],
+            status: [0; JOINTS],
+        }
+    }
+
     /// The measured joints' readings (rad).
     pub fn joints(&self) -> JointAngles {
         to_joint_angles(&self.position)
@@ -250,6 +304,40 @@ pub trait Link {
     fn drain(&mut self) {}
 }
 
+/// A link whose next message is one already read (by the checks before a run), then the
+/// link's own.
+pub struct Replay<'a> {
+    first: Option<SensorMessage>,
+    link: &'a mut dyn Link,
+}
+
+impl<'a> Replay<'a> {
+    /// `link`, its next message `first`.
+    pub fn new(first: SensorMessage, link: &'a mut dyn Link) -> Replay<'a> {
+        Replay {
+            first: Some(first),
+            link,
+        }
+    }
+}
+
+impl Link for Replay<'_> {
+    fn receive(&mut self) -> Result<SensorMessage, LolaError> {
+        match self.first.take() {
+            Some(m) => Ok(m),
+            None => self.link.receive(),
+        }
+    }
+
+    fn send(&mut self, message: &ActuatorMessage) -> Result<(), LolaError> {
+        self.link.send(message)
+    }
+
+    fn drain(&mut self) {
+        self.link.drain()
+    }
+}
+
 /// A connection to LoLA over its Unix socket.
 #[derive(Debug)]
 pub struct Connection {
@@ -314,21 +402,13 @@ mod tests {
     use super::*;
 
     fn v6_frame() -> SensorFrame {
+        let mut joints = SensorMessage::on_back(std::array::from_fn(|k| 0.01 * k as f32));
+        joints.current = [0.01; JOINTS];
         SensorFrame {
-            joints: SensorMessage {
-                stiffness: [0.0; JOINTS],
-                position: std::array::from_fn(|k| 0.01 * k as f32),
-                temperature: [35.0; JOINTS],
-                current: [0.01; JOINTS],
-            },
-            battery: [0.9, 0.0, -0.5, 30.0],
-            accelerometer: [0.0, 0.0, 9.81],
+            joints,
             gyroscope: [0.0; 3],
-            angles: [0.0, -1.5],
             sonar: [2.5, 2.5],
             fsr: [0.0; 8],
-            touch: [0.0; 14],
-            status: [0; JOINTS],
             robot_config: [
                 "P0000074A05S94700015".into(),
                 "6.0.0".into(),
@@ -336,6 +416,34 @@ mod tests {
                 "6.0.0".into(),
             ],
         }
+    }
+
+    /// The frame as a map of its keys.
+    fn as_map(frame: &SensorFrame) -> std::collections::BTreeMap<String, serde_json::Value> {
+        rmp_serde::from_slice(&encode(frame)).unwrap()
+    }
+
+    #[test]
+    fn the_imu_buttons_status_and_battery_are_read() {
+        let mut frame = v6_frame();
+        frame.joints.touch[CHEST_BUTTON] = 1.0;
+        frame.joints.status[9] = 2;
+        let m: SensorMessage = decode_from(&mut &encode(&frame)[..], 1, CYCLE).unwrap();
+        assert_eq!(m, frame.joints);
+        assert_eq!(m.accelerometer, [-9.81, 0.0, 0.0]);
+        assert_eq!(m.battery[BATTERY_CHARGE], 0.9);
+        // Status as floats (as nao_lola reads it) is read as well.
+        let mut map = as_map(&frame);
+        map.insert(
+            "Status".into(),
+            serde_json::json!(
+                (0..JOINTS)
+                    .map(|k| if k == 9 { 2.0 } else { 0.0 })
+                    .collect::<Vec<f64>>()
+            ),
+        );
+        let m: SensorMessage = decode_from(&mut &encode(&map)[..], 1, CYCLE).unwrap();
+        assert_eq!(m.status, frame.joints.status);
     }
 
     #[test]
@@ -376,6 +484,12 @@ mod tests {
         let bytes = encode(&Partial {
             stiffness: vec![0.0; JOINTS],
         });
+        let e = decode_from::<SensorMessage>(&mut &bytes[..], 1, CYCLE).unwrap_err();
+        assert!(matches!(e, LolaError::Parse(_)), "{e}");
+        // Every array is needed: without the accelerometer, how the robot lies is unknown.
+        let mut map = as_map(&v6_frame());
+        map.remove("Accelerometer");
+        let bytes = encode(&map);
         let e = decode_from::<SensorMessage>(&mut &bytes[..], 1, CYCLE).unwrap_err();
         assert!(matches!(e, LolaError::Parse(_)), "{e}");
         let mut frame = encode(&v6_frame());

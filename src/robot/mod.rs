@@ -3,8 +3,10 @@
 //! ([`camera`]) and writes the dataset capture by capture ([`capture`]); [`simulated`] is a
 //! simulated robot that serves LoLA for tests.
 
+pub mod body;
 pub mod camera;
 pub mod capture;
+pub mod check;
 pub mod lola;
 pub mod motion;
 pub mod plausible;

@@ -261,10 +261,9 @@ mod tests {
 
     fn message(knee: f32) -> SensorMessage {
         let mut m = SensorMessage {
-            stiffness: [0.0; JOINTS],
-            position: [0.0; JOINTS],
             temperature: [40.0; JOINTS],
             current: [0.1; JOINTS],
+            ..SensorMessage::on_back([0.0; JOINTS])
         };
         m.position[lola::index(Joint::LKneePitch)] = knee;
         m

@@ -3,6 +3,7 @@
 
 use crate::model::Joint;
 
+use super::body::{BodyLimits, worst_status};
 use super::lola::{self, SensorMessage};
 use super::plausible::Plausibility;
 
@@ -25,6 +26,9 @@ pub struct SafetyLimits {
     pub silent_cycles: u32,
     /// Which joint readings are believed ([`super::plausible`]).
     pub readings: Plausibility,
+    /// How the robot lies, its chest button, its motors' status, its battery
+    /// ([`super::body`]).
+    pub body: BodyLimits,
 }
 
 impl Default for SafetyLimits {
@@ -32,7 +36,7 @@ impl Default for SafetyLimits {
     /// temperature status 1 "hot" from about 70 °C and cuts motor power near 90 °C),
     /// stop on more than 2.5 A for 50 cycles (0.6 s: a stalled motor, the leg pushing
     /// against something), and on 25 cycles (0.3 s) without a message; readings as
-    /// [`Plausibility::default`].
+    /// [`Plausibility::default`], the robot as a whole as [`BodyLimits::default`].
     fn default() -> Self {
         SafetyLimits {
             pause_temperature: 70.0,
@@ -43,6 +47,7 @@ impl Default for SafetyLimits {
             current_cycles: 50,
             silent_cycles: 25,
             readings: Plausibility::default(),
+            body: BodyLimits::default(),
         }
     }
 }
@@ -52,7 +57,8 @@ impl Default for SafetyLimits {
 pub enum Verdict {
     /// Everything within the limits.
     Fine,
-    /// A motor is hot: pause at rest until it cools (the joint, °C).
+    /// A motor is hot, or its status says the firmware starts reducing its stiffness (status
+    /// 1, nao_lola `JointStatuses.msg` line 3): pause at rest until it cools (the joint, °C).
     Hot(Joint, f64),
     /// Stop the run: too hot (the joint, °C).
     Overheated(Joint, f64),
@@ -88,7 +94,13 @@ impl SafetyLimits {
         if !(r.range_tolerance >= 0.0 && r.jump_slack >= 0.0) {
             return Err("the readings' range tolerance and jump slack must be at least 0".into());
         }
-        Ok(())
+        self.body.validate()
+    }
+
+    /// Whether the head and leg motors are cool enough to go on: every one at or below the
+    /// resume temperature, none with a status above 0.
+    pub fn cooled(&self, message: &SensorMessage) -> bool {
+        SafetyLimits::hottest(message).1 <= self.resume_temperature && worst_status(message).1 < 1
     }
 
     /// The hottest head or leg motor and its temperature (°C).
@@ -135,6 +147,10 @@ impl Watch {
         if temperature >= limits.pause_temperature {
             return Verdict::Hot(joint, temperature);
         }
+        let (sjoint, status) = worst_status(message);
+        if status >= 1 {
+            return Verdict::Hot(sjoint, temperatures.get(sjoint));
+        }
         Verdict::Fine
     }
 }
@@ -146,10 +162,9 @@ mod tests {
 
     fn message(temperature: f32, current: f32) -> SensorMessage {
         SensorMessage {
-            stiffness: [0.0; JOINTS],
-            position: [0.0; JOINTS],
             temperature: [40.0; JOINTS],
             current: [0.1; JOINTS],
+            ..SensorMessage::on_back([0.0; JOINTS])
         }
         .with(10, temperature, current)
     }
@@ -178,6 +193,24 @@ mod tests {
         // An arm's temperature is not watched (its stiffness stays 0).
         let arm = message(40.0, 0.1).with(3, 95.0, 0.1);
         assert_eq!(w.check(&limits, &arm), Verdict::Fine);
+    }
+
+    #[test]
+    fn a_status_of_1_rests_as_when_hot_until_it_clears() {
+        let limits = SafetyLimits::default();
+        let mut w = Watch::default();
+        let mut m = message(50.0, 0.1);
+        m.status[lola::index(Joint::RHipPitch)] = 1;
+        assert_eq!(w.check(&limits, &m), Verdict::Hot(Joint::RHipPitch, 40.0));
+        let mut cool = message(40.0, 0.1);
+        assert!(limits.cooled(&cool));
+        cool.status[lola::index(Joint::RHipPitch)] = 1;
+        assert!(!limits.cooled(&cool), "cool but still reported hot");
+        // An arm's status is not watched.
+        let mut arm = message(40.0, 0.1);
+        arm.status[3] = 1;
+        assert_eq!(w.check(&limits, &arm), Verdict::Fine);
+        assert!(limits.cooled(&arm));
     }
 
     #[test]

@@ -1,4 +1,4 @@
-//! A simulated NAO V6 lying on its back, serving LoLA on a Unix socket: for testing
+//! A simulated NAO V6, lying on its back, serving LoLA on a Unix socket: for testing
 //! `naocalib capture` end to end without a robot.
 //!
 //! Each cycle it writes a [`SensorFrame`] and reads the client's [`ActuatorMessage`]
@@ -16,8 +16,12 @@
 //! view (`naocalib simulate-robot snap {path} --state FILE --camera {camera}`, for
 //! `capture --camera 'lower=command:…' --camera 'upper=command:…'`).
 //!
+//! It lies as [`RobotOptions::lying`] says (on its back unless told otherwise), and its
+//! IMU says so, as LoLA's does ([`body::imu`]).
+//!
 //! Faults on request ([`Faults`]): a blocked joint, an overheating motor, a connection
-//! dropped, the robot falling silent, a message that does not parse. Every actuator
+//! dropped, the robot falling silent, a message that does not parse, rolling over, the
+//! chest button pressed, a motor's status, a low battery. Every actuator
 //! message received can be recorded ([`RobotOptions::record`]) so that tests check the
 //! safety rules on what the robot was told.
 
@@ -30,8 +34,10 @@ use crate::model::{CameraId, Joint, JointAngles, Model, PARAMETER_COUNT, Side, g
 use crate::output::{WriteOptions, write_atomic, write_atomic_with};
 use crate::sim::render::{self, RenderOptions};
 
+use super::body::{self, Lying};
 use super::lola::{
-    self, ActuatorMessage, JOINT_NAMES, JOINTS, LolaError, SensorFrame, SensorMessage,
+    self, ActuatorMessage, BATTERY_CHARGE, CHEST_BUTTON, JOINT_NAMES, JOINTS, LolaError,
+    SensorFrame, SensorMessage,
 };
 
 /// Time constant of a joint following its command at stiffness 1 (s).
@@ -64,7 +70,21 @@ pub struct Faults {
     pub garbage_at: Option<u64>,
     /// Close the connection and exit on SIGUSR1 (a test's request mid-run).
     pub drop_on_signal: bool,
+    /// Roll over onto the right side from this cycle on (in 40 cycles, 0.5 s).
+    pub roll_at: Option<u64>,
+    /// The chest button pressed from this cycle on.
+    pub chest_at: Option<u64>,
+    /// A motor's status (the joint, the status) from a cycle on.
+    pub status_at: Option<(Joint, i32, u64)>,
+    /// The battery down to 3 % from this cycle on.
+    pub low_battery_at: Option<u64>,
 }
+
+/// Cycles the robot takes to roll over onto its side ([`Faults::roll_at`]).
+pub const ROLL_CYCLES: u64 = 40;
+
+/// The charge of a low battery ([`Faults::low_battery_at`]).
+pub const LOW_BATTERY: f32 = 0.03;
 
 /// The simulated robot.
 #[derive(Debug, Clone, PartialEq)]
@@ -80,6 +100,10 @@ pub struct RobotOptions {
     pub speed: f64,
     /// The posture it lies in at the start (readings frame, rad).
     pub start: JointAngles,
+    /// How it lies (its IMU says so): on its back unless a test says otherwise.
+    pub lying: Lying,
+    /// Its battery's charge (0 … 1).
+    pub battery: f32,
     /// Where to write the state for [`snap`].
     pub state: Option<PathBuf>,
     /// Where to write every actuator message received (CSV) when the robot exits.
@@ -282,32 +306,63 @@ impl Body {
         self.sample();
     }
 
-    fn frame(&self) -> SensorFrame {
+    /// "Up" in the torso's frame now: as it lies, turning onto its right side from
+    /// `roll_at` on.
+    fn up(&self, options: &RobotOptions) -> [f64; 3] {
+        let up = options.lying.up();
+        let Some(at) = options.faults.roll_at.filter(|&at| self.cycle >= at) else {
+            return up;
+        };
+        let phi =
+            ((self.cycle - at) as f64 / ROLL_CYCLES as f64).min(1.0) * std::f64::consts::FRAC_PI_2;
+        // Turned about the torso's long axis (z).
+        let (s, c) = phi.sin_cos();
+        [c * up[0] - s * up[1], s * up[0] + c * up[1], up[2]]
+    }
+
+    fn frame(&self, options: &RobotOptions) -> SensorFrame {
+        let after = |at: Option<u64>| at.is_some_and(|at| self.cycle >= at);
+        let (accelerometer, angles) = body::imu(self.up(options));
+        let mut battery = [options.battery, 0.0, -0.4, 30.0];
+        if after(options.faults.low_battery_at) {
+            battery[BATTERY_CHARGE] = LOW_BATTERY;
+        }
+        let mut touch = [0.0; 14];
+        if after(options.faults.chest_at) {
+            touch[CHEST_BUTTON] = 1.0;
+        }
+        let mut status = self.temperature.map(|t| {
+            if t >= 85.0 {
+                3
+            } else if t >= 75.0 {
+                2
+            } else if t >= 70.0 {
+                1
+            } else {
+                0
+            }
+        });
+        if let Some((joint, value, at)) = options.faults.status_at
+            && self.cycle >= at
+        {
+            let k = lola::index(joint);
+            status[k] = status[k].max(value);
+        }
         SensorFrame {
             joints: SensorMessage {
                 stiffness: self.stiffness.map(|s| s as f32),
                 position: std::array::from_fn(|k| self.reading(k)),
                 temperature: self.temperature.map(|t| t as f32),
                 current: self.current.map(|c| c as f32),
+                battery,
+                accelerometer,
+                angles,
+                touch,
+                status,
             },
-            battery: [0.9, 0.0, -0.4, 30.0],
-            accelerometer: [0.0, 0.0, 9.81],
             gyroscope: [0.0; 3],
-            angles: [0.0, -std::f32::consts::FRAC_PI_2],
             sonar: [2.5, 2.5],
             fsr: [0.0; 8],
-            touch: [0.0; 14],
-            status: self.temperature.map(|t| {
-                if t >= 85.0 {
-                    3
-                } else if t >= 75.0 {
-                    2
-                } else if t >= 70.0 {
-                    1
-                } else {
-                    0
-                }
-            }),
             robot_config: [
                 "P0000074A05S94700015".into(),
                 "6.0.0".into(),
@@ -487,7 +542,7 @@ fn session(
         if options.faults.silent_after.is_some_and(|n| body.cycle >= n) {
             silent = true;
         }
-        let frame = body.frame();
+        let frame = body.frame(options);
         if !silent && !deaf {
             let bytes = if options.faults.garbage_at == Some(body.cycle) {
                 vec![0xc1; 64]
@@ -693,6 +748,8 @@ mod tests {
             truth: [0.0; PARAMETER_COUNT],
             speed: 0.0,
             start: JointAngles::default(),
+            lying: Lying::OnBack,
+            battery: 0.9,
             state: None,
             record: None,
             faults: Faults::default(),
@@ -746,10 +803,47 @@ mod tests {
     }
 
     #[test]
+    fn the_imu_says_how_it_lies_and_rolls_over_when_told() {
+        let limits = body::BodyLimits::default();
+        let mut o = options();
+        o.faults.roll_at = Some(5);
+        o.faults.chest_at = Some(7);
+        o.faults.status_at = Some((Joint::LAnkleRoll, 2, 6));
+        o.faults.low_battery_at = Some(8);
+        let motors = motors();
+        let mut body = Body::new(&o);
+        let lies = |b: &Body| body::lying(&limits, &b.frame(&o).joints);
+        assert_eq!(lies(&body), Lying::OnBack);
+        assert_eq!(body.frame(&o).joints.accelerometer, [-9.81, 0.0, 0.0]);
+        for _ in 0..5 {
+            body.step(&o.model, &motors);
+        }
+        let m = body.frame(&o).joints;
+        assert_eq!(m.touch[CHEST_BUTTON], 0.0);
+        assert_eq!(m.status[lola::index(Joint::LAnkleRoll)], 0);
+        for _ in 0..ROLL_CYCLES {
+            body.step(&o.model, &motors);
+        }
+        assert_eq!(lies(&body), Lying::OnRightSide);
+        let m = body.frame(&o).joints;
+        assert_eq!(m.touch[CHEST_BUTTON], 1.0);
+        assert_eq!(m.status[lola::index(Joint::LAnkleRoll)], 2);
+        assert_eq!(m.battery[BATTERY_CHARGE], LOW_BATTERY);
+        for (l, _, _) in Lying::NAMED {
+            let o = RobotOptions {
+                lying: l,
+                ..options()
+            };
+            assert_eq!(body::lying(&limits, &Body::new(&o).frame(&o).joints), l);
+        }
+    }
+
+    #[test]
     fn the_robots_frame_is_a_v6_message() {
-        let body = Body::new(&options());
+        let o = options();
+        let body = Body::new(&o);
         assert_eq!(
-            lola::encode(&body.frame()).len(),
+            lola::encode(&body.frame(&o)).len(),
             lola::SENSOR_MESSAGE_BYTES
         );
     }

@@ -51,6 +51,7 @@ impl Body {
             position: self.pos,
             temperature: self.temperature,
             current: self.current,
+            ..SensorMessage::on_back([0.0; JOINTS])
         }
     }
 
@@ -80,14 +81,9 @@ type Fault = Box<dyn FnMut(u64, &mut Body, &mut SensorMessage) + Send>;
 fn frame(joints: SensorMessage) -> SensorFrame {
     SensorFrame {
         joints,
-        battery: [0.9, 0.0, -0.4, 30.0],
-        accelerometer: [0.0, 0.0, 9.81],
         gyroscope: [0.0; 3],
-        angles: [0.0, -1.57],
         sonar: [2.5, 2.5],
         fsr: [0.0; 8],
-        touch: [0.0; 14],
-        status: [0; JOINTS],
         robot_config: [
             "P0000074A05S94700015".into(),
             "6.0.0".into(),

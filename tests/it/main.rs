@@ -10,6 +10,7 @@ mod util;
 
 mod batch_solve;
 mod capture;
+mod capture_body;
 mod capture_cameras;
 #[cfg(feature = "ceres")]
 mod ceres_agreement;
@@ -19,6 +20,8 @@ mod cli_solve;
 mod dataset_io;
 #[cfg(feature = "detect")]
 mod detect_border;
+#[cfg(feature = "detect")]
+mod detect_dark;
 #[cfg(feature = "detect")]
 mod detect_files;
 #[cfg(feature = "detect")]

@@ -7,6 +7,7 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::model::{Joint, JointAngles};
+use crate::robot::body::BodyWatch;
 use crate::robot::lola::{self, ActuatorMessage, JOINTS, Link, LolaError, SensorMessage};
 use crate::robot::motion::{Settle, SettleState};
 use crate::robot::plausible::Believed;
@@ -47,6 +48,8 @@ pub(super) struct Drive<'a> {
     options: &'a CaptureOptions,
     stop: &'a AtomicBool,
     watch: Watch,
+    /// How the robot lies, its chest button, status and battery.
+    body: BodyWatch,
     last: SensorMessage,
     /// The readings believed ([`Believed`]).
     believed: Believed,
@@ -67,8 +70,9 @@ pub(super) struct Drive<'a> {
 
 impl<'a> Drive<'a> {
     /// Takes over the robot from LoLA's first message: its readings must be plausible
-    /// ([`Believed::start`]); the command holds the posture they report, at the stiffness
-    /// the robot reports. Nothing is sent yet.
+    /// ([`Believed::start`]) and the robot lie on its back with its battery charged and no
+    /// motor's stiffness cut ([`BodyWatch::start`]); the command holds the posture they
+    /// report, at the stiffness the robot reports. Nothing is sent yet.
     pub(super) fn start(
         link: &'a mut dyn Link,
         options: &'a CaptureOptions,
@@ -77,11 +81,14 @@ impl<'a> Drive<'a> {
         let first = link.receive()?;
         let believed =
             Believed::start(options.safety.readings, &first).map_err(CaptureError::FirstReading)?;
+        let body = BodyWatch::start(options.safety.body, &first)
+            .map_err(|e| CaptureError::NotReady(e.to_string()))?;
         Ok(Drive {
             link,
             options,
             stop,
             watch: Watch::default(),
+            body,
             base: first.position,
             command: believed.readings(),
             believed,
@@ -139,6 +146,9 @@ impl<'a> Drive<'a> {
                     j.name()
                 ))));
             }
+        }
+        if let Err(stop) = self.body.check(&self.last) {
+            return Err(Halt::Fault(CaptureError::Body(stop)));
         }
         if self.stop.load(Ordering::Relaxed) {
             return Err(Halt::Interrupted);
@@ -247,38 +257,43 @@ impl<'a> Drive<'a> {
         self.move_to(&rest, false).map(|_| ())
     }
 
-    /// Rests until the head and leg motors are at or below the resume temperature.
+    /// Rests until the head and leg motors are at or below the resume temperature and none
+    /// reports a status above 0 ([`SafetyLimits::cooled`]).
     pub(super) fn cool(&mut self) -> Result<(), Halt> {
         let limits = self.options.safety;
         self.rest()?;
         for _ in 0..limits.max_pause_cycles {
             self.cycle()?;
-            if SafetyLimits::hottest(&self.last).1 <= limits.resume_temperature {
+            if limits.cooled(&self.last) {
                 return Ok(());
             }
         }
         let (j, t) = SafetyLimits::hottest(&self.last);
+        let (sj, status) = crate::robot::body::worst_status(&self.last);
         Err(Halt::Fault(CaptureError::Safety(format!(
-            "{} still at {t:.1} °C after {} cycles at rest",
+            "{} still at {t:.1} °C ({} status {status}) after {} cycles at rest",
             j.name(),
+            sj.name(),
             limits.max_pause_cycles
         ))))
     }
 
     /// The way out of a run that ends with `end`: back to rest (unless the robot never
     /// moved: stopped during the ramp-up, it ramps down where it lies), then the stiffness
-    /// ramp-down; only a broken link stops them. After a message that did not parse the
-    /// ramp-down is sent blind.
+    /// ramp-down; only a broken link stops them. When LoLA's stream cannot be trusted or
+    /// read (a message that did not parse, silence, a socket error) the ramp-down is sent
+    /// blind, holding the posture; only a closed connection leaves nothing to send to.
     pub(super) fn finish(&mut self, end: &End) {
         self.finishing = true;
         match end {
-            End::Stopped(CaptureError::Lola(LolaError::Parse(_))) => self.blind_ramp_down(),
-            End::Stopped(CaptureError::Lola(_)) => {}
+            End::Stopped(CaptureError::Lola(LolaError::Closed)) => {}
+            End::Stopped(CaptureError::Lola(_)) => self.blind_ramp_down(),
             _ => {
                 let back =
                     if self.moved { self.rest() } else { Ok(()) }.and_then(|()| self.ramp_down());
-                if let Err(Halt::Link(LolaError::Parse(_))) = back {
-                    self.blind_ramp_down();
+                match back {
+                    Ok(()) | Err(Halt::Link(LolaError::Closed)) => {}
+                    Err(_) => self.blind_ramp_down(),
                 }
             }
         }

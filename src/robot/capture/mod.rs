@@ -22,6 +22,7 @@ use crate::dataset::{DatasetError, Location};
 use crate::model::{CameraId, JointAngles};
 use crate::output::WriteError;
 
+use super::body::BodyStop;
 use super::camera::CameraError;
 use super::lola::{self, LolaError};
 use super::motion::MotionOptions;
@@ -143,6 +144,16 @@ pub enum CaptureError {
     /// LoLA's first message is implausible: nothing was commanded.
     #[error("{0} in LoLA's first message; nothing was commanded")]
     FirstReading(ReadingFault),
+    /// The checks before the first move do not hold (what does not): nothing was moved.
+    #[error("{0}; nothing was moved")]
+    NotReady(String),
+    /// The robot as a whole stopped the run: it rolled over, the chest button, a motor's
+    /// status, the battery.
+    #[error(transparent)]
+    Body(#[from] BodyStop),
+    /// naocalib itself failed (a panic, a thread that ended): a bug.
+    #[error("naocalib failed inside: {0} (a bug; please report it)")]
+    Internal(String),
 }
 
 /// Turns a number of LoLA cycles into wall time (s) at LoLA's rate (for messages).

@@ -191,8 +191,8 @@ impl<'a> Session<'a> {
     /// stiffness up from what the robot reports, holding the posture it first reports,
     /// visits every row not yet in `out` (skipping the unreachable, abandoning obstructed
     /// stances, resting while motors are hot), and at the end, on the stop flag and on any
-    /// fault it can still command, returns to rest and ramps the stiffness down.
-    /// `Err` only when the run could not start (nothing was moved).
+    /// fault it can still command (a panic too), returns to rest and ramps the stiffness
+    /// down. `Err` only when the run could not start (nothing was moved).
     pub fn run(
         self,
         out: DatasetOut,
@@ -240,7 +240,18 @@ impl<'a> Session<'a> {
                 end: End::Completed,
             },
         };
-        let result = visit(model, options, &todo, &mut drive, &mut worker, &mut log);
+        // A panic on the way (a bug) still ends at rest with the stiffness ramped down.
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            visit(model, options, &todo, &mut drive, &mut worker, &mut log)
+        }))
+        .unwrap_or_else(|payload| {
+            let what = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "a panic".into());
+            Err(Halt::Fault(CaptureError::Internal(what)))
+        });
         let mut end = match result {
             Ok(()) => End::Completed,
             Err(Halt::Interrupted) => End::Interrupted,
@@ -300,6 +311,9 @@ impl Log<'_> {
             }
             Done::Stored(_, Err(e)) => Err(Halt::Fault(e)),
             Done::Taken(_) => Ok(()),
+            Done::Lost => Err(Halt::Fault(CaptureError::Internal(
+                "the thread that takes the pictures and writes the captures stopped".into(),
+            ))),
         }
     }
 }
@@ -526,12 +540,7 @@ mod tests {
 
         let sent = Rc::new(RefCell::new(Vec::new()));
         let mut robot = Robot {
-            now: SensorMessage {
-                stiffness: [0.0; JOINTS],
-                position: lola::put([0.0; JOINTS], &rest, |q| q as f32),
-                temperature: [35.0; JOINTS],
-                current: [0.0; JOINTS],
-            },
+            now: SensorMessage::on_back(lola::put([0.0; JOINTS], &rest, |q| q as f32)),
             block: (lola::index(Joint::LKneePitch), 0.3),
             sent: sent.clone(),
         };
@@ -596,6 +605,77 @@ mod tests {
         let last = sent.last().expect("commands");
         assert!(close(&lola::to_joint_angles(&last.position), &rest));
         assert!(last.stiffness.iter().all(|&s| s == 0.0));
+    }
+
+    /// A camera whose every picture panics (a bug in the picture thread).
+    struct Panics;
+
+    impl Camera for Panics {
+        fn take(&mut self, _: &Path) -> Result<Picture, CameraError> {
+            panic!("a bug in the camera")
+        }
+    }
+
+    /// A panic in the picture thread, and one in the session's own loop (an observer):
+    /// the run still ends at rest, the stiffness ramped down over the full ramp, and says
+    /// what failed.
+    #[test]
+    fn a_panic_in_a_thread_or_in_the_loop_ends_at_rest_with_the_stiffness_ramped_down() {
+        let model = Model::default();
+        let options = CaptureOptions::default();
+        let rest = options.rest;
+        let mut head = rest;
+        head.set(Joint::HeadYaw, 0.4);
+        let rows = [row(0, head)];
+        for in_thread in [true, false] {
+            let sent = Rc::new(RefCell::new(Vec::new()));
+            let mut robot = Robot {
+                now: SensorMessage::on_back(lola::put([0.0; JOINTS], &rest, |q| q as f32)),
+                block: (0, 10.0),
+                sent: sent.clone(),
+            };
+            let dir = tempfile::tempdir().unwrap();
+            let out = DatasetOut::create(&dir.path().join("ds"), &model, b"plan").unwrap();
+            let camera: Box<dyn Camera> = if in_thread {
+                Box::new(Panics)
+            } else {
+                Box::new(Black)
+            };
+            let mut observer = |e: &Event| {
+                if !in_thread && matches!(e, Event::Started) {
+                    panic!("a bug in an observer")
+                }
+            };
+            let report = Session::new(&model, &rows, &options)
+                .observe(&mut observer)
+                .run(out, vec![(CameraId::Lower, camera)], &mut robot)
+                .expect("the run starts");
+            let End::Stopped(CaptureError::Internal(what)) = &report.end else {
+                panic!("{:?}", report.end)
+            };
+            let expected = if in_thread {
+                "the thread that takes the pictures"
+            } else {
+                "a bug in an observer"
+            };
+            assert!(what.starts_with(expected), "{what}");
+            assert!(report.taken.is_empty());
+            let sent = sent.borrow();
+            let last = sent.last().unwrap();
+            let close =
+                |a: &JointAngles, b: &JointAngles| (*a - *b).iter().all(|(_, d)| d.abs() < 1e-6);
+            assert!(close(&lola::to_joint_angles(&last.position), &rest));
+            assert!(last.stiffness.iter().all(|&s| s == 0.0));
+            let knee = lola::index(Joint::LKneePitch);
+            let top = sent
+                .iter()
+                .rposition(|m| m.stiffness[knee] >= 0.8 - 1e-6)
+                .unwrap();
+            assert!(sent.len() - 1 - top >= crate::robot::motion::MIN_RAMP_CYCLES as usize);
+            for w in sent[top..].windows(2) {
+                assert!(w[1].stiffness[knee] <= w[0].stiffness[knee]);
+            }
+        }
     }
 
     /// The forecast moves on with every stance visited, taken or skipped, and not while

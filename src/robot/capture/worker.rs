@@ -28,6 +28,8 @@ pub(super) enum Done {
     Taken(Result<Picture, CameraError>),
     /// A capture written (its id; the captures in the dataset now), or why not.
     Stored(u64, Result<usize, CaptureError>),
+    /// The thread is gone (it panicked): nothing more will come.
+    Lost,
 }
 
 /// A camera with the size (width, height) its pictures must have.
@@ -100,11 +102,16 @@ impl Worker {
         }
     }
 
-    /// A job done, if one is, without waiting.
+    /// A job done, if one is, without waiting; [`Done::Lost`] once the thread is gone.
     pub(super) fn poll(&mut self) -> Option<Done> {
-        let done = self.done.try_recv().ok()?;
-        self.pending -= 1;
-        Some(done)
+        match self.done.try_recv() {
+            Ok(done) => {
+                self.pending -= 1;
+                Some(done)
+            }
+            Err(mpsc::TryRecvError::Empty) => None,
+            Err(mpsc::TryRecvError::Disconnected) => Some(Done::Lost),
+        }
     }
 
     /// Stops a picture under way, waits for the other jobs sent and stops the thread.

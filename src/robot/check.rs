@@ -1,0 +1,540 @@
+//! The checks before a robot moves: LoLA answers and its readings are plausible, the robot
+//! lies on its back, its battery, its motors' temperatures and status, its stiffness; each
+//! camera takes a picture of its size that is neither black nor saturated. `naocalib
+//! capture --check` runs them all and moves nothing (a dry run: the table of what holds);
+//! `naocalib capture` runs the same before its first move ([`first_message`] and
+//! [`camera`]) and refuses to start unless they hold.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use crate::model::{CameraId, Model};
+use crate::output::{WriteOptions, write_atomic};
+
+use super::body::{self, Lying};
+use super::camera::{Camera, CameraError, CameraSpec, Picture, image_kind};
+use super::capture::{CaptureError, CaptureOptions, check_cameras, check_plan, read_plan};
+use super::lola::{
+    ActuatorMessage, BATTERY_CHARGE, Connection, JOINTS, Link, LolaError, SensorMessage,
+};
+use super::plausible::Believed;
+use super::safety::SafetyLimits;
+
+/// Darkest mean brightness (0 … 255) a picture may have: below it the board cannot be
+/// found (the teams' exposures give a mean near the middle; a V6 camera at too short an
+/// exposure gives a nearly black picture).
+pub const MIN_BRIGHTNESS: f64 = 30.0;
+/// Brightest mean brightness (0 … 255): above it the picture is saturated.
+pub const MAX_BRIGHTNESS: f64 = 225.0;
+
+/// LoLA messages the dry run reads: 1 s.
+pub const CHECK_CYCLES: u32 = 84;
+
+/// One line of the table: what was checked, whether it holds, what was found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Check {
+    /// What was checked (`LoLA`, `lying`, `lower camera`, …).
+    pub item: String,
+    /// Whether it holds.
+    pub holds: bool,
+    /// What was found, and what to do when it does not hold.
+    pub detail: String,
+    /// Whether a capture needs it before its first move (else only the dry run does: a
+    /// capture takes a stiff robot over from the stiffness it reports).
+    pub before_moving: bool,
+}
+
+impl Check {
+    fn new(item: impl Into<String>, holds: bool, detail: impl Into<String>) -> Check {
+        Check {
+            item: item.into(),
+            holds,
+            detail: detail.into(),
+            before_moving: true,
+        }
+    }
+}
+
+/// The checks' results, in the order they ran.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct CheckReport {
+    /// The checks.
+    pub checks: Vec<Check>,
+}
+
+impl CheckReport {
+    /// Whether the day can start: every check holds.
+    pub fn ready(&self) -> bool {
+        self.checks.iter().all(|c| c.holds)
+    }
+
+    /// Whether a capture may move the robot: every check it needs holds.
+    pub fn can_move(&self) -> bool {
+        self.checks.iter().all(|c| c.holds || !c.before_moving)
+    }
+
+    /// The checks that do not hold and that a capture needs, joined for a message.
+    pub fn blocking(&self) -> String {
+        let failed: Vec<String> = self
+            .checks
+            .iter()
+            .filter(|c| !c.holds && c.before_moving)
+            .map(|c| format!("{}: {}", c.item, c.detail))
+            .collect();
+        failed.join("; ")
+    }
+
+    /// The checks that do not hold, joined for a message.
+    pub fn failed(&self) -> String {
+        let failed: Vec<String> = self
+            .checks
+            .iter()
+            .filter(|c| !c.holds)
+            .map(|c| format!("{}: {}", c.item, c.detail))
+            .collect();
+        failed.join("; ")
+    }
+
+    /// The table: one line per check, `ok` or `NO`, what was found.
+    pub fn table(&self) -> String {
+        let width = self.checks.iter().map(|c| c.item.len()).max().unwrap_or(0);
+        let mut out = String::new();
+        for c in &self.checks {
+            let mark = if c.holds { "ok" } else { "NO" };
+            out.push_str(&format!("{mark:<3} {:<width$}  {}\n", c.item, c.detail));
+        }
+        out
+    }
+}
+
+/// The robot's state in LoLA's message `m` against `limits`: how it lies, its battery,
+/// its motors' temperatures and status, and its stiffness (off is for the dry run only).
+pub fn robot(limits: &SafetyLimits, m: &SensorMessage) -> Vec<Check> {
+    let b = &limits.body;
+    let lying = match body::check_start(
+        b,
+        &SensorMessage {
+            battery: [1.0; 4],
+            status: [0; JOINTS],
+            ..m.clone()
+        },
+    ) {
+        Ok(()) => Check::new(
+            "lying",
+            true,
+            format!(
+                "{} (accelerometer {}, angles {})",
+                Lying::OnBack.words(),
+                body::vector(&m.accelerometer),
+                body::vector(&m.angles)
+            ),
+        ),
+        Err(e) => Check::new("lying", false, e.to_string()),
+    };
+    let charge = m.battery[BATTERY_CHARGE] as f64;
+    let charged = charge >= b.min_battery;
+    let battery = Check::new(
+        "battery",
+        charged,
+        format!(
+            "{:.0} % (at least {:.0} %){}",
+            charge * 100.0,
+            b.min_battery * 100.0,
+            if charged {
+                ""
+            } else {
+                ": charge it or plug the robot in"
+            }
+        ),
+    );
+    let (joint, t) = SafetyLimits::hottest(m);
+    let (sjoint, status) = body::worst_status(m);
+    let cool = t < limits.pause_temperature && status < 1;
+    let motors = Check::new(
+        "motors",
+        cool,
+        format!(
+            "hottest {} at {t:.1} °C (pause at {:.0} °C), highest status {status} ({}){}",
+            joint.name(),
+            limits.pause_temperature,
+            sjoint.name(),
+            if cool {
+                ""
+            } else {
+                ": let the motors cool with the stiffness off"
+            }
+        ),
+    );
+    let most = m
+        .stiffness
+        .iter()
+        .map(|&s| s as f64)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let stiffness = Check {
+        before_moving: false,
+        ..Check::new(
+            "stiffness",
+            most <= 0.01,
+            if most <= 0.01 {
+                "off".to_string()
+            } else {
+                format!(
+                    "up to {most:.2}: another program holds the robot (stop it: `hula`, \
+                     `lola_adaptor`, `bhuman`); a capture takes it over from there"
+                )
+            },
+        )
+    };
+    vec![lying, battery, motors, stiffness]
+}
+
+/// LoLA's first message, read before a capture commands anything: it must come and its
+/// joint readings be plausible (else the error, nothing sent); the robot's checks
+/// ([`robot`]) on it.
+pub fn first_message(
+    link: &mut dyn Link,
+    limits: &SafetyLimits,
+) -> Result<(SensorMessage, Vec<Check>), CaptureError> {
+    let first = link.receive()?;
+    Believed::start(limits.readings, &first).map_err(CaptureError::FirstReading)?;
+    let checks = robot(limits, &first);
+    Ok((first, checks))
+}
+
+/// The dry run's look at LoLA: `cycles` messages read, each answered by holding the
+/// posture and stiffness the first reported (nothing moves, no stiffness changes; nothing
+/// is sent when the first is implausible); the checks of LoLA, the readings and
+/// [`robot`] on the last message.
+pub fn lola(link: &mut dyn Link, limits: &SafetyLimits, cycles: u32) -> Vec<Check> {
+    let started = Instant::now();
+    let first = match link.receive() {
+        Ok(m) => m,
+        Err(e) => return vec![Check::new("LoLA", false, lola_hint(&e))],
+    };
+    if let Err(fault) = Believed::start(limits.readings, &first) {
+        return vec![
+            Check::new("LoLA", true, "answers"),
+            Check::new(
+                "joint readings",
+                false,
+                format!("{fault} in LoLA's first message"),
+            ),
+        ];
+    }
+    let hold = ActuatorMessage {
+        position: first.position,
+        stiffness: first.stiffness,
+    };
+    let mut last = first;
+    let mut received = 1u32;
+    let mut failed = None;
+    while received < cycles.max(1) {
+        let next = link.send(&hold).and_then(|()| link.receive());
+        match next {
+            Ok(m) => {
+                last = m;
+                received += 1;
+            }
+            Err(e) => {
+                failed = Some(e);
+                break;
+            }
+        }
+    }
+    let _ = link.send(&hold);
+    let ms = started.elapsed().as_secs_f64() * 1e3;
+    let mut checks = vec![match failed {
+        None => Check::new(
+            "LoLA",
+            true,
+            format!(
+                "{received} messages in {ms:.0} ms ({:.1} ms each; a V6 sends one every 12 ms)",
+                ms / received as f64
+            ),
+        ),
+        Some(e) => Check::new(
+            "LoLA",
+            false,
+            format!("after {received} messages: {}", lola_hint(&e)),
+        ),
+    }];
+    checks.push(match Believed::start(limits.readings, &last) {
+        Ok(_) => Check::new("joint readings", true, "plausible"),
+        Err(fault) => Check::new("joint readings", false, fault.to_string()),
+    });
+    checks.extend(robot(limits, &last));
+    checks
+}
+
+/// LoLA's error, with what to do.
+fn lola_hint(e: &LolaError) -> String {
+    match e {
+        LolaError::Connect { .. } | LolaError::Silent { .. } | LolaError::Closed => format!(
+            "{e}; LoLA takes one client: stop the team's program first (`hula`, \
+             `lola_adaptor`, `bhuman`)"
+        ),
+        _ => e.to_string(),
+    }
+}
+
+/// The dry run of `naocalib capture --check`: the plan read and checked against the robot
+/// `model` (safe rows, each row's camera among `cameras`; an error when not, as capture
+/// gives), then each camera of `cameras` opened with `timeout` and checked ([`camera`],
+/// its picture saved into `save`), then LoLA at `socket` for [`CHECK_CYCLES`] messages
+/// ([`lola`]). Nothing moves.
+pub fn dry_run(
+    plan: &Path,
+    model: &Model,
+    cameras: &[(CameraId, CameraSpec)],
+    timeout: Duration,
+    socket: &Path,
+    options: &CaptureOptions,
+    save: &Path,
+) -> Result<CheckReport, CaptureError> {
+    let rows = read_plan(plan)?;
+    check_plan(plan, model, &rows, options.joint_margin)?;
+    let given: Vec<CameraId> = cameras.iter().map(|(c, _)| *c).collect();
+    check_cameras(plan, &rows, &given)?;
+    let mut report = CheckReport::default();
+    let used = |id: CameraId| rows.iter().filter(|r| r.camera == id).count();
+    report.checks.push(Check::new(
+        "plan",
+        true,
+        format!(
+            "{} stances ({} lower, {} upper), each within the joints' limits and free of \
+             collisions",
+            rows.len(),
+            used(CameraId::Lower),
+            used(CameraId::Upper)
+        ),
+    ));
+    for (id, spec) in cameras {
+        report.checks.push(match spec.open(id.name(), timeout) {
+            Ok(mut opened) => camera(model, *id, opened.as_mut(), Some(save)),
+            Err(e) => Check::new(format!("{} camera", id.name()), false, e.to_string()),
+        });
+    }
+    match Connection::connect(socket, options.safety.silent_cycles) {
+        Ok(mut link) => report
+            .checks
+            .extend(lola(&mut link, &options.safety, CHECK_CYCLES)),
+        Err(e) => report.checks.push(Check::new("LoLA", false, lola_hint(&e))),
+    }
+    Ok(report)
+}
+
+/// A picture's size (width, height) and mean brightness (0 … 255, over every channel).
+pub fn brightness(bytes: &[u8]) -> Result<((u32, u32), f64), String> {
+    let (size, pixels) = match image_kind(bytes) {
+        Some("png") => {
+            let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+            decoder
+                .set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
+            let mut reader = decoder
+                .read_info()
+                .map_err(|e| format!("is not a readable PNG: {e}"))?;
+            let n = reader
+                .output_buffer_size()
+                .ok_or("is not a readable PNG: too large")?;
+            let mut buf = vec![0; n];
+            let info = reader
+                .next_frame(&mut buf)
+                .map_err(|e| format!("is not a readable PNG: {e}"))?;
+            buf.truncate(info.buffer_size());
+            ((info.width, info.height), buf)
+        }
+        Some(_) => {
+            let mut decoder = jpeg_decoder::Decoder::new(std::io::Cursor::new(bytes));
+            let pixels = decoder
+                .decode()
+                .map_err(|e| format!("is not a readable JPEG: {e}"))?;
+            let info = decoder.info().ok_or("is not a readable JPEG: no frame")?;
+            ((info.width.into(), info.height.into()), pixels)
+        }
+        None => return Err("is neither a PNG nor a JPEG".into()),
+    };
+    if pixels.is_empty() {
+        return Err("has no pixels".into());
+    }
+    let mean = pixels.iter().map(|&p| p as f64).sum::<f64>() / pixels.len() as f64;
+    Ok((size, mean))
+}
+
+/// One picture from `camera`, as the capture run will take them. The one place the checks
+/// call a camera (where the camera's settings are applied and read back first, that
+/// call belongs here).
+pub fn take_one(camera: &mut dyn Camera, scratch: &Path) -> Result<Picture, CameraError> {
+    camera.take(scratch)
+}
+
+/// The check of the `id` camera of the robot `model`: one picture taken, of the size of
+/// its intrinsics, neither too dark nor saturated; saved into `save` (as `{camera}.png`
+/// or `.jpg`) for a person to look at, when given.
+pub fn camera(model: &Model, id: CameraId, camera: &mut dyn Camera, save: Option<&Path>) -> Check {
+    let item = format!("{} camera", id.name());
+    let scratch = match tempfile::tempdir() {
+        Ok(dir) => dir,
+        Err(e) => return Check::new(item, false, format!("no scratch directory: {e}")),
+    };
+    let picture = match take_one(camera, scratch.path()) {
+        Ok(p) => p,
+        Err(e) => return Check::new(item, false, e.to_string()),
+    };
+    let ((w, h), mean) = match brightness(&picture.bytes) {
+        Ok(found) => found,
+        Err(e) => return Check::new(item, false, format!("its picture {e}")),
+    };
+    let saved = save.map(|dir| -> Result<PathBuf, String> {
+        let path = dir.join(format!("{}.{}", id.name(), picture.extension));
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        write_atomic(&path, &picture.bytes, &WriteOptions::new(true)).map_err(|e| e.to_string())?;
+        Ok(path)
+    });
+    let size = model.intrinsics(id);
+    let mut problems = Vec::new();
+    if (w, h) != (size.width, size.height) {
+        problems.push(format!(
+            "its intrinsics are for {}×{}",
+            size.width, size.height
+        ));
+    }
+    if mean < MIN_BRIGHTNESS {
+        problems.push(format!(
+            "too dark (at least {MIN_BRIGHTNESS:.0}): raise the exposure or gain, or light \
+             the boards"
+        ));
+    } else if mean > MAX_BRIGHTNESS {
+        problems.push(format!(
+            "saturated (at most {MAX_BRIGHTNESS:.0}): lower the exposure or gain"
+        ));
+    }
+    let mut detail = format!("{w}×{h}, brightness {mean:.0} of 255");
+    match saved {
+        Some(Ok(path)) => detail.push_str(&format!(", saved to {}", path.display())),
+        Some(Err(e)) => problems.push(format!("not saved: {e}")),
+        None => {}
+    }
+    if !problems.is_empty() {
+        detail = format!("{detail}: {}", problems.join("; "));
+    }
+    Check::new(item, problems.is_empty(), detail)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Joint;
+    use crate::robot::lola;
+
+    fn grey(width: u32, height: u32, value: u8) -> Vec<u8> {
+        crate::sim::render::GreyImage {
+            width,
+            height,
+            pixels: vec![value; (width * height) as usize],
+        }
+        .to_png()
+        .unwrap()
+    }
+
+    struct Fixed(Vec<u8>);
+
+    impl Camera for Fixed {
+        fn take(&mut self, _: &Path) -> Result<Picture, CameraError> {
+            Ok(Picture {
+                bytes: self.0.clone(),
+                extension: "png",
+            })
+        }
+    }
+
+    #[test]
+    fn a_camera_is_checked_for_its_size_and_brightness_and_its_picture_saved() {
+        let model = Model::default();
+        let dir = tempfile::tempdir().unwrap();
+        let good = camera(
+            &model,
+            CameraId::Lower,
+            &mut Fixed(grey(640, 480, 128)),
+            Some(dir.path()),
+        );
+        assert!(good.holds, "{good:?}");
+        assert!(
+            good.detail
+                .starts_with("640×480, brightness 128 of 255, saved to"),
+            "{}",
+            good.detail
+        );
+        assert_eq!(
+            std::fs::read(dir.path().join("lower.png")).unwrap(),
+            grey(640, 480, 128)
+        );
+        let dark = camera(&model, CameraId::Lower, &mut Fixed(grey(640, 480, 8)), None);
+        assert!(!dark.holds);
+        assert!(
+            dark.detail.contains("brightness 8 of 255: too dark"),
+            "{}",
+            dark.detail
+        );
+        let bright = camera(
+            &model,
+            CameraId::Lower,
+            &mut Fixed(grey(640, 480, 250)),
+            None,
+        );
+        assert!(bright.detail.contains("saturated"), "{}", bright.detail);
+        let small = camera(
+            &model,
+            CameraId::Lower,
+            &mut Fixed(grey(320, 240, 128)),
+            None,
+        );
+        assert!(!small.holds);
+        assert!(small.detail.contains("320×240"), "{}", small.detail);
+        assert!(
+            small.detail.contains("intrinsics are for 640×480"),
+            "{}",
+            small.detail
+        );
+    }
+
+    #[test]
+    fn the_robot_checks_hold_for_a_limp_robot_on_its_back_only() {
+        let limits = SafetyLimits::default();
+        let back = SensorMessage::on_back([0.0; JOINTS]);
+        let report = CheckReport {
+            checks: robot(&limits, &back),
+        };
+        assert!(report.ready(), "{}", report.table());
+        let mut m = back.clone();
+        m.accelerometer = [0.0, 0.0, -9.81];
+        m.angles = [0.0, 0.0];
+        m.stiffness = [0.5; JOINTS];
+        m.battery[BATTERY_CHARGE] = 0.02;
+        m.temperature[lola::index(Joint::LAnklePitch)] = 72.0;
+        let report = CheckReport {
+            checks: robot(&limits, &m),
+        };
+        let table = report.table();
+        assert!(!report.can_move());
+        for (item, text) in [
+            ("lying", "the robot lies upright"),
+            ("battery", "2 % (at least 5 %): charge it"),
+            ("motors", "hottest LAnklePitch at 72.0 °C"),
+            ("stiffness", "up to 0.50"),
+        ] {
+            let line = table
+                .lines()
+                .find(|l| l.get(4..).is_some_and(|r| r.starts_with(item)))
+                .unwrap();
+            assert!(line.starts_with("NO "), "{line}");
+            assert!(line.contains(text), "{line}");
+        }
+        // Stiffness alone does not keep a capture from starting.
+        let mut stiff = back.clone();
+        stiff.stiffness = [0.5; JOINTS];
+        let report = CheckReport {
+            checks: robot(&limits, &stiff),
+        };
+        assert!(report.can_move() && !report.ready());
+    }
+}
