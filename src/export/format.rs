@@ -289,6 +289,7 @@ mod tests {
                 angles: None,
                 posture: super::super::Posture::Lying,
                 standing: Default::default(),
+                cameras: Default::default(),
             };
             let update = f.update("", path, &cal).unwrap_err().to_string();
             assert!(update.contains("--update is not supported"), "{update}");

@@ -67,6 +67,7 @@ pub fn import_calibration(
         angles: None,
         posture: Posture::Standing,
         standing: Default::default(),
+        cameras: Default::default(),
     };
     Ok((cal, read))
 }

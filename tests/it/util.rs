@@ -149,6 +149,7 @@ pub fn converged_calibration(
         angles: None,
         posture,
         standing: Default::default(),
+        cameras: Default::default(),
     }
 }
 
