@@ -173,13 +173,12 @@ mod tests {
 
     #[test]
     fn opening_angles_and_focal_lengths_are_inverse_and_the_sigma_is_the_derivative() {
-        // B-Human's defaults: 54.7° × 42.5° at 640 × 480 are 618.9 px and 617.6 px.
+        // B-Human's defaults: 54.7° × 42.5° at 640 × 480 are 618.7 px and 617.2 px, as
+        // HULKs' normalised 0.96666 × 640 and 1.28574 × 480.
         let fx = focal_length(640, 54.7);
         let fy = focal_length(480, 42.5);
-        assert!(
-            (fx - 618.9).abs() < 0.1 && (fy - 617.6).abs() < 0.1,
-            "{fx} {fy}"
-        );
+        assert!((fx - 0.96666 * 640.0).abs() < 0.05, "{fx}");
+        assert!((fy - 1.28574 * 480.0).abs() < 0.05, "{fy}");
         assert!((opening_angle(640, fx) - 54.7).abs() < 1e-12);
         let prior = Prior {
             width: 640,
