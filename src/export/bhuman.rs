@@ -595,8 +595,16 @@ impl Format for Intrinsics {
                 }
             };
             let _ = writeln!(s, "  {} = {{", camera.name());
-            let _ = writeln!(s, "    openingAngleWidth = {};", intrinsics_text(0, values[0]));
-            let _ = writeln!(s, "    openingAngleHeight = {};", intrinsics_text(1, values[1]));
+            let _ = writeln!(
+                s,
+                "    openingAngleWidth = {};",
+                intrinsics_text(0, values[0])
+            );
+            let _ = writeln!(
+                s,
+                "    openingAngleHeight = {};",
+                intrinsics_text(1, values[1])
+            );
             let _ = writeln!(
                 s,
                 "    opticalCenter = {{ x = {}; y = {}; }};",
@@ -653,9 +661,8 @@ impl Format for Intrinsics {
             if !i.calibrated.iter().any(|c| *c) {
                 continue;
             }
-            let found = intrinsics_at(&root, path, camera)?.ok_or_else(|| {
-                parse_error(path, format!("cameras.{}: missing", camera.name()))
-            })?;
+            let found = intrinsics_at(&root, path, camera)?
+                .ok_or_else(|| parse_error(path, format!("cameras.{}: missing", camera.name())))?;
             let values = intrinsics_values(&i);
             // The opening angles follow the focal lengths, the centre its own coordinate.
             for (k, (_, start, end)) in found.into_iter().enumerate() {
