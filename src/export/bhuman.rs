@@ -678,6 +678,9 @@ impl Format for Intrinsics {
     }
 }
 
+/// A value with the byte span of its text.
+type Spanned = (f64, usize, usize);
+
 /// The four intrinsics values of `camera` in a parsed `cameraIntrinsics.cfg` (opening
 /// angles in deg, relative centre), each checked plausible, with their spans; `None` when
 /// the file has no `cameras.<camera>`.
@@ -685,7 +688,7 @@ fn intrinsics_at(
     root: &cfg::Value,
     path: &Path,
     camera: CameraId,
-) -> Result<Option<[(f64, usize, usize); 4]>, ExportError> {
+) -> Result<Option<[Spanned; 4]>, ExportError> {
     let base = ["cameras", camera.name()];
     if root.get(&base).is_none() {
         return Ok(None);

@@ -109,11 +109,8 @@ fn a_fresh_bhuman_intrinsics_file_is_naocalibs_intrinsics_through_bhumans_code()
         let prior = priors()[&camera];
         let want = cal.intrinsics(camera).unwrap().value;
         let got = bhuman_camera(&text, camera, prior.width as f64, prior.height as f64);
-        for k in 0..4 {
-            assert!(
-                (got[k] - want[k]).abs() < 1e-9,
-                "{camera} {k}: {got:?} vs {want:?}"
-            );
+        for (g, w) in got.iter().zip(&want) {
+            assert!((g - w).abs() < 1e-9, "{camera}: {got:?} vs {want:?}");
         }
         // At half the resolution (B-Human's lower camera may run at 320 × 240) the same
         // camera scaled.
@@ -123,8 +120,8 @@ fn a_fresh_bhuman_intrinsics_file_is_naocalibs_intrinsics_through_bhumans_code()
             prior.width as f64 / 2.0,
             prior.height as f64 / 2.0,
         );
-        for k in 0..4 {
-            assert!((half[k] - want[k] / 2.0).abs() < 1e-9);
+        for (h, w) in half.iter().zip(&want) {
+            assert!((h - w / 2.0).abs() < 1e-9);
         }
     }
     // import reads it back as the prior of a calibration held at it …
@@ -136,8 +133,8 @@ fn a_fresh_bhuman_intrinsics_file_is_naocalibs_intrinsics_through_bhumans_code()
     for camera in CameraId::ALL {
         let i = imported.intrinsics(camera).unwrap();
         let want = cal.intrinsics(camera).unwrap().value;
-        for k in 0..4 {
-            assert!((i.value[k] - want[k]).abs() < 1e-9, "{camera}: {i:?}");
+        for (v, w) in i.value.iter().zip(&want) {
+            assert!((v - w).abs() < 1e-9, "{camera}: {i:?}");
         }
         assert!(
             i.calibrated.iter().all(|c| !c),
@@ -256,11 +253,8 @@ fn solve_with_free_intrinsics_exports_the_intrinsics_file() {
     for camera in CameraId::ALL {
         let want = own.intrinsics(camera).unwrap();
         let got = bhuman_camera(&text, camera, 640.0, 480.0);
-        for k in 0..4 {
-            assert!(
-                (got[k] - want.value[k]).abs() < 1e-6,
-                "{camera}: {got:?} {want:?}"
-            );
+        for (g, w) in got.iter().zip(&want.value) {
+            assert!((g - w).abs() < 1e-6, "{camera}: {got:?} {want:?}");
         }
     }
 }
