@@ -1,11 +1,12 @@
 //! How long `naocalib plan` takes to design a paper-sized schedule (144 captures of the
-//! paper's 21 parameters, the default pool), and with compliance and play freed too; and
-//! how long ordering its 144 captures along collision-free moves takes of that.
+//! paper's 21 parameters, the default pool), with compliance and play freed too, and with
+//! both cameras and their intrinsics (`--families paper,intrinsics --cameras lower,upper`);
+//! and how long ordering its 144 captures along collision-free moves takes of that.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 
 use naocalib::model::JointAngles;
-use naocalib::model::{Family, FixedSet, Model};
+use naocalib::model::{CameraId, Family, FixedSet, Model};
 use naocalib::plan::{PlanOptions, collision::BodyModel, order, plan, route};
 
 fn bench(c: &mut Criterion) {
@@ -39,6 +40,22 @@ fn bench(c: &mut Criterion) {
             ..PlanOptions::default()
         };
         b.iter(|| plan(&model, &options).expect("plan"));
+    });
+    group.bench_function("plan_144_both_cameras_intrinsics", |b| {
+        let both = Model {
+            upper_camera: Some(naocalib::sim::camera::CameraPreset::V6.camera()),
+            ..Model::default()
+        };
+        let mut fixed = FixedSet::default();
+        for p in Family::Intrinsics.params() {
+            fixed.set(p, false);
+        }
+        let options = PlanOptions {
+            fixed,
+            cameras: CameraId::ALL.to_vec(),
+            ..PlanOptions::default()
+        };
+        b.iter(|| plan(&both, &options).expect("plan"));
     });
     group.finish();
 }

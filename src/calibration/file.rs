@@ -38,11 +38,11 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use super::{
-    COMPENSATION, Calibration, Entry, IMPORT_SOLVER, Origin, Posture, Standing, stand_torque,
+    COMPENSATION, Calibration, Entry, IMPORT_SOLVER, Origin, Posture, Prior, Standing, stand_torque,
 };
 use crate::dataset::{AngleKind, AngleSource};
 use crate::export::{ExportError, parse_error};
-use crate::model::{PAPER_PARAMETERS, Param};
+use crate::model::{CameraId, PAPER_PARAMETERS, Param};
 use crate::report::ResultJson;
 
 /// The `format` key of the TOML and JSON calibration files.
@@ -74,6 +74,7 @@ impl Calibration {
                 .into_iter()
                 .map(|(p, f)| (p.name(), f))
                 .collect(),
+            cameras: &self.cameras,
         }
     }
 
@@ -197,6 +198,9 @@ struct CalibrationOut<'a> {
     parameters: Entries<'a>,
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     standing: BTreeMap<&'a str, StandingFile>,
+    /// The a-priori intrinsics of the cameras whose intrinsics it carries.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    cameras: &'a BTreeMap<CameraId, Prior>,
 }
 
 /// One standing leg offset as written (`[standing.<offset>]`): its value (derived from the
@@ -323,6 +327,8 @@ struct CalibrationIn {
     /// Values derived from the parameters on writing ([`Calibration::standing_offset`]);
     /// their one-sigma and lying torques are kept.
     standing: Option<BTreeMap<String, StandingIn>>,
+    /// The a-priori intrinsics of the cameras whose intrinsics it carries.
+    cameras: Option<BTreeMap<CameraId, Prior>>,
 }
 
 impl CalibrationIn {
@@ -347,13 +353,26 @@ impl CalibrationIn {
             (name, e.value, e.std, e.unit, e.fixed, determined)
         });
         let fit = (self.solver, self.dataset, self.converged, self.rms_px);
-        assemble(
+        let cameras = self.cameras.unwrap_or_default();
+        if let Some(camera) = cameras.iter().find(|(_, p)| !p.is_valid()) {
+            return Err(parse_error(
+                path,
+                format!(
+                    "cameras.{}: the image size and focal lengths must be positive and every \
+                     number finite",
+                    camera.0
+                ),
+            ));
+        }
+        let mut cal = assemble(
             fit,
             (self.angles, self.corrected_by),
             entries.collect(),
             self.standing,
             path,
-        )
+        )?;
+        cal.cameras = cameras;
+        Ok(cal)
     }
 }
 
@@ -397,6 +416,7 @@ fn assemble(
         angles,
         posture: Posture::Standing,
         standing: standing_from(standing, path)?,
+        cameras: BTreeMap::new(),
     })
 }
 

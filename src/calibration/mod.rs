@@ -4,6 +4,7 @@
 //! every export read; [`mod@file`] is naocalib's own calibration file, TOML or JSON.
 
 pub mod file;
+pub mod intrinsics;
 pub mod standing;
 
 use std::collections::BTreeMap;
@@ -11,12 +12,13 @@ use std::path::Path;
 
 use crate::dataset::{AngleKind, AngleSource};
 use crate::export::{ExportError, parse_error};
-use crate::model::Param;
+use crate::model::{CameraId, Model, Param};
 use crate::solve::Solution;
 
 pub use file::{
     FORMAT, StandingFile, StandingIn, UniqueMap, VERSION, read_calibration, read_start_from,
 };
+pub use intrinsics::{Intrinsics, Prior};
 pub use standing::{EXTRAPOLATION_LIMIT, STANDING_TARGET_DEG, Standing, stand_torque};
 
 /// The meaning of the offsets, as stated in every exported file.
@@ -101,6 +103,10 @@ pub struct Calibration {
     /// What each standing leg offset rests on (its one-sigma, the lying torques its
     /// compliance was estimated from), by leg offset; empty when not known.
     pub standing: BTreeMap<Param, Standing>,
+    /// The a-priori intrinsics of each camera whose intrinsics the calibration carries
+    /// (estimated, or imported from a robot's file): what its corrections `Fx` … `Cy`
+    /// (`UpperFx` … `UpperCy`) are relative to. Empty when it carries none.
+    pub cameras: BTreeMap<CameraId, Prior>,
 }
 
 /// The posture a robot file's leg offsets are for (`naocalib export --posture`).
@@ -146,6 +152,7 @@ impl Calibration {
             angles: None,
             posture: Posture::Standing,
             standing: BTreeMap::new(),
+            cameras: BTreeMap::new(),
         };
         let sigmas: Vec<(Param, f64)> = cal
             .parameters
@@ -156,6 +163,81 @@ impl Calibration {
             cal.standing.entry(p).or_default().std = Some(std);
         }
         cal
+    }
+
+    /// The calibration with the a-priori intrinsics of `model` for every camera whose
+    /// intrinsics it estimated ([`Calibration::cameras`]).
+    pub fn with_cameras(mut self, model: &Model) -> Self {
+        let estimated = |p: Param| self.get(p).is_some_and(|e| !e.fixed);
+        self.cameras = intrinsics::priors_of(model, estimated)
+            .into_iter()
+            .collect();
+        self
+    }
+
+    /// `camera`'s calibrated intrinsics: its prior ([`Calibration::cameras`]) plus the
+    /// corrections, with their one-sigma; `None` when the calibration carries none for it.
+    pub fn intrinsics(&self, camera: CameraId) -> Option<Intrinsics> {
+        let prior = *self.cameras.get(&camera)?;
+        let params = intrinsics::params(camera);
+        let entry = params.map(|p| self.get(p));
+        let base = prior.values();
+        Some(Intrinsics {
+            camera,
+            prior,
+            value: std::array::from_fn(|k| base[k] + entry[k].map_or(0.0, |e| e.value)),
+            std: entry.map(|e| e.map_or(Some(0.0), |e| e.std)),
+            calibrated: params.map(|p| self.determined_here(p).is_some()),
+        })
+    }
+
+    /// The start values this calibration gives a problem of `model` (report units): every
+    /// determined parameter, the intrinsics corrections of a camera it carries a prior for
+    /// made relative to `model`'s a-priori intrinsics of that camera (scaled to its image
+    /// size), as `--start-from` and `plan --around` take them.
+    pub fn start_values(&self, model: &Model) -> Vec<(Param, f64)> {
+        let mut values: Vec<(Param, f64)> = self
+            .parameters
+            .iter()
+            .filter(|e| e.is_determined())
+            .map(|e| (e.param, e.value))
+            .collect();
+        let (intrinsics, undetermined) = self.intrinsics_relative_to(model);
+        values
+            .retain(|(p, _)| !undetermined.contains(p) && !intrinsics.iter().any(|(q, _)| q == p));
+        values.extend(intrinsics);
+        values
+    }
+
+    /// The intrinsics corrections (px) of every camera this calibration carries a prior
+    /// for, made relative to `model`'s a-priori intrinsics of that camera (scaled to its
+    /// image size); and the corrections it carries but does not determine.
+    pub fn intrinsics_relative_to(&self, model: &Model) -> (Vec<(Param, f64)>, Vec<Param>) {
+        let mut values = Vec::new();
+        let mut undetermined = Vec::new();
+        for (&camera, prior) in &self.cameras {
+            let Some(intrinsics) = self.intrinsics(camera) else {
+                continue;
+            };
+            let own = model.intrinsics(camera);
+            let scaled = Prior {
+                fx: intrinsics.value[0],
+                fy: intrinsics.value[1],
+                cx: intrinsics.value[2],
+                cy: intrinsics.value[3],
+                ..*prior
+            }
+            .scaled_to(own.width, own.height);
+            let base = Prior::of(own).values();
+            for (k, p) in intrinsics::params(camera).into_iter().enumerate() {
+                if self.get(p).is_none_or(|e| e.is_determined()) {
+                    values.push((p, scaled[k] - base[k]));
+                } else {
+                    undetermined.push(p);
+                }
+            }
+        }
+        (values, undetermined)
     }
 
     /// The value a robot file carries for `param` in [`Calibration::posture`]: the standing

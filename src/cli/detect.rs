@@ -54,7 +54,11 @@ pub struct DetectArgs {
 ///
 /// With `corrected` angles (`[joints] angles = "corrected"`) the robot's joint offsets are
 /// already in the logged angles, and the prediction keeps them at zero.
-pub fn read_start(path: &Path, corrected: bool) -> Result<[f64; PARAMETER_COUNT]> {
+pub fn read_start(
+    path: &Path,
+    model: &naocalib::model::Model,
+    corrected: bool,
+) -> Result<[f64; PARAMETER_COUNT]> {
     let calibration = naocalib::export::read_start_from(path)
         .with_context(|| format!("--start-from {}", path.display()))?;
     let mut problem_values = [0.0; PARAMETER_COUNT];
@@ -63,6 +67,10 @@ pub fn read_start(path: &Path, corrected: bool) -> Result<[f64; PARAMETER_COUNT]
         if !(corrected && joint) {
             problem_values[e.param.index()] = e.param.unit().from_report(e.value);
         }
+    }
+    // Intrinsics the calibration carries with their prior, relative to this dataset's.
+    for (p, value) in calibration.intrinsics_relative_to(model).0 {
+        problem_values[p.index()] = value;
     }
     Ok(problem_values)
 }
@@ -168,7 +176,7 @@ pub fn detect_for_solve(
 ) -> Result<()> {
     let options = DetectOptions {
         params: start_from
-            .map(|p| read_start(p, corrected(dataset)))
+            .map(|p| read_start(p, &dataset.model, corrected(dataset)))
             .transpose()?,
         ..DetectOptions::default()
     };
@@ -232,7 +240,7 @@ pub fn run(args: &DetectArgs) -> Result<ExitCode> {
         params: args
             .start_from
             .as_deref()
-            .map(|p| read_start(p, corrected(&dataset)))
+            .map(|p| read_start(p, &dataset.model, corrected(&dataset)))
             .transpose()?,
         repredict: !args.no_repredict,
         ..DetectOptions::default()

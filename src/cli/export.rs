@@ -182,7 +182,7 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
         targets.push((format, path.clone()));
     }
     if let Some(dir) = &args.dir {
-        targets.extend(export::every_file(dir));
+        targets.extend(export::every_file(&calibration, dir));
     }
     // The library's outputs policy: every path is checked before any file is written, a
     // result that is not a calibration becomes no robot file without --allow-unconverged,

@@ -210,8 +210,8 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
     if let Some(path) = &args.around {
         let current = naocalib::export::read_calibration(path)
             .with_context(|| format!("--around {}", path.display()))?;
-        for e in current.parameters.iter().filter(|e| e.is_determined()) {
-            options.feasibility.centre[e.param.index()] = e.param.unit().from_report(e.value);
+        for (p, value) in current.start_values(&model) {
+            options.feasibility.centre[p.index()] = p.unit().from_report(value);
         }
     }
     let start = Instant::now();

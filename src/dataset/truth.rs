@@ -108,9 +108,10 @@ fn non_finite(key: &str, value: &toml::Value) -> Result<(), (String, f64)> {
 }
 
 /// `truth.toml` for `truth` (already validated): every parameter in [`Param::ALL`] order,
-/// in report units, then the `[simulation]` table. The upper camera's parameters are
-/// written only for a dataset with upper-camera captures (`upper`) or when one is not zero
-/// (a parameter left out reads as zero).
+/// in report units, then the `[simulation]` table. The upper camera's rotation offsets are
+/// written only for a dataset with upper-camera captures (`upper`) or when one is not zero,
+/// its intrinsics (`UpperFx` … `UpperK2`) only when one is not zero (a parameter left out
+/// reads as zero).
 pub(crate) fn render(truth: &Truth, upper: bool) -> Result<String, toml::ser::Error> {
     let upper = upper
         || Family::UpperCamera
@@ -123,8 +124,14 @@ pub(crate) fn render(truth: &Truth, upper: bool) -> Result<String, toml::ser::Er
     );
     let _ = writeln!(s);
     let _ = writeln!(s, "[parameters]");
+    // The upper camera's intrinsics: only when one is not zero.
+    let upper_projection = Param::ALL
+        .into_iter()
+        .any(|p| p.is_upper_projection() && truth.values[p.index()] != 0.0);
     for param in Param::ALL {
-        if param.family() == Family::UpperCamera && !upper {
+        if (param.family() == Family::UpperCamera && !upper)
+            || (param.is_upper_projection() && !upper_projection)
+        {
             continue;
         }
         let value = report_value(param.unit(), truth.values[param.index()]);

@@ -489,3 +489,239 @@ fn update_cameras(text: &str, path: &Path, cal: &Calibration) -> Result<String, 
     }
     Ok(cfg::splice(text, edits))
 }
+
+/// The cameras in the order of B-Human's `CameraInfo::Camera` (`upper`, `lower`), which
+/// its enum-indexed `cameras` arrays follow.
+const BHUMAN_CAMERAS: [CameraId; 2] = [CameraId::Upper, CameraId::Lower];
+
+/// B-Human's default intrinsics of both cameras (`Config/Robots/Default/
+/// cameraIntrinsics.cfg`, Code Release 2025, commit d89d603f): opening angles 54.7° ×
+/// 42.5°, optical centre at the image's middle.
+const BHUMAN_DEFAULT_INTRINSICS: [f64; 4] = [54.7, 42.5, 0.5, 0.5];
+
+/// The image size naocalib reads B-Human's intrinsics at (the NAO V6's 640 × 480; B-Human's
+/// values are relative, so any size of that aspect gives the same camera).
+const BHUMAN_IMAGE: (u32, u32) = (640, 480);
+
+/// The keys of one camera's intrinsics below `cameras.<camera>`, in the order of
+/// [`intrinsics_values`].
+const INTRINSICS_KEYS: [&[&str]; 4] = [
+    &["openingAngleWidth"],
+    &["openingAngleHeight"],
+    &["opticalCenter", "x"],
+    &["opticalCenter", "y"],
+];
+
+/// What B-Human's file stores for calibrated intrinsics `i`: the opening angles (deg) and
+/// the optical centre relative to the image size.
+fn intrinsics_values(i: &crate::calibration::Intrinsics) -> [f64; 4] {
+    let [w, h] = i.opening_angles();
+    let [x, y] = i.relative_centre();
+    [w, h, x, y]
+}
+
+/// The text of the value `k` of [`INTRINSICS_KEYS`]: an angle in degrees or a number.
+fn intrinsics_text(k: usize, value: f64) -> String {
+    if k < 2 { deg(value) } else { num(value) }
+}
+
+/// B-Human's `cameraIntrinsics.cfg` as its Code Release 2025 reads it (SPQR's too): each
+/// camera's opening angles and optical centre relative to the image size.
+///
+/// B-Human's `CameraProvider::setupCamera` (`Src/Modules/Infrastructure/CameraProvider/
+/// CameraProvider.cpp`, lines 212–217, commit d89d603f) takes `openingAngleWidth`,
+/// `openingAngleHeight` and `opticalCenter` times the image's width and height, and
+/// `CameraInfo::updateFocalLength` (`Src/Representations/Infrastructure/CameraInfo.cpp`,
+/// lines 14 and 18) makes the focal lengths `width / (2·tan(openingAngleWidth / 2))` and
+/// `height / (2·tan(openingAngleHeight / 2))`; `Transformation::imageToRobot`
+/// (`Src/Tools/Math/Transformation.cpp`, line 74) looks along `(1, (cx − u)/f, (cy − v)/f_h)`
+/// from pixel `(u, v)`, the centre of the top-left pixel at 0 as in naocalib. So the file
+/// stores `2·atan(W / (2·fx))`, `2·atan(H / (2·fy))`, `cx / W`, `cy / H` of naocalib's
+/// intrinsics (W × H the dataset's image), the upper camera first
+/// (`CameraInfo::Camera` is `upper, lower`). SPQR's 2024 code
+/// (`Src/Modules/Infrastructure/CameraProvider/CameraProvider.cpp`, line 295, commit
+/// e2e482a7) reads the same file the same way; NomadZ keeps B-Human's older per-camera
+/// `CameraInfo` files instead.
+#[derive(Debug, Clone, Copy)]
+pub struct Intrinsics;
+
+impl Format for Intrinsics {
+    fn name(&self) -> &'static str {
+        "bhuman-intrinsics"
+    }
+    fn file(&self) -> &'static str {
+        "cameraIntrinsics.cfg"
+    }
+    fn description(&self) -> &'static str {
+        "B-Human (2025), SPQR: cameras.{upper,lower} opening angles in deg and optical centre \
+         relative to the image size"
+    }
+    fn doc_row(&self) -> DocRow {
+        DocRow {
+            carries: "`cameras = { upper = {openingAngleWidth; openingAngleHeight; opticalCenter \
+                      = {x; y;};}; lower = {…}; };` (B-Human Code Release 2025, SPQR): the \
+                      cameras' intrinsics, written only for a calibration that estimated them",
+            units: "deg; centre relative to the image size",
+            axes: "`f = W / (2·tan(openingAngleWidth/2))`, `f_h = H / (2·tan(openingAngleHeight/2))`, \
+                   centre `(x·W, y·H)` (`CameraInfo.cpp:14, 18`, `CameraProvider.cpp:212–217`), \
+                   pixel centres at integers as naocalib (`Transformation.cpp:74`)",
+        }
+    }
+    fn recognise(&self, code: &str) -> bool {
+        has_key(code, "cameras") && has_key(code, "openingAngleWidth")
+    }
+    fn intrinsics(&self) -> bool {
+        true
+    }
+    fn write(&self, cal: &Calibration) -> String {
+        let mut s = String::new();
+        header(
+            &mut s,
+            "//",
+            cal,
+            "opening angles in degrees (deg), optical centre relative to the image size",
+        );
+        let _ = writeln!(s, "cameras = {{");
+        for camera in BHUMAN_CAMERAS {
+            let values = match cal.intrinsics(camera) {
+                Some(i) => intrinsics_values(&i),
+                None => {
+                    let _ = writeln!(
+                        s,
+                        "  // {camera}: not calibrated here, B-Human's default (`--update` keeps \
+                         a robot's own)"
+                    );
+                    BHUMAN_DEFAULT_INTRINSICS
+                }
+            };
+            let _ = writeln!(s, "  {} = {{", camera.name());
+            let _ = writeln!(
+                s,
+                "    openingAngleWidth = {};",
+                intrinsics_text(0, values[0])
+            );
+            let _ = writeln!(
+                s,
+                "    openingAngleHeight = {};",
+                intrinsics_text(1, values[1])
+            );
+            let _ = writeln!(
+                s,
+                "    opticalCenter = {{ x = {}; y = {}; }};",
+                intrinsics_text(2, values[2]),
+                intrinsics_text(3, values[3])
+            );
+            let _ = writeln!(s, "  }};");
+        }
+        let _ = writeln!(s, "}};");
+        s
+    }
+    fn read(&self, text: &str, path: &Path) -> Result<Imported, ExportError> {
+        // Its values are the cameras' intrinsics ([`Format::read_cameras`]).
+        self.read_cameras(text, path).map(|_| Vec::new())
+    }
+    fn read_cameras(
+        &self,
+        text: &str,
+        path: &Path,
+    ) -> Result<Vec<(CameraId, crate::calibration::Prior)>, ExportError> {
+        let root = cfg::parse(text, path)?;
+        let mut out = Vec::new();
+        for camera in BHUMAN_CAMERAS {
+            let Some(found) = intrinsics_at(&root, path, camera)? else {
+                continue;
+            };
+            let [w, h, x, y] = found.map(|(v, _, _)| v);
+            let (width, height) = BHUMAN_IMAGE;
+            use crate::calibration::intrinsics::focal_length;
+            out.push((
+                camera,
+                crate::calibration::Prior {
+                    width,
+                    height,
+                    fx: focal_length(width, w),
+                    fy: focal_length(height, h),
+                    cx: x * width as f64,
+                    cy: y * height as f64,
+                },
+            ));
+        }
+        if out.is_empty() {
+            return Err(parse_error(path, "no cameras.upper nor cameras.lower"));
+        }
+        Ok(out)
+    }
+    fn update(&self, text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
+        let root = cfg::parse(text, path)?;
+        let mut edits = Vec::new();
+        for camera in BHUMAN_CAMERAS {
+            let Some(i) = cal.intrinsics(camera) else {
+                continue;
+            };
+            if !i.calibrated.iter().any(|c| *c) {
+                continue;
+            }
+            let found = intrinsics_at(&root, path, camera)?
+                .ok_or_else(|| parse_error(path, format!("cameras.{}: missing", camera.name())))?;
+            let values = intrinsics_values(&i);
+            // The opening angles follow the focal lengths, the centre its own coordinate.
+            for (k, (_, start, end)) in found.into_iter().enumerate() {
+                if i.calibrated[k] {
+                    edits.push((start, end, intrinsics_text(k, values[k])));
+                }
+            }
+        }
+        Ok(cfg::splice(text, edits))
+    }
+    fn file_names(&self) -> NameRule {
+        NameRule::Exactly("cameraintrinsics.cfg")
+    }
+}
+
+/// A value with the byte span of its text.
+type Spanned = (f64, usize, usize);
+
+/// The four intrinsics values of `camera` in a parsed `cameraIntrinsics.cfg` (opening
+/// angles in deg, relative centre), each checked plausible, with their spans; `None` when
+/// the file has no `cameras.<camera>`.
+fn intrinsics_at(
+    root: &cfg::Value,
+    path: &Path,
+    camera: CameraId,
+) -> Result<Option<[Spanned; 4]>, ExportError> {
+    let base = ["cameras", camera.name()];
+    if root.get(&base).is_none() {
+        return Ok(None);
+    }
+    let mut out = [(0.0, 0, 0); 4];
+    for (k, keys) in INTRINSICS_KEYS.iter().enumerate() {
+        let at: Vec<&str> = base.iter().chain(keys.iter()).copied().collect();
+        let key = at.join(".");
+        let v = root
+            .get(&at)
+            .ok_or_else(|| parse_error(path, format!("{key}: missing")))?;
+        let text = v.scalar().ok_or_else(|| {
+            parse_error(path, format!("line {}: {key}: expected a number", v.line))
+        })?;
+        let (value, ok) = if k < 2 {
+            let deg = cfg::angle_deg(text);
+            (deg, deg.is_some_and(|d| d > 10.0 && d < 150.0))
+        } else {
+            let x = cfg::number(text);
+            (x, x.is_some_and(|x| (0.0..=1.0).contains(&x)))
+        };
+        let Some(value) = value.filter(|_| ok) else {
+            let expected = if k < 2 {
+                "an opening angle of 10 … 150deg"
+            } else {
+                "a relative centre of 0 … 1"
+            };
+            return Err(parse_error(
+                path,
+                format!("line {}: {key}: '{text}' is not {expected}", v.line),
+            ));
+        };
+        out[k] = (value, v.start, v.end);
+    }
+    Ok(Some(out))
+}

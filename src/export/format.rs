@@ -76,6 +76,22 @@ pub trait Format: Sync {
     fn file_names(&self) -> NameRule {
         NameRule::None
     }
+    /// Whether the file carries the cameras' intrinsics only: a directory export writes it
+    /// only for a calibration that carries intrinsics ([`Calibration::cameras`]), and a
+    /// fresh file of it is refused for one that does not.
+    fn intrinsics(&self) -> bool {
+        false
+    }
+    /// The cameras' intrinsics a file of this format holds (`naocalib import`), each as
+    /// the prior of a calibration held at them; none by default.
+    fn read_cameras(
+        &self,
+        text: &str,
+        path: &Path,
+    ) -> Result<Vec<(crate::model::CameraId, crate::calibration::Prior)>, ExportError> {
+        let _ = (text, path);
+        Ok(Vec::new())
+    }
 }
 
 impl dyn Format + '_ {
@@ -289,6 +305,7 @@ mod tests {
                 angles: None,
                 posture: super::super::Posture::Lying,
                 standing: Default::default(),
+                cameras: Default::default(),
             };
             let update = f.update("", path, &cal).unwrap_err().to_string();
             assert!(update.contains("--update is not supported"), "{update}");

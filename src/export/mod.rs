@@ -102,6 +102,7 @@ pub static FORMATS: &[&dyn Format] = &[
     &bhuman::Camera,
     &bhuman::Camera2016,
     &bhuman::Joints,
+    &bhuman::Intrinsics,
     &hulks::Head,
     &hulks::Body,
     &naoth::Camera,
@@ -149,6 +150,17 @@ pub enum ExportError {
              file: give the robot's file with --update FILE", path.display()
     )]
     NeedsUpdate {
+        /// The file not written.
+        path: PathBuf,
+        /// The format's name.
+        format: &'static str,
+    },
+    /// A file of the cameras' intrinsics for a calibration that carries none.
+    #[error(
+        "not writing {}: {format}: the calibration carries no camera intrinsics (solve with \
+         --free intrinsics)", path.display()
+    )]
+    NoIntrinsics {
         /// The file not written.
         path: PathBuf,
         /// The format's name.

@@ -6,7 +6,10 @@ use super::{
     Calibration, Entry, ExportError, Format, Imported, Posture, names, parse_error, recognised,
     source,
 };
-use crate::model::Param;
+use std::collections::BTreeMap;
+
+use crate::calibration::Prior;
+use crate::model::{CameraId, Param};
 
 /// One file `naocalib import` read: its path, format name and how many values it held.
 pub type FileRead = (PathBuf, &'static str, usize);
@@ -22,8 +25,31 @@ pub fn import_calibration(
 ) -> Result<(Calibration, Vec<FileRead>), ExportError> {
     let mut values: Vec<Option<(f64, usize)>> = vec![None; Param::ALL.len()];
     let mut read = Vec::new();
+    let mut cameras: BTreeMap<CameraId, (Prior, usize)> = BTreeMap::new();
     for (k, file) in files.iter().enumerate() {
         let (format, imported) = import(file, format)?;
+        // The cameras' intrinsics the file holds, held at them.
+        let held = format.read_cameras(&source::read(file)?.text, file)?;
+        for (camera, prior) in &held {
+            if let Some((_, other)) = cameras.get(camera) {
+                return Err(parse_error(
+                    file,
+                    format!(
+                        "the {camera} camera's intrinsics are also in {}",
+                        files[*other].display()
+                    ),
+                ));
+            }
+            cameras.insert(*camera, (*prior, k));
+        }
+        let mut imported = imported;
+        for (camera, _) in &held {
+            for p in crate::calibration::intrinsics::params(*camera) {
+                if !imported.iter().any(|(q, _)| *q == p) {
+                    imported.push((p, 0.0));
+                }
+            }
+        }
         for (p, v) in &imported {
             if let Some((_, other)) = values[p.index()] {
                 return Err(parse_error(
@@ -67,6 +93,7 @@ pub fn import_calibration(
         angles: None,
         posture: Posture::Standing,
         standing: Default::default(),
+        cameras: cameras.into_iter().map(|(c, (p, _))| (c, p)).collect(),
     };
     Ok((cal, read))
 }

@@ -54,6 +54,12 @@ pub fn check_files(
     }
     for (format, path) in files {
         check_fresh(cal, *format, path)?;
+        if format.intrinsics() && cal.cameras.is_empty() {
+            return Err(ExportError::NoIntrinsics {
+                path: path.clone(),
+                format: format.name(),
+            });
+        }
         check_writable(path, options)?;
     }
     Ok(())
@@ -115,9 +121,15 @@ pub enum Withheld {
     RobotFiles(Vec<String>),
 }
 
-/// Every format of [`FORMATS`] with its file in `dir` ([`Format::file`]).
-pub fn every_file(dir: &Path) -> Vec<(&'static dyn Format, PathBuf)> {
-    FORMATS.iter().map(|&f| (f, dir.join(f.file()))).collect()
+/// Every format of [`FORMATS`] with its file in `dir` ([`Format::file`]) that `cal` has
+/// something for: the files of the cameras' intrinsics ([`Format::intrinsics`]) only when
+/// it carries intrinsics.
+pub fn every_file(cal: &Calibration, dir: &Path) -> Vec<(&'static dyn Format, PathBuf)> {
+    FORMATS
+        .iter()
+        .filter(|f| !f.intrinsics() || !cal.cameras.is_empty())
+        .map(|&f| (f, dir.join(f.file())))
+        .collect()
 }
 
 /// The files a directory export of `cal` into `dir` writes under the outputs policy
@@ -132,7 +144,7 @@ pub fn dir_files(cal: &Calibration, dir: &Path) -> (Vec<(&'static dyn Format, Pa
     } else {
         Withheld::Nothing
     };
-    let files = every_file(dir)
+    let files = every_file(cal, dir)
         .into_iter()
         .filter(|(format, _)| match withheld {
             Withheld::Nothing => true,
@@ -152,5 +164,5 @@ pub fn export_all(
     dir: &Path,
     options: &WriteOptions,
 ) -> Result<Vec<PathBuf>, ExportError> {
-    write_files(cal, &every_file(dir), Some(dir), options, false)
+    write_files(cal, &every_file(cal, dir), Some(dir), options, false)
 }

@@ -117,10 +117,17 @@ pub fn bound(param: Param) -> Bound {
             "an angle offset beyond ±30° is no mounting or encoder error",
         ),
         (Family::Paper, _) => sym(50.0, "the sandal is strapped to the foot"),
-        (Family::Intrinsics, _) if matches!(param, Param::Fx | Param::Fy) => sym(
-            280.0,
-            "the focal length must stay positive (half of the smallest NAO focal length)",
-        ),
+        (Family::Intrinsics, _)
+            if matches!(
+                param,
+                Param::Fx | Param::Fy | Param::UpperFx | Param::UpperFy
+            ) =>
+        {
+            sym(
+                280.0,
+                "the focal length must stay positive (half of the smallest NAO focal length)",
+            )
+        }
         (Family::Intrinsics, _) => sym(160.0, "the principal point must stay in the image"),
         (Family::Distortion, _) => sym(1.0, "the NAO's lenses have |k| below 0.2"),
         (Family::Links, _) => sym(

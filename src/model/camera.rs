@@ -1,7 +1,8 @@
 //! The NAO's two cameras ([`CameraId`]), the pinhole camera with optional OpenCV
-//! distortion, and its projection as data ([`Projection`]): the lower camera's intrinsics
-//! and first two distortion coefficients may carry calibration parameters (families
-//! `intrinsics` and `distortion`, see docs/MODEL.md).
+//! distortion, and its projection as data ([`Projection`]): each camera's intrinsics and
+//! first two distortion coefficients may carry calibration parameters (families
+//! `intrinsics` and `distortion`: `Fx` … `K2` for the lower camera, `UpperFx` … `UpperK2`
+//! for the upper one; see docs/MODEL.md).
 
 use super::chain::Affine;
 use super::parameters::{PARAMETER_COUNT, Param};
@@ -56,6 +57,29 @@ impl CameraId {
                 Param::UpperCamYaw,
                 Param::UpperCamPitch,
                 Param::UpperCamRoll,
+            ],
+        }
+    }
+
+    /// The camera's intrinsics and distortion corrections, in the order fx, fy, cx, cy,
+    /// k1, k2 (`Fx` … `K2` or `UpperFx` … `UpperK2`).
+    pub fn projection_params(self) -> [Param; 6] {
+        match self {
+            CameraId::Lower => [
+                Param::Fx,
+                Param::Fy,
+                Param::Cx,
+                Param::Cy,
+                Param::K1,
+                Param::K2,
+            ],
+            CameraId::Upper => [
+                Param::UpperFx,
+                Param::UpperFy,
+                Param::UpperCx,
+                Param::UpperCy,
+                Param::UpperK1,
+                Param::UpperK2,
             ],
         }
     }
@@ -126,8 +150,7 @@ impl Camera {
         self.constant_projection().project::<T>(&[], p)
     }
 
-    /// The projection with no parameter attached (the a-priori intrinsics as constants):
-    /// the upper camera's, whose intrinsics are not calibrated.
+    /// The projection with no parameter attached (the a-priori intrinsics as constants).
     pub fn constant_projection(&self) -> Projection {
         let [k1, k2, p1, p2, k3] = self.distortion;
         let c = Affine::constant;
@@ -147,15 +170,36 @@ impl Camera {
     /// The projection as data, with the intrinsics and distortion parameters (Fx, Fy, Cx,
     /// Cy, K1, K2) added to the a-priori values: the lower camera's.
     pub fn projection(&self) -> Projection {
+        self.projection_of(CameraId::Lower)
+    }
+
+    /// The projection as data of `camera` with these a-priori intrinsics: its six
+    /// corrections ([`CameraId::projection_params`]) added to the a-priori values.
+    pub fn projection_of(&self, camera: CameraId) -> Projection {
+        let [fx, fy, cx, cy, k1, k2] = camera.projection_params();
         Projection {
-            fx: Affine::constant(self.fx).plus(Param::Fx, 1.0),
-            fy: Affine::constant(self.fy).plus(Param::Fy, 1.0),
-            cx: Affine::constant(self.cx).plus(Param::Cx, 1.0),
-            cy: Affine::constant(self.cy).plus(Param::Cy, 1.0),
-            k1: Affine::constant(self.distortion[0]).plus(Param::K1, 1.0),
-            k2: Affine::constant(self.distortion[1]).plus(Param::K2, 1.0),
+            fx: Affine::constant(self.fx).plus(fx, 1.0),
+            fy: Affine::constant(self.fy).plus(fy, 1.0),
+            cx: Affine::constant(self.cx).plus(cx, 1.0),
+            cy: Affine::constant(self.cy).plus(cy, 1.0),
+            k1: Affine::constant(self.distortion[0]).plus(k1, 1.0),
+            k2: Affine::constant(self.distortion[1]).plus(k2, 1.0),
             ..self.constant_projection()
         }
+    }
+
+    /// These intrinsics with `camera`'s corrections in `params` (internal units, indexed
+    /// by [`Param::index`]) added: the true camera of a simulated robot.
+    pub fn corrected(&self, camera: CameraId, params: &[f64]) -> Camera {
+        let [fx, fy, cx, cy, k1, k2] = camera.projection_params().map(|p| params[p.index()]);
+        let mut out = *self;
+        out.fx += fx;
+        out.fy += fy;
+        out.cx += cx;
+        out.cy += cy;
+        out.distortion[0] += k1;
+        out.distortion[1] += k2;
+        out
     }
 
     /// Removes the lens distortion: the undistorted normalised coordinates `(a, b)`

@@ -115,13 +115,10 @@ impl Model {
         }
     }
 
-    /// The projection of `camera` as data: the lower camera's carries the intrinsics and
-    /// distortion parameters, the upper camera's is its a-priori intrinsics.
+    /// The projection of `camera` as data: its a-priori intrinsics with its intrinsics and
+    /// distortion parameters added (`Fx` … `K2`, `UpperFx` … `UpperK2`).
     pub fn projection(&self, camera: CameraId) -> Projection {
-        match camera {
-            CameraId::Lower => self.camera.projection(),
-            CameraId::Upper => self.intrinsics(camera).constant_projection(),
-        }
+        self.intrinsics(camera).projection_of(camera)
     }
 
     /// Projects every vertex in `vertices` through the capture's camera for parameters
@@ -146,22 +143,12 @@ impl Model {
     /// The camera with the intrinsics and distortion parameters of `params` (internal
     /// units, indexed by [`Param::index`]) added: the true camera of a simulated robot.
     pub fn camera_at(&self, params: &[f64]) -> Camera {
-        let mut camera = self.camera;
-        camera.fx += params[Param::Fx.index()];
-        camera.fy += params[Param::Fy.index()];
-        camera.cx += params[Param::Cx.index()];
-        camera.cy += params[Param::Cy.index()];
-        camera.distortion[0] += params[Param::K1.index()];
-        camera.distortion[1] += params[Param::K2.index()];
-        camera
+        self.intrinsics_at(CameraId::Lower, params)
     }
 
-    /// The true intrinsics of `camera` for the parameters `params`: [`Model::camera_at`]
-    /// for the lower camera, the a-priori intrinsics for the upper one.
+    /// The true intrinsics of `camera` for the parameters `params`: its a-priori
+    /// intrinsics with its corrections added.
     pub fn intrinsics_at(&self, camera: CameraId, params: &[f64]) -> Camera {
-        match camera {
-            CameraId::Lower => self.camera_at(params),
-            CameraId::Upper => *self.intrinsics(camera),
-        }
+        self.intrinsics(camera).corrected(camera, params)
     }
 }

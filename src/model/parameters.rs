@@ -250,6 +250,8 @@ pub enum ParamGroup {
     RightElastic,
     /// UpperCamYaw, UpperCamPitch, UpperCamRoll.
     UpperCamera,
+    /// The upper camera's intrinsics and distortion corrections.
+    UpperProjection,
 }
 
 impl ParamGroup {
@@ -269,6 +271,7 @@ impl ParamGroup {
             ParamGroup::LeftElastic => "left_elastic",
             ParamGroup::RightElastic => "right_elastic",
             ParamGroup::UpperCamera => "upper_camera",
+            ParamGroup::UpperProjection => "upper_projection",
         }
     }
 
@@ -282,7 +285,7 @@ macro_rules! parameters {
     ($($name:ident: $unit:ident, $family:ident, $group:ident $(, $joint:ident)?;)*) => {
         /// One calibration parameter. The first 21 are the paper's, in the order of its
         /// Table 2; the upper camera's three follow, then the extended model's, held fixed
-        /// unless freed.
+        /// unless freed, the upper camera's intrinsics and distortion last.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
         #[repr(usize)]
         pub enum Param { $(#[doc = concat!("Parameter `", stringify!($name), "`.")] $name,)* }
@@ -388,6 +391,12 @@ parameters! {
     RKneePitchPlay: Deg, Play, RightElastic, RKneePitch;
     RAnklePitchPlay: Deg, Play, RightElastic, RAnklePitch;
     RAnkleRollPlay: Deg, Play, RightElastic, RAnkleRoll;
+    UpperFx: Px, Intrinsics, UpperProjection;
+    UpperFy: Px, Intrinsics, UpperProjection;
+    UpperCx: Px, Intrinsics, UpperProjection;
+    UpperCy: Px, Intrinsics, UpperProjection;
+    UpperK1: One, Distortion, UpperProjection;
+    UpperK2: One, Distortion, UpperProjection;
 }
 
 /// Number of parameters the paper estimates (the first ones of [`Param::ALL`]).
@@ -419,6 +428,12 @@ impl Param {
     pub fn fixed_by_default(self) -> bool {
         self.family() != Family::Paper
     }
+
+    /// Whether the parameter corrects the upper camera's intrinsics or distortion
+    /// (`UpperFx` … `UpperK2`): part of a problem only when it has upper-camera captures.
+    pub fn is_upper_projection(self) -> bool {
+        self.group() == ParamGroup::UpperProjection
+    }
 }
 
 impl fmt::Display for Param {
@@ -430,20 +445,28 @@ impl fmt::Display for Param {
 /// Which parameters are held fixed in a solve.
 ///
 /// Besides the mask it remembers which parameters were held on purpose ([`FixedSet::set`],
-/// [`FixedSet::with`], `--fix`): the upper camera's parameters, held by default, are freed
-/// for a dataset with upper-camera captures ([`FixedSet::for_upper_camera`]) unless held on
-/// purpose.
+/// [`FixedSet::with`], `--fix`) and which were asked to be free: the upper camera's
+/// parameters are part of a problem only when it has upper-camera captures
+/// ([`FixedSet::for_upper_camera`]). Its rotation offsets, held by default, are then freed
+/// unless held on purpose; its intrinsics and distortion (`UpperFx` … `UpperK2`) are free
+/// when asked (`--free intrinsics` frees both cameras'), and held whenever there are no
+/// upper-camera captures, whatever was asked.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct FixedSet {
     held: [bool; PARAMETER_COUNT],
     pinned: [bool; PARAMETER_COUNT],
+    wanted: [bool; PARAMETER_COUNT],
+    upper: bool,
 }
 
 impl Default for FixedSet {
     fn default() -> Self {
+        let held = Param::ALL.map(Param::fixed_by_default);
         FixedSet {
-            held: Param::ALL.map(Param::fixed_by_default),
+            held,
             pinned: [false; PARAMETER_COUNT],
+            wanted: held,
+            upper: false,
         }
     }
 }
@@ -471,10 +494,13 @@ impl FixedSet {
         Ok(set)
     }
 
-    /// Holds `param` fixed (on purpose), or frees it.
+    /// Holds `param` fixed (on purpose), or frees it (the upper camera's intrinsics only
+    /// once the set is for a problem with upper-camera captures).
     pub fn set(&mut self, param: Param, fixed: bool) {
-        self.held[param.index()] = fixed;
-        self.pinned[param.index()] = fixed;
+        let i = param.index();
+        self.wanted[i] = fixed;
+        self.pinned[i] = fixed;
+        self.held[i] = fixed || (param.is_upper_projection() && !self.upper);
     }
 
     /// Whether `param` is held fixed.
@@ -483,22 +509,38 @@ impl FixedSet {
     }
 
     /// The set for a problem with (`upper`) or without upper-camera captures: the upper
-    /// camera's parameters are freed when it has some, unless held on purpose, and held
-    /// when it has none (no capture depends on them).
+    /// camera's rotation offsets are freed when it has some, unless held on purpose; its
+    /// intrinsics are free as asked when it has some; all are held when it has none (no
+    /// capture depends on them).
     pub fn for_upper_camera(mut self, upper: bool) -> Self {
+        self.upper = upper;
         for p in Family::UpperCamera.params() {
             self.held[p.index()] = !upper || self.pinned[p.index()];
+        }
+        for p in Param::ALL.into_iter().filter(|p| p.is_upper_projection()) {
+            self.held[p.index()] = !upper || self.wanted[p.index()];
         }
         self
     }
 
-    /// Whether `param` is part of the fitted model: false only for the upper camera's
-    /// parameters of a problem without upper-camera captures (held, and not on purpose),
-    /// which results and reports leave out.
+    /// Whether `param` is part of the fitted model: false for the upper camera's rotation
+    /// offsets of a problem without upper-camera captures (held, and not on purpose), and
+    /// for its intrinsics unless free (or held on purpose in a problem with upper-camera
+    /// captures); results and reports leave those out.
     pub fn in_model(&self, param: Param) -> bool {
-        param.family() != Family::UpperCamera
-            || !self.held[param.index()]
-            || self.pinned[param.index()]
+        let i = param.index();
+        if param.is_upper_projection() {
+            !self.held[i] || (self.pinned[i] && self.upper)
+        } else {
+            param.family() != Family::UpperCamera || !self.held[i] || self.pinned[i]
+        }
+    }
+
+    /// Whether `param` may be freed in this problem (`--model auto`'s candidates, the
+    /// misfit tests): every parameter of the model, and the upper camera's intrinsics when
+    /// the problem has upper-camera captures.
+    pub fn can_free(&self, param: Param) -> bool {
+        self.in_model(param) || (param.is_upper_projection() && self.upper)
     }
 
     /// Whether reports list `param` in their tables: the paper's parameters, the upper
@@ -565,13 +607,13 @@ mod tests {
 
     #[test]
     fn registry_has_the_extended_model() {
-        assert_eq!(PARAMETER_COUNT, 67);
+        assert_eq!(PARAMETER_COUNT, 73);
         let count = |f: Family| f.params().count();
         assert_eq!(count(Family::Paper), PAPER_PARAMETERS);
         assert_eq!(count(Family::UpperCamera), 3);
         assert_eq!(count(Family::Head), 2);
-        assert_eq!(count(Family::Intrinsics), 4);
-        assert_eq!(count(Family::Distortion), 2);
+        assert_eq!(count(Family::Intrinsics), 8);
+        assert_eq!(count(Family::Distortion), 4);
         assert_eq!(count(Family::Links), 11);
         assert_eq!(count(Family::Compliance), 12);
         assert_eq!(count(Family::Play), 12);
@@ -620,10 +662,69 @@ mod tests {
         assert!(pinned.is_fixed(Param::UpperCamYaw) && pinned.in_model(Param::UpperCamYaw));
         assert!(pinned.is_shown(Param::UpperCamYaw) && !pinned.is_fixed(Param::UpperCamRoll));
         // Nothing else changes.
-        for p in Param::ALL.into_iter().filter(|p| !upper.contains(p)) {
+        for p in Param::ALL
+            .into_iter()
+            .filter(|p| !upper.contains(p) && !p.is_upper_projection())
+        {
             assert_eq!(with.is_fixed(p), default.is_fixed(p));
             assert!(with.in_model(p) && without.in_model(p));
         }
+    }
+
+    #[test]
+    fn the_upper_cameras_intrinsics_are_free_with_the_lower_ones_only_with_upper_captures() {
+        let intrinsics: Vec<Param> = Param::ALL
+            .into_iter()
+            .filter(|p| p.is_upper_projection())
+            .collect();
+        assert_eq!(
+            intrinsics.iter().map(|p| p.name()).collect::<Vec<_>>(),
+            [
+                "UpperFx", "UpperFy", "UpperCx", "UpperCy", "UpperK1", "UpperK2"
+            ]
+        );
+        let free = FixedSet::from_lists("intrinsics", "").unwrap();
+        // Both cameras' focal lengths and centres are freed, the distortion stays held.
+        let with = free.clone().for_upper_camera(true);
+        for p in Family::Intrinsics.params() {
+            assert!(
+                !with.is_fixed(p) && with.in_model(p) && with.is_shown(p),
+                "{p}"
+            );
+        }
+        assert!(with.is_fixed(Param::UpperK1) && !with.in_model(Param::UpperK1));
+        assert!(with.can_free(Param::UpperK1));
+        // Without upper captures they are held and left out, whatever was asked.
+        let without = free.clone().for_upper_camera(false);
+        for &p in &intrinsics {
+            assert!(without.is_fixed(p) && !without.in_model(p) && !without.is_shown(p));
+            assert!(!without.can_free(p));
+        }
+        assert_eq!(
+            without.free(),
+            FixedSet::from_lists("Fx,Fy,Cx,Cy", "").unwrap().free()
+        );
+        // Freed later (as --model auto does) they follow the same rule.
+        let mut auto = FixedSet::default().for_upper_camera(false);
+        auto.set(Param::UpperFx, false);
+        assert!(auto.is_fixed(Param::UpperFx) && !auto.in_model(Param::UpperFx));
+        let mut auto = FixedSet::default().for_upper_camera(true);
+        assert!(!auto.in_model(Param::UpperFx) && auto.can_free(Param::UpperFx));
+        auto.set(Param::UpperFx, false);
+        assert!(!auto.is_fixed(Param::UpperFx) && auto.in_model(Param::UpperFx));
+        // Held on purpose in a problem with upper captures: part of the model, held.
+        let pinned = FixedSet::from_lists("intrinsics", "UpperCx")
+            .unwrap()
+            .for_upper_camera(true);
+        assert!(pinned.is_fixed(Param::UpperCx) && pinned.in_model(Param::UpperCx));
+        assert!(!pinned.is_fixed(Param::UpperCy));
+        // The default set is what it was: none of them free or in the model.
+        let default = FixedSet::default().for_upper_camera(true);
+        assert!(
+            intrinsics
+                .iter()
+                .all(|&p| default.is_fixed(p) && !default.in_model(p))
+        );
     }
 
     #[test]

@@ -84,12 +84,7 @@ impl RunOptions {
             Problem::from_dataset(dataset, self.fixed.clone()).map_err(RunError::Problem)?;
         problem.loss = self.loss;
         if let Some(previous) = &self.start_from {
-            let values: Vec<_> = previous
-                .parameters
-                .iter()
-                .filter(|e| e.is_determined())
-                .map(|e| (e.param, e.value))
-                .collect();
+            let values = previous.start_values(&dataset.model);
             problem.start_from(&values, corrected(dataset));
         }
         Ok(problem)
@@ -161,8 +156,9 @@ pub fn calibrate(dataset: &Dataset, options: &RunOptions) -> Result<Run, RunErro
 impl Run {
     /// The run of `solution`, fitted to `dataset` (from `start_from`, when given).
     pub fn new(dataset: &Dataset, solution: Solution, start_from: Option<Calibration>) -> Self {
-        let mut calibration =
-            Calibration::from_solution(&solution, Some(&dataset.dir)).with_lying_torques(dataset);
+        let mut calibration = Calibration::from_solution(&solution, Some(&dataset.dir))
+            .with_lying_torques(dataset)
+            .with_cameras(&dataset.model);
         calibration.angles = Some(dataset.angles.clone());
         let changes = start_from
             .as_ref()

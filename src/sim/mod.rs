@@ -201,10 +201,11 @@ fn deg(rng: &mut impl Rng, lo: f64, hi: f64) -> f64 {
 /// drawn by [`draw_truth`]), each with a random sign where the sign is physical: head
 /// offsets 0.5°, focal lengths 1 % (5.6 px) and principal point 3 px, distortion k1, k2
 /// 0.01, link lengths 0.5 mm, compliance 0.3 deg/(N·m) (bending with the load), play 0.5°
-/// full width.
+/// full width. The upper camera's intrinsics are not drawn here (a simulation gives them
+/// in its truth).
 pub fn draw_effects(rng: &mut impl Rng, families: &[Family], truth: &mut [f64; PARAMETER_COUNT]) {
     for p in Param::ALL {
-        if !families.contains(&p.family()) {
+        if !families.contains(&p.family()) || p.is_upper_projection() {
             continue;
         }
         let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };

@@ -105,7 +105,7 @@ pub fn family_tests_at(
 pub fn tested_columns(problem: &Problem, held: &[bool; PARAMETER_COUNT]) -> Vec<Param> {
     Param::ALL
         .into_iter()
-        .filter(|p| problem.fixed.in_model(*p))
+        .filter(|p| problem.fixed.can_free(*p))
         .filter(|p| !problem.fixed.is_fixed(*p) || !held[p.index()])
         .collect()
 }
@@ -133,7 +133,7 @@ impl Scores {
             .map(|f| {
                 let params: Vec<Param> = f
                     .params()
-                    .filter(|p| problem.fixed.in_model(*p))
+                    .filter(|p| problem.fixed.can_free(*p))
                     .filter(|p| problem.fixed.is_fixed(*p) && !held[p.index()])
                     .collect();
                 (f, params)

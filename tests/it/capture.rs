@@ -479,6 +479,7 @@ fn a_robot_as_the_teams_files_show_it_is_captured_and_calibrated() {
         angles: None,
         posture: export::Posture::Standing,
         standing: Default::default(),
+        cameras: Default::default(),
     };
     let cal = b.path("robot.toml");
     export::export(&current, &export::own::Toml, &cal, &WriteOptions::default()).unwrap();

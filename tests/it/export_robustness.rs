@@ -86,7 +86,7 @@ fn exports_carry_converged_and_refuse_what_is_not_a_calibration() {
     assert_eq!(back.converged, Some(false));
     assert!(!back.problems().is_empty());
     // Files robots load are refused, one by one and all together, and nothing is written.
-    for (format, target) in export::every_file(&dir.path().join("robot")) {
+    for (format, target) in export::every_file(&bad, &dir.path().join("robot")) {
         let result = export::export(&bad, format, &target, &opts);
         if format.robot() {
             let e = result.unwrap_err();

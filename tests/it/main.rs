@@ -31,6 +31,7 @@ mod detect_robust;
 #[cfg(feature = "detect")]
 mod detect_tilted;
 mod export_files;
+mod export_intrinsics;
 mod export_posture;
 mod export_robustness;
 mod export_roundtrip;

@@ -60,7 +60,9 @@ fn fast_jacobian_equals_brute_force_duals_on_the_extended_model() {
     let dataset = simulate(&two_cameras, &options).expect("simulated");
     let truth = dataset.truth.as_ref().expect("truth").values;
     let mut problem = Problem::from_dataset(&dataset, FixedSet::default()).expect("problem");
-    problem.fixed = FixedSet::from_lists(&crate::util::every_family(), "").expect("families");
+    problem.fixed = FixedSet::from_lists(&crate::util::every_family(), "")
+        .expect("families")
+        .for_upper_camera(true);
     let free = problem.free();
     assert_eq!(free.len(), PARAMETER_COUNT);
     let x: Vec<f64> = free

@@ -117,6 +117,52 @@ fn noise_free_both_cameras_recover_every_parameter() {
     }
 }
 
+/// Both cameras' intrinsics off their a-priori values (focal lengths 1–2 %, centres up to
+/// 9 px) in a noise-free session of both cameras with `--free intrinsics`: every free
+/// parameter, the eight intrinsics among them, is recovered to 1e-6 (report units) from the
+/// a-priori values, by Ceres and by the pure-Rust backends alike.
+#[test]
+fn noise_free_both_cameras_recover_both_cameras_intrinsics() {
+    let model = two_camera_model();
+    let drawn = simulate(&model, &both_cameras(11, 3, 0.0, 0.0)).expect("sim");
+    let mut truth = drawn.truth.as_ref().expect("truth").values;
+    for (p, px) in [
+        (Param::Fx, 9.0),
+        (Param::Fy, -6.0),
+        (Param::Cx, 4.0),
+        (Param::Cy, -7.5),
+        (Param::UpperFx, -11.0),
+        (Param::UpperFy, 8.0),
+        (Param::UpperCx, -9.0),
+        (Param::UpperCy, 6.5),
+    ] {
+        truth[p.index()] = px;
+    }
+    let options = SimOptions {
+        truth: Some(truth),
+        ..both_cameras(11, 3, 0.0, 0.0)
+    };
+    let dataset = simulate(&model, &options).expect("sim");
+    let fixed = FixedSet::from_lists("intrinsics", "").expect("families");
+    let problem = Problem::from_dataset(&dataset, fixed).expect("problem");
+    let free = problem.free();
+    assert_eq!(free.len(), 32, "{free:?}");
+    assert!(free.contains(&Param::UpperFx) && free.contains(&Param::UpperCy));
+    let mut backends = vec!["lm", "tiny"];
+    if cfg!(feature = "ceres") {
+        backends.push("ceres");
+    }
+    for name in backends {
+        let b = backend(name, false).expect("backend");
+        let s = crate::util::solve(&problem, b.as_ref()).expect("solved");
+        assert!(s.undetermined.is_empty(), "{name}: {:?}", s.undetermined);
+        for &p in &free {
+            let err = s.report_value(p) - p.unit().to_report(truth[p.index()]);
+            assert!(err.abs() < 1e-6, "{name}: {p} off by {err:e}");
+        }
+    }
+}
+
 /// Ceres' autodiff through the shim agrees with the Rust model on upper-camera captures:
 /// residuals and Jacobian of a problem with both cameras, at a point away from zero.
 #[cfg(feature = "ceres")]
@@ -163,6 +209,29 @@ fn upper_parameters_are_free_only_with_upper_captures() {
         .expect("problem");
     assert!(p.fixed.is_fixed(Param::UpperCamRoll) && p.fixed.in_model(Param::UpperCamRoll));
     assert!(!p.fixed.is_fixed(Param::UpperCamYaw));
+    // `--free intrinsics` frees the upper camera's only with upper captures.
+    let intrinsics = || FixedSet::from_lists("intrinsics,distortion", "").unwrap();
+    let upper_projection = CameraId::Upper.projection_params();
+    let p = Problem::from_dataset(&lower, intrinsics()).expect("problem");
+    assert!(
+        upper_projection
+            .iter()
+            .all(|&u| p.fixed.is_fixed(u) && !p.fixed.in_model(u))
+    );
+    assert!(
+        CameraId::Lower
+            .projection_params()
+            .iter()
+            .all(|&l| !p.fixed.is_fixed(l))
+    );
+    let p = Problem::from_dataset(&both, intrinsics()).expect("problem");
+    assert!(
+        upper_projection
+            .iter()
+            .all(|&u| !p.fixed.is_fixed(u) && p.fixed.in_model(u))
+    );
+    let p = Problem::from_dataset(&both, FixedSet::default()).expect("problem");
+    assert!(upper_projection.iter().all(|&u| !p.fixed.in_model(u)));
 }
 
 /// Robots as the teams' files show them (upper-camera pitch down to −10.2°, head offsets up
@@ -398,6 +467,21 @@ fn simulate_and_solve_both_cameras_from_the_command_line() {
             .unwrap()
             .contains(&"upper_camera".into())
     );
+    // Held, the upper camera's intrinsics are no part of any result; `--free intrinsics`
+    // gives them σ with upper captures and leaves them out without.
+    assert!(!text.contains("UpperFx"), "{text}");
+    let out = run(&["solve", "--json", "--free", "intrinsics"], &lower);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success() && !text.contains("\"Upper"), "{text}");
+    let out = run(&["solve", "--json", "--free", "intrinsics"], &dir);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for p in CameraId::Upper.projection_params().into_iter().take(4) {
+        let entry = &json["parameters"][p.name()];
+        assert_eq!(entry["unit"], "px", "{p}: {entry}");
+        assert!(entry["std"].as_f64().unwrap() > 0.0, "{p}: {entry}");
+    }
+    assert!(json["parameters"].get("UpperK1").is_none());
 }
 
 /// A plan's `camera` column chooses the camera of each simulated capture.

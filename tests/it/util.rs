@@ -114,7 +114,7 @@ pub fn determined_truth(
 pub fn plausible_value(rng: &mut impl rand::Rng, param: naocalib::model::Param, size: f64) -> f64 {
     use naocalib::model::Param;
     match param {
-        Param::K1 | Param::K2 => rng.random_range(-0.5..0.5),
+        Param::K1 | Param::K2 | Param::UpperK1 | Param::UpperK2 => rng.random_range(-0.5..0.5),
         _ if naocalib::model::bounds::bound(param).min == 0.0 => rng.random_range(0.0..size),
         _ => rng.random_range(-size..size),
     }
@@ -149,6 +149,7 @@ pub fn converged_calibration(
         angles: None,
         posture,
         standing: Default::default(),
+        cameras: Default::default(),
     }
 }
 
