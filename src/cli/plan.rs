@@ -208,7 +208,7 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
     options.feasibility.offset_length = args.offset_deg;
     options.feasibility.upper_offset = args.upper_offset_deg.to_radians();
     if let Some(path) = &args.around {
-        let current = naocalib::export::read_calibration(path)
+        let current = naocalib::export::read_start_from(path)
             .with_context(|| format!("--around {}", path.display()))?;
         for e in current.parameters.iter().filter(|e| e.is_determined()) {
             options.feasibility.centre[e.param.index()] = e.param.unit().from_report(e.value);
@@ -362,21 +362,35 @@ fn table(plan: &Prediction, random: &Prediction) -> String {
     out
 }
 
+/// The rank of a design's information and exactly which parameters it leaves
+/// undetermined (those of the named directions and those no capture sees).
 fn report_rank(out: &mut String, what: &str, p: &Prediction) {
-    if p.undetermined.is_empty() {
+    let left: Vec<&str> = p.undetermined_params().iter().map(|q| q.name()).collect();
+    if p.undetermined.is_empty() && left.is_empty() {
         let _ = writeln!(
             out,
             "{what}: rank {} of {}, every free parameter determined",
             p.rank,
             p.free.len()
         );
+    } else if p.undetermined.is_empty() {
+        let _ = writeln!(
+            out,
+            "{what}: rank {} of {}; {} of the free parameters undetermined: {}",
+            p.rank,
+            p.free.len(),
+            left.len(),
+            left.join(", ")
+        );
     } else {
         let _ = writeln!(
             out,
-            "{what}: rank {} of {}; undetermined: {}",
+            "{what}: rank {} of {}; undetermined: {}; {} of the free parameters undetermined: {}",
             p.rank,
             p.free.len(),
-            p.undetermined.join("; ")
+            p.undetermined.join("; "),
+            left.len(),
+            left.join(", ")
         );
     }
 }

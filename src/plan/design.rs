@@ -373,6 +373,17 @@ impl Prediction {
     pub fn std_of(&self, p: Param) -> Option<f64> {
         self.free.iter().position(|q| *q == p).map(|k| self.std[k])
     }
+
+    /// Every free parameter the design leaves undetermined (an infinite σ: no capture
+    /// sees it, or it lies on an undetermined direction), in registry order.
+    pub fn undetermined_params(&self) -> Vec<Param> {
+        self.free
+            .iter()
+            .zip(&self.std)
+            .filter(|(_, s)| !s.is_finite())
+            .map(|(p, _)| *p)
+            .collect()
+    }
 }
 
 /// Predicted σ = sqrt(diag(M⁻¹)) of a set of captures, with the identifiability analysis

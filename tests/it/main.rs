@@ -3,6 +3,7 @@
 
 mod util;
 
+mod all_or_none;
 mod batch_solve;
 mod capture;
 mod capture_cameras;
@@ -48,6 +49,7 @@ mod pure_rust_cli;
 mod readme;
 mod report_html;
 mod robot_file_bounds;
+mod robot_state;
 mod run_object;
 mod sandal;
 mod spec_reference;

@@ -1,0 +1,128 @@
+//! Processes and robot state when a run ends badly: the simulated robot leaves its record
+//! whenever a signal ends it (serving a client or awaiting one); a camera command capture
+//! gave up on (a timeout, the run stopped, capture itself killed) is not left running;
+//! `capture --resume` after a run killed mid-stance takes the stiffness over from what the
+//! robot reports.
+
+use std::process::{Child, Stdio};
+use std::time::{Duration, Instant};
+
+use naocalib::robot::simulated::read_record;
+
+use crate::capture::{Bench, finish, plan_file};
+use crate::util::stderr;
+
+/// Sends `signal` to `child`.
+fn signal(child: &Child, signal: i32) {
+    // SAFETY: a signal to a process this test started.
+    unsafe {
+        libc::kill(child.id() as libc::pid_t, signal);
+    }
+}
+
+/// A simulated robot ended by SIGTERM, SIGINT or SIGHUP writes its record: while it awaits
+/// its second client after serving one (`--clients 2`), and before any client came.
+#[test]
+fn the_simulated_robot_leaves_its_record_when_a_signal_ends_it() {
+    for (sig, served) in [
+        (libc::SIGTERM, true),
+        (libc::SIGINT, true),
+        (libc::SIGHUP, false),
+    ] {
+        let b = Bench::new();
+        let robot = b.robot("a.sock", "a.csv", &["--speed", "0", "--clients", "2"]);
+        if served {
+            let plan = b.path("plan.csv");
+            plan_file(&plan, 1, 3);
+            let out = b
+                .capture(&plan, "ds", "a.sock", &b.fixed_camera(), &[])
+                .output()
+                .unwrap();
+            assert!(out.status.success(), "{}", stderr(&out));
+        }
+        signal(&robot, sig);
+        let out = finish(robot);
+        assert!(out.status.success(), "signal {sig}: {}", stderr(&out));
+        let record = read_record(&b.path("a.csv")).unwrap();
+        assert_eq!(
+            !record.is_empty(),
+            served,
+            "signal {sig}: {} rows",
+            record.len()
+        );
+        assert!(!b.path("a.sock").exists(), "the socket is removed");
+    }
+}
+
+/// Whether a process whose command line contains `marker` runs.
+fn runs(marker: &str) -> bool {
+    std::fs::read_dir("/proc").unwrap().flatten().any(|e| {
+        std::fs::read(e.path().join("cmdline"))
+            .is_ok_and(|c| String::from_utf8_lossy(&c).contains(marker))
+    })
+}
+
+/// Waits up to 10 s for no process with `marker` in its command line to run.
+fn gone(marker: &str) -> bool {
+    let start = Instant::now();
+    while runs(marker) {
+        if start.elapsed() > Duration::from_secs(10) {
+            return false;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    true
+}
+
+/// A camera command capture gives up on is gone with it, whatever it is: a shell running
+/// a child, a single process the shell exec'd — after a timeout, and after capture itself
+/// is killed while the picture is under way.
+#[test]
+fn a_camera_command_capture_gave_up_on_does_not_run_on() {
+    for (how, killed) in [
+        ("exec", false),
+        ("child", false),
+        ("exec", true),
+        ("child", true),
+    ] {
+        let b = Bench::new();
+        let plan = b.path("plan.csv");
+        plan_file(&plan, 1, 3);
+        // A "sleep" whose command line the test can find.
+        let marker = b.path(&format!("naocalib-test-camera-{how}-{killed}"));
+        std::os::unix::fs::symlink("/bin/sleep", &marker).unwrap();
+        let camera = match how {
+            "exec" => format!("command:exec '{}' 300 # {{path}}", marker.display()),
+            _ => format!("command:'{}' 300; : {{path}}", marker.display()),
+        };
+        let robot = b.robot("a.sock", "a.csv", &["--speed", "0"]);
+        let mut capture = b.capture(&plan, "ds", "a.sock", &camera, &["--camera-timeout", "1"]);
+        let name = marker.display().to_string();
+        if killed {
+            let mut child = capture
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .spawn()
+                .unwrap();
+            let start = Instant::now();
+            while !runs(&name) {
+                assert!(
+                    start.elapsed() < Duration::from_secs(60),
+                    "no picture taken"
+                );
+                std::thread::sleep(Duration::from_millis(10));
+            }
+            child.kill().unwrap();
+            child.wait().unwrap();
+        } else {
+            let out = capture.output().unwrap();
+            assert!(!out.status.success(), "{how}: the picture timed out");
+        }
+        assert!(
+            gone(&name),
+            "{how} (capture killed: {killed}): the camera runs on"
+        );
+        signal(&robot, libc::SIGTERM);
+        finish(robot);
+    }
+}
