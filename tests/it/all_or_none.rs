@@ -4,10 +4,10 @@
 //! fault-injection hook (`NAOCALIB_KILL_AFTER_STEP=k`, [`naocalib::output::KILL_AFTER_STEP`])
 //! kills the process after its k-th step; each test kills at every k until a run completes.
 
+use assert_cmd::Command;
 use std::collections::BTreeMap;
 use std::os::unix::process::ExitStatusExt;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use naocalib::export::{Entry, Posture};
 use naocalib::model::Param;
@@ -38,7 +38,7 @@ fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
 /// and after the run that completes the set written then. Returns the kills.
 fn killed_at_every_step(command: impl Fn() -> Command, dir: &Path) -> usize {
     let before = snapshot(dir);
-    let mut after_kills = Vec::new();
+    let mut after_kills: Vec<BTreeMap<PathBuf, Vec<u8>>> = Vec::new();
     for k in 1..200 {
         let run = command()
             .env(KILL_AFTER_STEP, k.to_string())
@@ -134,8 +134,8 @@ fn calibration_file(dir: &Path, name: &str, deg: f64) -> PathBuf {
 #[test]
 fn export_dir_force_is_all_or_none_under_a_kill_at_every_step() {
     let dir = tempfile::tempdir().unwrap();
-    let old = calibration_file(dir.path(), "old.toml", 1.0);
-    let new = calibration_file(dir.path(), "new.toml", 2.0);
+    let old = calibration_file(dir.path(), "old.toml", 0.5);
+    let new = calibration_file(dir.path(), "new.toml", 0.25);
     let out = dir.path().join("robot");
     let first = naocalib()
         .arg("export")
