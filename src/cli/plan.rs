@@ -351,7 +351,7 @@ fn table(plan: &Prediction, random: &Prediction) -> String {
             worst[1] = worst[1].max(b);
         }
     }
-    if worst[0] > 0.0 {
+    if worst[0] > 0.0 && worst[0].is_finite() {
         out.push_str(&format!(
             "worst of the 15 camera and joint offsets: plan {}°, random {}° (random/plan {:.2})\n",
             show(worst[0], Unit::Deg),
