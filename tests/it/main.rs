@@ -52,6 +52,7 @@ mod robot_file_bounds;
 mod robot_state;
 mod run_object;
 mod sandal;
+mod silently_wrong;
 mod spec_reference;
 #[cfg(feature = "ceres")]
 mod uncertainty;

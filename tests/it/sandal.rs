@@ -576,7 +576,7 @@ fn what_cannot_be_a_sandal_is_refused_naming_file_line_and_key() {
             "board.squares_x",
         ),
         (
-            format!("[board]\nsquares_x = 2\nsquares_y = 4\nsquare_mm = {long}\n"),
+            format!("[board]\nsquares_x = 3\nsquares_y = 4\nsquare_mm = {long}\n"),
             "squares_y",
             "board.squares_y",
         ),
@@ -590,7 +590,7 @@ fn what_cannot_be_a_sandal_is_refused_naming_file_line_and_key() {
             "board.mount_origin_mm",
         ),
         (
-            "[board]\nsquares_x = 3\nsquares_y = 2\nsquare_mm = 10\nmount_origin_mm = [30, 0, 0]\n"
+            "[board]\nsquares_x = 3\nsquares_y = 3\nsquare_mm = 10\nmount_origin_mm = [30, 0, 0]\n"
                 .to_string(),
             "mount_origin_mm",
             "under the left sole",
