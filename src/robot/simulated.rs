@@ -472,8 +472,8 @@ pub fn serve(socket: &Path, options: &RobotOptions) -> Result<u64, RobotError> {
                 break;
             }
         }
-        // LoLA without a client: the motors go limp.
-        body.stiffness = [0.0; JOINTS];
+        // LoLA without a client keeps the last command: a robot whose client was killed
+        // mid-stance stays stiff where it was told, and the next client finds it so.
     }
     let _ = std::fs::remove_file(socket);
     if let Some(path) = &options.record {

@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use naocalib::robot::simulated::read_record;
 
-use crate::capture::{Bench, finish, plan_file};
+use crate::capture::{Bench, finish, plan_file, wait_for_captures};
 use crate::util::stderr;
 
 /// Sends `signal` to `child`.
@@ -119,5 +119,54 @@ fn a_camera_command_capture_gave_up_on_does_not_run_on() {
         );
         signal(&robot, libc::SIGTERM);
         finish(robot);
+    }
+}
+
+/// `capture --resume` after a run killed mid-stance (SIGKILL: no ramp-down) against the
+/// same robot, which holds the last command (stiff at 0.8): the resumed run takes the
+/// stiffness over from what the robot reports, so that over the whole record — both runs
+/// and the change between them — no motor's stiffness steps by more than one ramp step.
+#[test]
+fn resume_after_a_kill_takes_the_stiffness_over_from_the_robot() {
+    use naocalib::robot::motion::{MIN_RAMP_CYCLES, MotionOptions};
+    let b = Bench::new();
+    let plan = b.path("plan.csv");
+    plan_file(&plan, 4, 5);
+    let robot = b.robot("a.sock", "a.csv", &["--speed", "4", "--clients", "2"]);
+    let mut first = b
+        .capture(&plan, "ds", "a.sock", &b.fixed_camera(), &[])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    wait_for_captures(&b.path("ds"), 1);
+    first.kill().unwrap();
+    first.wait().unwrap();
+    let out = b
+        .capture(&plan, "ds", "a.sock", &b.fixed_camera(), &["--resume"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "resume: {}", stderr(&out));
+    finish(robot);
+    let record = read_record(&b.path("a.csv")).unwrap();
+    let stiff = MotionOptions::default().stiffness;
+    let step = stiff / MIN_RAMP_CYCLES as f64 + 1e-6;
+    assert!(
+        record
+            .iter()
+            .any(|r| r.stiffness.iter().any(|&s| s >= stiff - 1e-6)),
+        "the robot was never stiff"
+    );
+    for w in record.windows(2) {
+        for k in 0..w[0].stiffness.len() {
+            let ds = (w[1].stiffness[k] - w[0].stiffness[k]).abs();
+            assert!(
+                ds <= step,
+                "cycle {}: motor {k}'s stiffness stepped from {} to {}",
+                w[1].cycle,
+                w[0].stiffness[k],
+                w[1].stiffness[k]
+            );
+        }
     }
 }
