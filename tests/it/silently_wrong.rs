@@ -205,3 +205,97 @@ fn every_reader_of_a_start_calibration_applies_one_plausibility_rule() {
         .unwrap();
     assert_clean_failure(&plan, &["cameraCalibration.cfg", "naocalib import"]);
 }
+
+/// A parameter a run did not determine (the lower camera of an upper-camera-only run, the
+/// upper camera of a lower-camera-only run) takes no part in the batch's statistics or
+/// drift: each camera's mean is the one run's that saw it, and no drift is reported for
+/// either camera between the two runs; the run's column reads `undet.`, not a value.
+#[test]
+fn batch_statistics_and_drift_leave_out_what_a_run_did_not_determine() {
+    let dir = tempfile::tempdir().unwrap();
+    let (lower, mixed, upper) = (
+        dir.path().join("lo"),
+        dir.path().join("mix"),
+        dir.path().join("up"),
+    );
+    for (out, args) in [
+        (&lower, &["--seed", "3", "--stances", "12"][..]),
+        (
+            &mixed,
+            &["--seed", "4", "--stances", "4", "--upper-stances", "12"][..],
+        ),
+    ] {
+        let run = naocalib()
+            .arg("simulate")
+            .arg(out)
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(run.status.success(), "{}", stderr(&run));
+    }
+    // The upper camera's captures of the mixed dataset alone.
+    std::fs::create_dir(&upper).unwrap();
+    std::fs::copy(mixed.join("dataset.toml"), upper.join("dataset.toml")).unwrap();
+    let captures = std::fs::read_to_string(mixed.join("captures.csv")).unwrap();
+    let header = captures.lines().next().unwrap();
+    let camera = header.split(',').position(|c| c == "camera").unwrap();
+    let kept: Vec<&str> = captures
+        .lines()
+        .skip(1)
+        .filter(|l| l.split(',').nth(camera) == Some("upper"))
+        .collect();
+    let ids: Vec<&str> = kept.iter().map(|l| l.split(',').next().unwrap()).collect();
+    std::fs::write(
+        upper.join("captures.csv"),
+        format!("{header}\n{}\n", kept.join("\n")),
+    )
+    .unwrap();
+    let corners = std::fs::read_to_string(mixed.join("corners.csv")).unwrap();
+    let corners: Vec<&str> = corners
+        .lines()
+        .enumerate()
+        .filter(|(k, l)| *k == 0 || ids.contains(&l.split(',').next().unwrap()))
+        .map(|(_, l)| l)
+        .collect();
+    std::fs::write(upper.join("corners.csv"), corners.join("\n") + "\n").unwrap();
+
+    let batch = |json: bool| {
+        let mut c = naocalib();
+        c.arg("batch").arg(&lower).arg(&upper).args([
+            "--robots",
+            "all",
+            "--drift",
+            "first",
+            "--no-progress",
+        ]);
+        if json {
+            c.arg("--json");
+        }
+        let run = c.output().unwrap();
+        assert!(run.status.success(), "{}", stderr(&run));
+        String::from_utf8(run.stdout).unwrap()
+    };
+    let json: serde_json::Value = serde_json::from_str(&batch(true)).unwrap();
+    let stats = &json["summary"]["parameters"];
+    for name in [
+        "CamYaw",
+        "CamPitch",
+        "CamRoll",
+        "UpperCamYaw",
+        "UpperCamPitch",
+        "UpperCamRoll",
+    ] {
+        assert_eq!(stats[name]["n"], 1, "{name}: {}", stats[name]);
+        assert!(stats[name]["std"].is_null(), "{name}: {}", stats[name]);
+    }
+    let pairs = json["summary"]["drift"]["pairs"].as_array().unwrap();
+    assert_eq!(pairs.len(), 1);
+    let drifted = pairs[0]["parameters"].as_object().unwrap();
+    assert!(!drifted.is_empty());
+    for name in drifted.keys() {
+        assert!(!name.contains("Cam"), "{name} drifts: {}", drifted[name]);
+    }
+    let text = batch(false);
+    let row = text.lines().find(|l| l.starts_with("CamYaw ")).unwrap();
+    assert_eq!(row.split_whitespace().nth(3), Some("undet."), "{row}");
+}
