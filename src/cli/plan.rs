@@ -63,7 +63,7 @@ pub struct PlanArgs {
     /// more of the captures on the upper camera: its offsets get smaller σ, the 15 larger.
     #[arg(long, default_value_t = 0.88, value_parser = sigma_ratio)]
     upper_sigma_ratio: f64,
-    /// Leg stances drawn into the candidate pool per leg.
+    /// Leg stances drawn into the candidate pool per leg, for each camera planned for.
     #[arg(long, default_value_t = 300,
           value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=100_000))]
     pool: usize,
@@ -201,6 +201,7 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
         seed: args.seed,
         cameras,
         pool_stances: args.pool,
+        upper_pool_stances: args.pool,
         upper_sigma_ratio: args.upper_sigma_ratio,
         ..PlanOptions::default()
     };

@@ -299,3 +299,35 @@ fn batch_statistics_and_drift_leave_out_what_a_run_did_not_determine() {
     let row = text.lines().find(|l| l.starts_with("CamYaw ")).unwrap();
     assert_eq!(row.split_whitespace().nth(3), Some("undet."), "{row}");
 }
+
+/// A plan search that cannot succeed ends with an error that says why, within its budget
+/// of draws (no time asserted): an upper camera whose box of offsets no capture survives
+/// (±3°), and a robot whose upper camera sits at the edge of the plausible (−30°).
+#[test]
+fn a_plan_search_that_cannot_succeed_ends_with_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("dataset.toml");
+    let mut text = std::fs::read_to_string(sample().join("dataset.toml")).unwrap();
+    text.push_str(
+        "\n[upper_camera]\nwidth = 640\nheight = 480\nfx = 562.5\nfy = 562.5\ncx = 320.0\n\
+         cy = 240.0\n",
+    );
+    std::fs::write(&config, text).unwrap();
+    let around = calibration_with(dir.path(), Param::UpperCamPitch, -30.0);
+    for args in [
+        vec!["--upper-offset-deg".to_string(), "3".to_string()],
+        vec!["--around".to_string(), around.display().to_string()],
+    ] {
+        let out = naocalib()
+            .arg("plan")
+            .arg(dir.path().join("p.csv"))
+            .arg("--camera")
+            .arg(&config)
+            .args(["--captures", "8", "--pool", "20"])
+            .args(&args)
+            .output()
+            .unwrap();
+        assert_clean_failure(&out, &["feasible upper-camera captures", "draws"]);
+        assert!(!dir.path().join("p.csv").exists(), "{args:?}");
+    }
+}
