@@ -37,25 +37,27 @@ pub struct ParamDrift {
     pub delta: f64,
     /// `√(σ_a² + σ_b²)`.
     pub sigma: f64,
-    /// `delta / sigma`; `None` when the parameter was held fixed in either run or the
-    /// combined sigma is zero.
+    /// `delta / sigma`; `None` when the combined sigma is zero.
     pub z: Option<f64>,
     /// `|z| > threshold`.
     pub flagged: bool,
 }
 
-/// The drift of every parameter estimated in both runs (the paper's 21 and any further
-/// one), from `a` to `b`; `|z| > threshold` is flagged.
+/// The drift of every parameter both runs determined ([`super::stats::determined`]: the
+/// paper's 21 and any further one), from `a` to `b`; `|z| > threshold` is flagged. A
+/// parameter either run held or left undetermined has no drift: its value there is a start
+/// value, not a measurement.
 pub fn drift(a: &Solution, b: &Solution, threshold: f64) -> Vec<ParamDrift> {
+    use super::stats::determined;
     Param::ALL
         .iter()
         .copied()
         .filter(|&p| a.fixed.is_shown(p) || b.fixed.is_shown(p))
+        .filter(|&p| determined(a, p) && determined(b, p))
         .map(|p| {
             let delta = b.report_value(p) - a.report_value(p);
             let sigma = a.report_std(p).hypot(b.report_std(p));
-            let held = a.fixed.is_fixed(p) || b.fixed.is_fixed(p);
-            let z = (!held && sigma > 0.0 && sigma.is_finite()).then(|| delta / sigma);
+            let z = (sigma > 0.0 && sigma.is_finite()).then(|| delta / sigma);
             ParamDrift {
                 param: p,
                 delta,

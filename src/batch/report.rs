@@ -122,13 +122,18 @@ impl Batch {
                             "–".to_string()
                         } else if run.solution.fixed.is_fixed(p) {
                             "fixed".to_string()
+                        } else if !super::stats::determined(&run.solution, p) {
+                            // Free, but not determined by this run's data: its start value.
+                            "undet.".to_string()
                         } else {
                             format!("{:.4}", run.solution.report_value(p))
                         };
                         let _ = write!(out, " {cell:>10}");
                     }
                 }
-                let ms = if st.n == 0 {
+                let ms = if st.n == 0 && runs.iter().any(|r| !r.solution.fixed.is_fixed(p)) {
+                    "undet.".to_string()
+                } else if st.n == 0 {
                     "fixed".to_string()
                 } else {
                     format!("{:.4} ± {}", st.mean, fmt_or_dash(st.std, 4))

@@ -10,7 +10,7 @@ use crate::solve::Solution;
 pub struct ParamStats {
     /// The parameter.
     pub param: Param,
-    /// Runs in which it was estimated (not held fixed).
+    /// Runs that determined it ([`determined`]).
     pub n: usize,
     /// Mean of the estimates (NaN when `n` is 0).
     pub mean: f64,
@@ -63,12 +63,20 @@ pub fn mean_std(values: &[f64]) -> (f64, f64) {
     (mean, var.sqrt())
 }
 
+/// Whether the run `s` determined `p`: free in it and determined by its data
+/// ([`Solution::is_determined`]). A parameter held on purpose, held because its data leave
+/// it undetermined, or never observed (the lower camera of an upper-camera-only run) sits
+/// at its start value: it takes no part in statistics or drift.
+pub fn determined(s: &Solution, p: Param) -> bool {
+    !s.fixed.is_fixed(p) && s.is_determined(p)
+}
+
 /// Summarises `solutions`: for every parameter estimated in at least one run (and always
-/// the paper's 21) the statistics over the runs that estimated it.
+/// the paper's 21) the statistics over the runs that determined it ([`determined`]).
 pub fn summarize(solutions: &[&Solution]) -> Summary {
     let mut parameters = Vec::new();
     for p in Param::ALL {
-        let free: Vec<&&Solution> = solutions.iter().filter(|s| !s.fixed.is_fixed(p)).collect();
+        let free: Vec<&&Solution> = solutions.iter().filter(|s| determined(s, p)).collect();
         if free.is_empty() && !solutions.iter().any(|s| s.fixed.is_shown(p)) {
             continue;
         }

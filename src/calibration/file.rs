@@ -135,20 +135,36 @@ impl Calibration {
 
 /// Reads a calibration file: TOML by the `.toml` extension, otherwise JSON (a calibration
 /// JSON or the result JSON of `naocalib solve --json`).
+/// A robot's file (a team's format) is no calibration: the error points to `naocalib
+/// import`, which reads it.
 pub fn read_calibration(path: &Path) -> Result<Calibration, ExportError> {
     let text = crate::export::source::read(path)?.text;
-    if path
+    let read = if path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
     {
         Calibration::from_toml(&text, path)
     } else {
         Calibration::from_json(&text, path)
-    }
+    };
+    read.map_err(|e| match crate::export::format::recognised(&text) {
+        Some(format) => parse_error(
+            path,
+            format!(
+                "is a robot's file ({}), not a calibration: read it with `naocalib import {} \
+                 --out current.toml` (with the robot's other calibration file, if any) and \
+                 give current.toml",
+                format.name(),
+                path.display()
+            ),
+        ),
+        None => e,
+    })
 }
 
-/// Reads the calibration a solve or a detection starts from (`--start-from`: a robot's
-/// calibration from `naocalib import`, or an earlier result) and refuses it when a value it
+/// Reads the calibration a solve, a detection or a plan starts from (`solve --start-from`,
+/// `detect --start-from`, `plan --around`: a robot's calibration from `naocalib import`,
+/// or an earlier result) — the one plausibility rule of them all — and refuses it when a value it
 /// holds is beyond the physical bounds ([`crate::model::bounds`]), naming the file and the
 /// parameter: a start value beyond them (a play of −3°, an offset of 50°) would move the
 /// model's joints by it without a word.

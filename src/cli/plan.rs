@@ -63,7 +63,7 @@ pub struct PlanArgs {
     /// more of the captures on the upper camera: its offsets get smaller σ, the 15 larger.
     #[arg(long, default_value_t = 0.88, value_parser = sigma_ratio)]
     upper_sigma_ratio: f64,
-    /// Leg stances drawn into the candidate pool per leg.
+    /// Leg stances drawn into the candidate pool per leg, for each camera planned for.
     #[arg(long, default_value_t = 300,
           value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=100_000))]
     pool: usize,
@@ -201,6 +201,7 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
         seed: args.seed,
         cameras,
         pool_stances: args.pool,
+        upper_pool_stances: args.pool,
         upper_sigma_ratio: args.upper_sigma_ratio,
         ..PlanOptions::default()
     };
@@ -208,7 +209,7 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
     options.feasibility.offset_length = args.offset_deg;
     options.feasibility.upper_offset = args.upper_offset_deg.to_radians();
     if let Some(path) = &args.around {
-        let current = naocalib::export::read_calibration(path)
+        let current = naocalib::export::read_start_from(path)
             .with_context(|| format!("--around {}", path.display()))?;
         for (p, value) in current.start_values(&model) {
             options.feasibility.centre[p.index()] = p.unit().from_report(value);
@@ -351,7 +352,7 @@ fn table(plan: &Prediction, random: &Prediction) -> String {
             worst[1] = worst[1].max(b);
         }
     }
-    if worst[0] > 0.0 {
+    if worst[0] > 0.0 && worst[0].is_finite() {
         out.push_str(&format!(
             "worst of the 15 camera and joint offsets: plan {}°, random {}° (random/plan {:.2})\n",
             show(worst[0], Unit::Deg),
@@ -362,21 +363,35 @@ fn table(plan: &Prediction, random: &Prediction) -> String {
     out
 }
 
+/// The rank of a design's information and exactly which parameters it leaves
+/// undetermined (those of the named directions and those no capture sees).
 fn report_rank(out: &mut String, what: &str, p: &Prediction) {
-    if p.undetermined.is_empty() {
+    let left: Vec<&str> = p.undetermined_params().iter().map(|q| q.name()).collect();
+    if p.undetermined.is_empty() && left.is_empty() {
         let _ = writeln!(
             out,
             "{what}: rank {} of {}, every free parameter determined",
             p.rank,
             p.free.len()
         );
+    } else if p.undetermined.is_empty() {
+        let _ = writeln!(
+            out,
+            "{what}: rank {} of {}; {} of the free parameters undetermined: {}",
+            p.rank,
+            p.free.len(),
+            left.len(),
+            left.join(", ")
+        );
     } else {
         let _ = writeln!(
             out,
-            "{what}: rank {} of {}; undetermined: {}",
+            "{what}: rank {} of {}; undetermined: {}; {} of the free parameters undetermined: {}",
             p.rank,
             p.free.len(),
-            p.undetermined.join("; ")
+            p.undetermined.join("; "),
+            left.len(),
+            left.join(", ")
         );
     }
 }

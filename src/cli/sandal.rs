@@ -32,10 +32,14 @@ pub fn run(args: &SandalArgs) -> Result<ExitCode> {
         None => Board::default(),
     };
     let plate = PlateParams::default();
-    let files = sandal::files(&board, plate)?;
+    let in_file = |e: sandal::SandalError| match &args.config {
+        Some(config) => e.in_file(config),
+        None => e,
+    };
+    let files = sandal::files(&board, plate).map_err(in_file)?;
     let options = WriteOptions::new(args.force).protecting(args.config.iter().cloned());
     sandal::write(&args.out_dir, &files, &options)?;
-    for n in sandal::notes(&board, plate)? {
+    for n in sandal::notes(&board, plate).map_err(in_file)? {
         note!("naocalib sandal: note: {n}");
     }
     let mut text = format!(

@@ -20,6 +20,7 @@ pub(crate) const MAX_ANGLE_RAD: f64 = std::f64::consts::TAU;
 /// Reads the captures from the content of `captures.csv` at `path`.
 pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Vec<Capture>, DatasetError> {
     let table = CsvTable::parse(path, bytes)?;
+    table.refuse_near_misses(&known_columns())?;
     let id_col = table.require("capture")?;
     let board_col = table.require("board")?;
     let joint_cols = Joint::ALL.map(|j| table.require(j.name()));
@@ -191,6 +192,14 @@ pub(crate) fn check_cameras(
     }
 }
 
+/// Every column a `captures.csv` (or a plan) may have that naocalib reads or writes:
+/// [`header`]'s and the quality columns capture adds (`spread_deg`, `frames`).
+pub(crate) fn known_columns() -> Vec<&'static str> {
+    let mut known = header(true);
+    known.extend(["spread_deg", "frames"]);
+    known
+}
+
 /// The header of `captures.csv` as written: with a `camera` column after `image` when
 /// `with_camera`.
 pub(crate) fn header(with_camera: bool) -> Vec<&'static str> {
@@ -293,6 +302,64 @@ mod tests {
         for j in Joint::ALL {
             assert_eq!(c[0].joints.get(j), j.index() as f64 / 10.0);
         }
+    }
+
+    /// Any near miss of any known column (case, a letter off, a plural, `_`) is refused
+    /// with the column and the known one named; extras resembling none stay ignored.
+    #[test]
+    fn a_near_miss_of_a_known_column_is_refused_with_the_column_named() {
+        let known = known_columns();
+        for name in &known {
+            let mut misses = vec![
+                name.to_uppercase(),
+                format!("{name}s"),
+                format!("_{name}"),
+                name.chars().skip(1).collect::<String>(),
+            ];
+            if name.len() > 6 {
+                misses.push(name[..name.len() - 2].to_string());
+            }
+            for miss in misses.into_iter().filter(|m| !known.contains(&m.as_str())) {
+                // The miss beside every known column but the one it stands for (a plan
+                // whose `camera` column is spelt `Camera` has no `camera` column).
+                let header: Vec<&str> = header(true)
+                    .into_iter()
+                    .map(|c| if c == *name { miss.as_str() } else { c })
+                    .collect();
+                let mut header = header;
+                if !header.contains(&miss.as_str()) {
+                    header.push(&miss);
+                }
+                let width = header.len();
+                let text = format!("{}\n{}\n", header.join(","), vec!["0"; width].join(","));
+                let e = parse_str(&text).unwrap_err();
+                let col = header.iter().position(|c| *c == miss).unwrap() + 1;
+                assert!(
+                    e.contains(&format!("line 1, field {miss}: column {col} '{miss}'"))
+                        && e.contains("did you mean '"),
+                    "{miss}: {e}"
+                );
+            }
+        }
+        for extra in [
+            "LShoulderPitch",
+            "RElbowRoll",
+            "LWristYaw",
+            "LHand",
+            "RHand",
+            "time",
+            "timestamp",
+            "note",
+            "x",
+        ] {
+            assert!(
+                known
+                    .iter()
+                    .all(|k| !crate::dataset::csv_table::near_miss(extra, k)),
+                "{extra} is no near miss"
+            );
+        }
+        assert!(crate::dataset::csv_table::near_miss("Camera", "camera"));
     }
 
     #[test]

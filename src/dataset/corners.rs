@@ -16,6 +16,7 @@ pub(crate) const HEADER: [&str; 5] = ["capture", "row", "col", "u", "v"];
 /// Reads the corners from the content of `corners.csv` at `path`.
 pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Vec<Corner>, DatasetError> {
     let table = CsvTable::parse(path, bytes)?;
+    table.refuse_near_misses(&HEADER)?;
     let [capture, row_col, col_col, u, v] = HEADER.map(|name| table.require(name));
     let (capture, row_col, col_col, u, v) = (capture?, row_col?, col_col?, u?, v?);
     table

@@ -119,6 +119,35 @@ impl CsvTable {
         })
     }
 
+    /// Refuses a column that is none of `known` but resembles one of them (see
+    /// [`near_miss`]): a header `Camera` or `camra` would otherwise be ignored as an extra
+    /// column and every row read as if it had none. Columns that resemble none stay
+    /// ignored (arm joints, timestamps). The error names the header line, the column and
+    /// the known one it resembles.
+    pub fn refuse_near_misses(&self, known: &[&str]) -> Result<(), DatasetError> {
+        let mut unknown: Vec<(usize, &str)> = self
+            .columns
+            .iter()
+            .filter(|(name, _)| !known.contains(&name.as_str()))
+            .flat_map(|(name, at)| at.iter().map(move |&i| (i, name.as_str())))
+            .collect();
+        unknown.sort_unstable();
+        for (i, name) in unknown {
+            if let Some(like) = known.iter().find(|k| near_miss(name, k)) {
+                return Err(DatasetError::invalid(
+                    Location::line(&self.path, self.header_line).field(name),
+                    format!(
+                        "column {} '{name}' is not a known column; did you mean '{like}'? \
+                         (column names are case-sensitive; a column resembling a known one \
+                         is refused rather than ignored)",
+                        i + 1
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// The records, in file order.
     pub fn rows(&self) -> impl Iterator<Item = Row<'_>> {
         self.lines.iter().enumerate().map(|(k, line)| {
@@ -132,6 +161,28 @@ impl CsvTable {
             }
         })
     }
+}
+
+/// Whether the column name `name` is a near miss of the known column `known`: the same
+/// once case, `_`, `-` and blanks are set aside, or within a Damerau–Levenshtein distance
+/// of 1 (known names of 4 to 6 letters) or 2 (longer ones) of it.
+pub(crate) fn near_miss(name: &str, known: &str) -> bool {
+    let plain = |s: &str| -> String {
+        s.chars()
+            .filter(|c| !matches!(c, '_' | '-') && !c.is_whitespace())
+            .flat_map(char::to_lowercase)
+            .collect()
+    };
+    let (a, b) = (plain(name), plain(known));
+    if a.is_empty() {
+        return false;
+    }
+    let limit = match b.chars().count() {
+        0..=3 => 0,
+        4..=6 => 1,
+        _ => 2,
+    };
+    strsim::damerau_levenshtein(&a, &b) <= limit
 }
 
 /// One record of a [`CsvTable`].

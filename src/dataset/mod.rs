@@ -365,6 +365,17 @@ pub fn read_captures(path: &Path) -> Result<Vec<Capture>, DatasetError> {
     Ok(captures)
 }
 
+/// Where the key path `field` (`board.mount_rpy_deg[0]`) is in the TOML file `path`: its
+/// line when the file has the key, else just the file and the field (for the errors of a
+/// later check of what the file holds).
+pub fn locate(path: &Path, field: &str) -> Location {
+    let bytes = std::fs::read(path).unwrap_or_default();
+    match toml_doc::TomlDoc::new(path, &bytes) {
+        Ok(doc) => doc.at(field),
+        Err(_) => Location::file(path).field(field),
+    }
+}
+
 /// Reads a `dataset.toml` on its own: the camera, board and robot it describes.
 pub fn read_model(path: &Path) -> Result<Model, DatasetError> {
     let bytes = text::read_file(path, true, " (it needs at least a [camera] table)")?;

@@ -113,8 +113,21 @@ pub fn update(
     path: &Path,
     inputs: &[PathBuf],
 ) -> Result<(&'static dyn Format, Updated), ExportError> {
+    update_with(cal, format, path, inputs, &mut || {})
+}
+
+/// [`update`], with `meanwhile` run just after the file is read (the tests' other program
+/// editing it).
+fn update_with(
+    cal: &Calibration,
+    format: Option<&'static dyn Format>,
+    path: &Path,
+    inputs: &[PathBuf],
+    meanwhile: &mut dyn FnMut(),
+) -> Result<(&'static dyn Format, Updated), ExportError> {
     check_usable(cal, || path.display().to_string())?;
     let src = source::read(path)?;
+    meanwhile();
     let text = &src.text;
     let format = match format {
         Some(f) => f,
@@ -177,8 +190,29 @@ pub fn update(
     };
     // Refuse before writing anything: an input, a read-only file.
     crate::output::check_rewritable(&file, &options)?;
+    // The file as read must still be there when its backup is kept and when it is
+    // replaced: an edit another program made meanwhile would be lost from both.
+    let changed = || {
+        (std::fs::read(&file).ok().as_deref() != Some(bytes.as_bytes())).then(|| {
+            parse_error(
+                path,
+                "changed while naocalib was updating it (another program writes it?); \
+                 nothing was written: run the update again once it is left alone"
+                    .to_string(),
+            )
+        })
+    };
+    if let Some(e) = changed() {
+        return Err(e);
+    }
     if new_backup {
         crate::output::write_new_like(&backup, bytes.as_bytes(), &meta, &options)?;
+    }
+    if let Some(e) = changed() {
+        if new_backup {
+            let _ = std::fs::remove_file(&backup);
+        }
+        return Err(e);
     }
     let file = crate::output::rewrite(&file, src.with_text(&new).as_bytes(), &options)?;
     Ok((
@@ -224,4 +258,59 @@ fn applied_to(
         });
         same.then(|| b.clone())
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibration::{Entry, Origin, Posture};
+
+    /// A converged calibration with every parameter at `value` (deg / mm), none held.
+    fn calibration(value: f64) -> Calibration {
+        Calibration {
+            origin: Origin::Solved,
+            solver: Some("test".into()),
+            dataset: None,
+            converged: Some(true),
+            rms_px: Some([0.4, 0.5]),
+            parameters: Param::ALL
+                .into_iter()
+                .map(|param| Entry {
+                    param,
+                    value: if param.name().ends_with("Play") {
+                        0.5
+                    } else {
+                        value
+                    },
+                    std: Some(0.05),
+                    fixed: false,
+                })
+                .collect(),
+            angles: None,
+            posture: Posture::Lying,
+            standing: Default::default(),
+        }
+    }
+
+    /// An edit another program makes between naocalib's read and its write is never lost:
+    /// the update is refused, the file keeps the other edit, and no backup is left of a
+    /// content that was never the file's.
+    #[test]
+    fn an_update_refuses_a_file_changed_since_it_was_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let teams = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/teams");
+        for name in ["bhuman/cameraCalibration.cfg", "hulks/body.json"] {
+            let file = dir.path().join(name.replace('/', "-"));
+            std::fs::copy(teams.join(name), &file).unwrap();
+            let other = format!("{}\n", std::fs::read_to_string(&file).unwrap());
+            let mut edit = || std::fs::write(&file, &other).unwrap();
+            let e = update_with(&calibration(1.0), None, &file, &[], &mut edit).unwrap_err();
+            assert!(e.to_string().contains("changed while"), "{name}: {e}");
+            assert_eq!(std::fs::read_to_string(&file).unwrap(), other, "{name}");
+            assert!(backups(&file).0.is_empty(), "{name}: no backup");
+            // Left alone, it is updated.
+            update(&calibration(1.0), None, &file, &[]).unwrap();
+            assert_ne!(std::fs::read_to_string(&file).unwrap(), other, "{name}");
+        }
+    }
 }

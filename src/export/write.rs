@@ -82,9 +82,7 @@ pub fn write_files(
     for (format, path) in files {
         let text = format.write(cal);
         match (&stage, dir.and_then(|d| path.strip_prefix(d).ok())) {
-            (Some(stage), Some(rel)) => {
-                write_atomic(&stage.dir().join(rel), text.as_bytes(), &stage.options())?
-            }
+            (Some(stage), Some(rel)) => stage.write(rel, text.as_bytes())?,
             _ => write_atomic(path, text.as_bytes(), options)?,
         }
     }

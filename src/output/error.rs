@@ -66,6 +66,32 @@ impl WriteError {
     }
 }
 
+impl WriteError {
+    /// The error with every path it names passed through `f` (a staged file named where
+    /// it is published).
+    pub fn map_paths(self, f: impl Fn(&Path) -> PathBuf) -> WriteError {
+        match self {
+            WriteError::Io {
+                path,
+                action,
+                error,
+            } => WriteError::Io {
+                path: f(&path),
+                action,
+                error,
+            },
+            WriteError::Exists { path } => WriteError::Exists { path: f(&path) },
+            WriteError::Input { path } => WriteError::Input { path: f(&path) },
+            WriteError::NotAFile { path } => WriteError::NotAFile { path: f(&path) },
+            WriteError::ReadOnly { path } => WriteError::ReadOnly { path: f(&path) },
+            WriteError::InTheWay { path, in_the_way } => WriteError::InTheWay {
+                path: f(&path),
+                in_the_way: f(&in_the_way),
+            },
+        }
+    }
+}
+
 /// The message of [`WriteError::InTheWay`].
 fn in_the_way_message(path: &Path, in_the_way: &Path) -> String {
     if path == in_the_way {

@@ -119,6 +119,18 @@ fn check_dir(dir: &Path, options: &WriteOptions) -> Result<(), WriteError> {
             path: dir.to_path_buf(),
             in_the_way: dir.to_path_buf(),
         }),
+        // A symbolic link to nowhere: the directory it names is not made through it.
+        Err(_) if dir.symlink_metadata().is_ok() => Err(WriteError::Io {
+            path: dir.to_path_buf(),
+            action: "write into the directory this symbolic link names",
+            error: io::Error::new(
+                io::ErrorKind::NotFound,
+                format!(
+                    "{} does not exist",
+                    std::fs::read_link(dir).unwrap_or_default().display()
+                ),
+            ),
+        }),
         Err(_) => match file_in_the_way(dir) {
             Some(in_the_way) => Err(WriteError::InTheWay {
                 path: dir.to_path_buf(),
@@ -228,7 +240,34 @@ pub fn write_atomic_with(
             path: path.to_path_buf(),
         },
         _ => io_err("write", e.error),
-    })
+    })?;
+    step();
+    Ok(())
+}
+
+/// The environment variable of the fault-injection hook [`step`]: its number `k` makes the
+/// process kill itself (SIGKILL) after the `k`-th step of writing (a file written, a
+/// staged set published, a file of a set moved). Tests run a command with `k` = 1, 2, …
+/// to check that a kill at every step leaves the old files or the new ones, never a mix.
+pub const KILL_AFTER_STEP: &str = "NAOCALIB_KILL_AFTER_STEP";
+
+/// One step of writing done (see [`KILL_AFTER_STEP`]); without the variable, nothing.
+pub(crate) fn step() {
+    use std::sync::OnceLock;
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static LIMIT: OnceLock<Option<u64>> = OnceLock::new();
+    static STEPS: AtomicU64 = AtomicU64::new(0);
+    let limit = LIMIT.get_or_init(|| std::env::var(KILL_AFTER_STEP).ok()?.parse().ok());
+    if let Some(limit) = *limit
+        && STEPS.fetch_add(1, Ordering::SeqCst) + 1 >= limit
+    {
+        #[cfg(unix)]
+        // SAFETY: the process signals itself; SIGKILL cannot be caught.
+        unsafe {
+            libc::kill(libc::getpid(), libc::SIGKILL);
+        }
+        std::process::abort();
+    }
 }
 
 #[cfg(test)]

@@ -373,6 +373,17 @@ impl Prediction {
     pub fn std_of(&self, p: Param) -> Option<f64> {
         self.free.iter().position(|q| *q == p).map(|k| self.std[k])
     }
+
+    /// Every free parameter the design leaves undetermined (an infinite σ: no capture
+    /// sees it, or it lies on an undetermined direction), in registry order.
+    pub fn undetermined_params(&self) -> Vec<Param> {
+        self.free
+            .iter()
+            .zip(&self.std)
+            .filter(|(_, s)| !s.is_finite())
+            .map(|(p, _)| *p)
+            .collect()
+    }
 }
 
 /// Predicted σ = sqrt(diag(M⁻¹)) of a set of captures, with the identifiability analysis
@@ -381,7 +392,10 @@ pub fn predict(free: &[Param], infos: &[&CaptureInformation]) -> Prediction {
     let n = free.len();
     // Stack the factors: a "Jacobian" whose Gram matrix is M.
     let rows: usize = infos.iter().map(|i| i.factor.nrows()).sum();
-    let mut stacked = DMatrix::zeros(rows.max(1), n);
+    // At least as many rows as parameters (zero rows change nothing): the analysis then
+    // sees every direction the captures leave undetermined, not only those of the
+    // singular values a short matrix has.
+    let mut stacked = DMatrix::zeros(rows.max(n).max(1), n);
     let mut r0 = 0;
     for info in infos {
         for r in 0..info.factor.nrows() {

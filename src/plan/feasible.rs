@@ -625,8 +625,13 @@ pub fn candidates(
     let torque_signs = |joints: &JointAngles| {
         gravity::leg_torques(&model.robot, &model.board, side, joints).map(|t| [t > 0.0, t < 0.0])
     };
-    for _ in 0..2 * tries {
+    for attempt in 0..2 * tries {
         if found >= stances && signs.iter().all(|s| s[0] && s[1]) {
+            break;
+        }
+        // A search that cannot succeed says so in seconds: nothing feasible in the first
+        // FUTILE_TRIES draws (a feasible region is met within a few hundred) ends it.
+        if found == 0 && attempt == FUTILE_TRIES {
             break;
         }
         let mut joints = JointAngles::default();
@@ -660,6 +665,11 @@ pub fn candidates(
     }
     out
 }
+
+/// Draws after which a pool search that found nothing gives up (a camera, board or box of
+/// offsets that admit captures yield the first within a few hundred draws; every draw
+/// costs up to a millisecond).
+pub const FUTILE_TRIES: usize = 4000;
 
 /// Up to `count` feasible variants of the capture `base` (one head posture each): its
 /// measured leg's angles moved by up to ± `spread` (rad) each, kept within the limits less

@@ -165,8 +165,10 @@ pub enum PlanError {
     /// Too few feasible captures were found for a leg.
     #[error(
         "found only {found} feasible {camera}-camera captures for the {side} leg (board in \
-         view for all offsets, no collision, within the limits); check the camera intrinsics \
-         and board"
+         view for all offsets, no collision, within the limits; a search stops after {} \
+         draws without any); check the camera intrinsics and board, and for the upper \
+         camera its box of offsets (--upper-offset-deg, --around)",
+        feasible::FUTILE_TRIES
     )]
     Pool {
         /// The camera.

@@ -192,6 +192,32 @@ pub struct CommandCamera {
     cancel: Arc<AtomicBool>,
 }
 
+/// Makes the process `command` starts die with the thread that starts it (Linux's
+/// `PR_SET_PDEATHSIG`): a camera command that is one process (the shell exec'd it) is
+/// killed by the kernel even when capture itself is killed and cannot kill its group.
+fn die_with_parent(command: &mut std::process::Command) {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::process::CommandExt as _;
+        // SAFETY: getpid before the fork; prctl and getppid are async-signal-safe.
+        let parent = unsafe { libc::getpid() };
+        unsafe {
+            command.pre_exec(move || {
+                if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                // The parent died before the prctl: no signal would come.
+                if libc::getppid() != parent {
+                    return Err(std::io::Error::other("capture is gone"));
+                }
+                Ok(())
+            });
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = command;
+}
+
 /// Kills the process group `child` leads, and reaps `child`.
 fn kill_group(child: &mut std::process::Child) {
     // The group's id is the child's pid (`process_group(0)`).
@@ -215,10 +241,10 @@ impl Camera for CommandCamera {
             return Err(CameraError::Cancelled(self.command.clone()));
         }
         use std::os::unix::process::CommandExt as _;
-        let mut child = std::process::Command::new("sh")
-            .arg("-c")
-            .arg(&line)
-            .process_group(0)
+        let mut command = std::process::Command::new("sh");
+        command.arg("-c").arg(&line).process_group(0);
+        die_with_parent(&mut command);
+        let mut child = command
             .stdin(std::process::Stdio::null())
             .stdout(std::process::Stdio::null())
             .stderr(std::process::Stdio::piped())

@@ -460,8 +460,9 @@ fn listen(socket: &Path) -> std::io::Result<UnixListener> {
     Ok(listener)
 }
 
-/// Serves LoLA at `socket` until the clients are served (or a dropped-connection fault);
-/// returns the cycles run.
+/// Serves LoLA at `socket` until the clients are served, a dropped-connection fault or
+/// SIGTERM, SIGINT or SIGHUP (the record and the state written in every case but an
+/// error); returns the cycles run.
 pub fn serve(socket: &Path, options: &RobotOptions) -> Result<u64, RobotError> {
     if let Ok(meta) = socket.symlink_metadata() {
         use std::os::unix::fs::FileTypeExt;
@@ -478,19 +479,47 @@ pub fn serve(socket: &Path, options: &RobotOptions) -> Result<u64, RobotError> {
     if options.faults.drop_on_signal {
         signal_hook::flag::register(signal_hook::consts::SIGUSR1, dropped.clone())?;
     }
+    // SIGTERM, SIGINT or SIGHUP end the robot as its last client would: the record and
+    // the state are written, whether a client is served or awaited.
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    for signal in [
+        signal_hook::consts::SIGTERM,
+        signal_hook::consts::SIGINT,
+        signal_hook::consts::SIGHUP,
+    ] {
+        signal_hook::flag::register(signal, stop.clone())?;
+    }
     let mut body = Body::new(options);
     let mut record = Record::default();
     write_state(options, &body)?;
     let mut result = Ok(());
-    for _ in 0..options.clients.max(1) {
-        let (stream, _) = match listener.accept() {
-            Ok(s) => s,
-            Err(e) => {
-                result = Err(e.into());
-                break;
+    listener.set_nonblocking(true)?;
+    'clients: for _ in 0..options.clients.max(1) {
+        let stream = loop {
+            if stop.load(std::sync::atomic::Ordering::Relaxed) {
+                break 'clients;
+            }
+            match listener.accept() {
+                Ok((s, _)) => break s,
+                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                    std::thread::sleep(Duration::from_millis(5))
+                }
+                Err(e) => {
+                    result = Err(e.into());
+                    break 'clients;
+                }
             }
         };
-        match session(stream, options, &motors, &mut body, &mut record, &dropped) {
+        stream.set_nonblocking(false)?;
+        match session(
+            stream,
+            options,
+            &motors,
+            &mut body,
+            &mut record,
+            &dropped,
+            &stop,
+        ) {
             Ok(Session::Gone) => {}
             Ok(Session::Dropped) => break,
             Err(e) => {
@@ -498,8 +527,8 @@ pub fn serve(socket: &Path, options: &RobotOptions) -> Result<u64, RobotError> {
                 break;
             }
         }
-        // LoLA without a client: the motors go limp.
-        body.stiffness = [0.0; JOINTS];
+        // LoLA without a client keeps the last command: a robot whose client was killed
+        // mid-stance stays stiff where it was told, and the next client finds it so.
     }
     let _ = std::fs::remove_file(socket);
     if let Some(path) = &options.record {
@@ -517,6 +546,7 @@ fn session(
     body: &mut Body,
     record: &mut Record,
     dropped: &std::sync::atomic::AtomicBool,
+    stop: &std::sync::atomic::AtomicBool,
 ) -> Result<Session, RobotError> {
     let period = if options.speed > 0.0 {
         Some(lola::CYCLE.div_f64(options.speed))
@@ -536,6 +566,7 @@ fn session(
     loop {
         if options.faults.drop_after.is_some_and(|n| body.cycle >= n)
             || dropped.load(std::sync::atomic::Ordering::Relaxed)
+            || stop.load(std::sync::atomic::Ordering::Relaxed)
         {
             return Ok(Session::Dropped);
         }

@@ -203,11 +203,54 @@ impl Sandal {
                 );
             }
         }
-        Ok(Sandal {
+        for (field, n) in [
+            ("board.squares_x", board.squares_x),
+            ("board.squares_y", board.squares_y),
+        ] {
+            let side = f64::from(n) * board.square;
+            if side > MAX_PATTERN_MM {
+                return bad(
+                    field,
+                    format!(
+                        "{n} squares of {} mm make a pattern {side} mm long: a sandal's pattern \
+                         is at most {MAX_PATTERN_MM} mm on a side (a NAO's foot is 160 mm long)",
+                        board.square
+                    ),
+                );
+            }
+        }
+        let reach = board.mount_origin[0].hypot(board.mount_origin[1]);
+        if reach > MAX_MOUNT_MM {
+            return bad(
+                "board.mount_origin_mm",
+                format!(
+                    "the pattern's centre is {reach:.0} mm from the ankle: a sandal's plate is \
+                     strapped to the foot, its pattern within {MAX_MOUNT_MM} mm of the ankle"
+                ),
+            );
+        }
+        let sandal = Sandal {
             side,
             board: *board,
             plate,
-        })
+        };
+        let sole = sandal.sole_outline();
+        if sandal
+            .pattern_outline()
+            .iter()
+            .all(|&p| inside_polygon(p, &sole))
+        {
+            return bad(
+                "board.mount_origin_mm",
+                format!(
+                    "the whole pattern lies under the {} sole (its centre at {} mm): the foot \
+                     would hide it from the camera; the pattern goes beside the foot",
+                    side.name(),
+                    drawing_point(board.mount_origin)
+                ),
+            );
+        }
+        Ok(sandal)
     }
 
     /// A point `(x_B, y_B)` of the board plane in the sole frame (`T_SB`, docs/MODEL.md §4).
@@ -399,6 +442,34 @@ impl Sandal {
         }
         notes
     }
+}
+
+/// The longest side of a pattern a sandal may have (mm): twice an A3 sheet's width; the
+/// drawing, its PDFs and their memory stay bounded (a few MB).
+pub const MAX_PATTERN_MM: f64 = 600.0;
+
+/// The farthest the pattern's centre may be from the ankle's projection (mm): a sandal is
+/// strapped to the foot.
+pub const MAX_MOUNT_MM: f64 = 400.0;
+
+/// `(x, y)` of a 3-vector, for messages.
+fn drawing_point(p: [f64; 3]) -> String {
+    format!("({}, {})", p[0], p[1])
+}
+
+/// Whether `p` lies inside the closed polygon `polygon` (even–odd rule).
+fn inside_polygon(p: [f64; 2], polygon: &[[f64; 2]]) -> bool {
+    let mut inside = false;
+    let n = polygon.len();
+    for i in 0..n {
+        let (a, b) = (polygon[i], polygon[(i + n - 1) % n]);
+        if (a[1] > p[1]) != (b[1] > p[1])
+            && p[0] < (b[0] - a[0]) * (p[1] - a[1]) / (b[1] - a[1]) + a[0]
+        {
+            inside = !inside;
+        }
+    }
+    inside
 }
 
 /// The convex hull of `points`, counter-clockwise (Andrew's monotone chain).

@@ -18,7 +18,7 @@ mod template;
 use std::path::{Path, PathBuf};
 
 use crate::model::{Board, Side};
-use crate::output::{Staged, WriteError, WriteOptions, write_atomic};
+use crate::output::{Staged, WriteError, WriteOptions};
 pub use drawing::{Drawing, Role, SCALE_BAR_MM};
 pub use geometry::{
     BORDER_SQUARES, LEFT_FSR, LEFT_SOLE, Pin, PlateParams, Sandal, Slot, fsr_positions,
@@ -36,9 +36,29 @@ pub enum SandalError {
         /// What is wrong.
         message: String,
     },
+    /// The board of a file cannot be made as a sandal: the error names the file, the
+    /// line and the key ([`SandalError::in_file`]).
+    #[error(transparent)]
+    Config(#[from] crate::dataset::DatasetError),
     /// Writing failed (nothing is written then).
     #[error(transparent)]
     Write(#[from] WriteError),
+}
+
+impl SandalError {
+    /// This error, for a board read from the `dataset.toml` at `config`: a board that
+    /// cannot be a sandal is placed on the file's line of its key.
+    pub fn in_file(self, config: &Path) -> SandalError {
+        match self {
+            SandalError::Board { field, message } => {
+                SandalError::Config(crate::dataset::DatasetError::invalid(
+                    crate::dataset::locate(config, &field),
+                    message,
+                ))
+            }
+            e => e,
+        }
+    }
 }
 
 /// One file to write.
@@ -115,11 +135,7 @@ pub fn write(
 ) -> Result<Vec<PathBuf>, SandalError> {
     let staged = Staged::new(dir, options)?;
     for file in files {
-        write_atomic(
-            &staged.dir().join(&file.name),
-            &file.bytes,
-            &staged.options(),
-        )?;
+        staged.write(Path::new(&file.name), &file.bytes)?;
     }
     Ok(staged.publish()?)
 }

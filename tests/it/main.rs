@@ -8,6 +8,7 @@
 
 mod util;
 
+mod all_or_none;
 mod batch_solve;
 mod capture;
 mod capture_body;
@@ -61,8 +62,10 @@ mod pure_rust_cli;
 mod readme;
 mod report_html;
 mod robot_file_bounds;
+mod robot_state;
 mod run_object;
 mod sandal;
+mod silently_wrong;
 mod spec_reference;
 #[cfg(feature = "ceres")]
 mod uncertainty;

@@ -558,6 +558,66 @@ fn bad_input_writes_nothing() {
     assert!(run.status.success());
 }
 
+/// What cannot be a sandal is refused before anything is written, the error naming the
+/// `dataset.toml`, the line and the key: a pattern longer than the bound on a side (the
+/// drawing, its PDFs and the memory they take stay bounded whatever the squares), a
+/// pattern whose centre is farther than the bound from the ankle (a plate strapped to the
+/// foot), a pattern wholly under the sole (the foot hides it), a plate not flat.
+#[test]
+fn what_cannot_be_a_sandal_is_refused_naming_file_line_and_key() {
+    use naocalib::sandal::geometry::{MAX_MOUNT_MM, MAX_PATTERN_MM};
+    let dir = tempfile::tempdir().unwrap();
+    let long = MAX_PATTERN_MM / 4.0 + 1.0;
+    let far = MAX_MOUNT_MM + 1.0;
+    for (board, key, needle) in [
+        (
+            "[board]\nsquares_x = 64\nsquares_y = 64\nsquare_mm = 200\n".to_string(),
+            "squares_x",
+            "board.squares_x",
+        ),
+        (
+            format!("[board]\nsquares_x = 3\nsquares_y = 4\nsquare_mm = {long}\n"),
+            "squares_y",
+            "board.squares_y",
+        ),
+        (
+            format!(
+                "[board]\nmount_origin_mm = [{}, {}, 0]\n",
+                far * 0.8,
+                far * 0.6
+            ),
+            "mount_origin_mm",
+            "board.mount_origin_mm",
+        ),
+        (
+            "[board]\nsquares_x = 3\nsquares_y = 3\nsquare_mm = 10\nmount_origin_mm = [30, 0, 0]\n"
+                .to_string(),
+            "mount_origin_mm",
+            "under the left sole",
+        ),
+        (
+            "[board]\nmount_rpy_deg = [4, 0, 0]\n".to_string(),
+            "mount_rpy_deg",
+            "board.mount_rpy_deg[0]",
+        ),
+    ] {
+        let text = format!("{CAMERA}{board}");
+        let line = text.lines().position(|l| l.starts_with(key)).unwrap() + 1;
+        let config = write_config(dir.path(), &text);
+        let out = dir.path().join("out");
+        let run = naocalib()
+            .arg("sandal")
+            .arg(&out)
+            .arg("--config")
+            .arg(&config)
+            .output()
+            .unwrap();
+        let at = format!("dataset.toml line {line}, field board.{key}");
+        assert_clean_failure(&run, &[needle, at.as_str()]);
+        assert!(!out.exists(), "{board}: something was written");
+    }
+}
+
 /// Pixels per millimetre of the renderings.
 #[cfg(feature = "detect")]
 const PX_PER_MM: f64 = 4.0;
