@@ -289,6 +289,7 @@ mod tests {
             angles: None,
             posture: Posture::Lying,
             standing: Default::default(),
+            cameras: Default::default(),
         }
     }
 
