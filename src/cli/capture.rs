@@ -10,7 +10,8 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 
 use naocalib::model::CameraId;
-use naocalib::robot::camera::CameraSpec;
+use naocalib::robot::camera::settings::{self, SettingsChanges, settings_for};
+use naocalib::robot::camera::{CameraSpec, Setup};
 use naocalib::robot::capture::{self, Forecast};
 use naocalib::robot::lola::{self, Connection};
 use naocalib::robot::{CaptureOptions, End, Event, Report, Session, Start};
@@ -50,9 +51,23 @@ pub struct CaptureArgs {
     /// Stiffness of the head and leg joints while measuring (0.1 … 1).
     #[arg(long, default_value_t = 0.8, value_parser = within(0.1, 1.0, ""))]
     stiffness: f64,
-    /// Longest a picture may take (s, 0.1 … 120).
+    /// Longest a `command:` camera may take for a picture (s, 0.1 … 120).
     #[arg(long, default_value_t = 10.0, value_parser = within(0.1, 120.0, " s"))]
     camera_timeout: f64,
+    /// Longest wait for one V4L2 frame (s, 0.01 … 10); a stalled stream is restarted once,
+    /// then the run ends at rest.
+    #[arg(long, default_value_t = 1.0, value_parser = within(0.01, 10.0, " s"))]
+    frame_timeout: f64,
+    /// A V4L2 camera's setting, over the team defaults and dataset.toml's: [CAMERA.]KEY=VALUE
+    /// with KEY flip, exposure, gain, white_balance_k or fps (e.g. upper.exposure=1000;
+    /// without CAMERA: both cameras). Repeatable.
+    #[arg(long, value_name = "[CAMERA.]KEY=VALUE", value_parser = parse_setting)]
+    camera_setting: Vec<(Vec<CameraId>, SettingsChanges)>,
+}
+
+/// `--camera-setting`'s parser.
+fn parse_setting(text: &str) -> Result<(Vec<CameraId>, SettingsChanges), String> {
+    settings::parse_setting(text)
 }
 
 impl CaptureArgs {
@@ -100,10 +115,37 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     for (id, why) in start.retake() {
         note!("capture {id} will be taken again ({why})");
     }
-    let timeout = Duration::from_secs_f64(args.camera_timeout);
+    // Every camera set up, read back and (V4L2) its first picture checked before anything
+    // moves.
+    let file_settings = match &args.config {
+        Some(config) => naocalib::dataset::read_camera_settings(config)?,
+        None => naocalib::dataset::read_camera_settings(&args.out.join("dataset.toml"))?,
+    };
+    let scratch = tempfile::tempdir().context("cannot create a scratch directory")?;
     let mut cameras = Vec::new();
     for (id, spec) in &specs {
-        cameras.push((*id, spec.open(id.name(), timeout)?));
+        let setup = Setup {
+            settings: settings_for(*id, &start.model, &file_settings, &args.camera_setting),
+            frame_timeout: Duration::from_secs_f64(args.frame_timeout),
+            command_timeout: Duration::from_secs_f64(args.camera_timeout),
+        };
+        let camera = match spec {
+            CameraSpec::V4l2(device) => {
+                let (camera, first) = spec.open_checked(*id, &setup, scratch.path())?;
+                note!(
+                    "{id} camera ({}): {} — set and read back; first picture {}×{}, mean \
+                     brightness {:.0} of 255",
+                    device.display(),
+                    setup.settings,
+                    first.size.0,
+                    first.size.1,
+                    first.brightness.mean
+                );
+                camera
+            }
+            CameraSpec::Command(_) => spec.open(*id, &setup)?,
+        };
+        cameras.push((*id, camera));
     }
     let stop = capture::stop_on_signals().context("cannot watch for Ctrl-C, SIGTERM or SIGHUP")?;
     let mut link = Connection::connect(&args.lola, options.safety.silent_cycles)?;

@@ -55,3 +55,5 @@ mod spec_reference;
 mod uncertainty;
 mod upper_camera;
 mod upper_session;
+#[cfg(feature = "v4l2")]
+mod v6cam;

@@ -12,7 +12,8 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::model::{Board, Camera, Model, RobotGeometry};
+use crate::model::{Board, Camera, CameraId, Model, RobotGeometry};
+use crate::robot::camera::settings::SettingsChanges;
 
 use super::error::{DatasetError, Location};
 use super::toml_doc::TomlDoc;
@@ -173,6 +174,31 @@ pub(crate) fn parse_with_angles(
     let model = file.into_model().map_err(at)?;
     check(&model).map_err(|(key, message)| doc.error(&key, message))?;
     Ok((model, angles))
+}
+
+/// The capture settings (flip, exposure, gain, white balance, frame rate) that
+/// `dataset.toml` at `path` (content `bytes`) gives in `[camera]` (the lower camera) and
+/// `[upper_camera]`, checked; what a table does not give is left to the defaults.
+pub(crate) fn parse_settings(
+    path: &Path,
+    bytes: &[u8],
+) -> Result<Vec<(CameraId, SettingsChanges)>, DatasetError> {
+    let doc = TomlDoc::new(path, bytes)?;
+    let file: DatasetToml = doc.deserialize()?;
+    let mut out = Vec::new();
+    for (id, table, name) in [
+        (CameraId::Lower, &file.camera, "camera"),
+        (CameraId::Upper, &file.upper_camera, "upper_camera"),
+    ] {
+        if let Some(table) = table {
+            let changes = table.settings();
+            changes
+                .check()
+                .map_err(|(key, message)| doc.error(&format!("{name}.{key}"), message))?;
+            out.push((id, changes));
+        }
+    }
+    Ok(out)
 }
 
 /// `dataset.toml` for `model`, every value written out. Floats round-trip exactly; angles
