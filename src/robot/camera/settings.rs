@@ -144,18 +144,19 @@ impl SettingsChanges {
                 .parse::<u32>()
                 .map_err(|_| format!("{key}: '{value}' is not a whole number ≥ 0"))
         };
+        let mut next = *self;
         match key {
             "flip" => {
-                self.flip = Some(match value.trim() {
+                next.flip = Some(match value.trim() {
                     "true" | "1" => true,
                     "false" | "0" => false,
                     _ => return Err(format!("flip: '{value}' is not true or false")),
                 })
             }
-            "exposure" => self.exposure = Some(number()?),
-            "gain" => self.gain = Some(number()?),
-            "white_balance_k" => self.white_balance_k = Some(number()?),
-            "fps" => self.fps = Some(number()?),
+            "exposure" => next.exposure = Some(number()?),
+            "gain" => next.gain = Some(number()?),
+            "white_balance_k" => next.white_balance_k = Some(number()?),
+            "fps" => next.fps = Some(number()?),
             _ => {
                 let keys: Vec<&str> = SETTING_KEYS.iter().map(|(k, _)| *k).collect();
                 return Err(format!(
@@ -164,7 +165,9 @@ impl SettingsChanges {
                 ));
             }
         }
-        self.check().map_err(|(k, m)| format!("{k}: {m}"))
+        next.check().map_err(|(k, m)| format!("{k}: {m}"))?;
+        *self = next;
+        Ok(())
     }
 
     /// `self` with what `later` sets on top.
