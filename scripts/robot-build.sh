@@ -24,7 +24,7 @@ unset CARGO_ENCODED_RUSTFLAGS CARGO_BUILD_RUSTFLAGS
 args=(build --locked --no-default-features --features v4l2 --target "$target" --bin naocalib)
 [ "$profile" = release ] && args+=(--release)
 RUSTFLAGS="$flags" cargo "${args[@]}"
-bin="target/$target/$profile/naocalib"
+bin="${CARGO_TARGET_DIR:-target}/$target/$profile/naocalib"
 desc=$(file -b "$bin")
 case "$desc" in
     *"statically linked"* | *"static-pie linked"*) ;;

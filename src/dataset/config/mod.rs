@@ -224,6 +224,42 @@ mod tests {
         parse(Path::new("d/dataset.toml"), text.as_bytes()).map_err(|e| e.to_string())
     }
 
+    /// The capture settings of `[camera]` and `[upper_camera]`: read per camera, left out
+    /// of the model (a file with them gives the same model), a value out of range refused
+    /// with its key and line.
+    #[test]
+    fn camera_settings_are_read_per_camera_and_checked() {
+        let path = Path::new("d/dataset.toml");
+        let text = format!(
+            "{MINIMAL}exposure = 900\nflip = false\n[upper_camera]\nwidth = 1280\n\
+             height = 960\nfx = 1125\nfy = 1125\ncx = 640\ncy = 480\ngain = 300\n"
+        );
+        let settings = parse_settings(path, text.as_bytes()).unwrap();
+        assert_eq!(settings.len(), 2);
+        assert_eq!(settings[0].0, CameraId::Lower);
+        assert_eq!(
+            (settings[0].1.exposure, settings[0].1.flip),
+            (Some(900), Some(false))
+        );
+        assert_eq!(
+            (settings[1].0, settings[1].1.gain),
+            (CameraId::Upper, Some(300))
+        );
+        assert_eq!(
+            parse_str(&format!("{MINIMAL}exposure = 900\n")).unwrap(),
+            parse_str(MINIMAL).unwrap()
+        );
+        let bad = format!("{MINIMAL}exposure = 2000000\n");
+        let e = parse_settings(path, bad.as_bytes())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("camera.exposure") && e.contains("0 … 1048575"),
+            "{e}"
+        );
+        assert!(e.contains("line 8"), "{e}");
+    }
+
     #[test]
     fn minimal_file_gives_defaults() {
         let model = parse_str(MINIMAL).unwrap();
