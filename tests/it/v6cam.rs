@@ -213,6 +213,9 @@ fn the_upper_picture_is_upright_and_exposed_as_set_whatever_the_registers_held()
     assert_eq!(cams.registers(false), (0, 0, 1700, 250));
 }
 
+/// One refused run: the emulator's knobs, capture's extra flags, what its message says.
+type Case<'a> = (&'a [(&'a str, &'a str)], &'a [&'a str], &'a [&'a str]);
+
 /// A setting that does not stick (the driver ignores the flip, or the exposure), a size the
 /// camera does not stream, and a first picture that is near black or saturated each stop
 /// the run before anything moves, naming the camera and the control or brightness.
@@ -221,7 +224,7 @@ fn a_setting_that_does_not_stick_or_a_dark_first_picture_stops_before_anything_m
     let b = Bench::with_model(two_camera_model());
     let cams = Cameras::new(&b);
     let plan = plan(&b, 2, 42, &[1]);
-    let cases: [(&[(&str, &str)], &[&str], &[&str]); 4] = [
+    let cases: [Case; 4] = [
         (
             &[("V6CAM_IGNORE", "flip")],
             &[],

@@ -11,6 +11,10 @@
 //! `bhuman/BHumanCodeRelease` @d89d603f, NaoTH `BerlinUnited/NaoTH` @79e1e750, rUNSWift
 //! `UNSWComputing/rUNSWift-2022-release` @9213f6d3.
 
+// The request numbers and time fields are `u64`/`i64` on x86_64 glibc but `c_int`/`time_t`
+// of other widths on other targets (musl): the casts are for those.
+#![allow(clippy::unnecessary_cast)]
+
 use std::ffi::CString;
 use std::os::unix::ffi::OsStrExt as _;
 use std::path::Path;
