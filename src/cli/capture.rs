@@ -9,8 +9,9 @@ use std::time::Duration;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 
-use naocalib::model::CameraId;
-use naocalib::robot::camera::CameraSpec;
+use naocalib::model::{CameraId, Model};
+use naocalib::robot::camera::settings::{self, SettingsChanges, settings_for};
+use naocalib::robot::camera::{CameraSpec, Setup};
 use naocalib::robot::capture::{self, CaptureError, Forecast};
 use naocalib::robot::check::{self, CheckReport};
 use naocalib::robot::lola::{self, Connection, Replay};
@@ -53,7 +54,7 @@ pub struct CaptureArgs {
     /// Stiffness of the head and leg joints while measuring (0.1 … 1).
     #[arg(long, default_value_t = 0.8, value_parser = within(0.1, 1.0, ""))]
     stiffness: f64,
-    /// Longest a picture may take (s, 0.1 … 120).
+    /// Longest a `command:` camera may take for a picture (s, 0.1 … 120).
     #[arg(long, default_value_t = 10.0, value_parser = within(0.1, 120.0, " s"))]
     camera_timeout: f64,
     /// Move nothing: check the plan, each camera (one picture each saved into DIR, with
@@ -61,6 +62,20 @@ pub struct CaptureArgs {
     /// stiffness off); print what holds; exit 0 only when a capture can start.
     #[arg(long, value_name = "DIR", conflicts_with_all = ["out", "resume"])]
     check: Option<PathBuf>,
+    /// Longest wait for one V4L2 frame (s, 0.01 … 10); a stalled stream is restarted once,
+    /// then the run ends at rest.
+    #[arg(long, default_value_t = 1.0, value_parser = within(0.01, 10.0, " s"))]
+    frame_timeout: f64,
+    /// A V4L2 camera's setting, over the team defaults and dataset.toml's: [CAMERA.]KEY=VALUE
+    /// with KEY flip, exposure, gain, white_balance_k or fps (e.g. upper.exposure=1000;
+    /// without CAMERA: both cameras). Repeatable.
+    #[arg(long, value_name = "[CAMERA.]KEY=VALUE", value_parser = parse_setting)]
+    camera_setting: Vec<(Vec<CameraId>, SettingsChanges)>,
+}
+
+/// `--camera-setting`'s parser.
+fn parse_setting(text: &str) -> Result<(Vec<CameraId>, SettingsChanges), String> {
+    settings::parse_setting(text)
 }
 
 impl CaptureArgs {
@@ -89,6 +104,18 @@ impl CaptureArgs {
         }
         Ok(specs)
     }
+
+    /// How each camera of `specs` is set up for the robot `model`: the team defaults,
+    /// `config`'s `[camera]`/`[upper_camera]` settings over them, `--camera-setting` over
+    /// those, and the waits.
+    fn setup(&self, model: &Model, config: &Path, id: CameraId) -> Result<Setup> {
+        let file_settings = naocalib::dataset::read_camera_settings(config)?;
+        Ok(Setup {
+            settings: settings_for(id, model, &file_settings, &self.camera_setting),
+            frame_timeout: Duration::from_secs_f64(self.frame_timeout),
+            command_timeout: Duration::from_secs_f64(self.camera_timeout),
+        })
+    }
 }
 
 /// Runs `naocalib capture --check DIR`: prints the table; exit 1 when something does not
@@ -100,15 +127,12 @@ fn dry_run(args: &CaptureArgs, save: &Path) -> Result<ExitCode> {
         bail!("--check needs --config DATASET_TOML (the robot's cameras)");
     };
     let model = naocalib::dataset::read_model(config)?;
-    let report = check::dry_run(
-        &args.plan,
-        &model,
-        &specs,
-        Duration::from_secs_f64(args.camera_timeout),
-        &args.lola,
-        &options,
-        save,
-    )?;
+    let mut cameras = Vec::new();
+    for (id, spec) in specs {
+        let setup = args.setup(&model, config, id)?;
+        cameras.push((id, spec, setup));
+    }
+    let report = check::dry_run(&args.plan, &model, &cameras, &args.lola, &options, save)?;
     print!("{}", report.table());
     if report.ready() {
         note!("naocalib: the day can start: every check holds, nothing was moved");
@@ -145,10 +169,33 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     for (id, why) in start.retake() {
         note!("capture {id} will be taken again ({why})");
     }
-    let timeout = Duration::from_secs_f64(args.camera_timeout);
+    // Every camera set up, read back and (V4L2) its first picture checked before anything
+    // moves.
+    let config = match &args.config {
+        Some(config) => config.clone(),
+        None => dir.join("dataset.toml"),
+    };
+    let scratch = tempfile::tempdir().context("cannot create a scratch directory")?;
     let mut cameras = Vec::new();
     for (id, spec) in &specs {
-        cameras.push((*id, spec.open(id.name(), timeout)?));
+        let setup = args.setup(&start.model, &config, *id)?;
+        let camera = match spec {
+            CameraSpec::V4l2(device) => {
+                let (camera, first) = spec.open_checked(*id, &setup, scratch.path())?;
+                note!(
+                    "{id} camera ({}): {} — set and read back; first picture {}×{}, mean \
+                     brightness {:.0} of 255",
+                    device.display(),
+                    setup.settings,
+                    first.size.0,
+                    first.size.1,
+                    first.brightness.mean
+                );
+                camera
+            }
+            CameraSpec::Command(_) => spec.open(*id, &setup)?,
+        };
+        cameras.push((*id, camera));
     }
     let stop = capture::stop_on_signals().context("cannot watch for Ctrl-C, SIGTERM or SIGHUP")?;
     let mut connection = Connection::connect(&args.lola, options.safety.silent_cycles)?;

@@ -382,6 +382,22 @@ pub fn read_model(path: &Path) -> Result<Model, DatasetError> {
     config::parse(path, &bytes.unwrap_or_default())
 }
 
+/// Reads the capture settings of a `dataset.toml` (`[camera]` and `[upper_camera]`'s
+/// `flip`, `exposure`, `gain`, `white_balance_k`, `fps`): per camera with a table, what it
+/// changes of the defaults ([`crate::robot::camera::settings::CameraSettings::defaults`]).
+pub fn read_camera_settings(
+    path: &Path,
+) -> Result<
+    Vec<(
+        crate::model::CameraId,
+        crate::robot::camera::settings::SettingsChanges,
+    )>,
+    DatasetError,
+> {
+    let bytes = text::read_file(path, true, " (it needs at least a [camera] table)")?;
+    config::parse_settings(path, &bytes.unwrap_or_default())
+}
+
 /// Writes `contents` to the file `path` atomically (its directory must exist); refuses to
 /// replace an existing file unless `force`.
 pub fn write_file(path: &Path, contents: &[u8], force: bool) -> Result<(), DatasetError> {

@@ -1,5 +1,15 @@
-//! Taking the picture: the V6's lower camera through Video4Linux2 (`v4l2:DEVICE`, with the
-//! `v4l2` feature) or any command that writes a PNG or JPEG (`command:CMD {path}`).
+//! Taking the picture: the V6's cameras through Video4Linux2 (`v4l2:DEVICE`, with the
+//! `v4l2` feature; [`v4l2`]) set as [`settings`] says, or any command that writes a PNG or
+//! JPEG (`command:CMD {path}`).
+//!
+//! A picture belongs to its stance only if its exposure began after the stance settled:
+//! V4L2 frames are checked by their buffer timestamps; a `command:` grabber must itself
+//! deliver a frame whose exposure began after it was started (a framework that streams
+//! continuously must wait for the next frame, not hand over one it already holds).
+
+pub mod settings;
+#[cfg(feature = "v4l2")]
+pub mod v4l2;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -82,6 +92,42 @@ pub enum CameraError {
         /// What went wrong.
         message: String,
     },
+    /// A camera setting written did not read back the same; nothing was moved.
+    #[error(
+        "the {camera} camera ({device}): {control} was set to {wrote} but reads back {read}; \
+         nothing was moved (is it a NAO V6 camera, and is another program using it?)"
+    )]
+    Setting {
+        /// The camera.
+        camera: CameraId,
+        /// Its device.
+        device: String,
+        /// The control (its name in dataset.toml where it has one).
+        control: String,
+        /// The value written.
+        wrote: String,
+        /// The value read back.
+        read: String,
+    },
+    /// The camera's stream delivered no frame, even after a restart.
+    #[error(
+        "the {camera} camera ({device}) stalled: no frame within {seconds} s, {restarts} \
+         stream restart(s) did not help; unplugging is not needed — restart naocalib (the \
+         camera is opened afresh) or reboot the robot if it stalls again"
+    )]
+    Stalled {
+        /// The camera.
+        camera: CameraId,
+        /// Its device.
+        device: String,
+        /// The frame timeout (s).
+        seconds: f64,
+        /// The restarts tried.
+        restarts: u32,
+    },
+    /// A camera's first picture is not fit to calibrate with (size, near black, saturated).
+    #[error("{0}; nothing was moved")]
+    FirstPicture(String),
     /// A file could not be read or a process started.
     #[error("camera: {0}")]
     Io(#[from] std::io::Error),
@@ -141,24 +187,90 @@ impl CameraSpec {
         Err(CameraError::Spec(text.into()))
     }
 
-    /// Opens the camera named `name` (`lower` or `upper`: what `{camera}` stands for in a
-    /// command).
-    pub fn open(&self, name: &str, timeout: Duration) -> Result<Box<dyn Camera>, CameraError> {
+    /// Opens `camera` (`{camera}` in a command stands for its name): a V4L2 device is set
+    /// to `setup.settings`, every value read back; a command is only remembered.
+    pub fn open(&self, camera: CameraId, setup: &Setup) -> Result<Box<dyn Camera>, CameraError> {
         match self {
             CameraSpec::Command(command) => Ok(Box::new(CommandCamera {
                 command: command.clone(),
-                name: name.to_string(),
-                timeout,
+                name: camera.name().to_string(),
+                timeout: setup.command_timeout,
                 count: 0,
                 cancel: Arc::new(AtomicBool::new(false)),
             })),
             #[cfg(feature = "v4l2")]
             CameraSpec::V4l2(device) => Ok(Box::new(v4l2::V4l2Camera::open(
                 device,
-                &v4l2::V4l2Options::default(),
+                camera,
+                &setup.settings,
+                v4l2::FrameWait {
+                    timeout: setup.frame_timeout,
+                    restarts: 1,
+                },
             )?)),
             #[cfg(not(feature = "v4l2"))]
             CameraSpec::V4l2(_) => Err(CameraError::NoV4l2),
+        }
+    }
+
+    /// Opens `camera` as [`CameraSpec::open`] does, takes one picture and checks it
+    /// ([`settings::check_first`]: the size of `setup.settings`, neither near black nor
+    /// saturated): the camera and its first picture (with the settings applied and read
+    /// back for a V4L2 device), or why it is not fit — before anything moves.
+    pub fn open_checked(
+        &self,
+        camera: CameraId,
+        setup: &Setup,
+        scratch: &Path,
+    ) -> Result<(Box<dyn Camera>, settings::FirstPicture), CameraError> {
+        let mut cam = self.open(camera, setup)?;
+        let picture = cam.take(scratch)?;
+        let (size, grey) = decode_grey(&picture.bytes).map_err(|message| {
+            CameraError::FirstPicture(format!("the {camera} camera's first picture {message}"))
+        })?;
+        let brightness = settings::Brightness::of_grey(&grey);
+        let applied = matches!(self, CameraSpec::V4l2(_)).then_some(setup.settings);
+        let s = &setup.settings;
+        settings::check_first(
+            camera,
+            size,
+            (s.width, s.height),
+            &brightness,
+            applied.as_ref(),
+        )
+        .map_err(CameraError::FirstPicture)?;
+        Ok((
+            cam,
+            settings::FirstPicture {
+                camera,
+                settings: applied,
+                size,
+                brightness,
+                picture,
+            },
+        ))
+    }
+}
+
+/// How a camera is opened: its settings (V4L2) and how long a picture may take.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Setup {
+    /// What a V4L2 camera is set to (its size is also what every picture must have).
+    pub settings: settings::CameraSettings,
+    /// The longest wait for one V4L2 frame (a stalled stream is restarted once after it).
+    pub frame_timeout: Duration,
+    /// The longest a `command:` camera may take for a picture.
+    pub command_timeout: Duration,
+}
+
+impl Setup {
+    /// The team defaults of `camera` at `width`×`height` ([`settings::CameraSettings::defaults`]),
+    /// a 1 s frame timeout, 10 s for a command.
+    pub fn defaults(camera: CameraId, width: u32, height: u32) -> Setup {
+        Setup {
+            settings: settings::CameraSettings::defaults(camera, width, height),
+            frame_timeout: Duration::from_secs(1),
+            command_timeout: Duration::from_secs(10),
         }
     }
 }
@@ -335,6 +447,62 @@ pub fn decode_size(bytes: &[u8]) -> Result<(&'static str, (u32, u32)), String> {
     }
 }
 
+/// Decodes a PNG or JPEG image to grey levels (8 bits, the mean of its colour channels):
+/// its size (width, height) and pixels.
+pub fn decode_grey(bytes: &[u8]) -> Result<((u32, u32), Vec<u8>), String> {
+    match image_kind(bytes) {
+        Some("png") => {
+            let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+            decoder
+                .set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
+            let mut reader = decoder
+                .read_info()
+                .map_err(|e| format!("is not a readable PNG: {e}"))?;
+            let size = reader
+                .output_buffer_size()
+                .ok_or("is not a readable PNG: too large")?;
+            let mut buf = vec![0; size];
+            let info = reader
+                .next_frame(&mut buf)
+                .map_err(|e| format!("is not a readable PNG: {e}"))?;
+            buf.truncate(info.buffer_size());
+            let colours = match info.color_type {
+                png::ColorType::Grayscale | png::ColorType::GrayscaleAlpha => 1,
+                _ => 3,
+            };
+            let channels = info.color_type.samples();
+            Ok(((info.width, info.height), grey_of(&buf, channels, colours)))
+        }
+        Some(_) => {
+            let mut decoder = jpeg_decoder::Decoder::new(std::io::Cursor::new(bytes));
+            let pixels = decoder
+                .decode()
+                .map_err(|e| format!("is not a readable JPEG: {e}"))?;
+            let info = decoder.info().ok_or("is not a readable JPEG: no frame")?;
+            let channels = match info.pixel_format {
+                jpeg_decoder::PixelFormat::L8 => 1,
+                jpeg_decoder::PixelFormat::L16 => {
+                    return Err("is a 16-bit JPEG; 8-bit pictures are expected".into());
+                }
+                jpeg_decoder::PixelFormat::RGB24 => 3,
+                jpeg_decoder::PixelFormat::CMYK32 => 4,
+            };
+            let grey = grey_of(&pixels, channels, channels.min(3));
+            Ok(((info.width.into(), info.height.into()), grey))
+        }
+        None => Err("is neither a PNG nor a JPEG".into()),
+    }
+}
+
+/// The grey level of each pixel of `samples` (`channels` per pixel): the mean of its
+/// first `colours` channels.
+fn grey_of(samples: &[u8], channels: usize, colours: usize) -> Vec<u8> {
+    samples
+        .chunks_exact(channels)
+        .map(|p| (p[..colours].iter().map(|&c| u32::from(c)).sum::<u32>() / colours as u32) as u8)
+        .collect()
+}
+
 /// Checks that a picture decodes in full and has the camera's size (`width`×`height`
 /// from the dataset's camera intrinsics): what `detect` will need of it.
 pub fn check_picture(bytes: &[u8], width: u32, height: u32) -> Result<&'static str, String> {
@@ -346,147 +514,6 @@ pub fn check_picture(bytes: &[u8], width: u32, height: u32) -> Result<&'static s
         ));
     }
     Ok(extension)
-}
-
-/// The V6's lower camera through Video4Linux2 (the `v4l` crate).
-#[cfg(feature = "v4l2")]
-pub mod v4l2 {
-    use std::path::Path;
-
-    use v4l::buffer::Type;
-    use v4l::io::traits::CaptureStream;
-    use v4l::prelude::*;
-    use v4l::video::Capture;
-
-    use super::{Camera, CameraError, Picture};
-
-    /// How the camera is set up (docs/CAPTURE.md §4): YUYV at 640×480 or 1280×960, fixed
-    /// exposure and gain so that every picture is exposed alike.
-    #[derive(Debug, Clone, Copy, PartialEq)]
-    pub struct V4l2Options {
-        /// Width (640 or 1280).
-        pub width: u32,
-        /// Height (480 or 960).
-        pub height: u32,
-        /// Exposure in the driver's units (100 µs on the V6's OV5640).
-        pub exposure: i64,
-        /// Analogue gain in the driver's units.
-        pub gain: i64,
-        /// Frames dropped after opening and before each picture (the stream's queue).
-        pub skip_frames: u32,
-    }
-
-    impl Default for V4l2Options {
-        /// 640×480, exposure 100 (10 ms), gain 32, 3 frames skipped.
-        fn default() -> Self {
-            V4l2Options {
-                width: 640,
-                height: 480,
-                exposure: 100,
-                gain: 32,
-                skip_frames: 3,
-            }
-        }
-    }
-
-    /// An open V4L2 device streaming YUYV.
-    pub struct V4l2Camera {
-        device: Device,
-        name: String,
-        options: V4l2Options,
-    }
-
-    // The device is used from one thread at a time (the camera worker).
-    unsafe impl Send for V4l2Camera {}
-
-    fn device_error(name: &str, message: impl std::fmt::Display) -> CameraError {
-        CameraError::Device {
-            device: name.to_string(),
-            message: message.to_string(),
-        }
-    }
-
-    /// V4L2 control ids (linux/v4l2-controls.h).
-    const V4L2_CID_EXPOSURE_AUTO: u32 = 0x009a0901;
-    const V4L2_CID_EXPOSURE_ABSOLUTE: u32 = 0x009a0902;
-    const V4L2_CID_GAIN: u32 = 0x00980913;
-    const V4L2_CID_AUTO_WHITE_BALANCE: u32 = 0x0098090c;
-    /// `V4L2_EXPOSURE_MANUAL`.
-    const EXPOSURE_MANUAL: i64 = 1;
-
-    impl V4l2Camera {
-        /// Opens `path`, sets YUYV at the size and the fixed exposure.
-        pub fn open(path: &Path, options: &V4l2Options) -> Result<V4l2Camera, CameraError> {
-            let name = path.display().to_string();
-            let device = Device::with_path(path).map_err(|e| device_error(&name, e))?;
-            let mut format = device.format().map_err(|e| device_error(&name, e))?;
-            format.width = options.width;
-            format.height = options.height;
-            format.fourcc = v4l::FourCC::new(b"YUYV");
-            let set = device
-                .set_format(&format)
-                .map_err(|e| device_error(&name, e))?;
-            if set.fourcc != v4l::FourCC::new(b"YUYV")
-                || set.width != options.width
-                || set.height != options.height
-            {
-                return Err(device_error(
-                    &name,
-                    format!(
-                        "does not stream YUYV {}×{} (it offers {} {}×{})",
-                        options.width, options.height, set.fourcc, set.width, set.height
-                    ),
-                ));
-            }
-            for (id, value) in [
-                (V4L2_CID_EXPOSURE_AUTO, EXPOSURE_MANUAL),
-                (V4L2_CID_EXPOSURE_ABSOLUTE, options.exposure),
-                (V4L2_CID_GAIN, options.gain),
-                (V4L2_CID_AUTO_WHITE_BALANCE, 0),
-            ] {
-                let control = v4l::Control {
-                    id,
-                    value: v4l::control::Value::Integer(value),
-                };
-                device
-                    .set_control(control)
-                    .map_err(|e| device_error(&name, format!("control {id:#x}: {e}")))?;
-            }
-            Ok(V4l2Camera {
-                device,
-                name,
-                options: *options,
-            })
-        }
-    }
-
-    impl Camera for V4l2Camera {
-        fn take(&mut self, _scratch: &Path) -> Result<Picture, CameraError> {
-            let name = self.name.clone();
-            let mut stream = MmapStream::with_buffers(&self.device, Type::VideoCapture, 4)
-                .map_err(|e| device_error(&name, e))?;
-            for _ in 0..self.options.skip_frames {
-                stream.next().map_err(|e| device_error(&name, e))?;
-            }
-            let (buf, _meta) = stream.next().map_err(|e| device_error(&name, e))?;
-            let (w, h) = (self.options.width as usize, self.options.height as usize);
-            if buf.len() < 2 * w * h {
-                return Err(device_error(&name, "short YUYV frame"));
-            }
-            // YUYV: Y0 U Y1 V; the grey image is every other byte.
-            let grey: Vec<u8> = buf[..2 * w * h].iter().step_by(2).copied().collect();
-            let image = crate::sim::render::GreyImage {
-                width: self.options.width,
-                height: self.options.height,
-                pixels: grey,
-            };
-            let bytes = image.to_png().map_err(|e| device_error(&name, e))?;
-            Ok(Picture {
-                bytes,
-                extension: "png",
-            })
-        }
-    }
 }
 
 #[cfg(test)]
@@ -530,6 +557,7 @@ mod tests {
 
     #[test]
     fn a_command_camera_reads_the_png_it_wrote_and_refuses_other_files() {
+        let setup = Setup::defaults(CameraId::Lower, 640, 480);
         let dir = tempfile::tempdir().unwrap();
         let image = crate::sim::render::GreyImage {
             width: 4,
@@ -539,7 +567,7 @@ mod tests {
         let src = dir.path().join("src.png");
         std::fs::write(&src, image.to_png().unwrap()).unwrap();
         let spec = CameraSpec::parse(&format!("command:cp '{}' {{path}}", src.display())).unwrap();
-        let mut camera = spec.open("lower", Duration::from_secs(10)).unwrap();
+        let mut camera = spec.open(CameraId::Lower, &setup).unwrap();
         let picture = camera.take(dir.path()).unwrap();
         assert_eq!(picture.extension, "png");
         assert_eq!(picture.bytes, std::fs::read(&src).unwrap());
@@ -547,16 +575,56 @@ mod tests {
         let text = dir.path().join("x.txt");
         std::fs::write(&text, "hello").unwrap();
         let spec = CameraSpec::parse(&format!("command:cp '{}' {{path}}", text.display())).unwrap();
-        let e = spec
-            .open("lower", Duration::from_secs(10))
-            .unwrap()
-            .take(dir.path());
+        let e = spec.open(CameraId::Lower, &setup).unwrap().take(dir.path());
         assert!(e.unwrap_err().to_string().contains("neither a PNG"));
         let spec = CameraSpec::parse("command:echo oops >&2; false {path}").unwrap();
-        let e = spec
-            .open("lower", Duration::from_secs(10))
-            .unwrap()
-            .take(dir.path());
+        let e = spec.open(CameraId::Lower, &setup).unwrap().take(dir.path());
         assert!(e.unwrap_err().to_string().contains("oops"));
+    }
+
+    /// A command camera's first picture: size and brightness measured, a dark one and one
+    /// of another size refused before anything moves.
+    #[test]
+    fn first_pictures_are_checked_for_size_and_brightness() {
+        let dir = tempfile::tempdir().unwrap();
+        let write = |name: &str, w: u32, h: u32, level: u8| {
+            let image = crate::sim::render::GreyImage {
+                width: w,
+                height: h,
+                pixels: (0..w * h).map(|i| level + (i % 2) as u8).collect(),
+            };
+            let path = dir.path().join(name);
+            std::fs::write(&path, image.to_png().unwrap()).unwrap();
+            CameraSpec::parse(&format!("command:cp '{}' {{path}}", path.display())).unwrap()
+        };
+        let setup = Setup::defaults(CameraId::Upper, 64, 48);
+        let (_, first) = write("ok.png", 64, 48, 100)
+            .open_checked(CameraId::Upper, &setup, dir.path())
+            .unwrap();
+        assert_eq!(first.size, (64, 48));
+        assert!((first.brightness.mean - 100.5).abs() < 1e-9);
+        assert_eq!(first.settings, None);
+        let e = write("dark.png", 64, 48, 5)
+            .open_checked(CameraId::Upper, &setup, dir.path())
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.contains("upper camera") && e.contains("near black"),
+            "{e}"
+        );
+        assert!(e.contains("nothing was moved"), "{e}");
+        let e = write("big.png", 128, 96, 100)
+            .open_checked(CameraId::Upper, &setup, dir.path())
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("128×96"), "{e}");
+    }
+
+    #[test]
+    fn grey_levels_of_colour_and_grey_pictures() {
+        assert_eq!(grey_of(&[30, 60, 90, 255, 0, 0, 0, 255], 4, 3), vec![60, 0]);
+        assert_eq!(grey_of(&[7, 9], 1, 1), vec![7, 9]);
     }
 }

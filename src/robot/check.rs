@@ -6,13 +6,13 @@
 //! [`camera`]) and refuses to start unless they hold.
 
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use crate::model::{CameraId, Model};
 use crate::output::{WriteOptions, write_atomic};
 
 use super::body::{self, Lying};
-use super::camera::{Camera, CameraError, CameraSpec, Picture, image_kind};
+use super::camera::{Camera, CameraError, CameraSpec, Picture, Setup, image_kind};
 use super::capture::{CaptureError, CaptureOptions, check_cameras, check_plan, read_plan};
 use super::lola::{
     ActuatorMessage, BATTERY_CHARGE, Connection, JOINTS, Link, LolaError, SensorMessage,
@@ -279,21 +279,20 @@ fn lola_hint(e: &LolaError) -> String {
 
 /// The dry run of `naocalib capture --check`: the plan read and checked against the robot
 /// `model` (safe rows, each row's camera among `cameras`; an error when not, as capture
-/// gives), then each camera of `cameras` opened with `timeout` and checked ([`camera`],
-/// its picture saved into `save`), then LoLA at `socket` for [`CHECK_CYCLES`] messages
+/// gives), then each camera of `cameras` opened with its setup (a V4L2 camera's settings
+/// applied and read back) and checked ([`camera`], its picture saved into `save`), then LoLA at `socket` for [`CHECK_CYCLES`] messages
 /// ([`lola`]). Nothing moves.
 pub fn dry_run(
     plan: &Path,
     model: &Model,
-    cameras: &[(CameraId, CameraSpec)],
-    timeout: Duration,
+    cameras: &[(CameraId, CameraSpec, Setup)],
     socket: &Path,
     options: &CaptureOptions,
     save: &Path,
 ) -> Result<CheckReport, CaptureError> {
     let rows = read_plan(plan)?;
     check_plan(plan, model, &rows, options.joint_margin)?;
-    let given: Vec<CameraId> = cameras.iter().map(|(c, _)| *c).collect();
+    let given: Vec<CameraId> = cameras.iter().map(|(c, ..)| *c).collect();
     check_cameras(plan, &rows, &given)?;
     let mut report = CheckReport::default();
     let used = |id: CameraId| rows.iter().filter(|r| r.camera == id).count();
@@ -308,8 +307,8 @@ pub fn dry_run(
             used(CameraId::Upper)
         ),
     ));
-    for (id, spec) in cameras {
-        report.checks.push(match spec.open(id.name(), timeout) {
+    for (id, spec, setup) in cameras {
+        report.checks.push(match spec.open(*id, setup) {
             Ok(mut opened) => camera(model, *id, opened.as_mut(), Some(save)),
             Err(e) => Check::new(format!("{} camera", id.name()), false, e.to_string()),
         });

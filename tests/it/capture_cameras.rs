@@ -17,7 +17,7 @@ use crate::util::{assert_clean_failure, stderr};
 
 /// The robot's model with an upper camera of its own size (1280×960), so that a picture
 /// from the wrong camera shows.
-fn two_camera_model() -> Model {
+pub(crate) fn two_camera_model() -> Model {
     Model {
         upper_camera: Some(Camera {
             width: 1280,
@@ -34,7 +34,7 @@ fn two_camera_model() -> Model {
 
 /// Writes `rows` as a plan whose rows in `upper` are the upper camera's (the plan's
 /// `camera` column).
-fn plan_with_cameras(path: &Path, rows: &[PlannedCapture], upper: &[usize]) {
+pub(crate) fn plan_with_cameras(path: &Path, rows: &[PlannedCapture], upper: &[usize]) {
     let rows: Vec<PlannedCapture> = rows
         .iter()
         .enumerate()

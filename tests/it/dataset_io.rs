@@ -1099,7 +1099,7 @@ fn unknown_keys_in_dataset_toml() {
         &text,
         Some(8),
         Some("camera.skew"),
-        "unknown key 'skew' in [camera] (known keys: width, height, fx, fy, cx, cy, distortion)",
+        "unknown key 'skew' in [camera] (known keys: width, height, fx, fy, cx, cy, distortion, flip, exposure, gain, white_balance_k, fps)",
     );
     let text = format!("{GOOD_TOML}\n[robot]\nthigh_mm = 100.0\nknee_mm = 3\n");
     assert_broken(

@@ -72,3 +72,5 @@ mod uncertainty;
 mod upper_camera;
 #[cfg(feature = "detect")]
 mod upper_session;
+#[cfg(feature = "v4l2")]
+mod v6cam;

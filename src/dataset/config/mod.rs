@@ -12,7 +12,8 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::model::{Board, Camera, Model, RobotGeometry};
+use crate::model::{Board, Camera, CameraId, Model, RobotGeometry};
+use crate::robot::camera::settings::SettingsChanges;
 
 use super::error::{DatasetError, Location};
 use super::toml_doc::TomlDoc;
@@ -175,6 +176,31 @@ pub(crate) fn parse_with_angles(
     Ok((model, angles))
 }
 
+/// The capture settings (flip, exposure, gain, white balance, frame rate) that
+/// `dataset.toml` at `path` (content `bytes`) gives in `[camera]` (the lower camera) and
+/// `[upper_camera]`, checked; what a table does not give is left to the defaults.
+pub(crate) fn parse_settings(
+    path: &Path,
+    bytes: &[u8],
+) -> Result<Vec<(CameraId, SettingsChanges)>, DatasetError> {
+    let doc = TomlDoc::new(path, bytes)?;
+    let file: DatasetToml = doc.deserialize()?;
+    let mut out = Vec::new();
+    for (id, table, name) in [
+        (CameraId::Lower, &file.camera, "camera"),
+        (CameraId::Upper, &file.upper_camera, "upper_camera"),
+    ] {
+        if let Some(table) = table {
+            let changes = table.settings();
+            changes
+                .check()
+                .map_err(|(key, message)| doc.error(&format!("{name}.{key}"), message))?;
+            out.push((id, changes));
+        }
+    }
+    Ok(out)
+}
+
 /// `dataset.toml` for `model`, every value written out. Floats round-trip exactly; angles
 /// are written in degrees chosen so that reading them back gives the same radians whenever
 /// such a decimal exists.
@@ -196,6 +222,42 @@ mod tests {
 
     fn parse_str(text: &str) -> Result<Model, String> {
         parse(Path::new("d/dataset.toml"), text.as_bytes()).map_err(|e| e.to_string())
+    }
+
+    /// The capture settings of `[camera]` and `[upper_camera]`: read per camera, left out
+    /// of the model (a file with them gives the same model), a value out of range refused
+    /// with its key and line.
+    #[test]
+    fn camera_settings_are_read_per_camera_and_checked() {
+        let path = Path::new("d/dataset.toml");
+        let text = format!(
+            "{MINIMAL}exposure = 900\nflip = false\n[upper_camera]\nwidth = 1280\n\
+             height = 960\nfx = 1125\nfy = 1125\ncx = 640\ncy = 480\ngain = 300\n"
+        );
+        let settings = parse_settings(path, text.as_bytes()).unwrap();
+        assert_eq!(settings.len(), 2);
+        assert_eq!(settings[0].0, CameraId::Lower);
+        assert_eq!(
+            (settings[0].1.exposure, settings[0].1.flip),
+            (Some(900), Some(false))
+        );
+        assert_eq!(
+            (settings[1].0, settings[1].1.gain),
+            (CameraId::Upper, Some(300))
+        );
+        assert_eq!(
+            parse_str(&format!("{MINIMAL}exposure = 900\n")).unwrap(),
+            parse_str(MINIMAL).unwrap()
+        );
+        let bad = format!("{MINIMAL}exposure = 2000000\n");
+        let e = parse_settings(path, bad.as_bytes())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("camera.exposure") && e.contains("0 … 1048575"),
+            "{e}"
+        );
+        assert!(e.contains("line 8"), "{e}");
     }
 
     #[test]

@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize, Serializer};
 use crate::dataset::AngleKind;
 use crate::dataset::units::degrees_for;
 use crate::model::{Board, Camera, RobotGeometry};
+use crate::robot::camera::settings::SettingsChanges;
 
 /// `[joints]`: whether `captures.csv` holds raw encoder readings or angles a framework has
 /// already corrected with the robot's joint calibration (docs/MODEL.md §7).
@@ -33,6 +34,31 @@ pub(super) struct CameraToml {
     /// OpenCV's `[k1, k2, p1, p2, k3]`; zero when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) distortion: Option<Numbers<5>>,
+    /// How capture drives the camera (`crate::robot::camera::settings`); the team
+    /// defaults where absent. Not part of the model: a dataset's copy holds none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) flip: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) exposure: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) gain: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) white_balance_k: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) fps: Option<u32>,
+}
+
+impl CameraToml {
+    /// The capture settings this table changes.
+    pub(super) fn settings(&self) -> SettingsChanges {
+        SettingsChanges {
+            flip: self.flip,
+            exposure: self.exposure,
+            gain: self.gain,
+            white_balance_k: self.white_balance_k,
+            fps: self.fps,
+        }
+    }
 }
 
 /// `[board]`: the sandal pattern, its mount and its mass; every key optional.
@@ -92,6 +118,11 @@ impl From<&Camera> for CameraToml {
             cx: c.cx,
             cy: c.cy,
             distortion: Some(Numbers(c.distortion)),
+            flip: None,
+            exposure: None,
+            gain: None,
+            white_balance_k: None,
+            fps: None,
         }
     }
 }
