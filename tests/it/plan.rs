@@ -6,7 +6,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use naocalib::model::{Family, FixedSet, Joint, JointAngles, Model, PARAMETER_COUNT, Param, Side};
-use naocalib::plan::{self, Feasibility, Infeasible, Plan, PlanOptions, feasible};
+use naocalib::plan::{self, Feasibility, Infeasible, PlanOptions, feasible};
 use naocalib::sim::{self, SimOptions};
 use naocalib::solve::{Problem, UncertaintyOptions, backend, backend_names, calibrate};
 
