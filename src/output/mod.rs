@@ -245,7 +245,7 @@ pub fn write_atomic_with(
     Ok(())
 }
 
-/// The environment variable of the fault-injection hook [`step`]: its number `k` makes the
+/// The environment variable of the fault-injection hook (`step`): its number `k` makes the
 /// process kill itself (SIGKILL) after the `k`-th step of writing (a file written, a
 /// staged set published, a file of a set moved). Tests run a command with `k` = 1, 2, …
 /// to check that a kill at every step leaves the old files or the new ones, never a mix.

@@ -1,5 +1,5 @@
 //! Taking the picture: the V6's cameras through Video4Linux2 (`v4l2:DEVICE`, with the
-//! `v4l2` feature; [`v4l2`]) set as [`settings`] says, or any command that writes a PNG or
+//! `v4l2` feature; the `v4l2` module) set as [`settings`] says, or any command that writes a PNG or
 //! JPEG (`command:CMD {path}`).
 //!
 //! A picture belongs to its stance only if its exposure began after the stance settled:
