@@ -300,9 +300,13 @@ fn the_upper_first_plan_is_honest_and_gives_the_upper_camera_0_025() {
         eprintln!(
             "{name}: reported σ median {median:.4}°, at most {worst:.4}° (predicted {predicted:.4}°)"
         );
-        // A robot whose truth moves vertices out of the image loses them, and with them a
-        // little of the precision planned for.
-        assert!(worst <= 1.10 * predicted, "{name}: reported σ {worst}");
+        // The typical robot gets the precision planned for; a robot whose truth moves
+        // vertices out of the image loses them, and with them a little of it.
+        assert!(
+            (median - predicted).abs() <= 0.10 * predicted,
+            "{name}: median reported σ {median}"
+        );
+        assert!(worst <= 1.15 * predicted, "{name}: reported σ {worst}");
     }
 }
 
