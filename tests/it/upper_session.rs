@@ -300,10 +300,10 @@ fn the_upper_first_plan_is_honest_and_gives_the_upper_camera_0_025() {
         eprintln!(
             "{name}: reported σ median {median:.4}°, at most {worst:.4}° (predicted {predicted:.4}°)"
         );
-        // The typical robot gets the precision planned for; a robot whose truth moves
+        // The typical robot gets at least the precision planned for; a robot whose truth moves
         // vertices out of the image loses them, and with them a little of it.
         assert!(
-            (median - predicted).abs() <= 0.10 * predicted,
+            median <= 1.10 * predicted,
             "{name}: median reported σ {median}"
         );
         assert!(worst <= 1.15 * predicted, "{name}: reported σ {worst}");
