@@ -4,7 +4,7 @@
 # and OpenCV 4.6 with clang for the detection bindings.
 set -euo pipefail
 packages=(libceres-dev libeigen3-dev libgoogle-glog-dev g++ pkg-config
-          libopencv-dev clang libclang-dev)
+          libopencv-dev clang libclang-dev file)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p")
