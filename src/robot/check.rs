@@ -12,7 +12,8 @@ use crate::model::{CameraId, Model};
 use crate::output::{WriteOptions, write_atomic};
 
 use super::body::{self, Lying};
-use super::camera::{Camera, CameraError, CameraSpec, Picture, Setup, image_kind};
+use super::camera::settings::Brightness;
+use super::camera::{Camera, CameraError, CameraSpec, Picture, Setup, decode_grey};
 use super::capture::{CaptureError, CaptureOptions, check_cameras, check_plan, read_plan};
 use super::lola::{
     ActuatorMessage, BATTERY_CHARGE, Connection, JOINTS, Link, LolaError, SensorMessage,
@@ -322,41 +323,14 @@ pub fn dry_run(
     Ok(report)
 }
 
-/// A picture's size (width, height) and mean brightness (0 … 255, over every channel).
+/// A picture's size (width, height) and mean brightness (0 … 255, of its grey levels:
+/// [`decode_grey`]).
 pub fn brightness(bytes: &[u8]) -> Result<((u32, u32), f64), String> {
-    let (size, pixels) = match image_kind(bytes) {
-        Some("png") => {
-            let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
-            decoder
-                .set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
-            let mut reader = decoder
-                .read_info()
-                .map_err(|e| format!("is not a readable PNG: {e}"))?;
-            let n = reader
-                .output_buffer_size()
-                .ok_or("is not a readable PNG: too large")?;
-            let mut buf = vec![0; n];
-            let info = reader
-                .next_frame(&mut buf)
-                .map_err(|e| format!("is not a readable PNG: {e}"))?;
-            buf.truncate(info.buffer_size());
-            ((info.width, info.height), buf)
-        }
-        Some(_) => {
-            let mut decoder = jpeg_decoder::Decoder::new(std::io::Cursor::new(bytes));
-            let pixels = decoder
-                .decode()
-                .map_err(|e| format!("is not a readable JPEG: {e}"))?;
-            let info = decoder.info().ok_or("is not a readable JPEG: no frame")?;
-            ((info.width.into(), info.height.into()), pixels)
-        }
-        None => return Err("is neither a PNG nor a JPEG".into()),
-    };
-    if pixels.is_empty() {
+    let (size, grey) = decode_grey(bytes)?;
+    if grey.is_empty() {
         return Err("has no pixels".into());
     }
-    let mean = pixels.iter().map(|&p| p as f64).sum::<f64>() / pixels.len() as f64;
-    Ok((size, mean))
+    Ok((size, Brightness::of_grey(&grey).mean))
 }
 
 /// One picture from `camera`, as the capture run will take them. The one place the checks
