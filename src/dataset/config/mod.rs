@@ -205,11 +205,37 @@ pub(crate) fn parse_settings(
 /// are written in degrees chosen so that reading them back gives the same radians whenever
 /// such a decimal exists.
 pub(crate) fn render(model: &Model, angles: &AngleSource) -> Result<String, toml::ser::Error> {
-    let body = toml::to_string(&DatasetToml::from_model(model, angles))?;
+    render_with_settings(model, angles, &[], &[])
+}
+
+/// [`render`], with each camera's capture settings (`settings`: the keys `flip`,
+/// `exposure`, `gain`, `white_balance_k`, `fps` of its table, those it gives) and `notes`
+/// as comment lines after the header (a camera without a table is left out).
+pub(crate) fn render_with_settings(
+    model: &Model,
+    angles: &AngleSource,
+    settings: &[(CameraId, SettingsChanges)],
+    notes: &[String],
+) -> Result<String, toml::ser::Error> {
+    let mut file = DatasetToml::from_model(model, angles);
+    for (id, changes) in settings {
+        let table = match id {
+            CameraId::Lower => file.camera.as_mut(),
+            CameraId::Upper => file.upper_camera.as_mut(),
+        };
+        if let Some(table) = table {
+            table.set_settings(changes);
+        }
+    }
+    let body = toml::to_string(&file)?;
+    let notes: String = notes
+        .iter()
+        .map(|n| format!("# {}\n", n.replace(['\n', '\r'], " ")))
+        .collect();
     Ok(format!(
         "# naocalib dataset: lengths in mm, angles in degrees, masses in g; \
          distortion is OpenCV's [k1, k2, p1, p2, k3];\n# gravity is a direction in the origin \
-         frame.\n\n{body}"
+         frame.\n{notes}\n{body}"
     ))
 }
 

@@ -117,6 +117,25 @@ pub enum CaptureError {
         /// The dataset's directory.
         dir: PathBuf,
     },
+    /// `--resume` with a camera driven otherwise than the dataset's pictures were taken.
+    #[error(
+        "{at}: the dataset's {camera} camera pictures were taken with {control} {then}, this \
+         run would take them with {now}; resume with the same settings (the dataset's own \
+         dataset.toml, without --config or --camera-setting), or start a new dataset \
+         (nothing was moved)"
+    )]
+    OtherSettings {
+        /// The setting in the dataset's `dataset.toml`.
+        at: Location,
+        /// The camera.
+        camera: CameraId,
+        /// The control (its key in `dataset.toml`).
+        control: String,
+        /// The value the dataset records.
+        then: String,
+        /// The value of this run.
+        now: String,
+    },
     /// An option is out of range.
     #[error("{0}")]
     Options(String),
