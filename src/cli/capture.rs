@@ -187,9 +187,13 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         &given,
         options.joint_margin,
     )?;
-    for (id, why) in start.retake() {
-        note!("capture {id} will be taken again ({why})");
-    }
+    // What is said before the robot is reached goes through the terminal's thread once
+    // there is one: a terminal that stops reading must not hold up the run.
+    let mut said: Vec<String> = start
+        .retake()
+        .iter()
+        .map(|(id, why)| format!("capture {id} will be taken again ({why})"))
+        .collect();
     // Every camera set up (read back for V4L2), its settings those the dataset records
     // (with --resume), and its first picture checked before anything moves.
     let config = match &args.config {
@@ -209,15 +213,17 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         .zip(naocalib::robot::camera::open_all(&setups, scratch.path())?)
     {
         let how = match spec {
-            CameraSpec::V4l2(device) => format!("{}: {} — set and read back", device.display(), setup.settings),
+            CameraSpec::V4l2(device) => format!(
+                "{}: {} — set and read back",
+                device.display(),
+                setup.settings
+            ),
             CameraSpec::Command(_) => "command".to_string(),
         };
-        note!(
+        said.push(format!(
             "{id} camera ({how}); first picture {}×{}, mean brightness {:.0} of 255",
-            first.size.0,
-            first.size.1,
-            first.brightness.mean
-        );
+            first.size.0, first.size.1, first.brightness.mean
+        ));
         cameras.push((*id, camera));
     }
     let stop = capture::stop_on_signals().context("cannot watch for Ctrl-C, SIGTERM or SIGHUP")?;
@@ -233,6 +239,9 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     let (model, rows) = (&start.model, &start.rows);
     let mut forecast = Forecast::new(model, &out.todo(rows), &options);
     let terminal = Terminal::spawn(rows.len());
+    for line in said {
+        terminal.send(Print::Line(line));
+    }
     terminal.send(Print::Progress(
         out.len() as u64,
         format!(", {:.0} s of robot time planned", forecast.left()),

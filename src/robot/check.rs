@@ -376,13 +376,9 @@ pub fn camera(
     });
     let size = model.intrinsics(id);
     let mut problems = Vec::new();
-    if let Err(e) = settings::check_first(
-        id,
-        (w, h),
-        (size.width, size.height),
-        &brightness,
-        settings,
-    ) {
+    if let Err(e) =
+        settings::check_first(id, (w, h), (size.width, size.height), &brightness, settings)
+    {
         problems.push(e);
     }
     let mut detail = format!("{w}×{h}, brightness {:.0} of 255", brightness.mean);
@@ -455,7 +451,8 @@ mod tests {
         );
         assert!(!dark.holds);
         assert!(
-            dark.detail.contains("brightness 8 of 255: the lower camera's first picture is near black"),
+            dark.detail
+                .contains("brightness 8 of 255: the lower camera's first picture is near black"),
             "{}",
             dark.detail
         );

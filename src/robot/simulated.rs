@@ -850,18 +850,31 @@ mod tests {
             n += 1;
             let out = dir.path().join(format!("{n}.png"));
             let settings = SnapSettings { flip, manual };
-            snap(&state, &state_path, camera, &settings, &out, &RenderOptions::default())
-                .unwrap();
+            snap(
+                &state,
+                &state_path,
+                camera,
+                &settings,
+                &out,
+                &RenderOptions::default(),
+            )
+            .unwrap();
             decode_grey(&std::fs::read(&out).unwrap()).unwrap().1
         };
         let upright = snap_with(CameraId::Upper, true, None);
         let mut turned = snap_with(CameraId::Upper, false, None);
         assert_ne!(turned, upright);
         turned.reverse();
-        assert_eq!(turned, upright, "unflipped, the upper picture is turned by 180°");
+        assert_eq!(
+            turned, upright,
+            "unflipped, the upper picture is turned by 180°"
+        );
         assert_eq!(snap_with(CameraId::Upper, true, Some((700, 800))), upright);
         let old = Brightness::of_grey(&snap_with(CameraId::Upper, true, Some((100, 32))));
-        assert!(old.mean < crate::robot::camera::settings::DARK_MEAN, "{old:?}");
+        assert!(
+            old.mean < crate::robot::camera::settings::DARK_MEAN,
+            "{old:?}"
+        );
         let team = Brightness::of_grey(&upright).mean;
         assert!(team > 60.0 && team < 200.0, "{team}");
         let lower = snap_with(CameraId::Lower, false, Some((1700, 250)));

@@ -334,7 +334,8 @@ fn command_cameras_get_their_settings_and_the_dataset_records_them() {
     assert_eq!(lines.len(), 4, "{given}");
     for line in &lines {
         assert!(
-            *line == "lower 0 1700 250 4000 30 640 480" || *line == "upper 1 700 800 auto 30 1280 960",
+            *line == "lower 0 1700 250 4000 30 640 480"
+                || *line == "upper 1 700 800 auto 30 1280 960",
             "{line}"
         );
     }
@@ -343,30 +344,62 @@ fn command_cameras_get_their_settings_and_the_dataset_records_them() {
     let of = |c: CameraId| recorded.iter().find(|(id, _)| *id == c).unwrap().1;
     let lower = of(CameraId::Lower);
     assert_eq!(
-        (lower.flip, lower.exposure, lower.gain, lower.white_balance_k, lower.fps),
+        (
+            lower.flip,
+            lower.exposure,
+            lower.gain,
+            lower.white_balance_k,
+            lower.fps
+        ),
         (Some(false), Some(1700), Some(250), Some(4000), Some(30))
     );
     let upper = of(CameraId::Upper);
     assert_eq!(
-        (upper.flip, upper.exposure, upper.gain, upper.white_balance_k, upper.fps),
+        (
+            upper.flip,
+            upper.exposure,
+            upper.gain,
+            upper.white_balance_k,
+            upper.fps
+        ),
         (Some(true), Some(700), Some(800), None, Some(30))
     );
     let text = std::fs::read_to_string(&toml).unwrap();
-    assert!(text.contains("the upper camera's command was given"), "{text}");
+    assert!(
+        text.contains("the upper camera's command was given"),
+        "{text}"
+    );
     let ds = Dataset::load_without_corners(&b.path("ds")).unwrap();
     assert_eq!(ds.model, two_camera_model());
-    // Other settings: refused, nothing moved (the robot is not contacted).
+    // Other settings (the robot's dataset.toml given with --config again, and
+    // --camera-setting): refused, nothing moved (the robot is not contacted).
     for (setting, words) in [
-        ("upper.exposure=1000", ["upper camera", "exposure 700", "with 1000"]),
-        ("lower.white_balance_k=5000", ["lower camera", "white_balance_k 4000 K", "with 5000 K"]),
+        (
+            "upper.exposure=1000",
+            ["upper camera", "exposure 700", "with 1000"],
+        ),
+        (
+            "lower.white_balance_k=5000",
+            ["lower camera", "white_balance_k 4000 K", "with 5000 K"],
+        ),
+        (
+            "lower.fps=30",
+            ["lower camera", "white_balance_k 4000 K", "with automatic"],
+        ),
     ] {
+        let upper = format!("upper={command}");
+        let mut args = vec!["--camera", &upper, "--resume"];
+        if setting != "lower.fps=30" {
+            args.extend(["--camera-setting", "lower.white_balance_k=4000"]);
+        }
+        args.extend(["--camera-setting", setting]);
         let out = b
             .capture(
                 &plan,
                 "ds",
                 "nobody.sock",
                 &format!("lower={command}"),
-                &["--camera", &format!("upper={command}"), "--resume", "--camera-setting", setting],
+                &args,
             )
             .output()
             .unwrap();
@@ -374,14 +407,20 @@ fn command_cameras_get_their_settings_and_the_dataset_records_them() {
         needles.extend(words);
         assert_clean_failure(&out, &needles);
     }
-    // The same settings (the dataset's own dataset.toml): it goes on.
+    // The same settings: it goes on.
     let out = b
         .capture(
             &plan,
             "ds",
             "a.sock",
             &format!("lower={command}"),
-            &["--camera", &format!("upper={command}"), "--resume"],
+            &[
+                "--camera",
+                &format!("upper={command}"),
+                "--resume",
+                "--camera-setting",
+                "lower.white_balance_k=4000",
+            ],
         )
         .output()
         .unwrap();
@@ -402,14 +441,22 @@ fn the_simulated_cameras_at_the_old_settings_or_unflipped_stop_the_run_before_an
     let robot = b.robot("a.sock", "a.csv", &["--speed", "0"]);
     let snap = b.snap_camera();
     let run = |extra: &[&str]| {
-        let mut args = vec!["--camera", &format!("upper={snap}")].into_iter().map(String::from).collect::<Vec<_>>();
+        let mut args = vec!["--camera", &format!("upper={snap}")]
+            .into_iter()
+            .map(String::from)
+            .collect::<Vec<_>>();
         args.extend(extra.iter().map(|s| s.to_string()));
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         b.capture(&plan, "ds", "a.sock", &format!("lower={snap}"), &args)
             .output()
             .unwrap()
     };
-    let out = run(&["--camera-setting", "exposure=100", "--camera-setting", "gain=32"]);
+    let out = run(&[
+        "--camera-setting",
+        "exposure=100",
+        "--camera-setting",
+        "gain=32",
+    ]);
     assert_clean_failure(
         &out,
         &[
@@ -420,8 +467,14 @@ fn the_simulated_cameras_at_the_old_settings_or_unflipped_stop_the_run_before_an
         ],
     );
     for (setting, words) in [
-        ("upper.flip=false", ["upper camera's flip is false", "upside down"]),
-        ("lower.flip=true", ["lower camera's flip is true", "upside down"]),
+        (
+            "upper.flip=false",
+            ["upper camera's flip is false", "upside down"],
+        ),
+        (
+            "lower.flip=true",
+            ["lower camera's flip is true", "upside down"],
+        ),
     ] {
         let out = run(&["--camera-setting", setting]);
         let mut needles = vec!["nothing was moved"];
@@ -453,9 +506,18 @@ fn a_command_cameras_first_picture_is_checked_before_anything_moves() {
     grey(&b.path("small.png"), 320, 240, 90);
     grey(&b.path("dark.png"), 640, 480, 4);
     for (name, message) in [
-        ("small.png", "the lower camera's first picture is 320×240 pixels; the dataset's intrinsics are for 640×480"),
-        ("corrupt.jpg", "the lower camera's first picture is not a readable JPEG"),
-        ("dark.png", "the lower camera's first picture is near black (mean brightness 4 of 255"),
+        (
+            "small.png",
+            "the lower camera's first picture is 320×240 pixels; the dataset's intrinsics are for 640×480",
+        ),
+        (
+            "corrupt.jpg",
+            "the lower camera's first picture is not a readable JPEG",
+        ),
+        (
+            "dark.png",
+            "the lower camera's first picture is near black (mean brightness 4 of 255",
+        ),
     ] {
         let camera = format!("command:cp '{}' {{path}}", b.path(name).display());
         let out = b
@@ -464,7 +526,10 @@ fn a_command_cameras_first_picture_is_checked_before_anything_moves() {
             .unwrap();
         assert_clean_failure(&out, &[message, "nothing was moved"]);
         assert!(!stderr(&out).contains("LoLA"), "{}", stderr(&out));
-        assert!(!b.path("ds/dataset.toml").exists(), "{name}: a dataset was begun");
+        assert!(
+            !b.path("ds/dataset.toml").exists(),
+            "{name}: a dataset was begun"
+        );
     }
 }
 

@@ -252,13 +252,30 @@ impl UsedSettings {
         }
         let v = &self.values;
         let mut pairs = vec![
-            ("flip", v.flip.map(|f| f.to_string()), recorded.flip.map(|f| f.to_string())),
-            ("exposure", v.exposure.map(|x| x.to_string()), recorded.exposure.map(|x| x.to_string())),
-            ("gain", v.gain.map(|x| x.to_string()), recorded.gain.map(|x| x.to_string())),
-            ("fps", v.fps.map(|x| x.to_string()), recorded.fps.map(|x| x.to_string())),
+            (
+                "flip",
+                v.flip.map(|f| f.to_string()),
+                recorded.flip.map(|f| f.to_string()),
+            ),
+            (
+                "exposure",
+                v.exposure.map(|x| x.to_string()),
+                recorded.exposure.map(|x| x.to_string()),
+            ),
+            (
+                "gain",
+                v.gain.map(|x| x.to_string()),
+                recorded.gain.map(|x| x.to_string()),
+            ),
+            (
+                "fps",
+                v.fps.map(|x| x.to_string()),
+                recorded.fps.map(|x| x.to_string()),
+            ),
         ];
         if self.white_balance {
-            let auto = |k: Option<u32>| k.map_or_else(|| "automatic".to_string(), |k| format!("{k} K"));
+            let auto =
+                |k: Option<u32>| k.map_or_else(|| "automatic".to_string(), |k| format!("{k} K"));
             pairs.push((
                 "white_balance_k",
                 Some(auto(v.white_balance_k)),
