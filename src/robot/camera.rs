@@ -282,13 +282,16 @@ impl CameraSpec {
     }
 }
 
+/// A camera opened and checked, with its first picture.
+pub type Opened = (Box<dyn Camera>, settings::FirstPicture);
+
 /// Every camera of a run opened ([`CameraSpec::open_checked`]: set up, read back, its
 /// first picture checked), in order, before anything moves; the first that is not fit
 /// stops it.
 pub fn open_all(
     cameras: &[(CameraId, CameraSpec, Setup)],
     scratch: &Path,
-) -> Result<Vec<(Box<dyn Camera>, settings::FirstPicture)>, CameraError> {
+) -> Result<Vec<Opened>, CameraError> {
     cameras
         .iter()
         .map(|(id, spec, setup)| spec.open_checked(*id, setup, scratch))

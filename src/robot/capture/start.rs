@@ -8,9 +8,9 @@ use crate::dataset::{self, DatasetError};
 use crate::model::{CameraId, Model};
 use crate::robot::camera::settings::{UsedSettings, table_name};
 
-use super::CaptureError;
 use super::plan::{PlanRow, check_cameras, check_plan, read_plan};
 use super::writer::DatasetOut;
+use super::{CaptureError, SettingsMismatch};
 
 /// A run ready to start: the plan, the robot, and the dataset it goes into.
 #[derive(Debug)]
@@ -91,13 +91,13 @@ impl Start {
                 continue;
             };
             if let Err((control, then, now)) = u.check_same(then) {
-                return Err(CaptureError::OtherSettings {
+                return Err(CaptureError::OtherSettings(Box::new(SettingsMismatch {
                     at: dataset::locate(&path, &format!("{}.{control}", table_name(u.camera))),
                     camera: u.camera,
                     control,
                     then,
                     now,
-                });
+                })));
             }
         }
         Ok(())
