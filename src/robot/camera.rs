@@ -701,6 +701,48 @@ mod tests {
         assert!(e.unwrap_err().to_string().contains("oops"));
     }
 
+    /// A command is given its camera's settings through the placeholders it takes (each
+    /// quoted); a flip that turns the picture upside down is refused at opening.
+    #[test]
+    fn a_command_camera_is_given_its_settings_and_a_wrong_flip_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let image = crate::sim::render::GreyImage {
+            width: 4,
+            height: 2,
+            pixels: vec![7; 8],
+        };
+        let src = dir.path().join("src.png");
+        std::fs::write(&src, image.to_png().unwrap()).unwrap();
+        let log = dir.path().join("given.txt");
+        let spec = CameraSpec::parse(&format!(
+            "command:echo {{camera}} {{flip}} {{exposure}} {{gain}} {{white_balance_k}} {{fps}} \
+             {{width}}x{{height}} > '{}'; cp '{}' {{path}}",
+            log.display(),
+            src.display()
+        ))
+        .unwrap();
+        let mut setup = Setup::defaults(CameraId::Upper, 1280, 960);
+        setup.settings.gain = 300;
+        spec.open(CameraId::Upper, &setup)
+            .unwrap()
+            .take(dir.path())
+            .unwrap();
+        assert_eq!(
+            std::fs::read_to_string(&log).unwrap(),
+            "upper 1 700 300 auto 30 1280x960\n"
+        );
+        setup.settings.flip = false;
+        let e = spec
+            .open(CameraId::Upper, &setup)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.contains("upside down") && e.contains("nothing was moved"),
+            "{e}"
+        );
+    }
+
     /// A command camera's first picture: size and brightness measured, a dark one and one
     /// of another size refused before anything moves.
     #[test]

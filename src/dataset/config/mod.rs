@@ -286,6 +286,43 @@ mod tests {
         assert!(e.contains("line 8"), "{e}");
     }
 
+    /// The capture settings written into a camera's table read back as written, with
+    /// the notes as comments; the model is the same as without them.
+    #[test]
+    fn settings_written_into_the_camera_tables_read_back() {
+        let path = Path::new("d/dataset.toml");
+        let mut model = Model::default();
+        model.upper_camera = Some(model.camera);
+        let lower = SettingsChanges {
+            flip: Some(false),
+            exposure: Some(1700),
+            gain: Some(250),
+            white_balance_k: None,
+            fps: Some(30),
+        };
+        let upper = SettingsChanges {
+            white_balance_k: Some(4000),
+            ..lower
+        };
+        let text = render_with_settings(
+            &model,
+            &AngleSource::default(),
+            &[(CameraId::Lower, lower), (CameraId::Upper, upper)],
+            &["how\nthey were set".into()],
+        )
+        .unwrap();
+        assert!(text.contains("\n# how they were set\n"), "{text}");
+        assert_eq!(parse(path, text.as_bytes()).unwrap(), model);
+        assert_eq!(
+            parse_settings(path, text.as_bytes()).unwrap(),
+            vec![(CameraId::Lower, lower), (CameraId::Upper, upper)]
+        );
+        assert_eq!(
+            render_with_settings(&model, &AngleSource::default(), &[], &[]).unwrap(),
+            render(&model, &AngleSource::default()).unwrap()
+        );
+    }
+
     #[test]
     fn minimal_file_gives_defaults() {
         let model = parse_str(MINIMAL).unwrap();

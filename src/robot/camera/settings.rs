@@ -642,6 +642,94 @@ mod tests {
         assert!(parse_setting("gain").unwrap_err().contains("KEY=VALUE"));
     }
 
+    /// A flip against the camera's mounting is refused (upper: flipped, lower: not).
+    #[test]
+    fn a_flip_that_turns_the_picture_upside_down_is_refused() {
+        let upper = CameraSettings::defaults(CameraId::Upper, 640, 480);
+        let lower = CameraSettings::defaults(CameraId::Lower, 640, 480);
+        assert!(upper.check_upright(CameraId::Upper).is_ok());
+        assert!(lower.check_upright(CameraId::Lower).is_ok());
+        let e = CameraSettings {
+            flip: false,
+            ..upper
+        }
+        .check_upright(CameraId::Upper)
+        .unwrap_err();
+        assert!(
+            e.contains("upper camera's flip is false")
+                && e.contains("[upper_camera] flip")
+                && e.contains("upside down"),
+            "{e}"
+        );
+        let e = CameraSettings {
+            flip: true,
+            ..lower
+        }
+        .check_upright(CameraId::Lower)
+        .unwrap_err();
+        assert!(
+            e.contains("lower camera's flip is true") && e.contains("leave flip at false"),
+            "{e}"
+        );
+    }
+
+    /// A command is given, and a dataset records, the settings whose placeholders it
+    /// takes; a V4L2 camera all of them. A resume is checked on what is driven now and
+    /// recorded then; a camera whose table records nothing is not checked.
+    #[test]
+    fn the_settings_used_are_those_a_command_takes_and_resumes_keep_them() {
+        let mut s = CameraSettings::defaults(CameraId::Lower, 640, 480);
+        let p = s.placeholders();
+        assert_eq!(p[0], ("{flip}", "0".to_string()));
+        assert_eq!(p[3], ("{white_balance_k}", "auto".to_string()));
+        assert_eq!(p[6], ("{height}", "480".to_string()));
+        assert!(PLACEHOLDERS.iter().zip(&p).all(|(a, (b, _))| a == b));
+        let given = UsedSettings::given_to(CameraId::Lower, &s, "grab -e {exposure} {path}");
+        assert_eq!(
+            given.values,
+            SettingsChanges {
+                exposure: Some(1700),
+                ..SettingsChanges::default()
+            }
+        );
+        assert!(given.exposes() && given.any() && !given.white_balance);
+        let none = UsedSettings::given_to(CameraId::Lower, &s, "grab {path}");
+        assert!(!none.any() && !none.exposes());
+        assert!(none.note().contains("took no settings"));
+        let all = UsedSettings::read_back(CameraId::Lower, &s);
+        assert_eq!(all.values, s.as_changes());
+        assert!(all.note().contains("[camera]") && all.note().contains("read them back"));
+        // Resumed: the same, a table recording nothing, another exposure, another white
+        // balance (automatic then).
+        assert!(all.check_same(&s.as_changes()).is_ok());
+        assert!(all.check_same(&SettingsChanges::default()).is_ok());
+        let mut then = s.as_changes();
+        then.exposure = Some(900);
+        assert_eq!(
+            all.check_same(&then).unwrap_err(),
+            (
+                "exposure".to_string(),
+                "900".to_string(),
+                "1700".to_string()
+            )
+        );
+        assert!(given.check_same(&then).is_err());
+        assert!(
+            none.check_same(&then).is_ok(),
+            "nothing driven, nothing to check"
+        );
+        s.white_balance = Some(4000);
+        let fixed = UsedSettings::read_back(CameraId::Lower, &s);
+        assert_eq!(
+            fixed.check_same(&all.values).unwrap_err(),
+            (
+                "white_balance_k".to_string(),
+                "automatic".to_string(),
+                "4000 K".to_string()
+            )
+        );
+    }
+
     #[test]
     fn dark_saturated_and_wrong_sized_first_pictures_say_what_to_change() {
         let s = CameraSettings::defaults(CameraId::Lower, 640, 480);
