@@ -11,7 +11,7 @@ use clap::Args;
 
 use naocalib::model::{CameraId, Model};
 use naocalib::robot::camera::settings::{self, SettingsChanges, settings_for};
-use naocalib::robot::camera::{CameraSpec, Setup};
+use naocalib::robot::camera::{CameraSpec, Setup, guard};
 use naocalib::robot::capture::{self, CaptureError, Forecast};
 use naocalib::robot::check::{self, CheckReport};
 use naocalib::robot::lola::{self, Connection, Replay};
@@ -105,33 +105,55 @@ impl CaptureArgs {
         Ok(specs)
     }
 
-    /// How each camera of `specs` is set up for the robot `model`: the team defaults,
-    /// `config`'s `[camera]`/`[upper_camera]` settings over them, `--camera-setting` over
-    /// those, and the waits.
-    fn setup(&self, model: &Model, config: &Path, id: CameraId) -> Result<Setup> {
+    /// Each camera of `--camera` with how it is set up for the robot `model`: the team
+    /// defaults, `config`'s `[camera]`/`[upper_camera]` settings over them,
+    /// `--camera-setting` over those, the waits, and naocalib itself as the guard of a
+    /// `command:` camera.
+    fn setups(&self, model: &Model, config: &Path) -> Result<Vec<(CameraId, CameraSpec, Setup)>> {
         let file_settings = naocalib::dataset::read_camera_settings(config)?;
-        Ok(Setup {
-            settings: settings_for(id, model, &file_settings, &self.camera_setting),
-            frame_timeout: Duration::from_secs_f64(self.frame_timeout),
-            command_timeout: Duration::from_secs_f64(self.camera_timeout),
-        })
+        let guard = std::env::current_exe().ok();
+        Ok(self
+            .cameras()?
+            .into_iter()
+            .map(|(id, spec)| {
+                let setup = Setup {
+                    settings: settings_for(id, model, &file_settings, &self.camera_setting),
+                    frame_timeout: Duration::from_secs_f64(self.frame_timeout),
+                    command_timeout: Duration::from_secs_f64(self.camera_timeout),
+                    guard: guard.clone(),
+                };
+                (id, spec, setup)
+            })
+            .collect())
     }
+}
+
+/// `naocalib camera-guard --parent PID -- LINE` (hidden): the guard capture runs each
+/// `command:` camera's picture under (`naocalib::robot::camera::guard`).
+#[derive(Debug, Args)]
+pub struct CameraGuardArgs {
+    /// The capture process the guard belongs to.
+    #[arg(long)]
+    parent: u32,
+    /// The command line, for `sh -c`.
+    #[arg(last = true, required = true)]
+    line: String,
+}
+
+/// Runs the guard; it returns only when it could not kill its group.
+pub fn guard(args: &CameraGuardArgs) -> Result<ExitCode> {
+    Err(guard::run(args.parent, &args.line).into())
 }
 
 /// Runs `naocalib capture --check DIR`: prints the table; exit 1 when something does not
 /// hold.
 fn dry_run(args: &CaptureArgs, save: &Path) -> Result<ExitCode> {
     let options = args.options()?;
-    let specs = args.cameras()?;
     let Some(config) = &args.config else {
         bail!("--check needs --config DATASET_TOML (the robot's cameras)");
     };
     let model = naocalib::dataset::read_model(config)?;
-    let mut cameras = Vec::new();
-    for (id, spec) in specs {
-        let setup = args.setup(&model, config, id)?;
-        cameras.push((id, spec, setup));
-    }
+    let cameras = args.setups(&model, config)?;
     let report = check::dry_run(&args.plan, &model, &cameras, &args.lola, &options, save)?;
     print!("{}", report.table());
     if report.ready() {
@@ -155,8 +177,7 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         bail!("OUT is needed (the dataset directory to write)");
     };
     let options = args.options()?;
-    let specs = args.cameras()?;
-    let given: Vec<CameraId> = specs.iter().map(|(c, _)| *c).collect();
+    let given: Vec<CameraId> = args.cameras()?.iter().map(|(c, _)| *c).collect();
     // Every row checked before anything is written or moved.
     let mut start = Start::new(
         &args.plan,
@@ -166,35 +187,43 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         &given,
         options.joint_margin,
     )?;
-    for (id, why) in start.retake() {
-        note!("capture {id} will be taken again ({why})");
-    }
-    // Every camera set up, read back and (V4L2) its first picture checked before anything
-    // moves.
+    // What is said before the robot is reached goes through the terminal's thread once
+    // there is one: a terminal that stops reading must not hold up the run.
+    let mut said: Vec<String> = start
+        .retake()
+        .iter()
+        .map(|(id, why)| format!("capture {id} will be taken again ({why})"))
+        .collect();
+    // Every camera set up (read back for V4L2), its settings those the dataset records
+    // (with --resume), and its first picture checked before anything moves.
     let config = match &args.config {
         Some(config) => config.clone(),
         None => dir.join("dataset.toml"),
     };
+    let setups = args.setups(&start.model, &config)?;
+    let used: Vec<_> = setups
+        .iter()
+        .map(|(id, spec, setup)| spec.used(*id, &setup.settings))
+        .collect();
+    start.check_settings(&used)?;
     let scratch = tempfile::tempdir().context("cannot create a scratch directory")?;
     let mut cameras = Vec::new();
-    for (id, spec) in &specs {
-        let setup = args.setup(&start.model, &config, *id)?;
-        let camera = match spec {
-            CameraSpec::V4l2(device) => {
-                let (camera, first) = spec.open_checked(*id, &setup, scratch.path())?;
-                note!(
-                    "{id} camera ({}): {} — set and read back; first picture {}×{}, mean \
-                     brightness {:.0} of 255",
-                    device.display(),
-                    setup.settings,
-                    first.size.0,
-                    first.size.1,
-                    first.brightness.mean
-                );
-                camera
-            }
-            CameraSpec::Command(_) => spec.open(*id, &setup)?,
+    for ((id, spec, setup), (camera, first)) in setups
+        .iter()
+        .zip(naocalib::robot::camera::open_all(&setups, scratch.path())?)
+    {
+        let how = match spec {
+            CameraSpec::V4l2(device) => format!(
+                "{}: {} — set and read back",
+                device.display(),
+                setup.settings
+            ),
+            CameraSpec::Command(_) => "command".to_string(),
         };
+        said.push(format!(
+            "{id} camera ({how}); first picture {}×{}, mean brightness {:.0} of 255",
+            first.size.0, first.size.1, first.brightness.mean
+        ));
         cameras.push((*id, camera));
     }
     let stop = capture::stop_on_signals().context("cannot watch for Ctrl-C, SIGTERM or SIGHUP")?;
@@ -206,10 +235,13 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         return Err(CaptureError::NotReady(report.blocking()).into());
     }
     let mut link = Replay::new(first, &mut connection);
-    let out = start.open()?;
+    let out = start.open(&used)?;
     let (model, rows) = (&start.model, &start.rows);
     let mut forecast = Forecast::new(model, &out.todo(rows), &options);
     let terminal = Terminal::spawn(rows.len());
+    for line in said {
+        terminal.send(Print::Line(line));
+    }
     terminal.send(Print::Progress(
         out.len() as u64,
         format!(", {:.0} s of robot time planned", forecast.left()),

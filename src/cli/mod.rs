@@ -76,6 +76,9 @@ enum Command {
     /// Find the sandal's vertices in a dataset's images with OpenCV; write corners.csv.
     #[cfg(feature = "detect")]
     Detect(detect::DetectArgs),
+    /// The guard of a `command:` camera's processes (capture's own use).
+    #[command(name = "camera-guard", hide = true)]
+    CameraGuard(capture::CameraGuardArgs),
 }
 
 /// A progress bar on stderr over `len` items called `what` (`images`, `datasets`): done,
@@ -163,5 +166,6 @@ pub fn run(cli: &Cli) -> Result<ExitCode> {
         Command::Sandal(args) => sandal::run(args),
         #[cfg(feature = "detect")]
         Command::Detect(args) => detect::run(args),
+        Command::CameraGuard(args) => capture::guard(args),
     }
 }

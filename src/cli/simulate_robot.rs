@@ -12,7 +12,7 @@ use rand_chacha::ChaCha8Rng;
 
 use naocalib::model::{CameraId, Family, Joint, JointAngles, Model, PARAMETER_COUNT};
 use naocalib::robot::body::Lying;
-use naocalib::robot::simulated::{self, Faults, RobotOptions};
+use naocalib::robot::simulated::{self, Faults, RobotOptions, SnapSettings};
 use naocalib::sim::render::RenderOptions;
 
 use super::options::within;
@@ -103,7 +103,28 @@ enum SnapCommand {
         /// dataset.toml).
         #[arg(long, default_value = "lower", value_parser = camera_id)]
         camera: CameraId,
+        /// The sensor's flip (1 or 0): the upper camera's picture is upright only
+        /// flipped, the lower's only unflipped; not given: unflipped, as the sensor
+        /// starts (capture gives `--flip {flip}`).
+        #[arg(long, value_parser = flip)]
+        flip: Option<bool>,
+        /// Manual exposure (driver units, with --gain): the picture's brightness scales
+        /// with exposure × gain, the scene as rendered at the team settings (upper 700 ×
+        /// 800, lower 1700 × 250); not given: automatic exposure.
+        #[arg(long, requires = "gain", value_parser = clap::value_parser!(u32).range(0..=1_048_575))]
+        exposure: Option<u32>,
+        /// Gain (driver units, with --exposure).
+        #[arg(long, requires = "exposure", value_parser = clap::value_parser!(u32).range(0..=1023))]
+        gain: Option<u32>,
     },
+}
+
+fn flip(text: &str) -> Result<bool, String> {
+    match text {
+        "1" | "true" => Ok(true),
+        "0" | "false" => Ok(false),
+        _ => Err(format!("'{text}': expected 1 or 0")),
+    }
 }
 
 fn camera_id(name: &str) -> Result<CameraId, String> {
@@ -145,10 +166,24 @@ pub fn run(args: &SimulateRobotArgs) -> Result<ExitCode> {
         path,
         state: file,
         camera,
+        flip,
+        exposure,
+        gain,
     }) = &args.snap
     {
         let state = simulated::read_state(file)?;
-        simulated::snap(&state, file, *camera, path, &RenderOptions::default())?;
+        let settings = SnapSettings {
+            flip: flip.unwrap_or(false),
+            manual: exposure.zip(*gain),
+        };
+        simulated::snap(
+            &state,
+            file,
+            *camera,
+            &settings,
+            path,
+            &RenderOptions::default(),
+        )?;
         return Ok(ExitCode::SUCCESS);
     }
     let Some(socket) = &args.lola else {

@@ -382,6 +382,28 @@ pub fn read_model(path: &Path) -> Result<Model, DatasetError> {
     config::parse(path, &bytes.unwrap_or_default())
 }
 
+/// `dataset.toml` as `naocalib capture` writes it: `model` (validated; raw joint angles)
+/// with the capture settings each camera was driven with in its table (`settings`, the
+/// keys of [`crate::robot::camera::settings::SETTING_KEYS`]) and `notes` as comment lines
+/// under the header. `path` names the file in errors.
+pub fn render_captured(
+    path: &Path,
+    model: &Model,
+    settings: &[(
+        crate::model::CameraId,
+        crate::robot::camera::settings::SettingsChanges,
+    )],
+    notes: &[String],
+) -> Result<String, DatasetError> {
+    config::validate(path, model)?;
+    config::render_with_settings(model, &AngleSource::default(), settings, notes).map_err(|e| {
+        DatasetError::invalid(
+            Location::file(path),
+            format!("cannot be written as TOML: {e}"),
+        )
+    })
+}
+
 /// Reads the capture settings of a `dataset.toml` (`[camera]` and `[upper_camera]`'s
 /// `flip`, `exposure`, `gain`, `white_balance_k`, `fps`): per camera with a table, what it
 /// changes of the defaults ([`crate::robot::camera::settings::CameraSettings::defaults`]).

@@ -9,7 +9,11 @@
 //! lines 110–146: `FacingUp` when the negated reading is within
 //! `gravitational_acceleration_threshold` of (g, 0, 0); `etc/parameters/default.json` line
 //! 782: 7.0), after HULKs' low-pass filter of the accelerometer (`default.json` line 779,
-//! `linear_acceleration_low_pass_factor` 0.05). `Angles` must agree (torso pitched back).
+//! `linear_acceleration_low_pass_factor` 0.05). `Angles` must agree: the torso pitched
+//! back by more than 60°, NaoTH's "lying on back" (`BodyStateProvider.cpp` lines 100–101,
+//! `avg.y < -getup_threshold` over LoLA's `Angles`; `getup_threshold=60` in
+//! `Config/scheme/NaoTHLabor/BodyStateParameters.cfg` line 3, the scheme `scheme.cfg`
+//! selects; NaoTH 79e1e750).
 
 use crate::model::Joint;
 
@@ -149,7 +153,8 @@ pub struct BodyLimits {
     /// The torso may turn this far (rad) from how it lay at the start; farther, the robot
     /// rolled over and the run stops.
     pub max_turn: f64,
-    /// `Angles`' pitch (rad) must be at most this to agree that the torso lies back.
+    /// `Angles`' pitch (rad) must be below this to agree that the torso lies back
+    /// (NaoTH's −60°).
     pub max_pitch: f64,
     /// The chest button stops the run when pressed in this many cycles in a row.
     pub chest_cycles: u32,
@@ -163,7 +168,10 @@ pub struct BodyLimits {
 impl Default for BodyLimits {
     /// HULKs' facing threshold (7 m/s²) and filter (0.05); a turn of 20° (lying on its
     /// back the torso rocks by a few degrees as the legs move; rolling onto a side turns
-    /// it by 90°); `Angles` pitched back by at least 45°; the chest button held 3 cycles
+    /// it by 90°; naocalib's own: no team code watches a robot lying still for a turn, the
+    /// nearest thresholds being NaoTH's 60° for lying on a side and B-Human's 55° to tell
+    /// how a fallen robot lies, `fallDownStateProvider.cfg` line 18); `Angles` pitched back
+    /// by more than 60° (NaoTH's `getup_threshold`); the chest button held 3 cycles
     /// (36 ms: nothing else uses it during a capture; B-Human `NaoProvider.cpp` lines
     /// 325–331 and NaoTH `LolaAdaptor.cpp` lines 159–168 shut down after 3 s, as the
     /// button has other uses in a game); status 2 (nao_lola `JointStatuses.msg`: "stiffness
@@ -175,7 +183,7 @@ impl Default for BodyLimits {
             facing: 7.0,
             low_pass: 0.05,
             max_turn: 20f64.to_radians(),
-            max_pitch: -45f64.to_radians(),
+            max_pitch: -60f64.to_radians(),
             chest_cycles: 3,
             stop_status: 2,
             min_battery: 0.05,
@@ -292,7 +300,7 @@ fn norm(v: &[f32; 3]) -> f64 {
 pub fn lying(limits: &BodyLimits, message: &SensorMessage) -> Lying {
     match Lying::of(up(message), limits.facing) {
         Lying::OnBack
-            if (message.angles[1] as f64 > limits.max_pitch) || message.angles[1].is_nan() =>
+            if (message.angles[1] as f64 >= limits.max_pitch) || message.angles[1].is_nan() =>
         {
             Lying::Tilted
         }
@@ -436,6 +444,9 @@ mod tests {
             ([-6.94, -6.94, 0.0], [0.0, -half], Lying::Tilted),
             // The accelerometer on its back, angles upright: they disagree.
             ([-9.81, 0.0, 0.0], [0.0, 0.0], Lying::Tilted),
+            // Pitched back by 65° and by 55°: on its back only beyond NaoTH's 60°.
+            ([-9.81, 0.0, 0.0], [0.0, -1.134], Lying::OnBack),
+            ([-9.81, 0.0, 0.0], [0.0, -0.96], Lying::Tilted),
         ];
         for (acc, angles, expected) in cases {
             assert_eq!(lying(&limits, &lying_as(acc, angles)), expected, "{acc:?}");

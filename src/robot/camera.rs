@@ -2,11 +2,17 @@
 //! `v4l2` feature; the `v4l2` module) set as [`settings`] says, or any command that writes a PNG or
 //! JPEG (`command:CMD {path}`).
 //!
+//! A `command:` camera is given its camera's settings through placeholders (`{flip}`,
+//! `{exposure}`, `{gain}`, … [`settings::PLACEHOLDERS`]) and runs under a guard (the
+//! [`guard`] module, `naocalib camera-guard`) that kills every process the command starts
+//! when capture dies, by whatever signal.
+//!
 //! A picture belongs to its stance only if its exposure began after the stance settled:
 //! V4L2 frames are checked by their buffer timestamps; a `command:` grabber must itself
 //! deliver a frame whose exposure began after it was started (a framework that streams
 //! continuously must wait for the next frame, not hand over one it already holds).
 
+pub mod guard;
 pub mod settings;
 #[cfg(feature = "v4l2")]
 pub mod v4l2;
@@ -17,6 +23,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use crate::model::CameraId;
+use settings::UsedSettings;
 
 /// A picture as taken: the encoded image and its extension (`png` or `jpg`).
 #[derive(Debug, Clone, PartialEq)]
@@ -128,6 +135,9 @@ pub enum CameraError {
     /// A camera's first picture is not fit to calibrate with (size, near black, saturated).
     #[error("{0}; nothing was moved")]
     FirstPicture(String),
+    /// A camera's flip would turn its pictures upside down.
+    #[error("{0}; nothing was moved")]
+    UpsideDown(String),
     /// A file could not be read or a process started.
     #[error("camera: {0}")]
     Io(#[from] std::io::Error),
@@ -188,12 +198,20 @@ impl CameraSpec {
     }
 
     /// Opens `camera` (`{camera}` in a command stands for its name): a V4L2 device is set
-    /// to `setup.settings`, every value read back; a command is only remembered.
+    /// to `setup.settings`, every value read back; a command is only remembered, with the
+    /// settings its placeholders stand for. Settings whose flip would turn the pictures
+    /// upside down are refused ([`settings::CameraSettings::check_upright`]).
     pub fn open(&self, camera: CameraId, setup: &Setup) -> Result<Box<dyn Camera>, CameraError> {
+        setup
+            .settings
+            .check_upright(camera)
+            .map_err(CameraError::UpsideDown)?;
         match self {
             CameraSpec::Command(command) => Ok(Box::new(CommandCamera {
                 command: command.clone(),
                 name: camera.name().to_string(),
+                settings: setup.settings,
+                guard: setup.guard.clone(),
                 timeout: setup.command_timeout,
                 count: 0,
                 cancel: Arc::new(AtomicBool::new(false)),
@@ -213,10 +231,20 @@ impl CameraSpec {
         }
     }
 
+    /// The settings `camera` is driven with when opened with `settings`: all of them,
+    /// read back, for a V4L2 device; those its placeholders take for a command.
+    pub fn used(&self, camera: CameraId, settings: &settings::CameraSettings) -> UsedSettings {
+        match self {
+            CameraSpec::V4l2(_) => UsedSettings::read_back(camera, settings),
+            CameraSpec::Command(command) => UsedSettings::given_to(camera, settings, command),
+        }
+    }
+
     /// Opens `camera` as [`CameraSpec::open`] does, takes one picture and checks it
     /// ([`settings::check_first`]: the size of `setup.settings`, neither near black nor
-    /// saturated): the camera and its first picture (with the settings applied and read
-    /// back for a V4L2 device), or why it is not fit — before anything moves.
+    /// saturated), for a V4L2 device and a command alike: the camera and its first picture
+    /// (with the settings applied and read back for a V4L2 device), or why it is not fit —
+    /// before anything moves.
     pub fn open_checked(
         &self,
         camera: CameraId,
@@ -231,12 +259,13 @@ impl CameraSpec {
         let brightness = settings::Brightness::of_grey(&grey);
         let applied = matches!(self, CameraSpec::V4l2(_)).then_some(setup.settings);
         let s = &setup.settings;
+        let used = self.used(camera, s);
         settings::check_first(
             camera,
             size,
             (s.width, s.height),
             &brightness,
-            applied.as_ref(),
+            used.exposes().then_some(s),
         )
         .map_err(CameraError::FirstPicture)?;
         Ok((
@@ -244,6 +273,7 @@ impl CameraSpec {
             settings::FirstPicture {
                 camera,
                 settings: applied,
+                used,
                 size,
                 brightness,
                 picture,
@@ -252,25 +282,47 @@ impl CameraSpec {
     }
 }
 
-/// How a camera is opened: its settings (V4L2) and how long a picture may take.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// A camera opened and checked, with its first picture.
+pub type Opened = (Box<dyn Camera>, settings::FirstPicture);
+
+/// Every camera of a run opened ([`CameraSpec::open_checked`]: set up, read back, its
+/// first picture checked), in order, before anything moves; the first that is not fit
+/// stops it.
+pub fn open_all(
+    cameras: &[(CameraId, CameraSpec, Setup)],
+    scratch: &Path,
+) -> Result<Vec<Opened>, CameraError> {
+    cameras
+        .iter()
+        .map(|(id, spec, setup)| spec.open_checked(*id, setup, scratch))
+        .collect()
+}
+
+/// How a camera is opened: its settings and how long a picture may take.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Setup {
-    /// What a V4L2 camera is set to (its size is also what every picture must have).
+    /// What a V4L2 camera is set to, and what a command's placeholders stand for (its size
+    /// is also what every picture must have).
     pub settings: settings::CameraSettings,
     /// The longest wait for one V4L2 frame (a stalled stream is restarted once after it).
     pub frame_timeout: Duration,
     /// The longest a `command:` camera may take for a picture.
     pub command_timeout: Duration,
+    /// The program whose `camera-guard` subcommand ([`guard`]) runs each `command:`
+    /// picture (naocalib itself); `None`: the command runs without a guard, and what it
+    /// starts in the background may outlive a capture killed by SIGKILL.
+    pub guard: Option<PathBuf>,
 }
 
 impl Setup {
     /// The team defaults of `camera` at `width`×`height` ([`settings::CameraSettings::defaults`]),
-    /// a 1 s frame timeout, 10 s for a command.
+    /// a 1 s frame timeout, 10 s for a command, no guard.
     pub fn defaults(camera: CameraId, width: u32, height: u32) -> Setup {
         Setup {
             settings: settings::CameraSettings::defaults(camera, width, height),
             frame_timeout: Duration::from_secs(1),
             command_timeout: Duration::from_secs(10),
+            guard: None,
         }
     }
 }
@@ -291,22 +343,27 @@ fn shell_quote(text: &str) -> String {
     format!("'{}'", text.replace('\'', r"'\''"))
 }
 
-/// `command:CMD {path}`: runs CMD with `sh -c`, `{path}` replaced by a fresh file name and
-/// `{camera}` by the camera's name (`lower`, `upper`), and reads the PNG or JPEG it wrote
-/// there. CMD runs in a process group of its own, which is
-/// killed as a whole when it takes too long or the run stops.
+/// `command:CMD {path}`: runs CMD with `sh -c`, `{path}` replaced by a fresh file name,
+/// `{camera}` by the camera's name (`lower`, `upper`) and the settings' placeholders
+/// ([`settings::PLACEHOLDERS`]) by their values, and reads the PNG or JPEG it wrote there.
+/// CMD runs in a process group of its own (under the [`guard`] when one is given), which
+/// is killed as a whole when it takes too long, when the run stops, when CMD is done, and
+/// (through the guard) when capture dies.
 #[derive(Debug)]
 pub struct CommandCamera {
     command: String,
     name: String,
+    settings: settings::CameraSettings,
+    guard: Option<PathBuf>,
     timeout: Duration,
     count: u64,
     cancel: Arc<AtomicBool>,
 }
 
 /// Makes the process `command` starts die with the thread that starts it (Linux's
-/// `PR_SET_PDEATHSIG`): a camera command that is one process (the shell exec'd it) is
-/// killed by the kernel even when capture itself is killed and cannot kill its group.
+/// `PR_SET_PDEATHSIG`) — used for a command run without a guard: a camera command that
+/// is one process (the shell exec'd it) is killed by the kernel even when capture itself
+/// is killed and cannot kill its group.
 fn die_with_parent(command: &mut std::process::Command) {
     #[cfg(target_os = "linux")]
     {
@@ -340,27 +397,85 @@ fn kill_group(child: &mut std::process::Child) {
     let _ = child.wait();
 }
 
+/// Reads what is in `pipe` now, without waiting for more (a process that left the group
+/// may hold it open).
+fn read_available(pipe: Option<impl std::io::Read + std::os::fd::AsRawFd>) -> String {
+    let Some(mut pipe) = pipe else {
+        return String::new();
+    };
+    // SAFETY: fcntl on an open descriptor this process owns.
+    unsafe {
+        let fd = pipe.as_raw_fd();
+        let flags = libc::fcntl(fd, libc::F_GETFL);
+        libc::fcntl(fd, libc::F_SETFL, flags | libc::O_NONBLOCK);
+    }
+    let mut bytes = Vec::new();
+    let mut buf = [0u8; 4096];
+    while bytes.len() < 65536 {
+        match std::io::Read::read(&mut pipe, &mut buf) {
+            Ok(n) if n > 0 => bytes.extend_from_slice(&buf[..n]),
+            _ => break,
+        }
+    }
+    String::from_utf8_lossy(&bytes).into_owned()
+}
+
+impl CommandCamera {
+    /// The command line of picture `path`: `{path}`, `{camera}` and the settings'
+    /// placeholders replaced (each value quoted for `sh`).
+    fn line(&self, path: &Path) -> String {
+        let mut line = self
+            .command
+            .replace("{path}", &shell_quote(&path.to_string_lossy()))
+            .replace("{camera}", &shell_quote(&self.name));
+        for (placeholder, value) in self.settings.placeholders() {
+            line = line.replace(placeholder, &shell_quote(&value));
+        }
+        line
+    }
+
+    /// Starts `line`: under the guard (`naocalib camera-guard`, which reports how the
+    /// command ended on its standard output) when there is one, else `sh -c` itself; in a
+    /// process group of its own either way.
+    fn spawn(&self, line: &str) -> std::io::Result<std::process::Child> {
+        use std::os::unix::process::CommandExt as _;
+        use std::process::Stdio;
+        let mut command = match &self.guard {
+            Some(program) => {
+                let mut c = std::process::Command::new(program);
+                c.arg(guard::SUBCOMMAND)
+                    .arg("--parent")
+                    .arg(std::process::id().to_string())
+                    .arg("--")
+                    .arg(line)
+                    .stdout(Stdio::piped());
+                c
+            }
+            None => {
+                let mut c = std::process::Command::new("sh");
+                c.arg("-c").arg(line).stdout(Stdio::null());
+                die_with_parent(&mut c);
+                c
+            }
+        };
+        command
+            .process_group(0)
+            .stdin(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+    }
+}
+
 impl Camera for CommandCamera {
     fn take(&mut self, scratch: &Path) -> Result<Picture, CameraError> {
         self.count += 1;
         let path = scratch.join(format!("picture-{}", self.count));
         let _ = std::fs::remove_file(&path);
-        let line = self
-            .command
-            .replace("{path}", &shell_quote(&path.to_string_lossy()))
-            .replace("{camera}", &shell_quote(&self.name));
+        let line = self.line(&path);
         if self.cancel.load(Ordering::Relaxed) {
             return Err(CameraError::Cancelled(self.command.clone()));
         }
-        use std::os::unix::process::CommandExt as _;
-        let mut command = std::process::Command::new("sh");
-        command.arg("-c").arg(&line).process_group(0);
-        die_with_parent(&mut command);
-        let mut child = command
-            .stdin(std::process::Stdio::null())
-            .stdout(std::process::Stdio::null())
-            .stderr(std::process::Stdio::piped())
-            .spawn()?;
+        let mut child = self.spawn(&line)?;
         let start = Instant::now();
         let status = loop {
             if let Some(status) = child.try_wait()? {
@@ -379,20 +494,24 @@ impl Camera for CommandCamera {
             }
             std::thread::sleep(Duration::from_millis(2));
         };
-        // Whatever CMD left running in its group goes with it.
+        // Whatever CMD left running in its group goes with it (the guard has killed the
+        // group already).
         unsafe {
             libc::kill(-(child.id() as libc::pid_t), libc::SIGKILL);
         }
-        if !status.success() {
-            let mut stderr = String::new();
-            if let Some(mut e) = child.stderr.take() {
-                use std::io::Read as _;
-                let _ = e.read_to_string(&mut stderr);
-            }
+        let ended = match &self.guard {
+            Some(_) => guard::Ended::read(&read_available(child.stdout.take())),
+            None => Some(guard::Ended::of(status)),
+        };
+        if ended != Some(guard::Ended::Exit(0)) {
+            let stderr = read_available(child.stderr.take());
             let stderr: String = stderr.trim().chars().take(400).collect();
             return Err(CameraError::Command {
                 command: self.command.clone(),
-                status: status.to_string(),
+                status: ended.map_or_else(
+                    || format!("was stopped from outside ({status})"),
+                    |e| e.to_string(),
+                ),
                 stderr,
             });
         }
@@ -580,6 +699,48 @@ mod tests {
         let spec = CameraSpec::parse("command:echo oops >&2; false {path}").unwrap();
         let e = spec.open(CameraId::Lower, &setup).unwrap().take(dir.path());
         assert!(e.unwrap_err().to_string().contains("oops"));
+    }
+
+    /// A command is given its camera's settings through the placeholders it takes (each
+    /// quoted); a flip that turns the picture upside down is refused at opening.
+    #[test]
+    fn a_command_camera_is_given_its_settings_and_a_wrong_flip_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let image = crate::sim::render::GreyImage {
+            width: 4,
+            height: 2,
+            pixels: vec![7; 8],
+        };
+        let src = dir.path().join("src.png");
+        std::fs::write(&src, image.to_png().unwrap()).unwrap();
+        let log = dir.path().join("given.txt");
+        let spec = CameraSpec::parse(&format!(
+            "command:echo {{camera}} {{flip}} {{exposure}} {{gain}} {{white_balance_k}} {{fps}} \
+             {{width}}x{{height}} > '{}'; cp '{}' {{path}}",
+            log.display(),
+            src.display()
+        ))
+        .unwrap();
+        let mut setup = Setup::defaults(CameraId::Upper, 1280, 960);
+        setup.settings.gain = 300;
+        spec.open(CameraId::Upper, &setup)
+            .unwrap()
+            .take(dir.path())
+            .unwrap();
+        assert_eq!(
+            std::fs::read_to_string(&log).unwrap(),
+            "upper 1 700 300 auto 30 1280x960\n"
+        );
+        setup.settings.flip = false;
+        let e = spec
+            .open(CameraId::Upper, &setup)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.contains("upside down") && e.contains("nothing was moved"),
+            "{e}"
+        );
     }
 
     /// A command camera's first picture: size and brightness measured, a dark one and one

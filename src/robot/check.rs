@@ -12,7 +12,7 @@ use crate::model::{CameraId, Model};
 use crate::output::{WriteOptions, write_atomic};
 
 use super::body::{self, Lying};
-use super::camera::settings::Brightness;
+use super::camera::settings::{self, Brightness, CameraSettings};
 use super::camera::{Camera, CameraError, CameraSpec, Picture, Setup, decode_grey};
 use super::capture::{CaptureError, CaptureOptions, check_cameras, check_plan, read_plan};
 use super::lola::{
@@ -22,11 +22,9 @@ use super::plausible::Believed;
 use super::safety::SafetyLimits;
 
 /// Darkest mean brightness (0 … 255) a picture may have: below it the board cannot be
-/// found (the teams' exposures give a mean near the middle; a V6 camera at too short an
-/// exposure gives a nearly black picture).
-pub const MIN_BRIGHTNESS: f64 = 30.0;
-/// Brightest mean brightness (0 … 255): above it the picture is saturated.
-pub const MAX_BRIGHTNESS: f64 = 225.0;
+/// found ([`settings::DARK_MEAN`], the one threshold of capture, its dry run and
+/// detection).
+pub const MIN_BRIGHTNESS: f64 = settings::DARK_MEAN;
 
 /// LoLA messages the dry run reads: 1 s.
 pub const CHECK_CYCLES: u32 = 84;
@@ -309,8 +307,12 @@ pub fn dry_run(
         ),
     ));
     for (id, spec, setup) in cameras {
+        let applied = spec
+            .used(*id, &setup.settings)
+            .exposes()
+            .then_some(&setup.settings);
         report.checks.push(match spec.open(*id, setup) {
-            Ok(mut opened) => camera(model, *id, opened.as_mut(), Some(save)),
+            Ok(mut opened) => camera(model, *id, opened.as_mut(), applied, Some(save)),
             Err(e) => Check::new(format!("{} camera", id.name()), false, e.to_string()),
         });
     }
@@ -340,10 +342,18 @@ pub fn take_one(camera: &mut dyn Camera, scratch: &Path) -> Result<Picture, Came
     camera.take(scratch)
 }
 
-/// The check of the `id` camera of the robot `model`: one picture taken, of the size of
-/// its intrinsics, neither too dark nor saturated; saved into `save` (as `{camera}.png`
-/// or `.jpg`) for a person to look at, when given.
-pub fn camera(model: &Model, id: CameraId, camera: &mut dyn Camera, save: Option<&Path>) -> Check {
+/// The check of the `id` camera of the robot `model`: one picture taken and checked as
+/// capture checks its first picture ([`settings::check_first`]: the size of its
+/// intrinsics, neither near black nor saturated; `settings` are those applied, for the
+/// message); saved into `save` (as `{camera}.png` or `.jpg`) for a person to look at,
+/// when given.
+pub fn camera(
+    model: &Model,
+    id: CameraId,
+    camera: &mut dyn Camera,
+    settings: Option<&CameraSettings>,
+    save: Option<&Path>,
+) -> Check {
     let item = format!("{} camera", id.name());
     let scratch = match tempfile::tempdir() {
         Ok(dir) => dir,
@@ -353,10 +363,11 @@ pub fn camera(model: &Model, id: CameraId, camera: &mut dyn Camera, save: Option
         Ok(p) => p,
         Err(e) => return Check::new(item, false, e.to_string()),
     };
-    let ((w, h), mean) = match brightness(&picture.bytes) {
+    let ((w, h), grey) = match decode_grey(&picture.bytes) {
         Ok(found) => found,
         Err(e) => return Check::new(item, false, format!("its picture {e}")),
     };
+    let brightness = Brightness::of_grey(&grey);
     let saved = save.map(|dir| -> Result<PathBuf, String> {
         let path = dir.join(format!("{}.{}", id.name(), picture.extension));
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -365,23 +376,12 @@ pub fn camera(model: &Model, id: CameraId, camera: &mut dyn Camera, save: Option
     });
     let size = model.intrinsics(id);
     let mut problems = Vec::new();
-    if (w, h) != (size.width, size.height) {
-        problems.push(format!(
-            "its intrinsics are for {}×{}",
-            size.width, size.height
-        ));
+    if let Err(e) =
+        settings::check_first(id, (w, h), (size.width, size.height), &brightness, settings)
+    {
+        problems.push(e);
     }
-    if mean < MIN_BRIGHTNESS {
-        problems.push(format!(
-            "too dark (at least {MIN_BRIGHTNESS:.0}): raise the exposure or gain, or light \
-             the boards"
-        ));
-    } else if mean > MAX_BRIGHTNESS {
-        problems.push(format!(
-            "saturated (at most {MAX_BRIGHTNESS:.0}): lower the exposure or gain"
-        ));
-    }
-    let mut detail = format!("{w}×{h}, brightness {mean:.0} of 255");
+    let mut detail = format!("{w}×{h}, brightness {:.0} of 255", brightness.mean);
     match saved {
         Some(Ok(path)) => detail.push_str(&format!(", saved to {}", path.display())),
         Some(Err(e)) => problems.push(format!("not saved: {e}")),
@@ -428,6 +428,7 @@ mod tests {
             &model,
             CameraId::Lower,
             &mut Fixed(grey(640, 480, 128)),
+            None,
             Some(dir.path()),
         );
         assert!(good.holds, "{good:?}");
@@ -441,10 +442,17 @@ mod tests {
             std::fs::read(dir.path().join("lower.png")).unwrap(),
             grey(640, 480, 128)
         );
-        let dark = camera(&model, CameraId::Lower, &mut Fixed(grey(640, 480, 8)), None);
+        let dark = camera(
+            &model,
+            CameraId::Lower,
+            &mut Fixed(grey(640, 480, 8)),
+            None,
+            None,
+        );
         assert!(!dark.holds);
         assert!(
-            dark.detail.contains("brightness 8 of 255: too dark"),
+            dark.detail
+                .contains("brightness 8 of 255: the lower camera's first picture is near black"),
             "{}",
             dark.detail
         );
@@ -453,12 +461,14 @@ mod tests {
             CameraId::Lower,
             &mut Fixed(grey(640, 480, 250)),
             None,
+            None,
         );
         assert!(bright.detail.contains("saturated"), "{}", bright.detail);
         let small = camera(
             &model,
             CameraId::Lower,
             &mut Fixed(grey(320, 240, 128)),
+            None,
             None,
         );
         assert!(!small.holds);

@@ -5,11 +5,12 @@
 //! answers with one map of actuator commands ([`ActuatorMessage`]: `Position` and
 //! `Stiffness`, 25 values each). The layout below was checked against two public clients:
 //!
-//! - HULKs, `tools/hula/src/lola.rs` lines 5–33 (`LoLAStateMessage`: the keys and `[f32; N]`
-//!   arrays, `RobotConfig` four strings) and lines 35–59 (`LoLAControlMessage`), and
-//!   `tools/hula/src/proxy.rs` (`read_lola_message` reads 896 bytes; the answer is written
-//!   with `rmp_serde::encode::write_named`, a map with string keys);
-//! - ijnek/nao_lola, `include/nao_lola/lola_enums.hpp` lines 25–53 (the 25 joints in LoLA's
+//! - HULKs (`HULKs/hulk` 27921c5d), `crates/hula_types/src/robot_state.rs` lines 7–31
+//!   (`RobotState`: the keys and `[f32; N]` arrays, `RobotConfig` four strings) and
+//!   `crates/hula_types/src/lola.rs` lines 5–28 (`LolaControlFrame`), and
+//!   `services/hula/src/proxy.rs` lines 170–171 (LoLA's message read as 896 bytes) and
+//!   226 (the answer written with `rmp_serde::encode::write_named`, a map with string keys);
+//! - ijnek/nao_lola (0fd9c77), `include/nao_lola/lola_enums.hpp` lines 25–53 (the 25 joints in LoLA's
 //!   order), `include/nao_lola/connection.hpp` line 23 (`MSGPACK_READ_LENGTH 896`),
 //!   `src/connection.cpp` line 18 (`/tmp/robocup`) and `src/msgpack_packer.cpp` lines
 //!   31–37 (the answer holds only the keys it sets, e.g. `Position` and `Stiffness`).

@@ -645,14 +645,42 @@ pub fn read_state(path: &Path) -> Result<State, RobotError> {
     Ok(state)
 }
 
+/// How the simulated robot's camera is set when [`snap`] takes a picture, as a V6 camera
+/// is (`simulate-robot snap`'s `--flip`, `--exposure`, `--gain`; `capture` gives them to
+/// its `command:` camera as `{flip}`, `{exposure}`, `{gain}`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct SnapSettings {
+    /// Both sensor flips set. The V6's upper sensor is mounted turned by 180°, so its
+    /// picture is upright only flipped, the lower's only unflipped
+    /// ([`crate::robot::camera::settings::CameraSettings::defaults`]). False: the
+    /// registers as the sensor starts.
+    pub flip: bool,
+    /// Manual exposure and gain (the driver's units); `None`: automatic exposure (the
+    /// scene as rendered).
+    pub manual: Option<(u32, u32)>,
+}
+
+/// The brightness of the simulated `camera`'s picture relative to the scene as rendered,
+/// at manual `exposure` and `gain`: their product over the product of the camera's team
+/// settings (rUNSWift's, naocalib's defaults), so that those give the rendered scene —
+/// the scene each camera sees is lit as the teams' values expect — and the brightness
+/// scales with exposure × gain (a sensor's response, linear until it saturates).
+pub fn exposure_factor(camera: CameraId, exposure: u32, gain: u32) -> f64 {
+    let team = crate::robot::camera::settings::CameraSettings::defaults(camera, 0, 0);
+    (f64::from(exposure) * f64::from(gain)) / (f64::from(team.exposure) * f64::from(team.gain))
+}
+
 /// Renders what `camera` of the robot in `state` (read from `state_path`) sees (the sandal
 /// in view, the one whose centre is nearest the image centre; the true intrinsics of the
-/// lower camera, the `[upper_camera]` ones of the upper) and writes it as PNG to `out`
-/// (replacing a picture there, never the state file or the `dataset.toml` it names).
+/// lower camera, the `[upper_camera]` ones of the upper), as its sensor set to `settings`
+/// gives it — turned by 180° unless flipped as the camera's mounting needs, brightened or
+/// darkened by [`exposure_factor`] — and writes it as PNG to `out` (replacing a picture
+/// there, never the state file or the `dataset.toml` it names).
 pub fn snap(
     state: &State,
     state_path: &Path,
     camera: CameraId,
+    settings: &SnapSettings,
     out: &Path,
     options: &RenderOptions,
 ) -> Result<(), RobotError> {
@@ -711,7 +739,14 @@ pub fn snap(
     let seed = state.seed
         ^ posture.wrapping_mul(0x9E37_79B9_7F4A_7C15)
         ^ (camera as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
-    let image = render::render(&model, &pose, options, seed)?;
+    let mut image = render::render(&model, &pose, options, seed)?;
+    let upright = crate::robot::camera::settings::CameraSettings::defaults(camera, 0, 0).flip;
+    if settings.flip != upright {
+        image.turn_half();
+    }
+    if let Some((exposure, gain)) = settings.manual {
+        image.expose(exposure_factor(camera, exposure, gain));
+    }
     let bytes = image
         .to_png()
         .map_err(|message| render::RenderError::Encode {
@@ -787,6 +822,68 @@ mod tests {
             clients: 1,
             seed: 1,
         }
+    }
+
+    /// The simulated cameras as a V6's: the upper picture upright only flipped, the lower
+    /// only unflipped (else turned by 180°); at the team exposure and gain the scene as
+    /// rendered, at the old 100 × 32 near black, twice the product twice as bright.
+    #[test]
+    fn snapped_pictures_obey_the_flip_and_the_exposure() {
+        use crate::robot::camera::{decode_grey, settings::Brightness};
+        let dir = tempfile::tempdir().unwrap();
+        let cfg = dir.path().join("cfg");
+        let mut model = Model::default();
+        model.upper_camera = Some(model.camera);
+        crate::dataset::Dataset::new(&cfg, model)
+            .write(&cfg, false)
+            .unwrap();
+        let state_path = dir.path().join("state.json");
+        let state = State {
+            config: Some(cfg.join("dataset.toml")),
+            truth: vec![0.0; PARAMETER_COUNT],
+            joints: vec![0.0; crate::model::JOINT_COUNT],
+            cycle: 0,
+            seed: 3,
+        };
+        let mut n = 0;
+        let mut snap_with = |camera, flip, manual| {
+            n += 1;
+            let out = dir.path().join(format!("{n}.png"));
+            let settings = SnapSettings { flip, manual };
+            snap(
+                &state,
+                &state_path,
+                camera,
+                &settings,
+                &out,
+                &RenderOptions::default(),
+            )
+            .unwrap();
+            decode_grey(&std::fs::read(&out).unwrap()).unwrap().1
+        };
+        let upright = snap_with(CameraId::Upper, true, None);
+        let mut turned = snap_with(CameraId::Upper, false, None);
+        assert_ne!(turned, upright);
+        turned.reverse();
+        assert_eq!(
+            turned, upright,
+            "unflipped, the upper picture is turned by 180°"
+        );
+        assert_eq!(snap_with(CameraId::Upper, true, Some((700, 800))), upright);
+        let old = Brightness::of_grey(&snap_with(CameraId::Upper, true, Some((100, 32))));
+        assert!(
+            old.mean < crate::robot::camera::settings::DARK_MEAN,
+            "{old:?}"
+        );
+        let team = Brightness::of_grey(&upright).mean;
+        assert!(team > 60.0 && team < 200.0, "{team}");
+        let lower = snap_with(CameraId::Lower, false, Some((1700, 250)));
+        let mut flipped = snap_with(CameraId::Lower, true, Some((850, 250)));
+        flipped.reverse();
+        for (half, full) in flipped.iter().zip(&lower) {
+            assert!((f64::from(*half) - f64::from(*full) / 2.0).abs() <= 0.5 + 1e-9);
+        }
+        assert!((exposure_factor(CameraId::Upper, 1400, 800) - 2.0).abs() < 1e-12);
     }
 
     #[test]

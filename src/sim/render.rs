@@ -108,6 +108,22 @@ impl GreyImage {
         self.pixels[(v * self.width + u) as usize]
     }
 
+    /// Turns the image by 180° (as a sensor mounted upside down gives it).
+    pub fn turn_half(&mut self) {
+        self.pixels.reverse();
+    }
+
+    /// Scales every grey level by `factor` (an exposure other than the one rendered),
+    /// rounded and clamped to 0 … 255; a factor of 1 changes nothing.
+    pub fn expose(&mut self, factor: f64) {
+        if factor == 1.0 {
+            return;
+        }
+        for p in &mut self.pixels {
+            *p = (f64::from(*p) * factor).round().clamp(0.0, 255.0) as u8;
+        }
+    }
+
     /// The image as an 8-bit greyscale PNG.
     pub fn to_png(&self) -> Result<Vec<u8>, String> {
         let mut out = Vec::new();

@@ -103,13 +103,10 @@ impl Bench {
     }
 
     /// `naocalib capture PLAN OUT` against the robot at `sock`, each row's picture rendered
-    /// by the simulated robot's camera that the row names (lower or upper).
+    /// by the simulated robot's camera that the row names (lower or upper), set as capture
+    /// sets it (`{flip}`, `{exposure}`, `{gain}`).
     pub(crate) fn capture_both(&self, plan: &Path, out: &str, sock: &str) -> Command {
-        let snap = format!(
-            "command:'{}' simulate-robot snap {{path}} --state '{}' --camera {{camera}}",
-            bin().display(),
-            self.path("state.json").display()
-        );
+        let snap = self.snap_camera();
         self.capture(
             plan,
             out,
@@ -119,10 +116,12 @@ impl Bench {
         )
     }
 
-    /// The camera of the simulated robot.
-    fn snap_camera(&self) -> String {
+    /// The camera of the simulated robot (`{camera}`: the lower one unless named), its
+    /// flip, exposure and gain as capture gives them.
+    pub(crate) fn snap_camera(&self) -> String {
         format!(
-            "command:'{}' simulate-robot snap {{path}} --state '{}'",
+            "command:'{}' simulate-robot snap {{path}} --state '{}' --camera {{camera}} \
+             --flip {{flip}} --exposure {{exposure}} --gain {{gain}}",
             bin().display(),
             self.path("state.json").display()
         )
@@ -139,6 +138,17 @@ impl Bench {
         };
         std::fs::write(&png, image.to_png().unwrap()).unwrap();
         format!("command:cp '{}' {{path}}", png.display())
+    }
+
+    /// A camera command whose first picture — the one checked before anything moves — is
+    /// a copy of `first`, and every later one what the shell command `later` writes to
+    /// `{path}`: a fault that comes only once the run is under way.
+    pub(crate) fn after_first(&self, first: &Path, later: &str) -> String {
+        let flag = format!("{}.taken", first.display());
+        format!(
+            "command:if [ -e '{flag}' ]; then {later}; else cp '{}' {{path}} && touch '{flag}'; fi",
+            first.display()
+        )
     }
 
     /// A plan of `n` stances (`seed`) captured into `ds` with the fixed camera from a

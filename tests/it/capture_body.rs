@@ -200,7 +200,10 @@ fn the_dry_run_moves_nothing_and_says_what_holds() {
     assert_eq!(out.status.code(), Some(1), "{table}{}", stderr(&out));
     for (item, text) in [
         ("lower camera", "brightness 6 of 255"),
-        ("lower camera", "too dark (at least 30)"),
+        (
+            "lower camera",
+            "near black (mean brightness 6 of 255, at least 30 needed)",
+        ),
         ("lying", "the robot lies upright"),
         ("battery", "3 % (at least 5 %)"),
     ] {

@@ -114,24 +114,31 @@ fn each_rows_picture_comes_from_the_camera_it_names() {
     assert!(csv.starts_with("capture,board,image,camera,"), "{csv}");
 }
 
-/// The camera a picture comes from is checked by its size: with the cameras swapped, the
-/// first upper row's picture is refused and the run stops at rest.
+/// The camera a picture comes from is checked by its size: with the upper camera giving
+/// the lower one's picture once the run is under way (its first picture, checked before
+/// anything moved, was its own), the first upper row's picture is refused and the run
+/// stops at rest.
 #[test]
 fn a_picture_of_the_other_cameras_size_stops_the_run() {
     let b = Bench::with_model(two_camera_model());
     let plan = b.path("plan.csv");
     let rows = plan_file(&b.path("lower-only.csv"), 2, 32);
     plan_with_cameras(&plan, &rows, &[1]);
-    grey(&b.path("lower.png"), 640, 480, 60);
-    let command = |name: &str| format!("command:cp '{}'/{name}.png {{path}}", b.dir().display());
+    let lower = b.path("lower.png");
+    grey(&lower, 640, 480, 60);
+    grey(&b.path("upper.png"), 1280, 960, 60);
+    let upper = b.after_first(
+        &b.path("upper.png"),
+        &format!("cp '{}' {{path}}", lower.display()),
+    );
     let robot = b.robot("a.sock", "a.csv", &["--speed", "0"]);
     let out = b
         .capture(
             &plan,
             "ds",
             "a.sock",
-            &format!("lower={}", command("lower")),
-            &["--camera", &format!("upper={}", command("lower"))],
+            &format!("lower=command:cp '{}' {{path}}", lower.display()),
+            &["--camera", &format!("upper={upper}")],
         )
         .output()
         .unwrap();
@@ -271,6 +278,257 @@ fn the_simulated_robot_renders_both_cameras() {
             "capture {} ({}): {dark} dark, {bright} bright",
             c.id,
             c.camera
+        );
+        // Exposed as the team settings expose it.
+        let light = naocalib::robot::camera::settings::Brightness::of_grey(&pixels);
+        assert!(light.check(None).is_ok(), "capture {}: {light:?}", c.id);
+    }
+    let recorded = naocalib::dataset::read_camera_settings(&b.path("ds/dataset.toml")).unwrap();
+    assert_eq!(recorded.len(), 2);
+    for (camera, s) in recorded {
+        assert_eq!(s.flip, Some(camera == CameraId::Upper), "{camera}");
+    }
+}
+
+/// Each `command:` camera is given its camera's settings through its placeholders — the
+/// team defaults, upper flipped 700 × 800, lower unflipped 1700 × 250, and what
+/// `--camera-setting` changes — and the dataset records them in each camera's table (the
+/// keys capture reads), saying they were given to the command. `--resume` with other
+/// settings is refused before anything moves, naming the camera, the control and both
+/// values; with the same settings it goes on.
+#[test]
+fn command_cameras_get_their_settings_and_the_dataset_records_them() {
+    let b = Bench::with_model(two_camera_model());
+    let plan = b.path("plan.csv");
+    let rows = plan_file(&b.path("lower-only.csv"), 2, 36);
+    plan_with_cameras(&plan, &rows, &[1]);
+    grey(&b.path("lower.png"), 640, 480, 90);
+    grey(&b.path("upper.png"), 1280, 960, 90);
+    let log = b.path("given.txt");
+    let command = format!(
+        "command:echo {{camera}} {{flip}} {{exposure}} {{gain}} {{white_balance_k}} {{fps}} \
+         {{width}} {{height}} >> '{}'; cp '{}'/{{camera}}.png {{path}}",
+        log.display(),
+        b.dir().display()
+    );
+    let robot = b.robot("a.sock", "a.csv", &["--speed", "0", "--clients", "2"]);
+    let out = b
+        .capture(
+            &plan,
+            "ds",
+            "a.sock",
+            &format!("lower={command}"),
+            &[
+                "--camera",
+                &format!("upper={command}"),
+                "--camera-setting",
+                "lower.white_balance_k=4000",
+            ],
+        )
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let given = std::fs::read_to_string(&log).unwrap();
+    let lines: Vec<&str> = given.lines().collect();
+    // The first pictures, checked before anything moves, then one per row.
+    assert_eq!(lines.len(), 4, "{given}");
+    for line in &lines {
+        assert!(
+            *line == "lower 0 1700 250 4000 30 640 480"
+                || *line == "upper 1 700 800 auto 30 1280 960",
+            "{line}"
+        );
+    }
+    let toml = b.path("ds/dataset.toml");
+    let recorded = naocalib::dataset::read_camera_settings(&toml).unwrap();
+    let of = |c: CameraId| recorded.iter().find(|(id, _)| *id == c).unwrap().1;
+    let lower = of(CameraId::Lower);
+    assert_eq!(
+        (
+            lower.flip,
+            lower.exposure,
+            lower.gain,
+            lower.white_balance_k,
+            lower.fps
+        ),
+        (Some(false), Some(1700), Some(250), Some(4000), Some(30))
+    );
+    let upper = of(CameraId::Upper);
+    assert_eq!(
+        (
+            upper.flip,
+            upper.exposure,
+            upper.gain,
+            upper.white_balance_k,
+            upper.fps
+        ),
+        (Some(true), Some(700), Some(800), None, Some(30))
+    );
+    let text = std::fs::read_to_string(&toml).unwrap();
+    assert!(
+        text.contains("the upper camera's command was given"),
+        "{text}"
+    );
+    let ds = Dataset::load_without_corners(&b.path("ds")).unwrap();
+    assert_eq!(ds.model, two_camera_model());
+    // Other settings (the robot's dataset.toml given with --config again, and
+    // --camera-setting): refused, nothing moved (the robot is not contacted).
+    for (setting, words) in [
+        (
+            "upper.exposure=1000",
+            ["upper camera", "exposure 700", "with 1000"],
+        ),
+        (
+            "lower.white_balance_k=5000",
+            ["lower camera", "white_balance_k 4000 K", "with 5000 K"],
+        ),
+        (
+            "lower.fps=30",
+            ["lower camera", "white_balance_k 4000 K", "with automatic"],
+        ),
+    ] {
+        let upper = format!("upper={command}");
+        let mut args = vec!["--camera", &upper, "--resume"];
+        if setting != "lower.fps=30" {
+            args.extend(["--camera-setting", "lower.white_balance_k=4000"]);
+        }
+        args.extend(["--camera-setting", setting]);
+        let out = b
+            .capture(
+                &plan,
+                "ds",
+                "nobody.sock",
+                &format!("lower={command}"),
+                &args,
+            )
+            .output()
+            .unwrap();
+        let mut needles = vec!["ds/dataset.toml line", "nothing was moved"];
+        needles.extend(words);
+        assert_clean_failure(&out, &needles);
+    }
+    // The same settings: it goes on.
+    let out = b
+        .capture(
+            &plan,
+            "ds",
+            "a.sock",
+            &format!("lower={command}"),
+            &[
+                "--camera",
+                &format!("upper={command}"),
+                "--resume",
+                "--camera-setting",
+                "lower.white_balance_k=4000",
+            ],
+        )
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    finish(robot);
+}
+
+/// The simulated robot's cameras set as capture sets them: at the team defaults every
+/// picture is exposed; at the old settings (exposure 100, gain 32) the first picture is
+/// near black and the run stops before anything moves; a flip that would turn a camera's
+/// pictures upside down is refused before anything moves. The robot is not contacted.
+#[test]
+fn the_simulated_cameras_at_the_old_settings_or_unflipped_stop_the_run_before_anything_moves() {
+    let b = Bench::with_model(two_camera_model());
+    let plan = b.path("plan.csv");
+    let rows = plan_file(&b.path("lower-only.csv"), 2, 37);
+    plan_with_cameras(&plan, &rows, &[1]);
+    let robot = b.robot("a.sock", "a.csv", &["--speed", "0"]);
+    let snap = b.snap_camera();
+    let run = |extra: &[&str]| {
+        let mut args = vec!["--camera", &format!("upper={snap}")]
+            .into_iter()
+            .map(String::from)
+            .collect::<Vec<_>>();
+        args.extend(extra.iter().map(|s| s.to_string()));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        b.capture(&plan, "ds", "a.sock", &format!("lower={snap}"), &args)
+            .output()
+            .unwrap()
+    };
+    let out = run(&[
+        "--camera-setting",
+        "exposure=100",
+        "--camera-setting",
+        "gain=32",
+    ]);
+    assert_clean_failure(
+        &out,
+        &[
+            "the lower camera's first picture is near black",
+            "now exposure 100, gain 32",
+            "raise the exposure or the gain",
+            "nothing was moved",
+        ],
+    );
+    for (setting, words) in [
+        (
+            "upper.flip=false",
+            ["upper camera's flip is false", "upside down"],
+        ),
+        (
+            "lower.flip=true",
+            ["lower camera's flip is true", "upside down"],
+        ),
+    ] {
+        let out = run(&["--camera-setting", setting]);
+        let mut needles = vec!["nothing was moved"];
+        needles.extend(words);
+        assert_clean_failure(&out, &needles);
+    }
+    assert!(!b.path("ds/dataset.toml").exists(), "no dataset was begun");
+    // SIGTERM: the robot, never contacted, writes its (empty) record.
+    unsafe {
+        libc::kill(robot.id() as libc::pid_t, libc::SIGTERM);
+    }
+    finish(robot);
+    assert!(read_record(&b.path("a.csv")).unwrap().is_empty());
+}
+
+/// A `command:` camera's first picture is checked before anything moves, as a V4L2
+/// camera's is: a picture of another size, one that does not decode, a near black one —
+/// each refused with the camera and what to change; no dataset begun, LoLA not contacted.
+#[test]
+fn a_command_cameras_first_picture_is_checked_before_anything_moves() {
+    let b = Bench::new();
+    let plan = b.path("plan.csv");
+    plan_file(&plan, 2, 38);
+    let corrupt_jpeg: Vec<u8> = [0xff, 0xd8, 0xff, 0xe0]
+        .into_iter()
+        .chain((0..2000).map(|k| (k * 7 % 251) as u8))
+        .collect();
+    std::fs::write(b.path("corrupt.jpg"), corrupt_jpeg).unwrap();
+    grey(&b.path("small.png"), 320, 240, 90);
+    grey(&b.path("dark.png"), 640, 480, 4);
+    for (name, message) in [
+        (
+            "small.png",
+            "the lower camera's first picture is 320×240 pixels; the dataset's intrinsics are for 640×480",
+        ),
+        (
+            "corrupt.jpg",
+            "the lower camera's first picture is not a readable JPEG",
+        ),
+        (
+            "dark.png",
+            "the lower camera's first picture is near black (mean brightness 4 of 255",
+        ),
+    ] {
+        let camera = format!("command:cp '{}' {{path}}", b.path(name).display());
+        let out = b
+            .capture(&plan, "ds", "nobody.sock", &camera, &[])
+            .output()
+            .unwrap();
+        assert_clean_failure(&out, &[message, "nothing was moved"]);
+        assert!(!stderr(&out).contains("LoLA"), "{}", stderr(&out));
+        assert!(
+            !b.path("ds/dataset.toml").exists(),
+            "{name}: a dataset was begun"
         );
     }
 }

@@ -670,7 +670,8 @@ fn a_terminal_that_stops_reading_does_not_stall_the_robot() {
 }
 
 /// Pictures that `detect` could not use — a JPEG with valid magic bytes but corrupt data,
-/// a PNG of the wrong size — stop the run; nothing is counted as taken.
+/// a PNG of the wrong size — coming once the run is under way (the first picture, checked
+/// before anything moves, was fine) stop it at rest; nothing is counted as taken.
 #[test]
 fn pictures_that_do_not_decode_or_have_the_wrong_size_stop_the_run() {
     let corrupt_jpeg: Vec<u8> = [0xff, 0xd8, 0xff, 0xe0]
@@ -697,7 +698,11 @@ fn pictures_that_do_not_decode_or_have_the_wrong_size_stop_the_run() {
         let plan = b.path("plan.csv");
         plan_file(&plan, 2, 24);
         let robot = Robot::start(&b.path("f.sock"), Body::lying(), Box::new(|_, _, _| {}));
-        let camera = format!("command:cp '{}' {{path}}", picture.display());
+        b.fixed_camera();
+        let camera = b.after_first(
+            &b.path("fixed.png"),
+            &format!("cp '{}' {{path}}", picture.display()),
+        );
         let out = b
             .capture(&plan, "ds", "f.sock", &camera, &[])
             .output()
@@ -792,20 +797,24 @@ fn gone(pid: i32) -> bool {
     }
 }
 
-/// A camera command that takes too long is stopped with everything it started, and the
-/// message gives the limit as set (0.5 s).
+/// A camera command that takes too long once the run is under way is stopped with
+/// everything it started, the run ends at rest, and the message gives the limit as set
+/// (0.5 s).
 #[test]
 fn a_slow_camera_command_is_stopped_with_its_children() {
     let b = Bench::new();
     let plan = b.path("plan.csv");
     plan_file(&plan, 2, 25);
     let pidfile = b.path("sleep.pid");
-    let camera = format!(
-        "command:sleep 30 & echo $! > '{}'; wait; cp '{}' {{path}}",
-        pidfile.display(),
-        b.path("fixed.png").display()
-    );
     b.fixed_camera();
+    let camera = b.after_first(
+        &b.path("fixed.png"),
+        &format!(
+            "sleep 30 & echo $! > '{}'; wait; cp '{}' {{path}}",
+            pidfile.display(),
+            b.path("fixed.png").display()
+        ),
+    );
     let robot = Robot::start(&b.path("f.sock"), Body::lying(), Box::new(|_, _, _| {}));
     let out = b
         .capture(&plan, "ds", "f.sock", &camera, &["--camera-timeout", "0.5"])

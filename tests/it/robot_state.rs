@@ -54,12 +54,21 @@ fn the_simulated_robot_leaves_its_record_when_a_signal_ends_it() {
     }
 }
 
+/// How many processes named `marker` (their `argv[0]`) run.
+fn running(marker: &str) -> usize {
+    std::fs::read_dir("/proc")
+        .unwrap()
+        .flatten()
+        .filter(|e| {
+            std::fs::read(e.path().join("cmdline"))
+                .is_ok_and(|c| c.split(|&b| b == 0).next() == Some(marker.as_bytes()))
+        })
+        .count()
+}
+
 /// Whether a process named `marker` (its `argv[0]`) runs.
 fn runs(marker: &str) -> bool {
-    std::fs::read_dir("/proc").unwrap().flatten().any(|e| {
-        std::fs::read(e.path().join("cmdline"))
-            .is_ok_and(|c| c.split(|&b| b == 0).next() == Some(marker.as_bytes()))
-    })
+    running(marker) > 0
 }
 
 /// Waits up to 10 s for no process named `marker` to run.
@@ -75,11 +84,19 @@ fn gone(marker: &str) -> bool {
 }
 
 /// A camera command capture gives up on is gone with it: a shell running a child or a
-/// single process the shell exec'd after a timeout, and a single exec'd process also when
-/// capture itself is killed while the picture is under way (the kernel kills it then).
+/// single process the shell exec'd after a timeout; and when capture itself is killed by
+/// SIGKILL while the picture is under way, a single exec'd process, a shell's child, and
+/// a shell that forked a child into the background and waits on another (its guard kills
+/// the command's whole process group).
 #[test]
 fn a_camera_command_capture_gave_up_on_does_not_run_on() {
-    for (how, killed) in [("exec", false), ("child", false), ("exec", true)] {
+    for (how, killed) in [
+        ("exec", false),
+        ("child", false),
+        ("exec", true),
+        ("child", true),
+        ("fork", true),
+    ] {
         let b = Bench::new();
         let plan = b.path("plan.csv");
         plan_file(&plan, 1, 3);
@@ -88,6 +105,10 @@ fn a_camera_command_capture_gave_up_on_does_not_run_on() {
         std::os::unix::fs::symlink("/bin/sleep", &marker).unwrap();
         let camera = match how {
             "exec" => format!("command:exec '{}' 300 # {{path}}", marker.display()),
+            "fork" => format!(
+                "command:'{0}' 300 & '{0}' 301; : {{path}}",
+                marker.display()
+            ),
             _ => format!("command:'{}' 300; : {{path}}", marker.display()),
         };
         let robot = b.robot("a.sock", "a.csv", &["--speed", "0"]);
@@ -100,7 +121,8 @@ fn a_camera_command_capture_gave_up_on_does_not_run_on() {
                 .spawn()
                 .unwrap();
             let start = Instant::now();
-            while !runs(&name) {
+            let started = if how == "fork" { 2 } else { 1 };
+            while running(&name) < started {
                 assert!(
                     start.elapsed() < Duration::from_secs(60),
                     "no picture taken"

@@ -211,6 +211,30 @@ fn the_upper_picture_is_upright_and_exposed_as_set_whatever_the_registers_held()
     assert_eq!(check_pictures(&b.path("ds"), 170.0, 224.0), 4);
     assert_eq!(cams.registers(true), (1, 1, 700, 800));
     assert_eq!(cams.registers(false), (0, 0, 1700, 250));
+    // The dataset says how its pictures were taken: the settings read back, per camera.
+    let toml = b.path("ds/dataset.toml");
+    let recorded = naocalib::dataset::read_camera_settings(&toml).unwrap();
+    let of = |c: CameraId| recorded.iter().find(|(id, _)| *id == c).unwrap().1;
+    let (upper, lower) = (of(CameraId::Upper), of(CameraId::Lower));
+    assert_eq!(
+        (
+            upper.flip,
+            upper.exposure,
+            upper.gain,
+            upper.white_balance_k,
+            upper.fps
+        ),
+        (Some(true), Some(700), Some(800), None, Some(30))
+    );
+    assert_eq!(
+        (lower.flip, lower.exposure, lower.gain, lower.fps),
+        (Some(false), Some(1700), Some(250), Some(30))
+    );
+    let text = std::fs::read_to_string(&toml).unwrap();
+    assert!(
+        text.contains("as capture wrote and read them back"),
+        "{text}"
+    );
 }
 
 /// One refused run: the emulator's knobs, capture's extra flags, what its message says.

@@ -205,11 +205,37 @@ pub(crate) fn parse_settings(
 /// are written in degrees chosen so that reading them back gives the same radians whenever
 /// such a decimal exists.
 pub(crate) fn render(model: &Model, angles: &AngleSource) -> Result<String, toml::ser::Error> {
-    let body = toml::to_string(&DatasetToml::from_model(model, angles))?;
+    render_with_settings(model, angles, &[], &[])
+}
+
+/// [`render`], with each camera's capture settings (`settings`: the keys `flip`,
+/// `exposure`, `gain`, `white_balance_k`, `fps` of its table, those it gives) and `notes`
+/// as comment lines after the header (a camera without a table is left out).
+pub(crate) fn render_with_settings(
+    model: &Model,
+    angles: &AngleSource,
+    settings: &[(CameraId, SettingsChanges)],
+    notes: &[String],
+) -> Result<String, toml::ser::Error> {
+    let mut file = DatasetToml::from_model(model, angles);
+    for (id, changes) in settings {
+        let table = match id {
+            CameraId::Lower => file.camera.as_mut(),
+            CameraId::Upper => file.upper_camera.as_mut(),
+        };
+        if let Some(table) = table {
+            table.set_settings(changes);
+        }
+    }
+    let body = toml::to_string(&file)?;
+    let notes: String = notes
+        .iter()
+        .map(|n| format!("# {}\n", n.replace(['\n', '\r'], " ")))
+        .collect();
     Ok(format!(
         "# naocalib dataset: lengths in mm, angles in degrees, masses in g; \
          distortion is OpenCV's [k1, k2, p1, p2, k3];\n# gravity is a direction in the origin \
-         frame.\n\n{body}"
+         frame.\n{notes}\n{body}"
     ))
 }
 
@@ -258,6 +284,43 @@ mod tests {
             "{e}"
         );
         assert!(e.contains("line 8"), "{e}");
+    }
+
+    /// The capture settings written into a camera's table read back as written, with
+    /// the notes as comments; the model is the same as without them.
+    #[test]
+    fn settings_written_into_the_camera_tables_read_back() {
+        let path = Path::new("d/dataset.toml");
+        let mut model = Model::default();
+        model.upper_camera = Some(model.camera);
+        let lower = SettingsChanges {
+            flip: Some(false),
+            exposure: Some(1700),
+            gain: Some(250),
+            white_balance_k: None,
+            fps: Some(30),
+        };
+        let upper = SettingsChanges {
+            white_balance_k: Some(4000),
+            ..lower
+        };
+        let text = render_with_settings(
+            &model,
+            &AngleSource::default(),
+            &[(CameraId::Lower, lower), (CameraId::Upper, upper)],
+            &["how\nthey were set".into()],
+        )
+        .unwrap();
+        assert!(text.contains("\n# how they were set\n"), "{text}");
+        assert_eq!(parse(path, text.as_bytes()).unwrap(), model);
+        assert_eq!(
+            parse_settings(path, text.as_bytes()).unwrap(),
+            vec![(CameraId::Lower, lower), (CameraId::Upper, upper)]
+        );
+        assert_eq!(
+            render_with_settings(&model, &AngleSource::default(), &[], &[]).unwrap(),
+            render(&model, &AngleSource::default()).unwrap()
+        );
     }
 
     #[test]

@@ -49,6 +49,15 @@ pub(super) struct CameraToml {
 }
 
 impl CameraToml {
+    /// Sets the capture settings `changes` gives.
+    pub(super) fn set_settings(&mut self, changes: &SettingsChanges) {
+        self.flip = changes.flip;
+        self.exposure = changes.exposure;
+        self.gain = changes.gain;
+        self.white_balance_k = changes.white_balance_k;
+        self.fps = changes.fps;
+    }
+
     /// The capture settings this table changes.
     pub(super) fn settings(&self) -> SettingsChanges {
         SettingsChanges {

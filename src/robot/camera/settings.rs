@@ -77,6 +77,223 @@ impl CameraSettings {
     }
 }
 
+impl CameraSettings {
+    /// Refuses a flip that turns `camera`'s picture upside down: the V6's upper sensor is
+    /// mounted turned by 180° (upright pictures only flipped), the lower one upright (only
+    /// unflipped) — HULKs `etc/parameters/hardware.json:27,70`. The model calibrates
+    /// upright pictures only, so such a run could give no calibration.
+    pub fn check_upright(&self, camera: CameraId) -> Result<(), String> {
+        let mounted = CameraSettings::defaults(camera, self.width, self.height).flip;
+        if self.flip == mounted {
+            return Ok(());
+        }
+        Err(format!(
+            "the {camera} camera's flip is {} ([{}] flip in dataset.toml or --camera-setting \
+             {camera}.flip): the V6's {camera} sensor is mounted {}, so its pictures would be \
+             upside down and nothing could be calibrated from them; leave flip at {} (the \
+             default)",
+            self.flip,
+            table_name(camera),
+            if mounted {
+                "turned by 180° (its picture is upright only flipped)"
+            } else {
+                "upright (its picture is upright only unflipped)"
+            },
+            mounted
+        ))
+    }
+
+    /// Every setting as a change (`white_balance_k` absent: automatic).
+    pub fn as_changes(&self) -> SettingsChanges {
+        SettingsChanges {
+            flip: Some(self.flip),
+            exposure: Some(self.exposure),
+            gain: Some(self.gain),
+            white_balance_k: self.white_balance,
+            fps: Some(self.fps),
+        }
+    }
+
+    /// What a `command:` camera's placeholders stand for ([`PLACEHOLDERS`]): `{flip}` 1
+    /// or 0, `{exposure}`, `{gain}`, `{white_balance_k}` (K, or `auto`), `{fps}`,
+    /// `{width}`, `{height}`.
+    pub fn placeholders(&self) -> [(&'static str, String); 7] {
+        [
+            ("{flip}", u8::from(self.flip).to_string()),
+            ("{exposure}", self.exposure.to_string()),
+            ("{gain}", self.gain.to_string()),
+            (
+                "{white_balance_k}",
+                self.white_balance
+                    .map_or_else(|| "auto".to_string(), |k| k.to_string()),
+            ),
+            ("{fps}", self.fps.to_string()),
+            ("{width}", self.width.to_string()),
+            ("{height}", self.height.to_string()),
+        ]
+    }
+}
+
+/// The placeholders a `command:` camera may use for its camera's settings
+/// ([`CameraSettings::placeholders`]).
+pub const PLACEHOLDERS: [&str; 7] = [
+    "{flip}",
+    "{exposure}",
+    "{gain}",
+    "{white_balance_k}",
+    "{fps}",
+    "{width}",
+    "{height}",
+];
+
+/// The `dataset.toml` table of `camera`'s intrinsics and settings.
+pub fn table_name(camera: CameraId) -> &'static str {
+    match camera {
+        CameraId::Lower => "camera",
+        CameraId::Upper => "upper_camera",
+    }
+}
+
+/// How a camera was driven with its settings in a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Driven {
+    /// A V4L2 device: every setting written and read back.
+    ReadBack,
+    /// A `command:` camera: the settings its command takes through placeholders were
+    /// given to it (naocalib cannot read them back).
+    GivenToCommand,
+}
+
+/// The settings a camera was driven with in a run, as its dataset records them (the keys
+/// of [`SETTING_KEYS`] in its `dataset.toml` table).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct UsedSettings {
+    /// The camera.
+    pub camera: CameraId,
+    /// The values it was driven with; a key it was not driven with is `None`
+    /// (`white_balance_k` `None` with [`UsedSettings::white_balance`]: automatic).
+    pub values: SettingsChanges,
+    /// Whether its white balance was driven (automatic or fixed).
+    pub white_balance: bool,
+    /// How.
+    pub driven: Driven,
+}
+
+impl UsedSettings {
+    /// A V4L2 camera set to `settings`, every value read back.
+    pub fn read_back(camera: CameraId, settings: &CameraSettings) -> UsedSettings {
+        UsedSettings {
+            camera,
+            values: settings.as_changes(),
+            white_balance: true,
+            driven: Driven::ReadBack,
+        }
+    }
+
+    /// A `command:` camera whose command line is `command`, given `settings` through the
+    /// placeholders it holds.
+    pub fn given_to(camera: CameraId, settings: &CameraSettings, command: &str) -> UsedSettings {
+        let all = settings.as_changes();
+        let takes = |p: &str| command.contains(p);
+        UsedSettings {
+            camera,
+            values: SettingsChanges {
+                flip: all.flip.filter(|_| takes("{flip}")),
+                exposure: all.exposure.filter(|_| takes("{exposure}")),
+                gain: all.gain.filter(|_| takes("{gain}")),
+                white_balance_k: all.white_balance_k.filter(|_| takes("{white_balance_k}")),
+                fps: all.fps.filter(|_| takes("{fps}")),
+            },
+            white_balance: takes("{white_balance_k}"),
+            driven: Driven::GivenToCommand,
+        }
+    }
+
+    /// Whether the exposure or the gain was driven (so that a message about the
+    /// picture's brightness can give them).
+    pub fn exposes(&self) -> bool {
+        self.values.exposure.is_some() || self.values.gain.is_some()
+    }
+
+    /// Whether any setting was driven.
+    pub fn any(&self) -> bool {
+        self.values != SettingsChanges::default() || self.white_balance
+    }
+
+    /// A line for `dataset.toml`'s header saying how the camera's settings were applied.
+    pub fn note(&self) -> String {
+        let table = table_name(self.camera);
+        match (self.driven, self.any()) {
+            (Driven::ReadBack, _) => format!(
+                "[{table}] flip, exposure, gain, white_balance_k (absent: automatic) and fps: \
+                 the {} camera's settings as capture wrote and read them back",
+                self.camera
+            ),
+            (Driven::GivenToCommand, true) => format!(
+                "[{table}] settings: those the {} camera's command was given (its \
+                 placeholders); naocalib cannot read them back",
+                self.camera
+            ),
+            (Driven::GivenToCommand, false) => format!(
+                "[{table}]: the {} camera's command took no settings (it set its camera \
+                 itself)",
+                self.camera
+            ),
+        }
+    }
+
+    /// Checks these settings against those a dataset records for the camera
+    /// (`recorded`, its table's keys): every setting driven now must be the one recorded
+    /// (a table recording none of them is not checked). `Err` names the control, the
+    /// value recorded and the value now.
+    pub fn check_same(&self, recorded: &SettingsChanges) -> Result<(), (String, String, String)> {
+        if *recorded == SettingsChanges::default() {
+            return Ok(());
+        }
+        let v = &self.values;
+        let mut pairs = vec![
+            (
+                "flip",
+                v.flip.map(|f| f.to_string()),
+                recorded.flip.map(|f| f.to_string()),
+            ),
+            (
+                "exposure",
+                v.exposure.map(|x| x.to_string()),
+                recorded.exposure.map(|x| x.to_string()),
+            ),
+            (
+                "gain",
+                v.gain.map(|x| x.to_string()),
+                recorded.gain.map(|x| x.to_string()),
+            ),
+            (
+                "fps",
+                v.fps.map(|x| x.to_string()),
+                recorded.fps.map(|x| x.to_string()),
+            ),
+        ];
+        if self.white_balance {
+            let auto =
+                |k: Option<u32>| k.map_or_else(|| "automatic".to_string(), |k| format!("{k} K"));
+            pairs.push((
+                "white_balance_k",
+                Some(auto(v.white_balance_k)),
+                Some(auto(recorded.white_balance_k)),
+            ));
+        }
+        for (control, now, then) in pairs {
+            if let Some(now) = now
+                && Some(&now) != then.as_ref()
+            {
+                let then = then.unwrap_or_else(|| "absent".to_string());
+                return Err((control.to_string(), then, now));
+            }
+        }
+        Ok(())
+    }
+}
+
 impl std::fmt::Display for CameraSettings {
     /// `640×480 at 30 frames/s, flip 1, exposure 700, gain 800, white balance auto`.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -239,8 +456,10 @@ pub struct Brightness {
     pub saturated: f64,
 }
 
-/// Below this mean grey level a picture is near black: no board's corners can be found.
-pub const DARK_MEAN: f64 = 25.0;
+/// Below this mean grey level a picture is near black: no board's corners can be found
+/// (the teams' exposures give a mean near the middle; a V6 camera at too short an exposure
+/// gives a nearly black picture).
+pub const DARK_MEAN: f64 = 30.0;
 /// Above this share of saturated pixels a picture is washed out.
 pub const SATURATED_SHARE: f64 = 0.25;
 
@@ -299,6 +518,8 @@ pub struct FirstPicture {
     /// The settings written and read back (`None` for a `command:` camera, which sets
     /// its camera itself).
     pub settings: Option<CameraSettings>,
+    /// The settings the camera was driven with, as the dataset records them.
+    pub used: UsedSettings,
     /// The picture's size (width, height).
     pub size: (u32, u32),
     /// Its brightness.
@@ -419,6 +640,94 @@ mod tests {
                 .contains("lower or upper")
         );
         assert!(parse_setting("gain").unwrap_err().contains("KEY=VALUE"));
+    }
+
+    /// A flip against the camera's mounting is refused (upper: flipped, lower: not).
+    #[test]
+    fn a_flip_that_turns_the_picture_upside_down_is_refused() {
+        let upper = CameraSettings::defaults(CameraId::Upper, 640, 480);
+        let lower = CameraSettings::defaults(CameraId::Lower, 640, 480);
+        assert!(upper.check_upright(CameraId::Upper).is_ok());
+        assert!(lower.check_upright(CameraId::Lower).is_ok());
+        let e = CameraSettings {
+            flip: false,
+            ..upper
+        }
+        .check_upright(CameraId::Upper)
+        .unwrap_err();
+        assert!(
+            e.contains("upper camera's flip is false")
+                && e.contains("[upper_camera] flip")
+                && e.contains("upside down"),
+            "{e}"
+        );
+        let e = CameraSettings {
+            flip: true,
+            ..lower
+        }
+        .check_upright(CameraId::Lower)
+        .unwrap_err();
+        assert!(
+            e.contains("lower camera's flip is true") && e.contains("leave flip at false"),
+            "{e}"
+        );
+    }
+
+    /// A command is given, and a dataset records, the settings whose placeholders it
+    /// takes; a V4L2 camera all of them. A resume is checked on what is driven now and
+    /// recorded then; a camera whose table records nothing is not checked.
+    #[test]
+    fn the_settings_used_are_those_a_command_takes_and_resumes_keep_them() {
+        let mut s = CameraSettings::defaults(CameraId::Lower, 640, 480);
+        let p = s.placeholders();
+        assert_eq!(p[0], ("{flip}", "0".to_string()));
+        assert_eq!(p[3], ("{white_balance_k}", "auto".to_string()));
+        assert_eq!(p[6], ("{height}", "480".to_string()));
+        assert!(PLACEHOLDERS.iter().zip(&p).all(|(a, (b, _))| a == b));
+        let given = UsedSettings::given_to(CameraId::Lower, &s, "grab -e {exposure} {path}");
+        assert_eq!(
+            given.values,
+            SettingsChanges {
+                exposure: Some(1700),
+                ..SettingsChanges::default()
+            }
+        );
+        assert!(given.exposes() && given.any() && !given.white_balance);
+        let none = UsedSettings::given_to(CameraId::Lower, &s, "grab {path}");
+        assert!(!none.any() && !none.exposes());
+        assert!(none.note().contains("took no settings"));
+        let all = UsedSettings::read_back(CameraId::Lower, &s);
+        assert_eq!(all.values, s.as_changes());
+        assert!(all.note().contains("[camera]") && all.note().contains("read them back"));
+        // Resumed: the same, a table recording nothing, another exposure, another white
+        // balance (automatic then).
+        assert!(all.check_same(&s.as_changes()).is_ok());
+        assert!(all.check_same(&SettingsChanges::default()).is_ok());
+        let mut then = s.as_changes();
+        then.exposure = Some(900);
+        assert_eq!(
+            all.check_same(&then).unwrap_err(),
+            (
+                "exposure".to_string(),
+                "900".to_string(),
+                "1700".to_string()
+            )
+        );
+        assert!(given.check_same(&then).is_err());
+        assert!(
+            none.check_same(&then).is_ok(),
+            "nothing driven, nothing to check"
+        );
+        s.white_balance = Some(4000);
+        let fixed = UsedSettings::read_back(CameraId::Lower, &s);
+        assert_eq!(
+            fixed.check_same(&all.values).unwrap_err(),
+            (
+                "white_balance_k".to_string(),
+                "automatic".to_string(),
+                "4000 K".to_string()
+            )
+        );
     }
 
     #[test]

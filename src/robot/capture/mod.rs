@@ -117,6 +117,9 @@ pub enum CaptureError {
         /// The dataset's directory.
         dir: PathBuf,
     },
+    /// `--resume` with a camera driven otherwise than the dataset's pictures were taken.
+    #[error(transparent)]
+    OtherSettings(Box<SettingsMismatch>),
     /// An option is out of range.
     #[error("{0}")]
     Options(String),
@@ -154,6 +157,28 @@ pub enum CaptureError {
     /// naocalib itself failed (a panic, a thread that ended): a bug.
     #[error("naocalib failed inside: {0} (a bug; please report it)")]
     Internal(String),
+}
+
+/// A camera that `--resume` would drive otherwise than the dataset's pictures were taken;
+/// nothing was moved.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "{at}: the dataset's {camera} camera pictures were taken with {control} {then}, this run \
+     would take them with {now}; resume with the same settings (the dataset's own \
+     dataset.toml, without --config or --camera-setting), or start a new dataset (nothing \
+     was moved)"
+)]
+pub struct SettingsMismatch {
+    /// The setting in the dataset's `dataset.toml`.
+    pub at: Location,
+    /// The camera.
+    pub camera: CameraId,
+    /// The control (its key in `dataset.toml`).
+    pub control: String,
+    /// The value the dataset records.
+    pub then: String,
+    /// The value of this run.
+    pub now: String,
 }
 
 /// Turns a number of LoLA cycles into wall time (s) at LoLA's rate (for messages).

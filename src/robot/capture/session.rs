@@ -545,7 +545,7 @@ mod tests {
             sent: sent.clone(),
         };
         let dir = tempfile::tempdir().unwrap();
-        let out = DatasetOut::create(&dir.path().join("ds"), &model, b"plan").unwrap();
+        let out = DatasetOut::create(&dir.path().join("ds"), &model, b"plan", &[]).unwrap();
         // Each event with the posture last commanded when it came.
         let mut events: Vec<(Event, JointAngles)> = Vec::new();
         let mut observer = |e: &Event| {
@@ -635,7 +635,7 @@ mod tests {
                 sent: sent.clone(),
             };
             let dir = tempfile::tempdir().unwrap();
-            let out = DatasetOut::create(&dir.path().join("ds"), &model, b"plan").unwrap();
+            let out = DatasetOut::create(&dir.path().join("ds"), &model, b"plan", &[]).unwrap();
             let camera: Box<dyn Camera> = if in_thread {
                 Box::new(Panics)
             } else {

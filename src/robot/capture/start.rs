@@ -6,10 +6,11 @@ use std::path::{Path, PathBuf};
 
 use crate::dataset::{self, DatasetError};
 use crate::model::{CameraId, Model};
+use crate::robot::camera::settings::{UsedSettings, table_name};
 
-use super::CaptureError;
 use super::plan::{PlanRow, check_cameras, check_plan, read_plan};
 use super::writer::DatasetOut;
+use super::{CaptureError, SettingsMismatch};
 
 /// A run ready to start: the plan, the robot, and the dataset it goes into.
 #[derive(Debug)]
@@ -76,12 +77,39 @@ impl Start {
         self.resumed.as_ref().map_or(&[], DatasetOut::retake)
     }
 
-    /// The dataset to write: the one resumed, or a new one created now (`dataset.toml`,
-    /// the plan's copy, an empty `captures.csv`).
-    pub fn open(&mut self) -> Result<DatasetOut, CaptureError> {
+    /// Checks, with `--resume`, that each camera is driven with the settings the dataset
+    /// records for it (`used`, [`UsedSettings::check_same`]): the pictures of one dataset
+    /// are taken alike. Nothing to check for a new dataset.
+    pub fn check_settings(&self, used: &[UsedSettings]) -> Result<(), CaptureError> {
+        if self.resumed.is_none() {
+            return Ok(());
+        }
+        let path = self.dir.join(dataset::DATASET_TOML);
+        let recorded = dataset::read_camera_settings(&path)?;
+        for u in used {
+            let Some((_, then)) = recorded.iter().find(|(c, _)| *c == u.camera) else {
+                continue;
+            };
+            if let Err((control, then, now)) = u.check_same(then) {
+                return Err(CaptureError::OtherSettings(Box::new(SettingsMismatch {
+                    at: dataset::locate(&path, &format!("{}.{control}", table_name(u.camera))),
+                    camera: u.camera,
+                    control,
+                    then,
+                    now,
+                })));
+            }
+        }
+        Ok(())
+    }
+
+    /// The dataset to write: the one resumed, or a new one created now (`dataset.toml`
+    /// with the settings each camera is driven with, `used`; the plan's copy; an empty
+    /// `captures.csv`).
+    pub fn open(&mut self, used: &[UsedSettings]) -> Result<DatasetOut, CaptureError> {
         match self.resumed.take() {
             Some(out) => Ok(out),
-            None => DatasetOut::create(&self.dir, &self.model, &self.plan),
+            None => DatasetOut::create(&self.dir, &self.model, &self.plan, used),
         }
     }
 }

@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use crate::dataset::{self, Dataset, DatasetError, Location};
 use crate::model::{CameraId, Joint, JointAngles, Model, Side};
 use crate::output::{WriteError, WriteOptions, write_atomic};
+use crate::robot::camera::settings::UsedSettings;
 use crate::robot::camera::{Picture, check_picture};
 
 use super::CaptureError;
@@ -76,23 +77,23 @@ impl DatasetOut {
     }
 
     /// Starts a new dataset in `dir` for `model` (joint angles raw LoLA readings) with a
-    /// copy of the plan (`plan`, the file's bytes); refuses a directory that already holds
-    /// dataset files.
-    pub fn create(dir: &Path, model: &Model, plan: &[u8]) -> Result<DatasetOut, CaptureError> {
+    /// copy of the plan (`plan`, the file's bytes) and, in `dataset.toml`, the settings
+    /// each camera was driven with (`used`: its table's `flip`, `exposure`, … and a comment
+    /// saying how they were applied); refuses a directory that already holds dataset
+    /// files.
+    pub fn create(
+        dir: &Path,
+        model: &Model,
+        plan: &[u8],
+        used: &[UsedSettings],
+    ) -> Result<DatasetOut, CaptureError> {
         DatasetOut::check_new(dir)?;
-        // dataset.toml as Dataset::write renders it (every value, `[joints] angles = "raw"`).
-        let scratch = tempfile::tempdir().map_err(|e| DatasetError::io(dir, "write", e))?;
-        let mut ds = Dataset::new(scratch.path(), *model);
-        ds.angles = dataset::AngleSource::default();
-        ds.write(scratch.path(), false)?;
-        let toml = std::fs::read(scratch.path().join(dataset::DATASET_TOML))
-            .map_err(|e| DatasetError::io(scratch.path(), "read", e))?;
+        let path = dir.join(dataset::DATASET_TOML);
+        let settings: Vec<_> = used.iter().map(|u| (u.camera, u.values)).collect();
+        let notes: Vec<String> = used.iter().map(UsedSettings::note).collect();
+        let toml = dataset::render_captured(&path, model, &settings, &notes)?;
         std::fs::create_dir_all(dir).map_err(|e| DatasetError::io(dir, "create", e))?;
-        write_atomic(
-            &dir.join(dataset::DATASET_TOML),
-            &toml,
-            &WriteOptions::new(false),
-        )?;
+        write_atomic(&path, toml.as_bytes(), &WriteOptions::new(false))?;
         write_atomic(&dir.join(PLAN_CSV), plan, &WriteOptions::new(false))?;
         let out = DatasetOut {
             dir: dir.to_path_buf(),
