@@ -302,4 +302,38 @@ mod tests {
             [fx / 2.0, fy / 2.0, 160.0, 120.0]
         );
     }
+
+    #[test]
+    fn the_teams_view_is_the_opening_angles_focal_lengths_and_centre_offset_with_sigma() {
+        let prior = Prior {
+            width: 640,
+            height: 480,
+            fx: 600.0,
+            fy: 598.0,
+            cx: 320.0,
+            cy: 240.0,
+        };
+        let i = Intrinsics {
+            camera: CameraId::Lower,
+            prior,
+            value: [612.0, 590.0, 329.5, 232.0],
+            std: [Some(0.07), Some(0.06), Some(0.15), None],
+            calibrated: [true, true, true, false],
+        };
+        let view = i.teams_view();
+        assert_eq!(view.values[..2], i.opening_angles());
+        assert_eq!(view.values[2..4], [612.0, 590.0]);
+        assert_eq!(view.values[4..], [9.5, -8.0]);
+        assert_eq!(view.std[..2], i.opening_angles_std());
+        assert_eq!(view.std[2..], [Some(0.07), Some(0.06), Some(0.15), None]);
+        assert_eq!(view.calibrated, [true, true, true, true, true, false]);
+        // The same camera at half the size: every length halved, the angles kept.
+        assert_eq!(i.scaled_to(320, 240), [306.0, 295.0, 164.75, 116.0]);
+        let half = TeamsView::of_values(i.scaled_to(320, 240), 320, 240);
+        for k in 0..2 {
+            assert!((half.values[k] - view.values[k]).abs() < 1e-12);
+            assert!((half.values[k + 4] - view.values[k + 4] / 2.0).abs() < 1e-12);
+        }
+        assert_eq!(half.std, [Some(0.0); 6]);
+    }
 }

@@ -469,3 +469,35 @@ fn diagonal_at(text: &str, path: &Path, camera: CameraId) -> Result<(f64, usize)
     }
     Ok((deg, e.line))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibration::{Intrinsics, Prior};
+
+    #[test]
+    fn naoths_diagonal_is_its_one_focal_length() {
+        // NaoTH's V6 default, 67.4°, is a focal length of 600 px at 640 × 480.
+        let f = focal_length_of_diagonal(640, 480, DEFAULT_DIAGONAL_DEG);
+        assert!((f - 600.0).abs() < 0.3, "{f}");
+        // The diagonal written is that of the mean focal length, at NaoTH's image size
+        // whatever the calibration's.
+        let prior = Prior {
+            width: 1280,
+            height: 960,
+            fx: 1196.0,
+            fy: 1196.0,
+            cx: 640.0,
+            cy: 480.0,
+        };
+        let i = Intrinsics {
+            camera: CameraId::Upper,
+            prior,
+            value: [1220.0, 1180.0, 650.0, 470.0],
+            std: [Some(0.1); 4],
+            calibrated: [true; 4],
+        };
+        let f = focal_length_of_diagonal(640, 480, diagonal_of(&i));
+        assert!((f - 600.0).abs() < 1e-9, "{f}");
+    }
+}

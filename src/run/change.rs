@@ -107,3 +107,66 @@ pub fn intrinsics_of(
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibration::{Entry, Origin, Posture};
+
+    /// A calibration of `values` (every other parameter absent), carrying `cameras`.
+    fn calibration(values: &[(Param, f64, bool)], cameras: &[(CameraId, Prior)]) -> Calibration {
+        Calibration {
+            origin: Origin::Solved,
+            solver: None,
+            dataset: None,
+            converged: Some(true),
+            rms_px: None,
+            parameters: values
+                .iter()
+                .map(|&(param, value, fixed)| Entry {
+                    param,
+                    value,
+                    std: Some(if fixed { 0.0 } else { 0.1 }),
+                    fixed,
+                })
+                .collect(),
+            angles: None,
+            posture: Posture::Lying,
+            standing: Default::default(),
+            cameras: cameras.iter().copied().collect(),
+        }
+    }
+
+    #[test]
+    fn the_previous_intrinsics_are_the_robots_camera_at_the_calibrations_size() {
+        let model = Model::default();
+        let prior = Prior::of(&model.camera);
+        let params = intrinsics::params(CameraId::Lower);
+        let now = calibration(
+            &params.map(|p| (p, 3.0, false)),
+            &[(CameraId::Lower, prior)],
+        );
+        // The robot's file: another camera at twice the resolution, held at it.
+        let robot = Prior {
+            width: 1280,
+            height: 960,
+            fx: 1237.4,
+            fy: 1234.4,
+            cx: 640.0,
+            cy: 480.0,
+        };
+        let previous = calibration(&params.map(|p| (p, 0.0, true)), &[(CameraId::Lower, robot)]);
+        let cameras = intrinsics_of(&now, Some(&previous), &model);
+        assert_eq!(cameras.len(), 1);
+        let c = &cameras[0];
+        assert_eq!(c.now.value, prior.values().map(|v| v + 3.0));
+        assert_eq!(c.previous, Some([618.7, 617.2, 320.0, 240.0]));
+        // Without a previous calibration, or one without the intrinsics, none.
+        assert_eq!(intrinsics_of(&now, None, &model)[0].previous, None);
+        let none = calibration(&[], &[]);
+        assert_eq!(intrinsics_of(&now, Some(&none), &model)[0].previous, None);
+        // A calibration with the intrinsics held carries no camera: nothing to show.
+        let held = calibration(&params.map(|p| (p, 0.0, true)), &[]);
+        assert!(intrinsics_of(&held, Some(&previous), &model).is_empty());
+    }
+}

@@ -799,8 +799,8 @@ fn a_solve_json_with_free_intrinsics_exports_and_reports_the_cameras_intrinsics(
             .iter()
             .map(|p| ROBOT.iter().find(|(q, _)| q == p).unwrap().1)
             .collect();
-        for k in 0..4 {
-            let err = i.value[k] - i.prior.values()[k] - truth[k];
+        for (k, truth) in truth.iter().enumerate() {
+            let err = i.value[k] - i.prior.values()[k] - truth;
             assert!(err.abs() < 5.0 * i.std[k].unwrap(), "{camera} {k}: {i:?}");
         }
     }
@@ -913,6 +913,16 @@ fn a_solve_json_with_free_intrinsics_exports_and_reports_the_cameras_intrinsics(
     let cells: Vec<&str> = line.split_whitespace().collect();
     let bhuman_fx = naocalib::calibration::intrinsics::focal_length(640, 54.7);
     assert_eq!(cells[5], format!("{bhuman_fx:.4}"), "{line}");
+    // The change of the correction Fx: from the robot's camera made relative to the
+    // dataset's a-priori one.
+    let changes = table
+        .split("Change since the previous calibration")
+        .nth(1)
+        .unwrap();
+    let line = changes.lines().find(|l| l.starts_with("Fx ")).unwrap();
+    let previous: f64 = line.split_whitespace().nth(1).unwrap().parse().unwrap();
+    let prior = cal.cameras[&CameraId::Lower].fx;
+    assert!((previous - (bhuman_fx - prior)).abs() < 1e-4, "{line}");
     let html = std::fs::read_to_string(&report).unwrap();
     assert!(html.contains("id=\"intrinsics-lower\"") && html.contains("id=\"intrinsics-upper\""));
     assert!(
