@@ -28,7 +28,8 @@
 //!
 //! The JSON form has the same keys; [`Calibration::from_json`] also reads the result JSON
 //! of `naocalib solve --json`, whose `parameters` object has the same entries (a `null`
-//! `std` or `"determined": false` marks a parameter the data do not determine).
+//! `std` or `"determined": false` marks a parameter the data do not determine) and whose
+//! `cameras` object is the same table of a-priori intrinsics.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -369,17 +370,7 @@ impl CalibrationIn {
             (name, e.value, e.std, e.unit, e.fixed, determined)
         });
         let fit = (self.solver, self.dataset, self.converged, self.rms_px);
-        let cameras = self.cameras.unwrap_or_default();
-        if let Some(camera) = cameras.iter().find(|(_, p)| !p.is_valid()) {
-            return Err(parse_error(
-                path,
-                format!(
-                    "cameras.{}: the image size and focal lengths must be positive and every \
-                     number finite",
-                    camera.0
-                ),
-            ));
-        }
+        let cameras = checked_cameras(self.cameras, path)?;
         let mut cal = assemble(
             fit,
             (self.angles, self.corrected_by),
@@ -468,8 +459,31 @@ impl Calibration {
             result.rms_px,
         );
         let angles = (result.angles, result.corrected_by);
-        assemble(fit, angles, entries.collect(), result.standing, path)
+        let cameras = checked_cameras(result.cameras, path)?;
+        let mut cal = assemble(fit, angles, entries.collect(), result.standing, path)?;
+        cal.cameras = cameras;
+        Ok(cal)
     }
+}
+
+/// The `cameras` table of a calibration or result file, each camera's prior checked
+/// usable ([`Prior::is_valid`]); empty when absent.
+fn checked_cameras(
+    cameras: Option<BTreeMap<CameraId, Prior>>,
+    path: &Path,
+) -> Result<BTreeMap<CameraId, Prior>, ExportError> {
+    let cameras = cameras.unwrap_or_default();
+    if let Some(camera) = cameras.iter().find(|(_, p)| !p.is_valid()) {
+        return Err(parse_error(
+            path,
+            format!(
+                "cameras.{}: the image size and focal lengths must be positive and every \
+                 number finite",
+                camera.0
+            ),
+        ));
+    }
+    Ok(cameras)
 }
 
 /// An RMS residual read must be a non-negative number.

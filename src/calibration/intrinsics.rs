@@ -157,6 +157,96 @@ impl Intrinsics {
     }
 }
 
+impl Intrinsics {
+    /// `[fx, fy, cx, cy]` (px) of the same camera at `width × height` (the image scaled):
+    /// scaled by the ratio of the image sizes, each axis by its own, as
+    /// [`Prior::scaled_to`] — what a team reading its values at its own image size must get.
+    pub fn scaled_to(&self, width: u32, height: u32) -> [f64; 4] {
+        let [fx, fy, cx, cy] = self.value;
+        Prior {
+            fx,
+            fy,
+            cx,
+            cy,
+            ..self.prior
+        }
+        .scaled_to(width, height)
+    }
+
+    /// The one-sigma of [`Intrinsics::centre_offset`] (px): the centre's own.
+    pub fn centre_offset_std(&self) -> [Option<f64>; 2] {
+        [self.std[2], self.std[3]]
+    }
+
+    /// The camera as the teams read it ([`TeamsView`]).
+    pub fn teams_view(&self) -> TeamsView {
+        let [aw, ah] = self.opening_angles();
+        let [sw, sh] = self.opening_angles_std();
+        let [ox, oy] = self.centre_offset();
+        let [sx, sy] = self.centre_offset_std();
+        let [fx, fy, _, _] = self.value;
+        TeamsView {
+            values: [aw, ah, fx, fy, ox, oy],
+            std: [sw, sh, self.std[0], self.std[1], sx, sy],
+            calibrated: [
+                self.calibrated[0],
+                self.calibrated[1],
+                self.calibrated[0],
+                self.calibrated[1],
+                self.calibrated[2],
+                self.calibrated[3],
+            ],
+        }
+    }
+}
+
+/// The names and units of the quantities of a [`TeamsView`], in its order.
+pub const TEAMS_QUANTITIES: [(&str, &str); 6] = [
+    ("opening angle width", "deg"),
+    ("opening angle height", "deg"),
+    ("focal length x", "px"),
+    ("focal length y", "px"),
+    ("centre offset x", "px"),
+    ("centre offset y", "px"),
+];
+
+/// One camera's intrinsics as the teams' files and code read them: the horizontal and
+/// vertical opening angles (deg; B-Human, SPQR, NomadZ), the focal lengths (px; HULKs'
+/// normalised ones times the image size) and the optical centre's offset from the image's
+/// middle (px; where every team's default puts it), in the order of [`TEAMS_QUANTITIES`],
+/// at the calibration's image size.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TeamsView {
+    /// The values.
+    pub values: [f64; 6],
+    /// Their one-sigma, propagated from the fit's (`Some(0)` held, `None` not determined).
+    pub std: [Option<f64>; 6],
+    /// Whether each was calibrated (its correction estimated and determined).
+    pub calibrated: [bool; 6],
+}
+
+impl TeamsView {
+    /// The view of a camera of the intrinsics `[fx, fy, cx, cy]` (px) at `width × height`
+    /// with no uncertainty: a robot's previous calibration, for the change.
+    pub fn of_values(value: [f64; 4], width: u32, height: u32) -> TeamsView {
+        Intrinsics {
+            camera: CameraId::Lower,
+            prior: Prior {
+                width,
+                height,
+                fx: value[0],
+                fy: value[1],
+                cx: value[2],
+                cy: value[3],
+            },
+            value,
+            std: [Some(0.0); 4],
+            calibrated: [false; 4],
+        }
+        .teams_view()
+    }
+}
+
 /// The opening angle (deg) of an image side of `size` px at focal length `f` px.
 pub fn opening_angle(size: u32, f: f64) -> f64 {
     (2.0 * (size as f64 / (2.0 * f)).atan()).to_degrees()
@@ -211,5 +301,39 @@ mod tests {
             prior.scaled_to(320, 240),
             [fx / 2.0, fy / 2.0, 160.0, 120.0]
         );
+    }
+
+    #[test]
+    fn the_teams_view_is_the_opening_angles_focal_lengths_and_centre_offset_with_sigma() {
+        let prior = Prior {
+            width: 640,
+            height: 480,
+            fx: 600.0,
+            fy: 598.0,
+            cx: 320.0,
+            cy: 240.0,
+        };
+        let i = Intrinsics {
+            camera: CameraId::Lower,
+            prior,
+            value: [612.0, 590.0, 329.5, 232.0],
+            std: [Some(0.07), Some(0.06), Some(0.15), None],
+            calibrated: [true, true, true, false],
+        };
+        let view = i.teams_view();
+        assert_eq!(view.values[..2], i.opening_angles());
+        assert_eq!(view.values[2..4], [612.0, 590.0]);
+        assert_eq!(view.values[4..], [9.5, -8.0]);
+        assert_eq!(view.std[..2], i.opening_angles_std());
+        assert_eq!(view.std[2..], [Some(0.07), Some(0.06), Some(0.15), None]);
+        assert_eq!(view.calibrated, [true, true, true, true, true, false]);
+        // The same camera at half the size: every length halved, the angles kept.
+        assert_eq!(i.scaled_to(320, 240), [306.0, 295.0, 164.75, 116.0]);
+        let half = TeamsView::of_values(i.scaled_to(320, 240), 320, 240);
+        for k in 0..2 {
+            assert!((half.values[k] - view.values[k]).abs() < 1e-12);
+            assert!((half.values[k + 4] - view.values[k + 4] / 2.0).abs() < 1e-12);
+        }
+        assert_eq!(half.std, [Some(0.0); 6]);
     }
 }

@@ -176,16 +176,20 @@ impl Calibration {
     }
 
     /// `camera`'s calibrated intrinsics: its prior ([`Calibration::cameras`]) plus the
-    /// corrections, with their one-sigma; `None` when the calibration carries none for it.
+    /// corrections, with their one-sigma (a correction the data do not determine is left
+    /// out — its value is arbitrary, and no robot file carries it — and its one-sigma is
+    /// `None`); `None` when the calibration carries none for it.
     pub fn intrinsics(&self, camera: CameraId) -> Option<Intrinsics> {
         let prior = *self.cameras.get(&camera)?;
         let params = intrinsics::params(camera);
         let entry = params.map(|p| self.get(p));
         let base = prior.values();
+        let correction =
+            |e: Option<&Entry>| e.filter(|e| e.is_determined()).map_or(0.0, |e| e.value);
         Some(Intrinsics {
             camera,
             prior,
-            value: std::array::from_fn(|k| base[k] + entry[k].map_or(0.0, |e| e.value)),
+            value: std::array::from_fn(|k| base[k] + correction(entry[k])),
             std: entry.map(|e| e.map_or(Some(0.0), |e| e.std)),
             calibrated: params.map(|p| self.determined_here(p).is_some()),
         })

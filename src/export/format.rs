@@ -82,6 +82,11 @@ pub trait Format: Sync {
     fn intrinsics(&self) -> bool {
         false
     }
+    /// Whether `cal` carries what a file of the cameras' intrinsics ([`Format::intrinsics`])
+    /// holds: any camera's intrinsics by default; a file of one camera's, that camera's.
+    fn has_intrinsics_for(&self, cal: &Calibration) -> bool {
+        !cal.cameras.is_empty()
+    }
     /// The cameras' intrinsics a file of this format holds (`naocalib import`), each as
     /// the prior of a calibration held at them; none by default.
     fn read_cameras(

@@ -21,6 +21,18 @@
 //!   motor commands (`crates/control/src/motion/command_sender.rs`, line 52), so the file
 //!   stores **−α**.
 //!
+//! - Intrinsics (a calibration that estimated them): `camera_matrix_parameters.vision_top`
+//!   (the upper camera) and `vision_bottom` (the lower), `focal_lengths = [fx/W, fy/H]` and
+//!   `cc_optical_center = [cx/W, cy/H]`, which the head file overrides of HULKs'
+//!   `default.json` (merged key by key, `crates/parameters/src/directory.rs` lines 84–91,
+//!   `json.rs` lines 3–14). HULKs multiplies both by its image size of 640 × 480
+//!   (`camera_matrix_calculator.rs` lines 66, 74–97; `CameraMatrix::
+//!   from_normalized_focal_and_center`, `crates/projection/src/camera_matrix.rs` lines
+//!   49–54) and projects a point `(x, y, z)` of its optical camera frame to the pixel
+//!   `(fx·x/z + cx, fy·y/z + cy)` (`crates/projection/src/intrinsic.rs`, lines 47–60), the
+//!   pixel of index `i` at coordinate `i` (`crates/vision/src/field_border_detection.rs`,
+//!   line 74) — naocalib's convention, so `cx` needs no half-pixel shift.
+//!
 //! JSON has no comments: the units and the compensation rule are in the docs; a result
 //! that is not a calibration gets a top-level `naocalib_not_a_calibration` key, which
 //! HULKs does not know and so refuses to load.
@@ -54,7 +66,19 @@ struct HeadFile {
 
 #[derive(Serialize)]
 struct CameraMatrixParameters {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    vision_top: Option<Vision>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    vision_bottom: Option<Vision>,
     calibration: CameraCalibration,
+}
+
+/// One camera's normalised intrinsics (`camera_matrix_parameters.vision_top` /
+/// `vision_bottom`; their `camera_pitch` is HULKs' default, not written).
+#[derive(Serialize)]
+struct Vision {
+    focal_lengths: [f64; 2],
+    cc_optical_center: [f64; 2],
 }
 
 #[derive(Serialize)]
@@ -192,8 +216,9 @@ fn offsets_at(root: &jsonedit::Value, path: &Path) -> Result<Vec<(Param, f64)>, 
 }
 
 /// HULKs' per-head parameter JSON (`head.<id>.json`): the lower camera's correction
-/// `[x, y, z]` (rad), and the upper camera's when the calibration knows all three of its
-/// offsets.
+/// `[x, y, z]` (rad), the upper camera's when the calibration knows all three of its
+/// offsets, and each camera's normalised intrinsics (`vision_top`, `vision_bottom`:
+/// `focal_lengths`, `cc_optical_center`) when the calibration carries them.
 #[derive(Debug, Clone, Copy)]
 pub struct Head;
 
@@ -205,17 +230,23 @@ impl Format for Head {
         "hulks/head.json"
     }
     fn description(&self) -> &'static str {
-        "HULKs head.<id>.json: correction_in_camera_bottom/_top [x, y, z] in rad"
+        "HULKs head.<id>.json: correction_in_camera_bottom/_top [x, y, z] in rad; with \
+         intrinsics, vision_top/_bottom focal_lengths and cc_optical_center normalised"
     }
     fn doc_row(&self) -> DocRow {
         DocRow {
             carries: "`camera_matrix_parameters.calibration.correction_in_camera_bottom = [x, y, z]`, \
-                      `correction_in_camera_top`",
-            units: "rad",
+                      `correction_in_camera_top`; for a calibration of the intrinsics \
+                      `camera_matrix_parameters.vision_top` / `vision_bottom` \
+                      `focal_lengths = [fx/W, fy/H]`, `cc_optical_center = [cx/W, cy/H]`",
+            units: "rad; intrinsics normalised by the image size",
             axes: "`Rz(z)·Ry(y)·Rx(x)` applied before `head_to_camera`, in HULKs' optical camera \
                    frame (z forward, x right, y down); small angles: x ≈ CamPitch, y ≈ CamYaw, \
                    z ≈ −CamRoll; the top camera the same with its `camera_pitch` of −1.2° \
-                   (`camera_matrix_calculator.rs:67–73, 104–108, 115–116`)",
+                   (`camera_matrix_calculator.rs:67–73, 104–108, 115–116`); intrinsics times \
+                   640 × 480 (`camera_matrix_calculator.rs:66, 74–97`, `camera_matrix.rs:49–54`), \
+                   pixel `(f·x/z + c)` in the optical frame, pixel centres at integers as naocalib \
+                   (`intrinsic.rs:47–60`)",
         }
     }
     fn recognise(&self, code: &str) -> bool {
@@ -227,6 +258,8 @@ impl Format for Head {
         pretty(&HeadFile {
             naocalib_not_a_calibration: marker(cal),
             camera_matrix_parameters: CameraMatrixParameters {
+                vision_top: vision(cal, CameraId::Upper),
+                vision_bottom: vision(cal, CameraId::Lower),
                 calibration: CameraCalibration {
                     correction_in_camera_bottom: super::camera::hulks(cal, CameraId::Lower),
                     correction_in_camera_top: upper
@@ -282,8 +315,185 @@ impl Format for Head {
                 }
             };
         }
+        for camera in super::camera::CAMERAS {
+            vision_at(&root, path, camera)?;
+        }
+        for camera in super::camera::CAMERAS {
+            let Some(i) = cal.intrinsics(camera) else {
+                continue;
+            };
+            let values = normalised(&i);
+            let calibrated = |a: usize| [i.calibrated[2 * a], i.calibrated[2 * a + 1]];
+            // An array the file lacks is written whole: what was not calibrated at HULKs'
+            // default, which the robot ran with.
+            let array = |a: usize| {
+                let c = calibrated(a);
+                let v = |k: usize| {
+                    num(if c[k] {
+                        values[2 * a + k]
+                    } else {
+                        DEFAULT_INTRINSICS[2 * a + k]
+                    })
+                };
+                format!("[{}, {}]", v(0), v(1))
+            };
+            let wanted: Vec<usize> = (0..2)
+                .filter(|&a| calibrated(a).iter().any(|c| *c))
+                .collect();
+            let root = jsonedit::parse(&out, path)?;
+            let first = vision_path(camera, VISION_KEYS[0]);
+            let object = &first[..2];
+            if !wanted.is_empty() && root.get(object).is_none() {
+                let members: Vec<String> = wanted
+                    .iter()
+                    .map(|&a| format!("\"{}\": {}", VISION_KEYS[a], array(a)))
+                    .collect();
+                let text = format!("{{{}}}", members.join(", "));
+                out = jsonedit::set(&out, object, &text, path)?;
+                continue;
+            }
+            // `focal_lengths` (values 0, 1), then `cc_optical_center` (2, 3).
+            for a in wanted {
+                let c = calibrated(a);
+                let root = jsonedit::parse(&out, path)?;
+                out = match vision_at(&root, path, camera)?[a] {
+                    Some(old) => super::cfg::splice(
+                        &out,
+                        (0..2)
+                            .filter(|&k| c[k])
+                            .map(|k| (old[k].1, old[k].2, num(values[2 * a + k])))
+                            .collect(),
+                    ),
+                    None => {
+                        jsonedit::set(&out, &vision_path(camera, VISION_KEYS[a]), &array(a), path)?
+                    }
+                };
+            }
+        }
         Ok(out)
     }
+    /// Each camera's intrinsics the head file holds (`vision_top`, `vision_bottom`), at
+    /// HULKs' 640 × 480; a key the file lacks is HULKs' default.
+    fn read_cameras(
+        &self,
+        text: &str,
+        path: &Path,
+    ) -> Result<Vec<(CameraId, crate::calibration::Prior)>, ExportError> {
+        let root = jsonedit::parse(text, path)?;
+        let mut out = Vec::new();
+        for camera in super::camera::CAMERAS {
+            let found = vision_at(&root, path, camera)?;
+            if found.iter().all(Option::is_none) {
+                continue;
+            }
+            let value = |k: usize| found[k / 2].map_or(DEFAULT_INTRINSICS[k], |a| a[k % 2].0);
+            let (width, height) = IMAGE;
+            let (w, h) = (f64::from(width), f64::from(height));
+            out.push((
+                camera,
+                crate::calibration::Prior {
+                    width,
+                    height,
+                    fx: value(0) * w,
+                    fy: value(1) * h,
+                    cx: value(2) * w,
+                    cy: value(3) * h,
+                },
+            ));
+        }
+        Ok(out)
+    }
+}
+
+/// The image size HULKs computes its cameras at: `CameraMatrixCalculator::cycle` sets
+/// `image_size = vector![640.0, 480.0]` for both (`crates/control/src/
+/// camera_matrix_calculator.rs`, line 66, commit 21e8a3de9).
+pub const IMAGE: (u32, u32) = (640, 480);
+
+/// HULKs' default intrinsics of both cameras, normalised (`etc/parameters/default.json`,
+/// lines 91–92 and 96–97, commit 21e8a3de9): `focal_lengths` `[0.96666, 1.28574]`,
+/// `cc_optical_center` `[0.5, 0.5]`.
+pub const DEFAULT_INTRINSICS: [f64; 4] = [0.96666, 1.28574, 0.5, 0.5];
+
+/// The keys of a camera's intrinsics below `vision_top` / `vision_bottom`.
+const VISION_KEYS: [&str; 2] = ["focal_lengths", "cc_optical_center"];
+
+/// `camera_matrix_parameters.vision_top.<key>` (`vision_bottom` for the lower camera):
+/// HULKs' top camera is the upper one (`camera_matrix_calculator.rs`, lines 37–38, 67–81).
+fn vision_path(camera: CameraId, key: &'static str) -> [&'static str; 3] {
+    [
+        "camera_matrix_parameters",
+        match camera {
+            CameraId::Upper => "vision_top",
+            CameraId::Lower => "vision_bottom",
+        },
+        key,
+    ]
+}
+
+/// What HULKs' head file stores of calibrated intrinsics `i`: `[fx/W, fy/H, cx/W, cy/H]`
+/// (W × H the calibration's image), which HULKs multiplies by its 640 × 480
+/// (`CameraMatrix::from_normalized_focal_and_center`, `crates/projection/src/
+/// camera_matrix.rs`, lines 49–54, commit 21e8a3de9).
+fn normalised(i: &crate::calibration::Intrinsics) -> [f64; 4] {
+    let [fx, fy] = i.relative_focal_lengths();
+    let [cx, cy] = i.relative_centre();
+    [fx, fy, cx, cy]
+}
+
+/// The normalised intrinsics of `camera` for a fresh head file, when `cal` carries them.
+fn vision(cal: &Calibration, camera: CameraId) -> Option<Vision> {
+    let [fx, fy, cx, cy] = normalised(&cal.intrinsics(camera)?);
+    Some(Vision {
+        focal_lengths: [fx, fy],
+        cc_optical_center: [cx, cy],
+    })
+}
+
+/// `camera`'s `[focal_lengths, cc_optical_center]` in a parsed head file, each `[a, b]`
+/// with its spans when present, checked plausible (a focal length of an opening angle of
+/// 10 … 150°, a centre within the image).
+fn vision_at(
+    root: &jsonedit::Value,
+    path: &Path,
+    camera: CameraId,
+) -> Result<[Option<[Spanned; 2]>; 2], ExportError> {
+    let mut out = [None; 2];
+    for (a, key) in VISION_KEYS.iter().enumerate() {
+        let at = vision_path(camera, key);
+        let Some(v) = root.get(&at) else {
+            continue;
+        };
+        let name = at.join(".");
+        let (expected, range) = if a == 0 {
+            // 2·atan(0.5 / f) from 150° to 10°.
+            (
+                "[fx, fy], normalised focal lengths of 0.134 … 5.7",
+                0.134..=5.7,
+            )
+        } else {
+            ("[x, y], a normalised optical centre of 0 … 1", 0.0..=1.0)
+        };
+        let bad =
+            |line: usize| parse_error(path, format!("line {line}: {name}: expected {expected}"));
+        let jsonedit::Kind::Array(items) = &v.kind else {
+            return Err(bad(v.line));
+        };
+        if items.len() != 2 {
+            return Err(bad(v.line));
+        }
+        let mut pair = [(0.0, 0, 0); 2];
+        for (k, item) in items.iter().enumerate() {
+            match item.kind {
+                jsonedit::Kind::Number(x) if range.contains(&x) => {
+                    pair[k] = (x, item.start, item.end)
+                }
+                _ => return Err(bad(item.line)),
+            }
+        }
+        out[a] = Some(pair);
+    }
+    Ok(out)
 }
 
 impl Head {

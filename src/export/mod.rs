@@ -72,7 +72,7 @@ mod write;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use crate::model::Param;
+use crate::model::{CameraId, Param};
 use read::not_in_layout;
 use write::check_usable;
 
@@ -106,8 +106,12 @@ pub static FORMATS: &[&dyn Format] = &[
     &hulks::Head,
     &hulks::Body,
     &naoth::Camera,
+    &naoth::CameraInfo(CameraId::Upper),
+    &naoth::CameraInfo(CameraId::Lower),
     &nomadz::Camera,
     &nomadz::Joints,
+    &nomadz::CameraInfo(CameraId::Upper),
+    &nomadz::CameraInfo(CameraId::Lower),
     &runswift::Camera,
 ];
 
@@ -157,8 +161,8 @@ pub enum ExportError {
     },
     /// A file of the cameras' intrinsics for a calibration that carries none.
     #[error(
-        "not writing {}: {format}: the calibration carries no camera intrinsics (solve with \
-         --free intrinsics)", path.display()
+        "not writing {}: {format}: the calibration carries no camera intrinsics for it (solve \
+         with --free intrinsics; a camera's need captures of it)", path.display()
     )]
     NoIntrinsics {
         /// The file not written.

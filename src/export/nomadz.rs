@@ -25,16 +25,19 @@
 //! `upperCameraTiltCorrection`, `upperCameraRollCorrection`, `upperCameraPanCorrection`
 //! (radians) enter the same way after `headTiltToUpperCameraTilt` (1.2°; lines 582–586):
 //! UpperCamPitch, UpperCamRoll, UpperCamYaw. The `body…` keys are not calibrated here.
+//!
+//! **Intrinsics**: `upperCameraInfo.cfg` and `lowerCameraInfo.cfg`, one per camera
+//! ([`CameraInfo`]): opening angles in radians, the optical centre in pixels.
 
 use std::fmt::Write as _;
 use std::path::Path;
 
 use super::bhuman::{BHUMAN_JOINTS, joint_param};
 use super::cfg::{self, Kind};
-use super::format::{DocRow, Format};
+use super::format::{DocRow, Format, NameRule};
 use super::source::has_key;
 use super::{Calibration, ExportError, Imported, header, num, parse_error};
-use crate::model::Param;
+use crate::model::{CameraId, Param};
 
 /// NomadZ's default `(minAngle, maxAngle)` (deg) of each joint, in [`BHUMAN_JOINTS`]
 /// order.
@@ -406,5 +409,318 @@ impl Format for Camera {
             edits.push((*start, *end, num(v.to_radians())));
         }
         Ok(cfg::splice(text, edits))
+    }
+}
+
+/// NomadZ's default image size of each camera (`Config/Robots/Default/upperCameraInfo.cfg`:
+/// 640 × 480, `lowerCameraInfo.cfg`: 320 × 240, commit 2a597dac), at which a fresh file
+/// of it is written: the file's `width` and `height` are the resolution NomadZ opens the
+/// camera at (`CameraProvider.cpp`, lines 49–51), which naocalib does not change.
+pub fn default_image(camera: CameraId) -> (u32, u32) {
+    match camera {
+        CameraId::Upper => (640, 480),
+        CameraId::Lower => (320, 240),
+    }
+}
+
+/// NomadZ's default opening angles of both cameras (rad; 54.7° × 42.5°, the centre at the
+/// image's middle: `Config/Robots/Default/*CameraInfo.cfg`, commit 2a597dac).
+const DEFAULT_OPENING_RAD: [f64; 2] = [0.9546951, 0.7417649];
+
+/// The keys of a camera's intrinsics in a NomadZ `CameraInfo` file, in the order of
+/// [`camera_info_values`].
+const CAMERA_INFO_KEYS: [&[&str]; 4] = [
+    &["openingAngleWidth"],
+    &["openingAngleHeight"],
+    &["opticalCenter", "x"],
+    &["opticalCenter", "y"],
+];
+
+/// What a NomadZ `CameraInfo` file at `width × height` stores of calibrated intrinsics
+/// `i`: the opening angles (rad) and the optical centre (px) of the same camera at that
+/// image size.
+fn camera_info_values(i: &crate::calibration::Intrinsics, width: u32, height: u32) -> [f64; 4] {
+    let [fx, fy, cx, cy] = i.scaled_to(width, height);
+    [
+        crate::calibration::intrinsics::opening_angle(width, fx).to_radians(),
+        crate::calibration::intrinsics::opening_angle(height, fy).to_radians(),
+        cx,
+        cy,
+    ]
+}
+
+/// A NomadZ `CameraInfo` file as read: the camera, the image size, and the four values
+/// of [`CAMERA_INFO_KEYS`] (rad, rad, px, px) with their spans.
+struct CameraInfoFile {
+    camera: CameraId,
+    width: u32,
+    height: u32,
+    values: [(f64, usize, usize); 4],
+}
+
+/// Reads a NomadZ `CameraInfo` file, each value checked: `camera` upper or lower, a
+/// positive `width` and `height`, opening angles of 10 … 150° as plain radians (NomadZ
+/// streams them as floats, without units: `CameraInfo.cpp`, lines 18–19), the centre
+/// inside the image.
+fn camera_info(text: &str, path: &Path) -> Result<CameraInfoFile, ExportError> {
+    let root = cfg::parse(text, path)?;
+    let scalar = |key: &str| -> Result<(&str, usize), ExportError> {
+        let v = root
+            .get(&[key])
+            .ok_or_else(|| parse_error(path, format!("{key}: missing")))?;
+        let s = v.scalar().ok_or_else(|| {
+            parse_error(path, format!("line {}: {key}: expected a value", v.line))
+        })?;
+        Ok((s, v.line))
+    };
+    let (name, line) = scalar("camera")?;
+    let camera = CameraId::ALL
+        .into_iter()
+        .find(|c| c.name() == name.trim())
+        .ok_or_else(|| {
+            parse_error(
+                path,
+                format!("line {line}: camera: '{name}' is neither upper nor lower"),
+            )
+        })?;
+    let mut size = [0u32; 2];
+    for (k, key) in ["width", "height"].iter().enumerate() {
+        let (text, line) = scalar(key)?;
+        size[k] = text.trim().parse().ok().filter(|n| *n > 0).ok_or_else(|| {
+            parse_error(
+                path,
+                format!("line {line}: {key}: '{text}' is not a positive number of pixels"),
+            )
+        })?;
+    }
+    let [width, height] = size;
+    let mut values = [(0.0, 0, 0); 4];
+    for (k, keys) in CAMERA_INFO_KEYS.iter().enumerate() {
+        let key = keys.join(".");
+        let v = root
+            .get(keys)
+            .ok_or_else(|| parse_error(path, format!("{key}: missing")))?;
+        let text = v.scalar().ok_or_else(|| {
+            parse_error(path, format!("line {}: {key}: expected a number", v.line))
+        })?;
+        let x = cfg::number(text);
+        let (ok, expected) = match k {
+            0 | 1 => (
+                x.is_some_and(|x| (10f64.to_radians()..150f64.to_radians()).contains(&x)),
+                "an opening angle of 10 … 150° in radians (NomadZ reads no unit)".to_string(),
+            ),
+            2 => (
+                x.is_some_and(|x| (0.0..=f64::from(width)).contains(&x)),
+                format!("an optical centre of 0 … {width} px"),
+            ),
+            _ => (
+                x.is_some_and(|x| (0.0..=f64::from(height)).contains(&x)),
+                format!("an optical centre of 0 … {height} px"),
+            ),
+        };
+        match x.filter(|_| ok) {
+            Some(x) => values[k] = (x, v.start, v.end),
+            None => {
+                return Err(parse_error(
+                    path,
+                    format!("line {}: {key}: '{text}' is not {expected}", v.line),
+                ));
+            }
+        }
+    }
+    Ok(CameraInfoFile {
+        camera,
+        width,
+        height,
+        values,
+    })
+}
+
+/// NomadZ's `upperCameraInfo.cfg` / `lowerCameraInfo.cfg` (B-Human 2013's `CameraInfo`),
+/// one file per camera in `Config/Robots/<robot>/`, which NomadZ reads before
+/// `Config/Robots/Default/` (`Src/Core/System/File.cpp`, lines 52–53, commit 2a597dac;
+/// `Src/Modules/Infrastructure/CameraProvider.cpp`, lines 38–43): the camera, the image
+/// size, the opening angles in radians and the optical centre in pixels at that size.
+///
+/// NomadZ's `CameraInfo::serialize` (`Src/Representations/Infrastructure/CameraInfo.cpp`,
+/// line 22) makes one focal length `width / (2·tan(openingAngleWidth / 2))`, which
+/// `Src/Tools/Geometry/Transformations.cpp` uses for both image axes, looking from pixel
+/// `(u, v)` along `(f, cx − u, cy − v)` (lines 81–82, 155, 332; a point is rounded to the
+/// pixel `(int)(0.5 + cx − y·f/x)`, line 36: pixel centres at integers, as naocalib);
+/// `openingAngleHeight` is the image's vertical field of view (the image's top edge at
+/// `tan(openingAngleHeight / 2)`, `Transformations.cpp` lines 351–352,
+/// `CameraMatrixProvider.cpp` line 33). So the file stores `2·atan(w / (2·fx))`,
+/// `2·atan(h / (2·fy))`, `cx`, `cy` of naocalib's camera at the file's `w × h`; the
+/// difference of `fx` and `fy` is lost to NomadZ's projection, which uses `fx`.
+#[derive(Debug, Clone, Copy)]
+pub struct CameraInfo(pub CameraId);
+
+impl Format for CameraInfo {
+    fn name(&self) -> &'static str {
+        match self.0 {
+            CameraId::Upper => "nomadz-upper-camera-info",
+            CameraId::Lower => "nomadz-lower-camera-info",
+        }
+    }
+    fn file(&self) -> &'static str {
+        match self.0 {
+            CameraId::Upper => "nomadz/upperCameraInfo.cfg",
+            CameraId::Lower => "nomadz/lowerCameraInfo.cfg",
+        }
+    }
+    fn description(&self) -> &'static str {
+        match self.0 {
+            CameraId::Upper => {
+                "NomadZ upperCameraInfo.cfg: the upper camera's opening angles in rad and optical \
+                 centre in px"
+            }
+            CameraId::Lower => {
+                "NomadZ lowerCameraInfo.cfg: the lower camera's opening angles in rad and optical \
+                 centre in px"
+            }
+        }
+    }
+    fn doc_row(&self) -> DocRow {
+        DocRow {
+            carries: match self.0 {
+                CameraId::Upper => {
+                    "`camera = upper; width; height; openingAngleWidth; openingAngleHeight; \
+                     opticalCenter = {x; y;};` (NomadZ's `CameraInfo`): the upper camera's \
+                     intrinsics, written only for a calibration that estimated them"
+                }
+                CameraId::Lower => "the same for `camera = lower`",
+            },
+            units: "rad; centre in px at `width × height`",
+            axes: "`f = width / (2·tan(openingAngleWidth/2))` for both axes (`CameraInfo.cpp:22`, \
+                   `Transformations.cpp:81–82`), `openingAngleHeight` the vertical field of view \
+                   (`Transformations.cpp:351–352`), centre in px, pixel centres at integers as \
+                   naocalib (`Transformations.cpp:36`)",
+        }
+    }
+    fn recognise(&self, code: &str) -> bool {
+        has_key(code, "openingAngleWidth")
+            && has_key(code, "opticalCenter")
+            && !has_key(code, "cameras")
+            && cfg::parse(code, Path::new("-"))
+                .ok()
+                .and_then(|root| {
+                    root.get(&["camera"])
+                        .and_then(|v| v.scalar().map(str::to_owned))
+                })
+                .is_some_and(|c| c.trim() == self.0.name())
+    }
+    fn intrinsics(&self) -> bool {
+        true
+    }
+    fn has_intrinsics_for(&self, cal: &Calibration) -> bool {
+        cal.cameras.contains_key(&self.0)
+    }
+    fn write(&self, cal: &Calibration) -> String {
+        let mut s = String::new();
+        header(
+            &mut s,
+            "//",
+            cal,
+            "opening angles in radians (rad), optical centre in pixels at width x height",
+        );
+        let (width, height) = default_image(self.0);
+        let _ = writeln!(
+            s,
+            "// NomadZ's focal length is width / (2 tan(openingAngleWidth / 2)) for both axes;"
+        );
+        let [aw, ah, cx, cy] = match cal.intrinsics(self.0) {
+            Some(i) => {
+                let [fx, fy, _, _] = i.scaled_to(width, height);
+                let _ = writeln!(
+                    s,
+                    "// calibrated fx {fx:.3} px, fy {fy:.3} px at {width} x {height}."
+                );
+                camera_info_values(&i, width, height)
+            }
+            None => {
+                // A directory export leaves the file out (Format::has_intrinsics_for).
+                let _ = writeln!(
+                    s,
+                    "// the {} camera's intrinsics are not calibrated here: NomadZ's default",
+                    self.0
+                );
+                let (w, h) = (f64::from(width), f64::from(height));
+                [
+                    DEFAULT_OPENING_RAD[0],
+                    DEFAULT_OPENING_RAD[1],
+                    w / 2.0,
+                    h / 2.0,
+                ]
+            }
+        };
+        let _ = writeln!(s, "camera = {};", self.0);
+        let _ = writeln!(s, "width = {width};");
+        let _ = writeln!(s, "height = {height};");
+        let _ = writeln!(
+            s,
+            "openingAngleWidth = {}; // {:.4}deg",
+            num(aw),
+            aw.to_degrees()
+        );
+        let _ = writeln!(
+            s,
+            "openingAngleHeight = {}; // {:.4}deg",
+            num(ah),
+            ah.to_degrees()
+        );
+        let _ = writeln!(
+            s,
+            "opticalCenter = {{ x = {}; y = {}; }};",
+            num(cx),
+            num(cy)
+        );
+        s
+    }
+    fn read(&self, text: &str, path: &Path) -> Result<Imported, ExportError> {
+        // Its values are the camera's intrinsics ([`Format::read_cameras`]).
+        self.read_cameras(text, path).map(|_| Vec::new())
+    }
+    /// The file's camera at its `width × height`: `fx`, `fy` from the opening angles, the
+    /// centre as stored.
+    fn read_cameras(
+        &self,
+        text: &str,
+        path: &Path,
+    ) -> Result<Vec<(CameraId, crate::calibration::Prior)>, ExportError> {
+        use crate::calibration::intrinsics::focal_length;
+        let f = camera_info(text, path)?;
+        let [aw, ah, cx, cy] = f.values.map(|(v, _, _)| v);
+        Ok(vec![(
+            f.camera,
+            crate::calibration::Prior {
+                width: f.width,
+                height: f.height,
+                fx: focal_length(f.width, aw.to_degrees()),
+                fy: focal_length(f.height, ah.to_degrees()),
+                cx,
+                cy,
+            },
+        )])
+    }
+    /// `text` with the opening angles and centre coordinates this calibration estimated
+    /// replaced, at the file's own `width × height` (which stay); every other byte kept (a
+    /// comment beside a value too).
+    fn update(&self, text: &str, path: &Path, cal: &Calibration) -> Result<String, ExportError> {
+        let f = camera_info(text, path)?;
+        let Some(i) = cal.intrinsics(f.camera) else {
+            return Ok(text.to_string());
+        };
+        let values = camera_info_values(&i, f.width, f.height);
+        let edits = (0..4)
+            .filter(|&k| i.calibrated[k])
+            .map(|k| (f.values[k].1, f.values[k].2, num(values[k])))
+            .collect();
+        Ok(cfg::splice(text, edits))
+    }
+    fn file_names(&self) -> NameRule {
+        match self.0 {
+            CameraId::Upper => NameRule::Exactly("uppercamerainfo.cfg"),
+            CameraId::Lower => NameRule::Exactly("lowercamerainfo.cfg"),
+        }
     }
 }

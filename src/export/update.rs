@@ -150,7 +150,16 @@ fn update_with(
     let new = format.update(text, path, cal)?;
     if new == *text {
         let held = format.read(text, path).unwrap_or_default();
-        let why = if held.iter().any(|(p, _)| cal.determined_here(*p).is_some()) {
+        // The cameras' intrinsics the file holds, calibrated here.
+        let intrinsics = format
+            .read_cameras(text, path)
+            .unwrap_or_default()
+            .iter()
+            .any(|(camera, _)| {
+                cal.intrinsics(*camera)
+                    .is_some_and(|i| i.calibrated.iter().any(|c| *c))
+            });
+        let why = if intrinsics || held.iter().any(|(p, _)| cal.determined_here(*p).is_some()) {
             Unchanged::AlreadyHolds
         } else {
             Unchanged::NothingDetermined

@@ -54,7 +54,7 @@ pub fn check_files(
     }
     for (format, path) in files {
         check_fresh(cal, *format, path)?;
-        if format.intrinsics() && cal.cameras.is_empty() {
+        if format.intrinsics() && !format.has_intrinsics_for(cal) {
             return Err(ExportError::NoIntrinsics {
                 path: path.clone(),
                 format: format.name(),
@@ -121,11 +121,11 @@ pub enum Withheld {
 
 /// Every format of [`FORMATS`] with its file in `dir` ([`Format::file`]) that `cal` has
 /// something for: the files of the cameras' intrinsics ([`Format::intrinsics`]) only when
-/// it carries intrinsics.
+/// it carries the intrinsics they hold ([`Format::has_intrinsics_for`]).
 pub fn every_file(cal: &Calibration, dir: &Path) -> Vec<(&'static dyn Format, PathBuf)> {
     FORMATS
         .iter()
-        .filter(|f| !f.intrinsics() || !cal.cameras.is_empty())
+        .filter(|f| !f.intrinsics() || f.has_intrinsics_for(cal))
         .map(|&f| (f, dir.join(f.file())))
         .collect()
 }

@@ -142,6 +142,47 @@ fn change_table(out: &mut String, changes: &[Change], id_suffix: &str) {
     out.push_str("</table>\n");
 }
 
+/// The calibrated cameras' intrinsics as the teams read them ([`super::intrinsics_rows`]),
+/// one table per camera, with the previous calibration's values and the change when the
+/// run started from one; nothing when the run calibrated no intrinsics.
+fn intrinsics_tables(out: &mut String, cameras: &[crate::run::CameraIntrinsics], id_suffix: &str) {
+    if cameras.is_empty() {
+        return;
+    }
+    out.push_str("<h3>Camera intrinsics</h3>\n");
+    for camera in cameras {
+        let with_previous = camera.previous.is_some();
+        let _ = writeln!(
+            out,
+            "<p>{}.</p>\n<table id=\"intrinsics-{}{id_suffix}\">\n<tr><th class=\"name\">quantity\
+             </th><th>value</th><th>±1σ</th>{}<th class=\"name\">unit</th></tr>",
+            escape(&super::intrinsics_heading(camera)),
+            camera.now.camera,
+            if with_previous {
+                "<th>previous</th><th>change</th>"
+            } else {
+                ""
+            }
+        );
+        for row in super::intrinsics_rows(camera) {
+            let previous = match (row.previous, row.change()) {
+                (Some(p), Some(c)) => format!("<td>{p:.4}</td><td>{c:+.4}</td>"),
+                _ => String::new(),
+            };
+            let _ = writeln!(
+                out,
+                "<tr><td class=\"name\">{}</td><td>{:.4}</td><td>{}</td>{previous}\
+                 <td class=\"name\">{}</td></tr>",
+                row.quantity,
+                row.value,
+                escape(&row.sigma),
+                row.unit
+            );
+        }
+        out.push_str("</table>\n");
+    }
+}
+
 fn page_start(out: &mut String, title: &str) {
     let _ = write!(
         out,
@@ -367,6 +408,7 @@ fn section(out: &mut String, s: &Section<'_>) -> Result<(), ReportError> {
             escape(standing.trim())
         );
     }
+    intrinsics_tables(out, &run.intrinsics, &s.id_suffix);
     out.push_str("<h3>Diagnosis</h3>\n<div class=\"diag\">");
     for line in super::diagnosis(solution) {
         let class = if line.contains("NOT") {

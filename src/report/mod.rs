@@ -121,8 +121,95 @@ pub fn run_text(run: &Run) -> String {
     let mut out = format!("{}\n", run.dataset().display());
     out.push_str(&table(&run.solution, run.truth()));
     out.push_str(&standing_table(&run.calibration));
+    out.push_str(&intrinsics_table(&run.intrinsics));
     if let Some(changes) = &run.changes {
         out.push_str(&changes_table(changes));
+    }
+    out
+}
+
+/// One quantity of a camera's intrinsics as the teams read them
+/// ([`crate::calibration::intrinsics::TeamsView`]), as the table and the HTML report show
+/// it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IntrinsicsRow {
+    /// What it is (`opening angle width`, …).
+    pub quantity: &'static str,
+    /// Its value.
+    pub value: f64,
+    /// Its one-sigma cell: the number, `held` or `undet.`.
+    pub sigma: String,
+    /// The previous calibration's value, when known.
+    pub previous: Option<f64>,
+    /// The unit (`deg`, `px`).
+    pub unit: &'static str,
+}
+
+impl IntrinsicsRow {
+    /// `value − previous`, when the previous value is known.
+    pub fn change(&self) -> Option<f64> {
+        self.previous.map(|p| self.value - p)
+    }
+}
+
+/// The rows of one calibrated camera's intrinsics as the teams read them: opening angles
+/// (deg), focal lengths (px) and the centre's offset from the image's middle (px), each with
+/// its one-sigma and the previous calibration's value.
+pub fn intrinsics_rows(camera: &crate::run::CameraIntrinsics) -> Vec<IntrinsicsRow> {
+    use crate::calibration::intrinsics::{TEAMS_QUANTITIES, TeamsView};
+    let now = camera.now.teams_view();
+    let previous = camera
+        .previous
+        .map(|v| TeamsView::of_values(v, camera.now.prior.width, camera.now.prior.height));
+    TEAMS_QUANTITIES
+        .iter()
+        .enumerate()
+        .map(|(k, &(quantity, unit))| IntrinsicsRow {
+            quantity,
+            value: now.values[k],
+            sigma: match now.std[k] {
+                None => "undet.".into(),
+                Some(_) if !now.calibrated[k] => "held".into(),
+                Some(s) => format!("{s:.4}"),
+            },
+            previous: previous.map(|p| p.values[k]),
+            unit,
+        })
+        .collect()
+}
+
+/// The heading of one camera's intrinsics table: the camera and the image size.
+pub fn intrinsics_heading(camera: &crate::run::CameraIntrinsics) -> String {
+    format!(
+        "Intrinsics of the {} camera at {}×{} px as the teams read them (±1σ from the fit)",
+        camera.now.camera, camera.now.prior.width, camera.now.prior.height
+    )
+}
+
+/// The calibrated cameras' intrinsics ([`intrinsics_rows`]) as text tables, one per camera,
+/// with the previous calibration's values and the change when the run started from one
+/// (empty when the run calibrated no intrinsics).
+pub fn intrinsics_table(cameras: &[crate::run::CameraIntrinsics]) -> String {
+    let mut out = String::new();
+    for camera in cameras {
+        let with_previous = camera.previous.is_some();
+        let _ = writeln!(out, "\n{}:", intrinsics_heading(camera));
+        let _ = write!(out, "{:<22} {:>10} {:>9}", "quantity", "value", "±1σ");
+        if with_previous {
+            let _ = write!(out, " {:>10} {:>9}", "previous", "change");
+        }
+        let _ = writeln!(out, "  unit");
+        for row in intrinsics_rows(camera) {
+            let _ = write!(
+                out,
+                "{:<22} {:>10.4} {:>9}",
+                row.quantity, row.value, row.sigma
+            );
+            if let (Some(previous), Some(change)) = (row.previous, row.change()) {
+                let _ = write!(out, " {previous:>10.4} {change:>+9.4}");
+            }
+            let _ = writeln!(out, "  {}", row.unit);
+        }
     }
     out
 }

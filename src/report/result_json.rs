@@ -15,9 +15,9 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use crate::calibration::{StandingIn, UniqueMap};
+use crate::calibration::{Prior, StandingIn, UniqueMap};
 use crate::dataset::AngleKind;
-use crate::model::Param;
+use crate::model::{CameraId, Param};
 use crate::run::{Change, Run};
 use crate::solve::Solution;
 use crate::solve::uncertainty::Direction;
@@ -29,6 +29,12 @@ pub struct ResultJson {
     /// Whether the dataset's joint angles were raw or already corrected (`solve`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub angles: Option<AngleKind>,
+    /// The a-priori intrinsics of each camera whose intrinsics were estimated (`solve
+    /// --free intrinsics`), as naocalib's calibration files carry them: what the
+    /// corrections `Fx` … `Cy` (`UpperFx` … `UpperCy`) are relative to, so that `export`
+    /// writes the cameras' intrinsics from the result. Absent with the intrinsics held.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cameras: Option<BTreeMap<CameraId, Prior>>,
     /// Captures used.
     #[serde(default)]
     pub captures: usize,
@@ -298,8 +304,9 @@ impl From<&Direction> for DirectionJson {
 
 impl ResultJson {
     /// The result JSON of `run`: its solution (with the truth, when known), dataset, the
-    /// dataset's joint-angle source, standing leg offsets and the change since the previous
-    /// calibration.
+    /// dataset's joint-angle source, standing leg offsets, the change since the previous
+    /// calibration and the a-priori intrinsics of the cameras whose intrinsics it
+    /// estimated.
     pub fn from_run(run: &Run) -> Self {
         let mut result =
             ResultJson::new(&run.solution, run.truth()).with_standing(&run.calibration);
@@ -311,6 +318,8 @@ impl ResultJson {
         if let Some(changes) = &run.changes {
             result = result.with_changes(changes);
         }
+        let cameras = &run.calibration.cameras;
+        result.cameras = (!cameras.is_empty()).then(|| cameras.clone());
         result
     }
 
@@ -326,6 +335,7 @@ impl ResultJson {
             .collect();
         ResultJson {
             angles: None,
+            cameras: None,
             captures: solution.captures,
             changes: None,
             chosen: solution

@@ -37,7 +37,7 @@ use crate::dataset::{AngleKind, Dataset};
 use crate::model::{FixedSet, PARAMETER_COUNT, Side};
 use crate::solve::{Loss, Problem, Solution, SolveError, UncertaintyOptions};
 
-pub use change::{Change, changes};
+pub use change::{CameraIntrinsics, Change, changes, intrinsics_of};
 pub use files::{FilesError, RunFiles};
 
 /// How a run solves its dataset: what `naocalib solve` and `naocalib batch` take from their
@@ -131,6 +131,9 @@ pub struct Run {
     pub start_from: Option<Calibration>,
     /// The change since [`Run::start_from`], parameter by parameter.
     pub changes: Option<Vec<Change>>,
+    /// Each camera whose intrinsics the run calibrated, with the previous calibration's
+    /// ([`Run::start_from`]); empty with the intrinsics held.
+    pub intrinsics: Vec<CameraIntrinsics>,
     /// The dataset's true parameters (simulated datasets), internal units.
     pub truth: Option<[f64; PARAMETER_COUNT]>,
     /// Which board each capture shows (for plots).
@@ -162,7 +165,8 @@ impl Run {
         calibration.angles = Some(dataset.angles.clone());
         let changes = start_from
             .as_ref()
-            .map(|previous| changes(&solution, previous, corrected(dataset)));
+            .map(|previous| changes(&solution, previous, corrected(dataset), &dataset.model));
+        let intrinsics = intrinsics_of(&calibration, start_from.as_ref(), &dataset.model);
         Run {
             provenance: Provenance {
                 dataset: dataset.dir.clone(),
@@ -172,6 +176,7 @@ impl Run {
             calibration,
             start_from,
             changes,
+            intrinsics,
             truth: dataset.truth.as_ref().map(|t| t.values),
             sides: dataset.captures.iter().map(|c| (c.id, c.side)).collect(),
             solution,
