@@ -40,6 +40,8 @@ use super::lola::{
     SensorFrame, SensorMessage,
 };
 
+pub mod request;
+
 /// Time constant of a joint following its command at stiffness 1 (s).
 pub const LAG_S: f64 = 0.03;
 /// Fastest a joint moves (rad/s).
