@@ -14,6 +14,9 @@ use crate::robot::check::{self, CheckReport};
 
 use super::{CaptureError, CaptureOptions, End, Report, cycles_to_seconds};
 
+/// The cameras of a run, opened, each with its name.
+pub type OpenCameras = Vec<(CameraId, Box<dyn Camera>)>;
+
 /// A measurement phase to run, as `naocalib capture` is asked for it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CaptureRequest {
@@ -119,7 +122,7 @@ impl CaptureRequest {
         config: &Path,
         scratch: &Path,
         note: &mut dyn FnMut(&str),
-    ) -> Result<Vec<(CameraId, Box<dyn Camera>)>, CaptureRequestError> {
+    ) -> Result<OpenCameras, CaptureRequestError> {
         let mut cameras = Vec::new();
         for (id, spec) in self.cameras()? {
             let setup = self.setup(model, config, id)?;
