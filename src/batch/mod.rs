@@ -41,6 +41,7 @@
 pub mod drift;
 mod files;
 mod report;
+pub mod request;
 pub mod stats;
 
 use std::panic::AssertUnwindSafe;

@@ -5,6 +5,7 @@
 
 pub mod file;
 pub mod intrinsics;
+pub mod prediction;
 pub mod standing;
 
 use std::collections::BTreeMap;

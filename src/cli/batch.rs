@@ -112,44 +112,24 @@ pub fn run(args: &BatchArgs, verbose: bool) -> Result<ExitCode> {
         bar.finish_and_clear();
     }
     files.write(&result, &options.drift, &mut |line| note!("{line}"))?;
-    super::print_out(if args.json {
-        format!(
-            "{}\n",
-            serde_json::to_string_pretty(&result.json(&options.drift))?
-        )
-    } else {
-        result.table(&options.drift)
-    })?;
-    for f in result.failures.iter().filter(|_| args.json) {
-        note!("naocalib: {}: {}", f.dataset.display(), f.error);
+    let (text, failures) = batch::request::printed(&result, &options.drift, args.json)?;
+    super::print_out(text)?;
+    for f in failures {
+        note!("{f}");
     }
-    Ok(if !result.all_solved() {
-        ExitCode::from(2)
-    } else if !result.all_converged() {
-        ExitCode::from(3)
-    } else {
-        ExitCode::SUCCESS
-    })
+    Ok(ExitCode::from(batch::request::exit_code(&result)))
 }
 
 /// The drift options of the flags.
 fn drift_options(args: &BatchArgs) -> Result<DriftOptions> {
-    if !(args.drift_threshold.is_finite() && args.drift_threshold > 0.0) {
-        anyhow::bail!(
-            "--drift-threshold must be a positive number, got {}",
-            args.drift_threshold
-        );
-    }
-    Ok(DriftOptions {
-        mode: match args.drift {
-            DriftArg::Consecutive => DriftMode::Consecutive,
-            DriftArg::First => DriftMode::First,
-        },
-        threshold: args.drift_threshold,
-        grouping: match args.robots {
-            RobotsArg::Parent => Grouping::Parent,
-            RobotsArg::All => Grouping::All,
-            RobotsArg::None => Grouping::None,
-        },
-    })
+    let mode = match args.drift {
+        DriftArg::Consecutive => DriftMode::Consecutive,
+        DriftArg::First => DriftMode::First,
+    };
+    let grouping = match args.robots {
+        RobotsArg::Parent => Grouping::Parent,
+        RobotsArg::All => Grouping::All,
+        RobotsArg::None => Grouping::None,
+    };
+    batch::request::drift_options(mode, args.drift_threshold, grouping).map_err(anyhow::Error::msg)
 }

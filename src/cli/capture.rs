@@ -4,18 +4,18 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::Ordering;
 use std::sync::mpsc;
-use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
 
-use naocalib::model::{CameraId, Model};
-use naocalib::robot::camera::settings::{self, SettingsChanges, settings_for};
-use naocalib::robot::camera::{CameraSpec, Setup, guard};
+use naocalib::model::CameraId;
+use naocalib::robot::camera::guard;
+use naocalib::robot::camera::settings::{self, SettingsChanges};
+use naocalib::robot::capture::request::{self, CaptureRequest};
 use naocalib::robot::capture::{self, CaptureError, Forecast};
 use naocalib::robot::check::{self, CheckReport};
 use naocalib::robot::lola::{self, Connection, Replay};
-use naocalib::robot::{CaptureOptions, End, Event, Report, Session, Start};
+use naocalib::robot::{Event, Session, Start};
 
 use super::options::within;
 
@@ -79,52 +79,21 @@ fn parse_setting(text: &str) -> Result<(Vec<CameraId>, SettingsChanges), String>
 }
 
 impl CaptureArgs {
-    /// The run's options from the flags.
-    fn options(&self) -> Result<CaptureOptions> {
-        let mut options = CaptureOptions::default();
-        options.motion.leg_speed = self.leg_speed.to_radians();
-        options.motion.head_speed = self.head_speed.to_radians();
-        options.motion.stiffness = self.stiffness;
-        options
-            .motion
-            .validate()
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-        Ok(options)
-    }
-
-    /// The cameras of `--camera`, each once.
-    fn cameras(&self) -> Result<Vec<(CameraId, CameraSpec)>> {
-        let mut specs: Vec<(CameraId, CameraSpec)> = Vec::new();
-        for text in &self.camera {
-            let (id, spec) = CameraSpec::parse_named(text)?;
-            if specs.iter().any(|(c, _)| *c == id) {
-                bail!("--camera: the {id} camera is given twice");
-            }
-            specs.push((id, spec));
+    /// The library's request of these flags.
+    fn request(&self) -> CaptureRequest {
+        CaptureRequest {
+            plan: self.plan.clone(),
+            config: self.config.clone(),
+            lola: self.lola.clone(),
+            cameras: self.camera.clone(),
+            leg_speed_deg: self.leg_speed,
+            head_speed_deg: self.head_speed,
+            stiffness: self.stiffness,
+            camera_timeout_s: self.camera_timeout,
+            frame_timeout_s: self.frame_timeout,
+            camera_settings: self.camera_setting.clone(),
+            guard: std::env::current_exe().ok(),
         }
-        Ok(specs)
-    }
-
-    /// Each camera of `--camera` with how it is set up for the robot `model`: the team
-    /// defaults, `config`'s `[camera]`/`[upper_camera]` settings over them,
-    /// `--camera-setting` over those, the waits, and naocalib itself as the guard of a
-    /// `command:` camera.
-    fn setups(&self, model: &Model, config: &Path) -> Result<Vec<(CameraId, CameraSpec, Setup)>> {
-        let file_settings = naocalib::dataset::read_camera_settings(config)?;
-        let guard = std::env::current_exe().ok();
-        Ok(self
-            .cameras()?
-            .into_iter()
-            .map(|(id, spec)| {
-                let setup = Setup {
-                    settings: settings_for(id, model, &file_settings, &self.camera_setting),
-                    frame_timeout: Duration::from_secs_f64(self.frame_timeout),
-                    command_timeout: Duration::from_secs_f64(self.camera_timeout),
-                    guard: guard.clone(),
-                };
-                (id, spec, setup)
-            })
-            .collect())
     }
 }
 
@@ -147,37 +116,28 @@ pub fn guard(args: &CameraGuardArgs) -> Result<ExitCode> {
 
 /// Runs `naocalib capture --check DIR`: prints the table; exit 1 when something does not
 /// hold.
-fn dry_run(args: &CaptureArgs, save: &Path) -> Result<ExitCode> {
-    let options = args.options()?;
-    let Some(config) = &args.config else {
-        bail!("--check needs --config DATASET_TOML (the robot's cameras)");
-    };
-    let model = naocalib::dataset::read_model(config)?;
-    let cameras = args.setups(&model, config)?;
-    let report = check::dry_run(&args.plan, &model, &cameras, &args.lola, &options, save)?;
-    print!("{}", report.table());
-    if report.ready() {
-        note!("naocalib: the day can start: every check holds, nothing was moved");
-        Ok(ExitCode::SUCCESS)
+fn dry_run(request: &CaptureRequest, save: &Path) -> Result<ExitCode> {
+    let report = request.dry_run(save)?;
+    super::print_out(report.table())?;
+    note!("{}", request::verdict(&report));
+    Ok(if report.ready() {
+        ExitCode::SUCCESS
     } else {
-        note!(
-            "naocalib: not ready (nothing was moved): {}",
-            report.failed()
-        );
-        Ok(ExitCode::from(1))
-    }
+        ExitCode::from(1)
+    })
 }
 
 /// Runs `naocalib capture`.
 pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
+    let request = args.request();
     if let Some(save) = &args.check {
-        return dry_run(args, save);
+        return dry_run(&request, save);
     }
     let Some(dir) = &args.out else {
         bail!("OUT is needed (the dataset directory to write)");
     };
-    let options = args.options()?;
-    let given: Vec<CameraId> = args.cameras()?.iter().map(|(c, _)| *c).collect();
+    let options = request.options()?;
+    let given: Vec<CameraId> = request.cameras()?.iter().map(|(c, _)| *c).collect();
     // Every row checked before anything is written or moved.
     let mut start = Start::new(
         &args.plan,
@@ -196,36 +156,15 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
         .collect();
     // Every camera set up (read back for V4L2), its settings those the dataset records
     // (with --resume), and its first picture checked before anything moves.
-    let config = match &args.config {
-        Some(config) => config.clone(),
-        None => dir.join("dataset.toml"),
-    };
-    let setups = args.setups(&start.model, &config)?;
+    let setups = request.setups(&start.model, &request.config_in(dir))?;
     let used: Vec<_> = setups
         .iter()
         .map(|(id, spec, setup)| spec.used(*id, &setup.settings))
         .collect();
     start.check_settings(&used)?;
     let scratch = tempfile::tempdir().context("cannot create a scratch directory")?;
-    let mut cameras = Vec::new();
-    for ((id, spec, setup), (camera, first)) in setups
-        .iter()
-        .zip(naocalib::robot::camera::open_all(&setups, scratch.path())?)
-    {
-        let how = match spec {
-            CameraSpec::V4l2(device) => format!(
-                "{}: {} — set and read back",
-                device.display(),
-                setup.settings
-            ),
-            CameraSpec::Command(_) => "command".to_string(),
-        };
-        said.push(format!(
-            "{id} camera ({how}); first picture {}×{}, mean brightness {:.0} of 255",
-            first.size.0, first.size.1, first.brightness.mean
-        ));
-        cameras.push((*id, camera));
-    }
+    let (cameras, opened) = CaptureRequest::open_cameras(&setups, scratch.path())?;
+    said.extend(opened);
     let stop = capture::stop_on_signals().context("cannot watch for Ctrl-C, SIGTERM or SIGHUP")?;
     let mut connection = Connection::connect(&args.lola, options.safety.silent_cycles)?;
     // The robot's checks on LoLA's first message, before anything is written or sent.
@@ -264,46 +203,13 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     // The robot is limp (or gone): let LoLA go before anything may wait for the terminal.
     drop(connection);
     terminal.close();
-    summary(dir, &report?, rows.len(), stop.load(Ordering::Relaxed))
-}
-
-/// The account of the run, and the exit code: 0 when the plan was run to its end, 2 when
-/// a signal stopped it, an error when a fault did.
-fn summary(out: &Path, report: &Report, total: usize, signalled: bool) -> Result<ExitCode> {
-    let done = report.already + report.taken.len();
-    note!(
-        "{} captures taken in this run ({} before), {} skipped, {done} of {total} in {} \
-         ({:.1} s of robot time)",
-        report.taken.len(),
-        report.already,
-        report.skipped(),
-        out.display(),
-        capture::cycles_to_seconds(report.cycles)
-    );
-    for (id, reason) in &report.unreachable {
-        note!("  skipped capture {id} before moving: {reason}");
+    let account = request::account(dir, &report?, rows.len(), stop.load(Ordering::Relaxed));
+    for line in &account.lines {
+        note!("{line}");
     }
-    for (id, reason) in &report.abandoned {
-        note!("  skipped capture {id} on the way: {reason}");
-    }
-    match &report.end {
-        End::Completed => Ok(ExitCode::SUCCESS),
-        End::Interrupted => {
-            let signal = if signalled { "a signal" } else { "a stop" };
-            note!(
-                "naocalib: stopped by {signal}: the robot is at rest with its stiffness off; \
-                 {} is a valid dataset; go on with --resume",
-                out.display()
-            );
-            Ok(ExitCode::from(2))
-        }
-        End::Stopped(e) => {
-            bail!(
-                "{e}; the run stopped ({} is a valid dataset of the {done} captures taken; \
-                 go on with --resume)",
-                out.display()
-            )
-        }
+    match account.error {
+        Some(e) => Err(anyhow::Error::msg(e)),
+        None => Ok(ExitCode::from(account.exit)),
     }
 }
 

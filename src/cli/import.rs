@@ -4,10 +4,10 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::Args;
 
-use naocalib::export::{WriteOptions, export, from_path, import_calibration};
+use naocalib::export::request::{self, ImportRequest};
 
 #[derive(Debug, Args)]
 pub struct ImportArgs {
@@ -29,20 +29,12 @@ pub struct ImportArgs {
 
 /// Runs `naocalib import`.
 pub fn run(args: &ImportArgs) -> Result<ExitCode> {
-    let format = super::export::format_arg(args.format.as_deref())?;
-    let (calibration, read) = import_calibration(&args.files, format)?;
-    let out_format = match from_path(&args.out) {
-        Some(f) if !f.robot() => f,
-        _ => bail!(
-            "{}: --out must be a .toml or .json calibration file",
-            args.out.display()
-        ),
-    };
-    let options = WriteOptions {
+    let read = request::import(&ImportRequest {
+        files: args.files.clone(),
+        out: args.out.clone(),
+        format: args.format.clone(),
         force: args.force,
-        inputs: args.files.clone(),
-    };
-    export(&calibration, out_format, &args.out, &options)?;
+    })?;
     for (file, format, count) in read {
         note!("read {} ({format}): {count} values", file.display());
     }

@@ -37,24 +37,8 @@ pub struct ProblemArgs {
 impl ProblemArgs {
     /// The held parameters for `--fix` and `--free` (family or parameter names).
     pub fn fixed_set(&self) -> Result<FixedSet> {
-        let fix = naocalib::model::parameters::parse_param_list(self.fix.as_deref().unwrap_or(""))
-            .map_err(|e| anyhow::anyhow!("--fix: {e}"))?;
-        for name in self.free.iter().flat_map(|f| f.split(',')).map(str::trim) {
-            let Ok(named) = naocalib::model::parameters::parse_param_list(name) else {
-                continue;
-            };
-            if !named.is_empty() && named.iter().all(|p| fix.contains(p)) {
-                anyhow::bail!(
-                    "--free {name} and --fix hold the same parameters: --fix would undo \
-                     --free {name}; name it in one of them"
-                );
-            }
-        }
-        FixedSet::from_lists(
-            self.free.as_deref().unwrap_or(""),
-            self.fix.as_deref().unwrap_or(""),
-        )
-        .map_err(anyhow::Error::msg)
+        naocalib::model::held::held(self.free.as_deref(), self.fix.as_deref())
+            .map_err(anyhow::Error::msg)
     }
 
     /// The loss (plain least squares without `--loss`).

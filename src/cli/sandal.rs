@@ -6,9 +6,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Args;
 
-use naocalib::model::Board;
-use naocalib::output::WriteOptions;
-use naocalib::sandal::{self, PlateParams};
+use naocalib::sandal::request::{self, SandalRequest};
 
 use super::print_out;
 
@@ -27,36 +25,15 @@ pub struct SandalArgs {
 
 /// Runs `naocalib sandal`.
 pub fn run(args: &SandalArgs) -> Result<ExitCode> {
-    let board = match &args.config {
-        Some(path) => naocalib::dataset::read_model(path)?.board,
-        None => Board::default(),
+    let request = SandalRequest {
+        out_dir: args.out_dir.clone(),
+        config: args.config.clone(),
+        force: args.force,
     };
-    let plate = PlateParams::default();
-    let in_file = |e: sandal::SandalError| match &args.config {
-        Some(config) => e.in_file(config),
-        None => e,
-    };
-    let files = sandal::files(&board, plate).map_err(in_file)?;
-    let options = WriteOptions::new(args.force).protecting(args.config.iter().cloned());
-    sandal::write(&args.out_dir, &files, &options)?;
-    for n in sandal::notes(&board, plate).map_err(in_file)? {
+    let made = request::run(&request)?;
+    for n in &made.notes {
         note!("naocalib sandal: note: {n}");
     }
-    let mut text = format!(
-        "Wrote the sandals for a board of {} × {} squares of {} mm into {}:\n",
-        board.squares_x,
-        board.squares_y,
-        board.square,
-        args.out_dir.display()
-    );
-    let width = files.iter().map(|f| f.name.len()).max().unwrap_or(0);
-    for f in &files {
-        text.push_str(&format!("  {:<width$}  {}\n", f.name, f.what));
-    }
-    text.push_str(
-        "Print at 100 % (actual size) and check both 100 mm bars before gluing; \
-         docs/SANDALS.md says how to make, mount and check them.\n",
-    );
-    print_out(text)?;
+    print_out(request::summary(&request, &made))?;
     Ok(ExitCode::SUCCESS)
 }

@@ -3,13 +3,12 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::Args;
 
-use naocalib::model::{CameraId, Family, Model};
-use naocalib::output::{Staged, WriteOptions};
-use naocalib::sim::SimOptions;
+use naocalib::model::Family;
 use naocalib::sim::camera::CameraPreset;
+use naocalib::sim::request::{self, SimRequest, parse_camera};
 
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
@@ -84,222 +83,32 @@ pub struct SimulateArgs {
     distortion: Option<Vec<f64>>,
 }
 
-/// The most captures `simulate` writes (as many as a dataset may have).
-const MAX_CAPTURES: usize = 100_000;
-
-/// Checks the counts and noise levels before anything is simulated or written.
-fn check_bounds(args: &SimulateArgs) -> Result<()> {
-    if args.stances == 0 || args.heads == 0 {
-        bail!(
-            "--stances and --heads must be at least 1 (got {} and {})",
-            args.stances,
-            args.heads
-        );
-    }
-    let captures = args
-        .stances
-        .checked_add(args.upper_stances)
-        .and_then(|n| n.checked_mul(args.heads))
-        .and_then(|n| n.checked_mul(2));
-    if captures.is_none_or(|n| n > MAX_CAPTURES) {
-        let count = captures.map_or("more than 2⁶⁴".to_string(), |n| n.to_string());
-        bail!(
-            "--stances {} --upper-stances {} --heads {} would make 2 × ({} + {}) × {} = \
-             {count} captures; at most {MAX_CAPTURES} are allowed",
-            args.stances,
-            args.upper_stances,
-            args.heads,
-            args.stances,
-            args.upper_stances,
-            args.heads
-        );
-    }
-    let within = |flag: &str, x: f64, hi: f64, unit: &str| {
-        if x.is_finite() && (0.0..=hi).contains(&x) {
-            Ok(())
-        } else {
-            Err(anyhow::anyhow!("{flag} must be 0 … {hi} {unit}, got {x}"))
-        }
-    };
-    within("--px-noise", args.px_noise, 100.0, "px")?;
-    within("--joint-noise-deg", args.joint_noise_deg, 10.0, "°")?;
-    if let Some(d) = &args.distortion
-        && let Some(k) = d.iter().find(|k| !(k.is_finite() && k.abs() <= 100.0))
-    {
-        bail!("--distortion coefficients must be finite and within ±100, got {k}");
-    }
-    Ok(())
-}
-
 /// Runs `naocalib simulate`.
 pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
-    check_bounds(args)?;
-    let truth = match &args.truth {
-        Some(path) => {
-            // With --force the dataset's truth.toml would be replaced: never the input.
-            let written = args.out.join(naocalib::dataset::TRUTH_TOML);
-            if let (Ok(a), Ok(b)) = (path.canonicalize(), written.canonicalize())
-                && a == b
-            {
-                bail!(
-                    "--truth {} is the truth.toml this would write; copy it out of {} first",
-                    path.display(),
-                    args.out.display()
-                );
-            }
-            Some(naocalib::dataset::read_truth(path)?.values)
-        }
-        None => None,
-    };
-    let (schedule, schedule_cameras) = match &args.stance_file {
-        Some(path) => {
-            let plan = naocalib::plan::read_csv(path)?;
-            if plan.is_empty() {
-                bail!("{}: the plan has no captures", path.display());
-            }
-            // The camera of each row (the plan's `camera` column; lower when absent).
-            let cameras = naocalib::dataset::read_captures(path)?
-                .iter()
-                .map(|c| c.camera)
-                .collect();
-            (Some(naocalib::plan::to_stances(&plan)), cameras)
-        }
-        None => (None, Vec::new()),
-    };
-    // Every output against every input, and the dataset files against --force, before
-    // anything is simulated or written.
-    let inputs: Vec<PathBuf> = args
-        .truth
-        .iter()
-        .chain(&args.stance_file)
-        .cloned()
-        .collect();
-    let write_options = WriteOptions::new(args.force).protecting(inputs);
-    let dataset_files = naocalib::output::dataset_files(&args.out);
-    let files: Vec<&std::path::Path> = dataset_files.iter().map(PathBuf::as_path).collect();
-    naocalib::output::check_outputs(&files, &[&args.out], &write_options)?;
-    naocalib::dataset::check_writable(&args.out, true, args.force)?;
-    // The dataset is written into a stage beside OUT and published at the end: a failure
-    // (a full disk) or a kill part-way leaves OUT as it was.
-    let stage = Staged::new(&args.out, &write_options)?;
-    let options = SimOptions {
+    let request = SimRequest {
+        out: args.out.clone(),
+        force: args.force,
         seed: args.seed,
         stances: args.stances,
         heads: args.heads,
-        px_noise: args.px_noise,
-        joint_noise: args.joint_noise_deg.to_radians(),
-        truth,
-        effects: args.effects.clone().map(|e| e.0).unwrap_or_default(),
-        noise_seed: None,
-        near_border: args.near_border,
-        images: args.images.then(|| naocalib::sim::render::ImageOutput {
-            dir: stage.dir().to_path_buf(),
-            options: naocalib::sim::render::RenderOptions {
-                blur: args.blur,
-                noise: args.grey_noise,
-                vignetting: args.vignetting,
-                seed: args.seed,
-                ..Default::default()
-            },
-            force: true,
-        }),
         upper_stances: args.upper_stances,
         team_offsets: args.team_offsets,
-        schedule_cameras,
-        schedule,
+        px_noise: args.px_noise,
+        joint_noise_deg: args.joint_noise_deg,
+        truth: args.truth.clone(),
+        effects: args.effects.clone().map(|e| e.0).unwrap_or_default(),
+        images: args.images,
+        blur: args.blur,
+        grey_noise: args.grey_noise,
+        vignetting: args.vignetting,
+        camera: args.camera,
+        stance_file: args.stance_file.clone(),
+        near_border: args.near_border,
+        distortion: args.distortion.clone(),
     };
-    let mut model = Model {
-        camera: args.camera.camera(),
-        ..Model::default()
-    };
-    if let Some(d) = &args.distortion {
-        anyhow::ensure!(
-            d.len() == 5,
-            "--distortion takes five numbers: k1,k2,p1,p2,k3"
-        );
-        model.camera.distortion = std::array::from_fn(|i| d[i]);
-    }
-    let upper = args.upper_stances > 0 || options.schedule_cameras.contains(&CameraId::Upper);
-    if upper {
-        // The V6's two cameras are the same model: the upper one gets the same intrinsics.
-        model.upper_camera = Some(model.camera);
-    }
-    let mut dataset = naocalib::sim::simulate(&model, &options)?;
-    if args.images {
-        dataset.corners.clear();
-    }
-    let mut outside = 0;
-    if let Some(path) = &args.stance_file {
-        // A planned stance may show part of the board outside the image for offsets beyond
-        // the plan's bounds: those vertices are not seen.
-        let camera_of: std::collections::HashMap<u64, CameraId> =
-            dataset.captures.iter().map(|c| (c.id, c.camera)).collect();
-        let before = dataset.corners.len();
-        dataset.corners.retain(|c| {
-            let camera = camera_of.get(&c.capture).copied().unwrap_or_default();
-            model.intrinsics(camera).contains(c.pixel, 0.0)
-        });
-        outside = before - dataset.corners.len();
-        if let Some(truth) = &mut dataset.truth {
-            for key in ["stances_per_leg", "head_postures"] {
-                truth.simulation.remove(key);
-            }
-            truth.simulation.insert(
-                "stance_file".into(),
-                toml::Value::String(path.display().to_string()),
-            );
-        }
-    }
-    dataset.dir = args.out.clone();
-    dataset.write(stage.dir(), true)?;
-    stage.publish()?;
-    let upper = dataset
-        .captures
-        .iter()
-        .filter(|c| c.camera == CameraId::Upper)
-        .count();
-    if args.images {
-        super::print_out(format!(
-            "wrote {}: {} captures{} with images in {} (seed {}, blur {} px, grey noise {}, \
-             vignetting {}, {}° joint noise); corners.csv is empty: run `naocalib detect`\n",
-            args.out.display(),
-            dataset.captures.len(),
-            upper_note(upper),
-            args.out.join("images").display(),
-            args.seed,
-            args.blur,
-            args.grey_noise,
-            args.vignetting,
-            args.joint_noise_deg
-        ))?;
-    } else {
-        super::print_out(format!(
-            "wrote {}: {} captures{}, {} vertices (seed {}, {} px, {}° joint noise)\n",
-            args.out.display(),
-            dataset.captures.len(),
-            upper_note(upper),
-            dataset.corners.len(),
-            args.seed,
-            args.px_noise,
-            args.joint_noise_deg
-        ))?;
-        if outside > 0 {
-            super::print_out(format!(
-                "{outside} vertices fell outside the image at the true offsets and were left \
-                 out\n"
-            ))?;
-        }
-    }
+    let simulated = request::run(&request)?;
+    super::print_out(request::summary(&request, &simulated))?;
     Ok(ExitCode::SUCCESS)
-}
-
-/// ` (N with the upper camera)` when there are upper-camera captures, else nothing.
-fn upper_note(upper: usize) -> String {
-    if upper == 0 {
-        String::new()
-    } else {
-        format!(" ({upper} with the upper camera)")
-    }
 }
 
 /// `--effects`' help, with the registry's families.
@@ -307,18 +116,8 @@ fn effects_help() -> String {
     format!(
         "Give the drawn robot effects the paper's model lacks, as families ({}, or `realistic` \
          for {}); their true values go into truth.toml",
-        effect_families(),
+        request::effect_families(),
         Family::names(Family::realistic())
-    )
-}
-
-/// The families `--effects` draws: every one beyond the paper's but the upper camera's
-/// (drawn with the paper's whenever there are upper-camera captures).
-fn effect_families() -> String {
-    Family::names(
-        Family::ALL
-            .into_iter()
-            .filter(|f| !matches!(f, Family::Paper | Family::UpperCamera)),
     )
 }
 
@@ -328,32 +127,5 @@ struct Effects(Vec<Family>);
 
 /// Parses `--effects`: family names, or `realistic`.
 fn parse_effects(text: &str) -> Result<Effects, String> {
-    let mut out = Vec::new();
-    for name in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-        let named: Vec<Family> = match (name, Family::from_name(name)) {
-            ("realistic", _) => Family::realistic(),
-            (_, Some(Family::Paper | Family::UpperCamera)) | (_, None) => {
-                return Err(format!(
-                    "unknown effect '{name}' ({}, realistic = {})",
-                    effect_families(),
-                    Family::names(Family::realistic())
-                ));
-            }
-            (_, Some(f)) => vec![f],
-        };
-        for f in named {
-            if !out.contains(&f) {
-                out.push(f);
-            }
-        }
-    }
-    Ok(Effects(out))
-}
-
-/// Parses `--camera`.
-fn parse_camera(text: &str) -> Result<CameraPreset, String> {
-    CameraPreset::from_name(text).ok_or_else(|| {
-        let names: Vec<&str> = CameraPreset::ALL.iter().map(|(_, n)| *n).collect();
-        format!("unknown camera '{text}' ({})", names.join(", "))
-    })
+    request::parse_effects(text).map(Effects)
 }

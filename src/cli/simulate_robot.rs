@@ -5,14 +5,13 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::{Args, Subcommand};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
 
-use naocalib::model::{CameraId, Family, Joint, JointAngles, Model, PARAMETER_COUNT};
+use naocalib::model::CameraId;
 use naocalib::robot::body::Lying;
-use naocalib::robot::simulated::{self, Faults, RobotOptions, SnapSettings};
+use naocalib::robot::simulated::request::{self, RobotRequest};
+use naocalib::robot::simulated::{self, SnapSettings};
 use naocalib::sim::render::RenderOptions;
 
 use super::options::within;
@@ -138,28 +137,6 @@ fn lying(name: &str) -> Result<Lying, String> {
     })
 }
 
-/// `JOINT=STATUS@CYCLE` of `--status`.
-fn status(text: &str) -> Result<(Joint, i32, u64)> {
-    let bad = || {
-        anyhow::anyhow!(
-            "--status: expected JOINT=STATUS@CYCLE (e.g. LKneePitch=2@300), got '{text}'"
-        )
-    };
-    let (name, rest) = text.split_once('=').ok_or_else(bad)?;
-    let (value, cycle) = rest.split_once('@').ok_or_else(bad)?;
-    let value: i32 = value.trim().parse().map_err(|_| bad())?;
-    if !(1..=3).contains(&value) {
-        bail!("--status: a status is 1, 2 or 3, got {value}");
-    }
-    let cycle: u64 = cycle.trim().parse().map_err(|_| bad())?;
-    Ok((joint(name.trim())?, value, cycle))
-}
-
-fn joint(name: &str) -> Result<Joint> {
-    Joint::from_name(name)
-        .ok_or_else(|| anyhow::anyhow!("unknown joint '{name}' (e.g. LKneePitch, HeadYaw)"))
-}
-
 /// Runs `naocalib simulate-robot`.
 pub fn run(args: &SimulateRobotArgs) -> Result<ExitCode> {
     if let Some(SnapCommand::Snap {
@@ -186,93 +163,29 @@ pub fn run(args: &SimulateRobotArgs) -> Result<ExitCode> {
         )?;
         return Ok(ExitCode::SUCCESS);
     }
-    let Some(socket) = &args.lola else {
-        bail!("--lola SOCKET is needed (or `simulate-robot snap PATH --state FILE`)");
-    };
-    if !(args.speed.is_finite() && args.speed >= 0.0 && args.speed <= 1000.0) {
-        bail!("--speed must be 0 … 1000, got {}", args.speed);
-    }
-    let model = match &args.config {
-        Some(path) => naocalib::dataset::read_model(path)?,
-        None => Model::default(),
-    };
-    let truth: [f64; PARAMETER_COUNT] = match &args.truth {
-        Some(path) => naocalib::dataset::read_truth(path)?.values,
-        None => {
-            let mut families = Vec::new();
-            for name in &args.effects {
-                let Some(f) = Family::from_name(name.trim()) else {
-                    bail!("--effects: unknown family '{name}'");
-                };
-                families.push(f);
-            }
-            let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
-            let mut truth = naocalib::sim::draw_truth(&mut rng);
-            naocalib::sim::draw_effects(&mut rng, &families, &mut truth);
-            truth
-        }
-    };
-    let block = match &args.block {
-        Some(text) => {
-            let Some((name, deg)) = text.split_once('=') else {
-                bail!("--block: expected JOINT=DEG, got '{text}'");
-            };
-            let deg: f64 = deg
-                .trim()
-                .parse()
-                .ok()
-                .filter(|d: &f64| d.is_finite())
-                .ok_or_else(|| anyhow::anyhow!("--block: '{deg}' is not a number of degrees"))?;
-            let joint = joint(name.trim())?;
-            let (lo, hi) = joint.limits();
-            if !(lo..=hi).contains(&deg.to_radians()) {
-                bail!(
-                    "--block: {deg}° is outside {}'s range {:.1}° … {:.1}°",
-                    joint.name(),
-                    lo.to_degrees(),
-                    hi.to_degrees()
-                );
-            }
-            Some((joint, deg.to_radians()))
-        }
-        None => None,
-    };
-    let overheat = args.overheat.as_deref().map(joint).transpose()?;
-    let status_at = args.status.as_deref().map(status).transpose()?;
-    // Lying on its back, legs nearly straight, as a robot is put down.
-    let mut start = JointAngles::default();
-    start.set(Joint::LKneePitch, 0.03);
-    start.set(Joint::RKneePitch, 0.02);
-    start.set(Joint::HeadPitch, -0.05);
-    let options = RobotOptions {
-        model,
-        config: args
-            .config
-            .as_ref()
-            .map(|p| std::path::absolute(p).unwrap_or_else(|_| p.clone())),
-        truth,
+    let cycles = request::run(&RobotRequest {
+        lola: args.lola.clone(),
+        config: args.config.clone(),
+        seed: args.seed,
+        effects: args.effects.clone(),
+        truth: args.truth.clone(),
         speed: args.speed,
-        start,
-        lying: args.lying,
-        battery: (args.battery / 100.0) as f32,
         state: args.state.clone(),
         record: args.record.clone(),
-        faults: Faults {
-            block,
-            overheat,
-            drop_after: args.drop_after,
-            silent_after: args.silent_after,
-            garbage_at: args.garbage_at,
-            drop_on_signal: args.drop_on_sigusr1,
-            roll_at: args.roll_at,
-            chest_at: args.chest_at,
-            status_at,
-            low_battery_at: args.low_battery_at,
-        },
-        clients: args.clients as usize,
-        seed: args.seed,
-    };
-    let cycles = simulated::serve(socket, &options)?;
+        block: args.block.clone(),
+        overheat: args.overheat.clone(),
+        status: args.status.clone(),
+        drop_after: args.drop_after,
+        drop_on_signal: args.drop_on_sigusr1,
+        silent_after: args.silent_after,
+        garbage_at: args.garbage_at,
+        lying: args.lying,
+        battery_percent: args.battery,
+        roll_at: args.roll_at,
+        chest_at: args.chest_at,
+        low_battery_at: args.low_battery_at,
+        clients: args.clients,
+    })?;
     note!("simulated robot: {cycles} cycles served");
     Ok(ExitCode::SUCCESS)
 }

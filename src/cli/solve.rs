@@ -9,7 +9,7 @@ use clap::Args;
 
 use super::options::{ProblemArgs, SolverArgs, UncertaintyArgs, run_options};
 use naocalib::dataset::Dataset;
-use naocalib::report::ResultJson;
+use naocalib::report::printed;
 use naocalib::run::{self, Run, RunError, RunFiles, RunOptions};
 use naocalib::solve::{self, uncertainty::with_bootstrap_progress};
 
@@ -111,22 +111,8 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     files.write(&run, &dataset, &mut |line| note!("{line}"))?;
     // A capture whose residuals are many times the others' is named, and the run marked.
     let marked = args.detect && detect_guard(&run.solution);
-    super::print_out(if args.json {
-        let value = ResultJson::from_run(&run).to_value();
-        format!("{}\n", serde_json::to_string_pretty(&value)?)
-    } else if marked {
-        format!(
-            "{}MARKED: captures with residuals many times the others' (see the warnings above)\n",
-            naocalib::report::run_text(&run)
-        )
-    } else {
-        naocalib::report::run_text(&run)
-    })?;
-    Ok(if run.solution.is_calibration() && !marked {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::from(3)
-    })
+    super::print_out(printed::solve_output(&run, args.json, marked)?)?;
+    Ok(ExitCode::from(printed::solve_exit_code(&run, marked)))
 }
 
 /// [`run::calibrate`], with a progress bar for a long bootstrap on a terminal.

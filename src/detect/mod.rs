@@ -35,6 +35,7 @@ pub mod numbering;
 mod outcome;
 pub mod overlay;
 mod predict;
+pub mod request;
 
 use std::path::Path;
 

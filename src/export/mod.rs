@@ -63,6 +63,7 @@ pub mod naoth;
 pub mod nomadz;
 pub mod own;
 mod read;
+pub mod request;
 pub mod runswift;
 pub mod source;
 pub mod tree;

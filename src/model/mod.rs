@@ -9,6 +9,7 @@ pub mod bounds;
 pub mod camera;
 pub mod chain;
 pub mod gravity;
+pub mod held;
 pub mod parameters;
 pub mod pose;
 pub mod robot;

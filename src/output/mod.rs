@@ -188,6 +188,23 @@ pub fn write_atomic(
     })
 }
 
+/// Like [`write_atomic`], but without syncing the file before the rename: for a file
+/// rewritten many times a second and read at once by another process (the simulated
+/// robot's state), whose last version a crash may lose at no cost. Readers still see the
+/// old file or the new one, and the same refusals hold.
+pub fn write_atomic_unsynced(
+    path: &Path,
+    contents: &[u8],
+    options: &WriteOptions,
+) -> Result<(), WriteError> {
+    write_atomic_with(path, options, |tmp| {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(tmp)?
+            .write_all(contents)
+    })
+}
+
 /// Like [`write_atomic`], but the content is produced by `fill`, which writes the
 /// temporary file at the path it is given (a sibling of `path` with the same extension, so
 /// that writers that look at the extension, such as image encoders, do the right thing).
@@ -306,6 +323,20 @@ mod tests {
             ["a.csv"],
             "no temporary file left behind"
         );
+    }
+
+    #[test]
+    fn an_unsynced_write_refuses_and_forces_the_same() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("state.json");
+        write_atomic_unsynced(&path, b"one", &WriteOptions::default()).unwrap();
+        assert!(write_atomic_unsynced(&path, b"two", &WriteOptions::default()).is_err());
+        assert_eq!(std::fs::read(&path).unwrap(), b"one");
+        write_atomic_unsynced(&path, b"two", &WriteOptions::new(true)).unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"two");
+        let input = WriteOptions::new(true).protecting([path.clone()]);
+        assert!(write_atomic_unsynced(&path, b"three", &input).is_err());
+        assert_eq!(names(dir.path()), ["state.json"]);
     }
 
     #[cfg(unix)]

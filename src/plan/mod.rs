@@ -36,6 +36,8 @@ pub mod collision;
 pub mod design;
 pub mod feasible;
 pub mod order;
+pub mod report;
+pub mod request;
 pub mod route;
 
 use std::path::Path;

@@ -7,6 +7,7 @@ pub mod compare;
 pub mod html;
 pub mod misfit_plot;
 pub mod plot;
+pub mod printed;
 pub mod result_json;
 
 pub use result_json::ResultJson;

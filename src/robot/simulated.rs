@@ -31,7 +31,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use crate::model::{CameraId, Joint, JointAngles, Model, PARAMETER_COUNT, Side, gravity};
-use crate::output::{WriteOptions, write_atomic, write_atomic_with};
+use crate::output::{WriteOptions, write_atomic, write_atomic_unsynced};
 use crate::sim::render::{self, RenderOptions};
 
 use super::body::{self, Lying};
@@ -39,6 +39,8 @@ use super::lola::{
     self, ActuatorMessage, BATTERY_CHARGE, CHEST_BUTTON, JOINT_NAMES, JOINTS, LolaError,
     SensorFrame, SensorMessage,
 };
+
+pub mod request;
 
 /// Time constant of a joint following its command at stiffness 1 (s).
 pub const LAG_S: f64 = 0.03;
@@ -428,9 +430,11 @@ fn write_state(options: &RobotOptions, body: &Body) -> Result<(), RobotError> {
         seed: options.seed,
     };
     let bytes = serde_json::to_vec(&state).expect("a state always encodes");
-    Ok(write_atomic_with(path, &WriteOptions::new(true), |tmp| {
-        std::fs::write(tmp, &bytes)
-    })?)
+    Ok(write_atomic_unsynced(
+        path,
+        &bytes,
+        &WriteOptions::new(true),
+    )?)
 }
 
 /// How a client's session ended.

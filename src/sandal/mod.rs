@@ -11,6 +11,7 @@
 pub mod drawing;
 pub mod geometry;
 pub mod pdf;
+pub mod request;
 mod scad;
 mod svg;
 mod template;

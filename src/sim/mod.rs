@@ -8,6 +8,7 @@
 
 pub mod camera;
 pub mod render;
+pub mod request;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

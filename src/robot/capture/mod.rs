@@ -31,6 +31,7 @@ use super::safety::SafetyLimits;
 
 mod drive;
 pub mod plan;
+pub mod request;
 pub mod session;
 pub mod signals;
 pub mod start;
