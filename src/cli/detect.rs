@@ -324,9 +324,15 @@ pub fn run(args: &DetectArgs) -> Result<ExitCode> {
         corners.len(),
         corners_path.display()
     );
-    Ok(if summary.found == 0 && !results.is_empty() {
-        ExitCode::from(2)
-    } else {
-        ExitCode::SUCCESS
-    })
+    let turned = detect::turned::of_results(&results);
+    for t in &turned {
+        note!("naocalib: error: {t}");
+    }
+    Ok(
+        if (summary.found == 0 && !results.is_empty()) || !turned.is_empty() {
+            ExitCode::from(2)
+        } else {
+            ExitCode::SUCCESS
+        },
+    )
 }
