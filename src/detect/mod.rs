@@ -249,7 +249,7 @@ fn detect_image(
     let model = &dataset.model;
     let path = resolve_image(&dataset.dir, image)?;
     let intrinsics = model.intrinsics(capture.camera);
-    let grey = read_sized(&path, [intrinsics.width, intrinsics.height])?;
+    let grey = read_sized(&path, [intrinsics.width, intrinsics.height], capture.camera)?;
     let cv = |e: opencv::Error| DetectError::OpenCv {
         path: path.clone(),
         message: e.message,

@@ -50,10 +50,12 @@ pub enum DetectError {
         /// What the decoder said.
         message: String,
     },
-    /// The image does not have the camera's resolution.
+    /// The image does not have the resolution of the camera that took it.
     #[error(
-        "{}: the image is {}×{} pixels, but the camera in dataset.toml is {}×{}",
-        path.display(), size[0], size[1], camera[0], camera[1]
+        "{}: the image is {}×{} pixels, but the {} camera that took it (its capture's \
+         camera column) is {}×{} in [{}] of dataset.toml",
+        path.display(), size[0], size[1], camera_id.name(), camera[0], camera[1],
+        crate::dataset::camera_table(*camera_id)
     )]
     Size {
         /// The image.
@@ -62,6 +64,8 @@ pub enum DetectError {
         size: [u32; 2],
         /// The camera's resolution.
         camera: [u32; 2],
+        /// The camera that took it.
+        camera_id: CameraId,
     },
     /// The image header claims a size beyond what detection reads (refused before decoding).
     #[error(
