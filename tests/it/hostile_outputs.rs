@@ -718,3 +718,55 @@ fn a_failed_write_names_the_output_never_a_staging_path() {
     }
     assert!(temporaries(tmp.path()).is_empty());
 }
+
+/// `export RESULT --update FILE` where RESULT has the name a backup of FILE would take
+/// (`FILE.bak`, or `FILE.bak.2` beside an older `FILE.bak`): the backup takes the next
+/// free name, and the result, an input, is never replaced.
+#[test]
+fn an_update_never_gives_its_backup_the_results_name() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = dataset(tmp.path());
+    let team = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/teams/bhuman/cameraCalibration.cfg");
+    for older in [false, true] {
+        let work = tmp.path().join(format!("older-{older}"));
+        std::fs::create_dir(&work).unwrap();
+        let file = work.join("cameraCalibration.cfg");
+        std::fs::copy(&team, &file).unwrap();
+        let robot = std::fs::read(&file).unwrap();
+        let result = if older {
+            std::fs::write(work.join("cameraCalibration.cfg.bak"), b"an older backup").unwrap();
+            work.join("cameraCalibration.cfg.bak.2")
+        } else {
+            work.join("cameraCalibration.cfg.bak")
+        };
+        let json = result_json(&dir, &result);
+        let out = naocalib()
+            .arg("export")
+            .arg(&result)
+            .arg("--update")
+            .arg(&file)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", stderr(&out));
+        let kept = work.join(if older {
+            "cameraCalibration.cfg.bak.3"
+        } else {
+            "cameraCalibration.cfg.bak.2"
+        });
+        assert_eq!(
+            std::fs::read(&kept).unwrap(),
+            robot,
+            "the robot's file kept"
+        );
+        let still: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&result).unwrap()).unwrap();
+        assert_eq!(still, json, "the result is untouched");
+        if older {
+            assert_eq!(
+                std::fs::read(work.join("cameraCalibration.cfg.bak")).unwrap(),
+                b"an older backup"
+            );
+        }
+    }
+}
