@@ -206,7 +206,7 @@ fn turn_back(model: &Model, camera: CameraId, seen: &Seen, params: &[f64]) -> Se
     let chains = seen.chains.clone();
     // The pattern's colours turned by 180° are its own when its squares along both sides
     // add up to an even number (7 × 5: black corners all round).
-    if (b.squares_x + b.squares_y) % 2 == 0 {
+    if (b.squares_x + b.squares_y).is_multiple_of(2) {
         let reversed: Vec<(Vertex, [f64; 2])> = mirrored
             .iter()
             .map(|&(v, p)| {
