@@ -398,8 +398,10 @@ impl Batch {
         let stage = crate::output::Staged::new(dir, &options)?;
         let staged = stage.options();
         let solutions: Vec<_> = self.runs.iter().map(|r| &r.solution).collect();
+        let named = |e| crate::run::files::staged_plot_error(e, &stage);
         if !solutions.is_empty() {
-            plot::parameter_estimates(&solutions, &stage.dir().join("parameters"), &staged)?;
+            plot::parameter_estimates(&solutions, &stage.dir().join("parameters"), &staged)
+                .map_err(named)?;
         }
         for (run, name) in self.runs.iter().zip(run_file_names(&self.runs)) {
             let prefix = name.trim_end_matches(".json");
@@ -409,7 +411,8 @@ impl Batch {
                 stage.dir(),
                 prefix,
                 &staged,
-            )?;
+            )
+            .map_err(named)?;
         }
         Ok(stage.publish()?)
     }

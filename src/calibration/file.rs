@@ -149,6 +149,19 @@ pub fn read_calibration(path: &Path) -> Result<Calibration, ExportError> {
         Calibration::from_json(&text, path)
     };
     read.map_err(|e| match crate::export::format::recognised(&text) {
+        // Neither a calibration nor a robot's file naocalib knows: what the reader said,
+        // and what a calibration is.
+        None if !looks_like_a_calibration(&text) => match e {
+            crate::export::ExportError::Parse { path, message } => parse_error(
+                &path,
+                format!(
+                    "{message}: not a calibration (a TOML or JSON of `naocalib import`, \
+                         `solve --export` or `solve --json`); a robot's file is read with \
+                         `naocalib import`"
+                ),
+            ),
+            e => e,
+        },
         Some(format) => parse_error(
             path,
             format!(
@@ -161,6 +174,19 @@ pub fn read_calibration(path: &Path) -> Result<Calibration, ExportError> {
         ),
         None => e,
     })
+}
+
+/// Whether `text` is TOML or JSON with a calibration's `format` or `parameters` (a
+/// calibration, if perhaps a broken one), not some other file.
+fn looks_like_a_calibration(text: &str) -> bool {
+    let has = |key: &str| key == "format" || key == "parameters";
+    if let Ok(table) = text.parse::<toml::Table>() {
+        return table.keys().any(|k| has(k));
+    }
+    match serde_json::from_str::<Value>(text) {
+        Ok(Value::Object(map)) => map.keys().any(|k| has(k)),
+        _ => false,
+    }
 }
 
 /// Reads the calibration a solve, a detection or a plan starts from (`solve --start-from`,

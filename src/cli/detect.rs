@@ -117,7 +117,11 @@ pub fn run(args: &DetectArgs) -> Result<ExitCode> {
         note!("{line}");
     }
     note!("{}", detected.write()?);
-    Ok(if detected.nothing_found() {
+    let turned = detected.turned();
+    for line in &turned {
+        note!("{line}");
+    }
+    Ok(if detected.nothing_found() || !turned.is_empty() {
         ExitCode::from(2)
     } else {
         ExitCode::SUCCESS

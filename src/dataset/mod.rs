@@ -21,6 +21,7 @@ mod write;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+pub use config::camera_table;
 pub use error::{DatasetError, Location};
 
 use crate::model::{CameraId, JointAngles, Model, PARAMETER_COUNT, Param, Side, Vertex};

@@ -8,6 +8,7 @@ use opencv::core::Mat;
 use opencv::prelude::*;
 
 use super::DetectError;
+use crate::model::CameraId;
 
 /// The full path of `image` in `dir`, checked to stay inside `dir` (also through symbolic
 /// links).
@@ -35,9 +36,13 @@ pub fn read_grey(path: &Path) -> Result<Mat, DetectError> {
 }
 
 /// Reads an image file as 8-bit greyscale, refusing one whose size is not `size` (the
-/// camera's resolution): from the header, before any pixel is decoded, and again after
-/// decoding.
-pub(super) fn read_sized(path: &Path, size: [u32; 2]) -> Result<Mat, DetectError> {
+/// resolution of `camera`, the camera that took it): from the header, before any pixel
+/// is decoded, and again after decoding.
+pub(super) fn read_sized(
+    path: &Path,
+    size: [u32; 2],
+    camera_id: CameraId,
+) -> Result<Mat, DetectError> {
     let camera = size;
     let bytes = read_bytes(path)?;
     if !bytes.is_empty() {
@@ -47,6 +52,7 @@ pub(super) fn read_sized(path: &Path, size: [u32; 2]) -> Result<Mat, DetectError
                 path: path.to_path_buf(),
                 size,
                 camera,
+                camera_id,
             });
         }
     }
@@ -58,6 +64,7 @@ pub(super) fn read_sized(path: &Path, size: [u32; 2]) -> Result<Mat, DetectError
             path: path.to_path_buf(),
             size,
             camera,
+            camera_id,
         });
     }
     Ok(grey)

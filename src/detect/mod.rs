@@ -22,7 +22,9 @@
 //! [`DetectOptions::repredict`]) the paper's calibration from the boards found predicts
 //! again, and the images without a whole board are searched again, until nothing
 //! changes. An image with no board that is too dark to show one says so (its camera and
-//! brightness). Nothing here stops a run: every image gets an [`Outcome`] (`outcome.rs`);
+//! brightness). A camera whose boards the model explains only with its pictures turned
+//! by 180° (its sensor's flip not as it needs, [`turned`]) is said so, and its boards are
+//! not used. Nothing here stops a run: every image gets an [`Outcome`] (`outcome.rs`);
 //! [`guard`] names the captures whose residuals after a fit stand out.
 
 pub mod assign;
@@ -36,6 +38,7 @@ mod outcome;
 pub mod overlay;
 mod predict;
 pub mod request;
+pub mod turned;
 
 use std::path::Path;
 
@@ -123,8 +126,9 @@ impl Default for DetectOptions {
 /// in place of `dataset.corners`, for solving without a `corners.csv`; nothing is written.
 ///
 /// Images in which no board is found (or that cannot be read, or are rejected) are only
-/// reported in the returned results; it is an error when no capture names an image, or
-/// when no board is found in any of them (the dataset is then left unchanged).
+/// reported in the returned results; it is an error when no capture names an image, when
+/// a camera's pictures are turned by 180° ([`turned`]), or when no board is found in any
+/// of them (the dataset is then left unchanged).
 pub fn detect_into(
     dataset: &mut Dataset,
     options: &DetectOptions,
@@ -142,6 +146,13 @@ pub fn detect_into(
     }
     let results = detect_dataset(dataset, options, done);
     let summary = Summary::of(&results);
+    let turned = turned::of_results(&results);
+    if !turned.is_empty() {
+        return Err(NoCorners::Turned {
+            dir: dataset.dir.clone(),
+            cameras: turned,
+        });
+    }
     if summary.found == 0 {
         let first = results
             .iter()
@@ -239,7 +250,7 @@ fn detect_image(
     let model = &dataset.model;
     let path = resolve_image(&dataset.dir, image)?;
     let intrinsics = model.intrinsics(capture.camera);
-    let grey = read_sized(&path, [intrinsics.width, intrinsics.height])?;
+    let grey = read_sized(&path, [intrinsics.width, intrinsics.height], capture.camera)?;
     let cv = |e: opencv::Error| DetectError::OpenCv {
         path: path.clone(),
         message: e.message,
@@ -397,8 +408,19 @@ pub fn detect_dataset(
     // prediction finds near where it says, and the rest gets the full search at the end.
     let first = if repredict { Mode::Quick } else { Mode::Full };
     let mut results = passes.run(options, &all, first);
+    // Pictures turned by 180° are judged with the prediction given, against the boards
+    // the model numbered (not in OpenCV's order, not another pattern).
+    let judged = options.use_model && passes.grid == board_grid(&dataset.model);
     if repredict {
-        passes.repredict(options, &mut results);
+        // The boards of a camera whose pictures are turned take no part in the
+        // calibration that predicts again.
+        let turned = turned::turned_cameras(dataset, &results, &options.prediction());
+        passes.repredict(options, &mut results, &turned);
+    }
+    if judged {
+        for t in turned::turned_cameras(dataset, &results, &options.prediction()) {
+            mark_turned(dataset, &mut results, t);
+        }
     }
     for r in &results {
         done(r);
@@ -436,7 +458,12 @@ impl Passes<'_> {
     /// calibrates from the boards found, predicts again and searches again where no whole
     /// board was found, until nothing changes; then gives what only the quick pass looked
     /// at the full search, with the best prediction there is.
-    fn repredict(&self, options: &DetectOptions, results: &mut [ImageResult]) {
+    fn repredict(
+        &self,
+        options: &DetectOptions,
+        results: &mut [ImageResult],
+        turned: &[turned::Turned],
+    ) {
         let mut quick = vec![true; results.len()];
         let mut options = options.clone();
         for _ in 1..MAX_PASSES {
@@ -444,7 +471,7 @@ impl Passes<'_> {
             if results.iter().all(|r| whole(r, self.grid)) {
                 break;
             }
-            let Some(params) = calibrate_from(self.dataset, results) else {
+            let Some(params) = calibrate_from(self.dataset, results, turned) else {
                 break;
             };
             options.params = Some(params);
@@ -512,11 +539,34 @@ impl Passes<'_> {
     }
 }
 
+/// Marks every board found in a picture of the camera `turned` judged turned by 180° as
+/// not used.
+fn mark_turned(dataset: &Dataset, results: &mut [ImageResult], turned: turned::Turned) {
+    for r in results {
+        let camera = dataset
+            .captures
+            .iter()
+            .find(|c| c.id == r.capture)
+            .map(|c| c.camera);
+        if camera == Some(turned.camera)
+            && let Outcome::Found { corners, .. } = &r.outcome
+        {
+            r.outcome = Outcome::Turned {
+                found: corners.len(),
+                turned,
+            };
+        }
+    }
+}
+
 /// Whether `result` leaves nothing to search again: a whole board, no image, or an image
 /// that cannot be used.
 fn whole(result: &ImageResult, grid: Grid) -> bool {
     match &result.outcome {
-        Outcome::NoImage | Outcome::Failed(_) | Outcome::TooDark { .. } => true,
+        Outcome::NoImage
+        | Outcome::Failed(_)
+        | Outcome::TooDark { .. }
+        | Outcome::Turned { .. } => true,
         Outcome::Found { corners, .. } => corners.len() == grid.len(),
         Outcome::NotFound | Outcome::Rejected { .. } => false,
     }
@@ -540,7 +590,10 @@ fn worth_again(
     params: &[f64; PARAMETER_COUNT],
 ) -> bool {
     match &result.outcome {
-        Outcome::NoImage | Outcome::Failed(_) | Outcome::TooDark { .. } => false,
+        Outcome::NoImage
+        | Outcome::Failed(_)
+        | Outcome::TooDark { .. }
+        | Outcome::Turned { .. } => false,
         Outcome::NotFound | Outcome::Rejected { .. } => true,
         Outcome::Found { corners, .. } => {
             corners.len() < grid.len()
@@ -556,18 +609,35 @@ fn worth_again(
 }
 
 /// The paper's calibration (plain least squares) from the boards found in `results`, as
-/// the re-predict loop's prediction; `None` when too few were found or the fit is not a
-/// calibration.
-fn calibrate_from(dataset: &Dataset, results: &[ImageResult]) -> Option<[f64; PARAMETER_COUNT]> {
-    let boards = results
+/// the re-predict loop's prediction, leaving out the cameras whose pictures are `turned`;
+/// `None` when too few were found or the fit is not a calibration.
+fn calibrate_from(
+    dataset: &Dataset,
+    results: &[ImageResult],
+    turned: &[turned::Turned],
+) -> Option<[f64; PARAMETER_COUNT]> {
+    let left_out: std::collections::HashSet<u64> = dataset
+        .captures
         .iter()
-        .filter(|r| matches!(r.outcome, Outcome::Found { .. }))
-        .count();
-    if boards < MIN_BOARDS_TO_REPREDICT {
+        .filter(|c| turned.iter().any(|t| t.camera == c.camera))
+        .map(|c| c.id)
+        .collect();
+    let used: Vec<&ImageResult> = results
+        .iter()
+        .filter(|r| matches!(r.outcome, Outcome::Found { .. }) && !left_out.contains(&r.capture))
+        .collect();
+    if used.len() < MIN_BOARDS_TO_REPREDICT {
         return None;
     }
     let mut found = dataset.clone();
-    found.corners = corners(results);
+    found.corners = used
+        .iter()
+        .filter_map(|r| match &r.outcome {
+            Outcome::Found { corners, .. } => Some(corners.iter().copied()),
+            _ => None,
+        })
+        .flatten()
+        .collect();
     let problem =
         crate::solve::Problem::from_dataset(&found, crate::model::FixedSet::default()).ok()?;
     let backend = crate::solve::backend(crate::solve::backend_names()[0], false)?;

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use super::assign;
 use super::image::{MAX_PIXELS, MAX_SIDE};
+use super::turned::Turned;
 use crate::dataset::Corner;
 use crate::model::CameraId;
 use crate::robot::check::MIN_BRIGHTNESS;
@@ -49,10 +50,12 @@ pub enum DetectError {
         /// What the decoder said.
         message: String,
     },
-    /// The image does not have the camera's resolution.
+    /// The image does not have the resolution of the camera that took it.
     #[error(
-        "{}: the image is {}×{} pixels, but the camera in dataset.toml is {}×{}",
-        path.display(), size[0], size[1], camera[0], camera[1]
+        "{}: the image is {}×{} pixels, but the {} camera that took it (its capture's \
+         camera column) is {}×{} in [{}] of dataset.toml",
+        path.display(), size[0], size[1], camera_id.name(), camera[0], camera[1],
+        crate::dataset::camera_table(*camera_id)
     )]
     Size {
         /// The image.
@@ -61,6 +64,8 @@ pub enum DetectError {
         size: [u32; 2],
         /// The camera's resolution.
         camera: [u32; 2],
+        /// The camera that took it.
+        camera_id: CameraId,
     },
     /// The image header claims a size beyond what detection reads (refused before decoding).
     #[error(
@@ -121,6 +126,14 @@ pub enum Outcome {
         /// The picture's mean brightness.
         brightness: f64,
     },
+    /// A board was found, but its camera's pictures are turned by 180° (its sensor's
+    /// flip not as the camera needs, [`super::turned`]): not used.
+    Turned {
+        /// Vertices found.
+        found: usize,
+        /// What says the camera's pictures are turned.
+        turned: Turned,
+    },
 }
 
 /// The result for one capture.
@@ -171,6 +184,12 @@ impl fmt::Display for ImageResult {
                  {brightness:.0} of 255 (at least {MIN_BRIGHTNESS:.0} is needed); raise \
                  its exposure or gain"
             ),
+            Outcome::Turned { found, turned } => write!(
+                f,
+                ": found {found} vertices, not used: the {} camera's pictures are turned by \
+                 180° (set its flip, see the summary)",
+                turned.camera.name()
+            ),
         }
     }
 }
@@ -188,6 +207,10 @@ pub struct Summary {
     pub failed: usize,
     /// Captures without an image.
     pub no_image: usize,
+    /// Boards found but not used: their camera's pictures are turned by 180°.
+    pub turned: usize,
+    /// The cameras (lower, upper) whose pictures are turned by 180°.
+    pub turned_cameras: [bool; 2],
 }
 
 impl Summary {
@@ -201,6 +224,10 @@ impl Summary {
                 Outcome::Rejected { .. } | Outcome::TooDark { .. } => s.rejected += 1,
                 Outcome::Failed(_) => s.failed += 1,
                 Outcome::NoImage => s.no_image += 1,
+                Outcome::Turned { turned, .. } => {
+                    s.turned += 1;
+                    s.turned_cameras[turned.camera as usize] = true;
+                }
             }
         }
         s
@@ -216,6 +243,19 @@ impl fmt::Display for Summary {
         )?;
         if self.no_image > 0 {
             write!(f, ", {} without an image", self.no_image)?;
+        }
+        if self.turned > 0 {
+            let cameras: Vec<&str> = CameraId::ALL
+                .into_iter()
+                .filter(|c| self.turned_cameras[*c as usize])
+                .map(CameraId::name)
+                .collect();
+            write!(
+                f,
+                ", {} not used: the {} camera's pictures are turned by 180° (set its flip)",
+                self.turned,
+                cameras.join(" and the ")
+            )?;
         }
         Ok(())
     }
@@ -249,6 +289,20 @@ pub enum NoCorners {
         /// The first capture's result line (why it failed).
         first: String,
     },
+    /// A camera's pictures are turned by 180°: no calibration is given from them.
+    #[error("{}: {}", dir.display(), turned_message(cameras))]
+    Turned {
+        /// The dataset directory.
+        dir: PathBuf,
+        /// What says each turned camera's pictures are turned.
+        cameras: Vec<Turned>,
+    },
+}
+
+/// What is said of the cameras `turned`, one after the other.
+fn turned_message(turned: &[Turned]) -> String {
+    let each: Vec<String> = turned.iter().map(ToString::to_string).collect();
+    each.join("; and ")
 }
 
 /// The result of detecting the vertices of a whole dataset in memory.

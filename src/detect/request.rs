@@ -235,6 +235,15 @@ impl Detected<'_> {
         self.summary().found == 0 && !self.results.is_empty()
     }
 
+    /// The cameras whose pictures are turned by 180° ([`super::turned::of_results`]), each
+    /// said as an error line.
+    pub fn turned(&self) -> Vec<String> {
+        super::turned::of_results(&self.results)
+            .iter()
+            .map(|t| format!("naocalib: error: {t}"))
+            .collect()
+    }
+
     /// Writes the vertices found into the dataset's corners.csv, and says so; refused
     /// when none was found and the file holds vertices.
     pub fn write(&self) -> Result<String, DetectRequestError> {

@@ -50,6 +50,17 @@ pub enum WriteError {
         /// The existing non-directory where a directory is needed.
         in_the_way: PathBuf,
     },
+    /// The directory to write into, or one on the way to it, is a symbolic link to
+    /// nothing: no directory is made through it.
+    #[error("{}", dangling_message(path, link, target))]
+    DanglingLink {
+        /// The file (or directory) being written.
+        path: PathBuf,
+        /// The symbolic link.
+        link: PathBuf,
+        /// Where it points.
+        target: PathBuf,
+    },
 }
 
 impl WriteError {
@@ -61,7 +72,8 @@ impl WriteError {
             | WriteError::Input { path }
             | WriteError::NotAFile { path }
             | WriteError::ReadOnly { path }
-            | WriteError::InTheWay { path, .. } => path,
+            | WriteError::InTheWay { path, .. }
+            | WriteError::DanglingLink { path, .. } => path,
         }
     }
 }
@@ -88,6 +100,11 @@ impl WriteError {
                 path: f(&path),
                 in_the_way: f(&in_the_way),
             },
+            WriteError::DanglingLink { path, link, target } => WriteError::DanglingLink {
+                path: f(&path),
+                link: f(&link),
+                target,
+            },
         }
     }
 }
@@ -107,4 +124,26 @@ fn in_the_way_message(path: &Path, in_the_way: &Path) -> String {
             path.display()
         )
     }
+}
+
+/// The message of [`WriteError::DanglingLink`].
+fn dangling_message(path: &Path, link: &Path, target: &Path) -> String {
+    let what = if path == link {
+        format!(
+            "{}: is a symbolic link to {}",
+            path.display(),
+            target.display()
+        )
+    } else {
+        format!(
+            "{}: cannot be written: {} on its way is a symbolic link to {}",
+            path.display(),
+            link.display(),
+            target.display()
+        )
+    };
+    format!(
+        "{what}, which does not exist: nothing is written through it (make that directory, \
+         or name another)"
+    )
 }

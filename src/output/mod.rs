@@ -38,10 +38,11 @@ use std::io::{self, Write as _};
 use std::path::{Path, PathBuf};
 
 pub use error::WriteError;
-use paths::parent_dir;
+use paths::{dangling_link_on_the_way, parent_dir};
 pub use paths::{file_in_the_way, same_file};
 pub use rewrite::{check_rewritable, rewrite, write_new_like};
 pub use staged::Staged;
+pub use staged::published;
 use stale::temp_prefix;
 pub use stale::{TEMP_PREFIX, sweep_stale};
 
@@ -119,24 +120,19 @@ fn check_dir(dir: &Path, options: &WriteOptions) -> Result<(), WriteError> {
             path: dir.to_path_buf(),
             in_the_way: dir.to_path_buf(),
         }),
-        // A symbolic link to nowhere: the directory it names is not made through it.
-        Err(_) if dir.symlink_metadata().is_ok() => Err(WriteError::Io {
-            path: dir.to_path_buf(),
-            action: "write into the directory this symbolic link names",
-            error: io::Error::new(
-                io::ErrorKind::NotFound,
-                format!(
-                    "{} does not exist",
-                    std::fs::read_link(dir).unwrap_or_default().display()
-                ),
-            ),
-        }),
-        Err(_) => match file_in_the_way(dir) {
-            Some(in_the_way) => Err(WriteError::InTheWay {
+        // A symbolic link to nowhere (the directory or one on its way): the directory it
+        // names is not made through it.
+        Err(_) => match (dangling_link_on_the_way(dir, true), file_in_the_way(dir)) {
+            (Some((link, target)), _) => Err(WriteError::DanglingLink {
+                path: dir.to_path_buf(),
+                link,
+                target,
+            }),
+            (None, Some(in_the_way)) => Err(WriteError::InTheWay {
                 path: dir.to_path_buf(),
                 in_the_way,
             }),
-            None => Ok(()),
+            (None, None) => Ok(()),
         },
     }
 }
@@ -154,6 +150,13 @@ pub fn check_writable(path: &Path, options: &WriteOptions) -> Result<(), WriteEr
         return Err(WriteError::InTheWay {
             path: path.to_path_buf(),
             in_the_way,
+        });
+    }
+    if let Some((link, target)) = dangling_link_on_the_way(path, false) {
+        return Err(WriteError::DanglingLink {
+            path: path.to_path_buf(),
+            link,
+            target,
         });
     }
     if let Ok(meta) = path.symlink_metadata() {
@@ -209,6 +212,16 @@ pub fn write_atomic_unsynced(
 /// temporary file at the path it is given (a sibling of `path` with the same extension, so
 /// that writers that look at the extension, such as image encoders, do the right thing).
 pub fn write_atomic_with(
+    path: &Path,
+    options: &WriteOptions,
+    fill: impl FnOnce(&Path) -> io::Result<()>,
+) -> Result<(), WriteError> {
+    // A file of a staged set is named where it will be published, never in its stage.
+    write_into(path, options, fill).map_err(|e| e.map_paths(published))
+}
+
+/// [`write_atomic_with`], its errors naming the paths as written to.
+fn write_into(
     path: &Path,
     options: &WriteOptions,
     fill: impl FnOnce(&Path) -> io::Result<()>,

@@ -61,6 +61,26 @@ pub fn file_in_the_way(path: &Path) -> Option<PathBuf> {
     None
 }
 
+/// The nearest of `path`'s directories (and `path` itself with `itself`) that is a
+/// symbolic link to nothing, with where it points, before the first existing directory:
+/// a directory would have to be made through it.
+pub fn dangling_link_on_the_way(path: &Path, itself: bool) -> Option<(PathBuf, PathBuf)> {
+    for dir in path.ancestors().skip(usize::from(!itself)) {
+        if dir.as_os_str().is_empty() {
+            return None;
+        }
+        match std::fs::metadata(dir) {
+            Ok(_) => return None,
+            Err(_) => {
+                if let Ok(target) = std::fs::read_link(dir) {
+                    return Some((dir.to_path_buf(), target));
+                }
+            }
+        }
+    }
+    None
+}
+
 /// The directory `p` is in (`.` for a bare name).
 pub(super) fn parent_dir(p: &Path) -> &Path {
     match p.parent() {

@@ -57,6 +57,10 @@ impl Staged {
         let stage = builder
             .tempdir_in(parent)
             .map_err(|e| io_err("create a staging directory for", e))?;
+        live()
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push((stage.path().to_path_buf(), target.to_path_buf()));
         Ok(Staged {
             target: target.to_path_buf(),
             stage: Some(stage),
@@ -107,6 +111,7 @@ impl Staged {
     /// Moves every staged file into the target, after checking all of them, and returns
     /// their final paths (sorted).
     pub fn publish(mut self) -> Result<Vec<PathBuf>, WriteError> {
+        forget(&self.stage);
         let Some(stage) = self.stage.take() else {
             return Ok(Vec::new());
         };
@@ -162,6 +167,40 @@ impl Staged {
         }
         Ok(targets)
     }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        forget(&self.stage);
+    }
+}
+
+/// The stages of this process not yet published or dropped: (stage, target).
+fn live() -> &'static std::sync::Mutex<Vec<(PathBuf, PathBuf)>> {
+    static LIVE: std::sync::Mutex<Vec<(PathBuf, PathBuf)>> = std::sync::Mutex::new(Vec::new());
+    &LIVE
+}
+
+/// Takes the stage `stage` off the live ones.
+fn forget(stage: &Option<tempfile::TempDir>) {
+    if let Some(stage) = stage {
+        live()
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .retain(|(s, _)| s != stage.path());
+    }
+}
+
+/// `path` where it will be once its stage is published: a path inside a live stage of
+/// this process ([`Staged::dir`]) named in its target, any other path as it is. Every
+/// error of the crate's writer names its file so, and so may any error that names a file
+/// a writer was given: a user hears of the output they asked for, never of a staging
+/// directory.
+pub fn published(path: &Path) -> PathBuf {
+    let live = live().lock().unwrap_or_else(|e| e.into_inner());
+    live.iter()
+        .find_map(|(stage, target)| path.strip_prefix(stage).ok().map(|rel| target.join(rel)))
+        .unwrap_or_else(|| path.to_path_buf())
 }
 
 /// Publishes the staged `files` in `stage` into the existing directory `target` at once:

@@ -120,6 +120,19 @@ impl RunFiles {
     }
 }
 
+/// `e`, an error of drawing a plot into `stage`, naming the file where it would be
+/// published (never the stage).
+pub(crate) fn staged_plot_error(e: PlotError, stage: &Staged) -> PlotError {
+    match e {
+        PlotError::Draw { path, message } => PlotError::Draw {
+            path: stage.published(&path),
+            message,
+        },
+        PlotError::Write(e) => PlotError::Write(stage.named(e)),
+        e => e,
+    }
+}
+
 /// The plots of `run` into `dir`, all or nothing: staged beside it, published when every
 /// plot is drawn.
 fn plots(
@@ -136,13 +149,15 @@ fn plots(
         stage.dir(),
         "solve",
         &staged,
-    )?;
+    )
+    .map_err(|e| staged_plot_error(e, &stage))?;
     crate::report::misfit_plot::misfit_plots(
         &run.solution,
         dataset,
         stage.dir(),
         "misfit",
         &staged,
-    )?;
+    )
+    .map_err(|e| staged_plot_error(e, &stage))?;
     Ok(stage.publish()?)
 }

@@ -26,7 +26,7 @@
 //! ```
 
 mod change;
-mod files;
+pub(crate) mod files;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -209,6 +209,14 @@ impl Sandal {
         ] {
             let side = f64::from(n) * board.square;
             if side > MAX_PATTERN_MM {
+                // The key to change: the count when as many squares of the paper's size
+                // would not fit either, else the square's size.
+                let paper = Board::default().square;
+                let field = if f64::from(n) * paper > MAX_PATTERN_MM {
+                    field
+                } else {
+                    "board.square_mm"
+                };
                 return bad(
                     field,
                     format!(

@@ -9,6 +9,8 @@ use naocalib::dataset::{
 };
 use naocalib::model::{Joint, JointAngles, Model, PARAMETER_COUNT, Param, Side, Vertex};
 
+use crate::util::naocalib;
+
 // ---------------------------------------------------------------------------------------
 // Round trip
 // ---------------------------------------------------------------------------------------
@@ -1182,5 +1184,205 @@ fn truth_file_on_its_own() {
             path.display()
         )),
         "{e}"
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// Every key of dataset.toml
+// ---------------------------------------------------------------------------------------
+
+/// A `dataset.toml` with every key of every table given.
+const EVERY_KEY: &str = "[camera]
+width = 640
+height = 480
+fx = 562.5
+fy = 562.5
+cx = 320.0
+cy = 240.0
+distortion = [0.0, 0.0, 0.0, 0.0, 0.0]
+flip = false
+exposure = 1700
+gain = 250
+white_balance_k = 4000
+fps = 30
+
+[upper_camera]
+width = 640
+height = 480
+fx = 562.5
+fy = 562.5
+cx = 320.0
+cy = 240.0
+distortion = [0.0, 0.0, 0.0, 0.0, 0.0]
+flip = true
+exposure = 700
+gain = 800
+white_balance_k = 4000
+fps = 30
+
+[board]
+squares_x = 7
+squares_y = 5
+square_mm = 25.0
+mount_origin_mm = [170.0, 0.0, 0.0]
+mount_rpy_deg = [0.0, 0.0, 0.0]
+mass_g = 120.0
+com_mm = [150.0, 0.0, 0.0]
+
+[robot]
+hip_offset_y_mm = 50.0
+hip_to_neck_z_mm = 211.5
+thigh_mm = 100.0
+tibia_mm = 102.9
+foot_height_mm = 45.19
+lower_camera_offset_mm = [50.71, 0.0, 17.74]
+lower_camera_tilt_deg = 39.7
+upper_camera_offset_mm = [58.71, 0.0, 63.64]
+upper_camera_tilt_deg = 1.2
+gravity = [-1.0, 0.0, 0.0]
+
+[joints]
+angles = \"corrected\"
+corrected_by = \"the robot's calibration of May\"
+";
+
+/// The first error any reader of `dataset.toml` at `path` gives: the model (with the
+/// joints table), the capture settings.
+fn config_error(path: &Path) -> Option<String> {
+    if let Err(e) = naocalib::dataset::read_model(path) {
+        return Some(e.to_string());
+    }
+    naocalib::dataset::read_camera_settings(path)
+        .err()
+        .map(|e| e.to_string())
+}
+
+/// The keys a table of dataset.toml knows, as its unknown-key error lists them (the
+/// readers' own registry of keys).
+fn known_keys(dir: &Path, table: &str) -> Vec<String> {
+    let path = dir.join("known.toml");
+    std::fs::write(
+        &path,
+        EVERY_KEY.replace(
+            &format!("[{table}]\n"),
+            &format!("[{table}]\nzz_unknown = 1\n"),
+        ),
+    )
+    .unwrap();
+    let e = config_error(&path).expect("an unknown key is refused");
+    let list = e.split("known keys: ").nth(1).expect(&e);
+    list.trim_end_matches(')')
+        .split(", ")
+        .map(str::to_string)
+        .collect()
+}
+
+/// Every key of every table of dataset.toml (the readers' own list of them), given a value
+/// of the wrong kind or out of range: whatever is refused — by the dataset's readers, and
+/// for `[board]` by `naocalib sandal` too, with its own rules (a plate is flat: no
+/// height, roll or pitch; a bounded pattern near the ankle) — is refused naming the
+/// file, the line of the key and the key.
+#[test]
+fn every_key_error_of_dataset_toml_names_the_file_its_line_and_the_key() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let path = dir.join("dataset.toml");
+    std::fs::write(&path, EVERY_KEY).unwrap();
+    assert_eq!(config_error(&path), None, "the full file is valid");
+    let mut keys = Vec::new();
+    let mut table = String::new();
+    for (k, line) in EVERY_KEY.lines().enumerate() {
+        if let Some(t) = line.strip_prefix('[') {
+            table = t.trim_end_matches(']').to_string();
+        } else if let Some((key, value)) = line.split_once(" = ") {
+            keys.push((k, table.clone(), key.to_string(), value.to_string()));
+        }
+    }
+    for t in ["camera", "upper_camera", "board", "robot", "joints"] {
+        for known in known_keys(dir, t) {
+            assert!(
+                keys.iter()
+                    .any(|(_, table, key, _)| table == t && *key == known),
+                "[{t}] {known} is not in the test's file"
+            );
+        }
+    }
+    let mut refused = 0;
+    for (k, table, key, value) in &keys {
+        let field = format!("{table}.{key}");
+        let wrong_kind = if value.starts_with('"') {
+            "5".to_string()
+        } else {
+            "\"x\"".to_string()
+        };
+        let out_of_range = if value.starts_with('[') {
+            format!("[1e9, {}", value.split_once(", ").unwrap().1)
+        } else if value.starts_with('"') {
+            "\"bogus\"".to_string()
+        } else if value == "true" || value == "false" {
+            continue;
+        } else if value.contains('.') {
+            "1e9".to_string()
+        } else {
+            "1000000000".to_string()
+        };
+        let mut variants = vec![(wrong_kind, true), (out_of_range, false)];
+        if table == "board" {
+            // What no sandal can be: lifted, rolled, pitched, too long, too far.
+            variants.extend(
+                match key.as_str() {
+                    "mount_origin_mm" => vec!["[170.0, 0.0, 5.0]", "[900.0, 0.0, 0.0]"],
+                    "mount_rpy_deg" => vec!["[4.0, 0.0, 0.0]", "[0.0, -3.0, 0.0]"],
+                    "square_mm" => vec!["200.0"],
+                    _ => vec![],
+                }
+                .into_iter()
+                .map(|v| (v.to_string(), false)),
+            );
+        }
+        for (bad, must_fail) in variants {
+            let text: String = EVERY_KEY
+                .lines()
+                .enumerate()
+                .map(|(i, l)| {
+                    if i == *k {
+                        format!("{key} = {bad}\n")
+                    } else {
+                        format!("{l}\n")
+                    }
+                })
+                .collect();
+            std::fs::write(&path, &text).unwrap();
+            let at = format!("dataset.toml line {}, field {field}", k + 1);
+            let mut errors: Vec<String> = config_error(&path).into_iter().collect();
+            if table == "board" {
+                let out = naocalib()
+                    .arg("sandal")
+                    .arg(dir.join("sandal"))
+                    .arg("--config")
+                    .arg(&path)
+                    .output()
+                    .unwrap();
+                if !out.status.success() {
+                    assert_eq!(out.status.code(), Some(1));
+                    errors.push(String::from_utf8_lossy(&out.stderr).into_owned());
+                }
+                let _ = std::fs::remove_dir_all(dir.join("sandal"));
+            }
+            assert!(
+                !must_fail || !errors.is_empty(),
+                "{field} = {bad}: accepted"
+            );
+            for e in &errors {
+                assert!(e.contains(&at), "{field} = {bad}: '{e}' lacks '{at}'");
+                refused += 1;
+            }
+        }
+    }
+    // Most out-of-range values are refused too (not only the wrong kinds).
+    assert!(
+        refused > 2 * keys.len(),
+        "{refused} refusals over {} keys",
+        keys.len()
     );
 }

@@ -1,27 +1,11 @@
 //! Pictures detection cannot use, said so: a picture too dark to show the board is named
 //! too dark with its camera and brightness, not only "not found".
 
-use std::path::Path;
-
+use crate::util::read_grey_png as read_png;
 use naocalib::detect::{self, DetectOptions, Outcome};
 use naocalib::model::{CameraId, Model};
-use naocalib::sim::render::{GreyImage, ImageOutput, RenderOptions};
+use naocalib::sim::render::{ImageOutput, RenderOptions};
 use naocalib::sim::{SimOptions, simulate};
-
-/// Reads a rendered grey PNG.
-fn read_png(path: &Path) -> GreyImage {
-    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
-    let mut reader = decoder.read_info().unwrap();
-    let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut pixels).unwrap();
-    assert_eq!(info.color_type, png::ColorType::Grayscale);
-    pixels.truncate(info.buffer_size());
-    GreyImage {
-        width: info.width,
-        height: info.height,
-        pixels,
-    }
-}
 
 #[test]
 fn a_picture_too_dark_to_show_the_board_is_said_so() {

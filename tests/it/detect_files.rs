@@ -199,7 +199,8 @@ fn bad_image_files_give_per_image_errors() {
         "capture 1 (images/0001.png): error:",
         "0001.png: the file is empty",
         "0002.png: no such file",
-        "0003.png: the image is 320×240 pixels, but the camera in dataset.toml is 640×480",
+        "0003.png: the image is 320×240 pixels, but the lower camera that took it (its \
+         capture's camera column) is 640×480 in [camera] of dataset.toml",
         "0004.png: not a readable image: not a PNG, JPEG",
         "0006.png: not a readable image",
         "capture 7 (images/0007.png): found 24 vertices",
@@ -309,4 +310,64 @@ fn rejected_and_not_found_are_reported() {
         "{err}"
     );
     assert!(err.contains("6 found, 1 not found, 1 rejected"), "{err}");
+}
+
+/// A picture of the wrong size names the size of the camera that took it and that
+/// camera's table in dataset.toml (`[camera]` or `[upper_camera]`), whichever it is.
+#[test]
+fn a_wrong_sized_picture_names_the_table_of_the_camera_that_took_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let base = tmp.path().join("base");
+    let out = naocalib()
+        .args(["simulate", "--images", "--stances", "1", "--heads", "1"])
+        .args(["--upper-stances", "1", "--seed", "2"])
+        .arg(&base)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = std::fs::read_to_string(base.join("dataset.toml")).unwrap();
+    for (table, camera, other) in [
+        ("[upper_camera]", "upper", "lower"),
+        ("[camera]", "lower", "upper"),
+    ] {
+        let dir = tmp.path().join(camera);
+        std::fs::create_dir_all(dir.join("images")).unwrap();
+        for name in ["captures.csv", "corners.csv"] {
+            std::fs::copy(base.join(name), dir.join(name)).unwrap();
+        }
+        for e in std::fs::read_dir(base.join("images")).unwrap() {
+            let e = e.unwrap();
+            std::fs::copy(e.path(), dir.join("images").join(e.file_name())).unwrap();
+        }
+        // That camera's table says 1280 × 960; its pictures are 640 × 480.
+        let at = text.find(&format!("{table}\n")).unwrap();
+        let (head, tail) = text.split_at(at);
+        let end = tail.find("\n\n").unwrap();
+        let changed = tail[..end]
+            .replace("width = 640", "width = 1280")
+            .replace("height = 480", "height = 960");
+        std::fs::write(
+            dir.join("dataset.toml"),
+            format!("{head}{changed}{}", &tail[end..]),
+        )
+        .unwrap();
+        let out = naocalib().arg("detect").arg(&dir).output().unwrap();
+        let err = stderr(&out);
+        let said = format!(
+            "the image is 640×480 pixels, but the {camera} camera that took it (its capture's \
+             camera column) is 1280×960 in {table} of dataset.toml"
+        );
+        let captures = naocalib::dataset::read_captures(&dir.join("captures.csv")).unwrap();
+        for c in &captures {
+            let line = err
+                .lines()
+                .find(|l| l.starts_with(&format!("capture {} ", c.id)))
+                .unwrap_or_else(|| panic!("{err}"));
+            if c.camera.name() == camera {
+                assert!(line.contains(&said), "{line}");
+            } else {
+                assert!(line.contains("found 24 vertices"), "{other}: {line}");
+            }
+        }
+    }
 }

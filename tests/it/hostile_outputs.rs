@@ -558,3 +558,217 @@ fn batch_forced(flag: &str, target: &Path, data: &Path) -> std::process::Output 
         .output()
         .unwrap()
 }
+
+/// Every output into a symbolic link that points to nothing — the directory to write into,
+/// or a directory on the way to a file — is refused before anything is written, naming
+/// the link and where it points; nothing is made through it.
+#[cfg(unix)]
+#[test]
+fn a_dangling_symbolic_link_on_the_way_is_named_and_nothing_is_made_through_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = dataset(tmp.path());
+    let json = tmp.path().join("r.json");
+    result_json(&dir, &json);
+    let images = tmp.path().join("images");
+    let out = naocalib()
+        .args(["simulate", "--images", "--stances", "1", "--heads", "1"])
+        .arg(&images)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let solve = ["solve", "--solver", "lm", "--plain-std"];
+    // (arguments before the output, whether the output is below the link, arguments after).
+    let mut cases: Vec<(Vec<&str>, &str, Vec<&Path>)> = vec![
+        (vec!["sandal"], "", vec![]),
+        (
+            vec!["simulate", "--stances", "1", "--heads", "1"],
+            "",
+            vec![],
+        ),
+        ([&solve[..], &["--plots"]].concat(), "", vec![&dir]),
+        ([&solve[..], &["--export"]].concat(), "", vec![&dir]),
+        ([&solve[..], &["--report"]].concat(), "r.html", vec![&dir]),
+        (
+            [&solve[..], &["--report"]].concat(),
+            "sub/r.html",
+            vec![&dir],
+        ),
+        (
+            vec!["batch", "--solver", "lm", "--no-progress", "--out"],
+            "",
+            vec![&dir],
+        ),
+        (vec!["export", json.to_str().unwrap(), "--dir"], "", vec![]),
+        (
+            vec!["export", json.to_str().unwrap(), "--out"],
+            "c.toml",
+            vec![],
+        ),
+    ];
+    if cfg!(feature = "detect") {
+        cases.push((vec!["detect", "--overlay"], "", vec![&images]));
+    }
+    for (k, (before, below, after)) in cases.into_iter().enumerate() {
+        let link = tmp.path().join(format!("link-{k}"));
+        let gone = tmp.path().join(format!("gone-{k}"));
+        std::os::unix::fs::symlink(&gone, &link).unwrap();
+        let output = if below.is_empty() {
+            link.clone()
+        } else {
+            link.join(below)
+        };
+        let out = naocalib()
+            .args(&before)
+            .arg(&output)
+            .args(&after)
+            .output()
+            .unwrap();
+        // The link named, and where it points.
+        let link_named = link.display().to_string();
+        let said = format!(
+            "is a symbolic link to {}, which does not exist",
+            gone.display()
+        );
+        assert_clean_failure(&out, &[link_named.as_str(), said.as_str()]);
+        assert!(!gone.exists(), "{before:?}: made through the link");
+        let err = stderr(&out);
+        assert_eq!(
+            err.matches("does not exist").count(),
+            1,
+            "{before:?}: {err}"
+        );
+    }
+    assert!(temporaries(tmp.path()).is_empty());
+}
+
+/// A write that fails part-way (here: the file-size limit, as a full disk would) names the
+/// output the user asked for — never the staging directory a set of files is written into
+/// first — and leaves neither the output nor a temporary: for every writer of a set
+/// (a dataset, its images, plots, exports, batch results, sandals) and of single files.
+#[cfg(unix)]
+#[test]
+fn a_failed_write_names_the_output_never_a_staging_path() {
+    use std::os::unix::process::CommandExt as _;
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = dataset(tmp.path());
+    let json = tmp.path().join("r.json");
+    result_json(&dir, &json);
+    let out_dir = tmp.path().join("out");
+    std::fs::create_dir(&out_dir).unwrap();
+    let d = dir.to_str().unwrap();
+    let j = json.to_str().unwrap();
+    let solve = ["solve", "--solver", "lm", "--plain-std"];
+    // (arguments before the output, the output's name, arguments after).
+    let cases: Vec<(Vec<&str>, &str, Vec<&str>)> = vec![
+        (
+            vec!["simulate", "--stances", "2", "--heads", "1"],
+            "sim",
+            vec![],
+        ),
+        (
+            vec!["simulate", "--images", "--stances", "1", "--heads", "1"],
+            "img",
+            vec![],
+        ),
+        ([&solve[..], &["--plots"]].concat(), "plots", vec![d]),
+        ([&solve[..], &["--export"]].concat(), "export", vec![d]),
+        ([&solve[..], &["--report"]].concat(), "report.html", vec![d]),
+        (
+            vec!["batch", "--solver", "lm", "--no-progress", "--out"],
+            "batch",
+            vec![d],
+        ),
+        (
+            vec!["batch", "--solver", "lm", "--no-progress", "--plots"],
+            "bplots",
+            vec![d],
+        ),
+        (vec!["sandal"], "sandal", vec![]),
+        (vec!["export", j, "--dir"], "teams", vec![]),
+    ];
+    for (before, name, after) in cases {
+        let output = out_dir.join(name);
+        let mut command = plain();
+        command.args(&before).arg(&output).args(&after);
+        // SAFETY: only async-signal-safe calls between fork and exec.
+        unsafe {
+            command.pre_exec(|| {
+                // Writing past 1 KiB fails (EFBIG) instead of killing the process.
+                libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+                let limit = libc::rlimit {
+                    rlim_cur: 1024,
+                    rlim_max: 1024,
+                };
+                libc::setrlimit(libc::RLIMIT_FSIZE, &limit);
+                Ok(())
+            });
+        }
+        let out = command.output().unwrap();
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(1), "{before:?}: {err}");
+        assert!(err.contains("File too large"), "{before:?}: {err}");
+        assert!(
+            err.contains(&format!("{}/", output.display()))
+                || err.contains(&format!("{}:", output.display())),
+            "{before:?}: the output is not named: {err}"
+        );
+        assert!(
+            !err.contains(".naocalib-"),
+            "{before:?}: a staging path: {err}"
+        );
+        assert!(!output.exists(), "{before:?}: part of the output is left");
+    }
+    assert!(temporaries(tmp.path()).is_empty());
+}
+
+/// `export RESULT --update FILE` where RESULT has the name a backup of FILE would take
+/// (`FILE.bak`, or `FILE.bak.2` beside an older `FILE.bak`): the backup takes the next
+/// free name, and the result, an input, is never replaced.
+#[test]
+fn an_update_never_gives_its_backup_the_results_name() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = dataset(tmp.path());
+    let team = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/teams/bhuman/cameraCalibration.cfg");
+    for older in [false, true] {
+        let work = tmp.path().join(format!("older-{older}"));
+        std::fs::create_dir(&work).unwrap();
+        let file = work.join("cameraCalibration.cfg");
+        std::fs::copy(&team, &file).unwrap();
+        let robot = std::fs::read(&file).unwrap();
+        let result = if older {
+            std::fs::write(work.join("cameraCalibration.cfg.bak"), b"an older backup").unwrap();
+            work.join("cameraCalibration.cfg.bak.2")
+        } else {
+            work.join("cameraCalibration.cfg.bak")
+        };
+        let json = result_json(&dir, &result);
+        let out = naocalib()
+            .arg("export")
+            .arg(&result)
+            .arg("--update")
+            .arg(&file)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", stderr(&out));
+        let kept = work.join(if older {
+            "cameraCalibration.cfg.bak.3"
+        } else {
+            "cameraCalibration.cfg.bak.2"
+        });
+        assert_eq!(
+            std::fs::read(&kept).unwrap(),
+            robot,
+            "the robot's file kept"
+        );
+        let still: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&result).unwrap()).unwrap();
+        assert_eq!(still, json, "the result is untouched");
+        if older {
+            assert_eq!(
+                std::fs::read(work.join("cameraCalibration.cfg.bak")).unwrap(),
+                b"an older backup"
+            );
+        }
+    }
+}

@@ -31,6 +31,8 @@ mod detect_render;
 mod detect_robust;
 #[cfg(feature = "detect")]
 mod detect_tilted;
+#[cfg(feature = "detect")]
+mod detect_turned;
 mod export_files;
 mod export_intrinsics;
 mod export_posture;

@@ -577,8 +577,8 @@ fn what_cannot_be_a_sandal_is_refused_naming_file_line_and_key() {
         ),
         (
             format!("[board]\nsquares_x = 3\nsquares_y = 4\nsquare_mm = {long}\n"),
-            "squares_y",
-            "board.squares_y",
+            "square_mm",
+            "board.square_mm",
         ),
         (
             format!(

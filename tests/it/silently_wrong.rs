@@ -1,8 +1,9 @@
 //! Nothing silently wrong: a column that resembles a known one is refused by every reader
 //! of captures (solve, capture's plan) before anything is read further or moved; a plan
 //! names exactly the parameters its design leaves undetermined; every reader of a
-//! calibration to start from (`solve --start-from`, `plan --around`) applies one
-//! plausibility rule, and a robot's team file is pointed to `naocalib import`.
+//! calibration to start from (`solve --start-from`, `detect --start-from`, `plan
+//! --around`) applies one plausibility rule, and a robot's team file (any format) or a
+//! file that is no calibration is pointed to `naocalib import`.
 
 use std::path::{Path, PathBuf};
 
@@ -204,6 +205,89 @@ fn every_reader_of_a_start_calibration_applies_one_plausibility_rule() {
         .output()
         .unwrap();
     assert_clean_failure(&plan, &["cameraCalibration.cfg", "naocalib import"]);
+}
+
+/// Every robot's file naocalib knows (every team format of the registry, as `solve
+/// --export` writes it), and a file that is no calibration at all, given as the
+/// calibration to start from — `solve --start-from`, `detect --start-from`, `plan
+/// --around` — is refused at once, naming the file and pointing to `naocalib import`,
+/// never with only a parser's "expected value at line 1 column 1".
+#[test]
+fn every_reader_of_a_start_calibration_points_a_robots_file_to_import() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("d");
+    let out = naocalib()
+        .args([
+            "simulate",
+            "--stances",
+            "6",
+            "--heads",
+            "2",
+            "--upper-stances",
+            "2",
+        ])
+        .arg(&data)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let export = dir.path().join("export");
+    let out = naocalib()
+        .args([
+            "solve",
+            "--solver",
+            "lm",
+            "--plain-std",
+            "--free",
+            "intrinsics",
+        ])
+        .arg("--export")
+        .arg(&export)
+        .arg(&data)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let garbage = dir.path().join("notes.cfg");
+    std::fs::write(&garbage, "robot 23 is calibrated, see the log\n").unwrap();
+    let mut files: Vec<(String, PathBuf)> = naocalib::export::FORMATS
+        .iter()
+        .filter(|f| f.robot())
+        .map(|f| (f.name().to_string(), export.join(f.file())))
+        .collect();
+    files.push(("no calibration".into(), garbage));
+    for (format, file) in files {
+        assert!(file.exists(), "{format}: {} not written", file.display());
+        let name = file.file_name().unwrap().to_str().unwrap().to_string();
+        let solve = naocalib()
+            .args(["solve", "--start-from"])
+            .arg(&file)
+            .arg(&data)
+            .output()
+            .unwrap();
+        let plan = naocalib()
+            .args(["plan", "--captures", "4", "--around"])
+            .arg(&file)
+            .arg(dir.path().join("p.csv"))
+            .output()
+            .unwrap();
+        let mut outs = vec![("solve", solve), ("plan", plan)];
+        if cfg!(feature = "detect") {
+            let detect = naocalib()
+                .args(["detect", "--force", "--start-from"])
+                .arg(&file)
+                .arg(&data)
+                .output()
+                .unwrap();
+            outs.push(("detect", detect));
+        }
+        for (reader, out) in outs {
+            let err = stderr(&out);
+            assert_eq!(out.status.code(), Some(1), "{format}, {reader}: {err}");
+            for needle in [name.as_str(), "naocalib import"] {
+                assert!(err.contains(needle), "{format}, {reader}: {needle}: {err}");
+            }
+        }
+        assert!(!dir.path().join("p.csv").exists());
+    }
 }
 
 /// A parameter a run did not determine (the lower camera of an upper-camera-only run, the

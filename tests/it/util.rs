@@ -188,3 +188,19 @@ pub fn paper_plan() -> &'static naocalib::plan::Plan {
         .expect("plan")
     })
 }
+
+/// Reads a grey PNG (as `naocalib simulate --images` renders them).
+pub fn read_grey_png(path: &Path) -> naocalib::sim::render::GreyImage {
+    let file = std::fs::File::open(path).unwrap();
+    let decoder = png::Decoder::new(std::io::BufReader::new(file));
+    let mut reader = decoder.read_info().unwrap();
+    let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut pixels).unwrap();
+    assert_eq!(info.color_type, png::ColorType::Grayscale);
+    pixels.truncate(info.buffer_size());
+    naocalib::sim::render::GreyImage {
+        width: info.width,
+        height: info.height,
+        pixels,
+    }
+}

@@ -42,6 +42,15 @@ pub(crate) struct DatasetToml {
     joints: JointsToml,
 }
 
+/// The table of `dataset.toml` that holds `camera`'s intrinsics and capture settings:
+/// `camera` (the lower camera) or `upper_camera`.
+pub fn camera_table(camera: CameraId) -> &'static str {
+    match camera {
+        CameraId::Lower => "camera",
+        CameraId::Upper => "upper_camera",
+    }
+}
+
 /// A problem with one key: its TOML key path and what is wrong.
 type KeyError = (String, String);
 
@@ -186,10 +195,11 @@ pub(crate) fn parse_settings(
     let doc = TomlDoc::new(path, bytes)?;
     let file: DatasetToml = doc.deserialize()?;
     let mut out = Vec::new();
-    for (id, table, name) in [
-        (CameraId::Lower, &file.camera, "camera"),
-        (CameraId::Upper, &file.upper_camera, "upper_camera"),
+    for (id, table) in [
+        (CameraId::Lower, &file.camera),
+        (CameraId::Upper, &file.upper_camera),
     ] {
+        let name = camera_table(id);
         if let Some(table) = table {
             let changes = table.settings();
             changes

@@ -1,0 +1,537 @@
+//! Pictures turned by 180°: whether a camera's boards are where the model puts them, or
+//! only where it puts them with the pictures turned back (the sensor's flip not as the
+//! camera needs it: the V6's upper camera gives its picture turned unless both flips of
+//! its sensor, UVC extension unit 3 selectors 12 and 13, are set).
+//!
+//! Turning a picture by 180° about its centre is rolling the camera by 180° about its
+//! optical axis: every board of the camera's pictures lies mirrored through the image
+//! centre, and tilted the other way. The 7 × 5 pattern looks the same turned by 180°, so
+//! detection finds and numbers a board in a turned picture as readily as in an upright
+//! one (near the image centre, at nearly the same vertices); what gives the turn away is
+//! the camera's boards together — where they lie and which side of each is near. Per
+//! camera, two hypotheses are fitted over all its boards, each with the camera's three
+//! rotation offsets and the legs' joint offsets free from the prediction (the rest held
+//! there): the pictures as taken ("upright"), and the pictures turned back (every vertex
+//! mirrored through the image centre, the pattern's numbering turned with it when the
+//! pattern looks the same turned). A camera's pictures are turned when the turned
+//! hypothesis explains its boards far better: [`RATIO`] times smaller RMS, the upright
+//! one leaving more than [`MIN_UPRIGHT_PX`] and the turned one turning the camera by at
+//! most [`MAX_FIT_DEG`] — a margin that the offsets real robots carry (legs up to 2°,
+//! camera pitch corrections to −10°, head and board offsets) stay far from on upright
+//! pictures (`tests` over simulated robots).
+
+use std::fmt;
+
+use nalgebra::{DMatrix, DVector};
+
+use super::outcome::{ImageResult, Outcome};
+use crate::dataset::{Dataset, camera_table};
+use crate::model::{CameraId, Model, PARAMETER_COUNT, Param, ParamGroup, StanceChains, Vertex};
+use crate::robot::camera::settings::CameraSettings;
+
+/// Fewest boards of a camera before its pictures are judged.
+pub const MIN_BOARDS: usize = 3;
+/// Most boards of a camera the hypotheses are fitted to (spread over its captures).
+pub const MAX_BOARDS: usize = 20;
+/// How many times the upright hypothesis's RMS must exceed the turned one's.
+pub const RATIO: f64 = 3.0;
+/// Least RMS (px, in a picture 640 pixels wide; in proportion for other sizes) that the
+/// upright hypothesis leaves before a camera is called turned: pictures the model explains
+/// better as taken are upright.
+pub const MIN_UPRIGHT_PX: f64 = 3.0;
+/// Most (deg) the turned hypothesis's fit may turn the camera from the prediction (the
+/// largest correction of a real robot's camera, about 10°, with head offsets): beyond it,
+/// neither hypothesis explains the boards.
+pub const MAX_FIT_DEG: f64 = 25.0;
+
+/// How the two hypotheses explain one camera's boards.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Turned {
+    /// The camera.
+    pub camera: CameraId,
+    /// Its boards found (at most [`MAX_BOARDS`] of them fitted).
+    pub boards: usize,
+    /// RMS (px per coordinate) of its vertices against the fitted model, the pictures as
+    /// taken.
+    pub upright_px: f64,
+    /// The same with the pictures turned back by 180°.
+    pub turned_px: f64,
+    /// How far (deg) the fit of the turned hypothesis turned the camera from the
+    /// prediction.
+    pub turned_deg: f64,
+    /// The camera's picture width (px).
+    pub width: u32,
+}
+
+impl Turned {
+    /// Whether the camera's pictures are turned by 180° (see the module's rule).
+    pub fn is_turned(&self) -> bool {
+        let scale = f64::from(self.width) / 640.0;
+        self.boards >= MIN_BOARDS
+            && self.upright_px > MIN_UPRIGHT_PX * scale
+            && self.upright_px > RATIO * self.turned_px
+            && self.turned_deg <= MAX_FIT_DEG
+    }
+
+    /// The flip the camera needs (both flips of its sensor set or clear): the V6's
+    /// defaults, which capture applies unless told otherwise.
+    pub fn needed_flip(&self) -> bool {
+        CameraSettings::defaults(self.camera, self.width, 0).flip
+    }
+}
+
+impl fmt::Display for Turned {
+    /// What a user is told of a turned camera: the evidence and what to set.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "the {} camera's pictures are turned by 180°: its {} boards fit the model to \
+             {:.1} px turned back but only to {:.1} px as taken. Its sensor's flip was not \
+             as the camera needs when they were taken: set `flip = {}` in [{}] of \
+             dataset.toml (both flips of the sensor, UVC extension unit 3, selectors 12 and \
+             13; the opposite of what it was if this robot's sensor is mounted otherwise) \
+             and take the pictures again; no calibration is given from these pictures",
+            self.camera.name(),
+            self.boards,
+            self.turned_px,
+            self.upright_px,
+            self.needed_flip(),
+            camera_table(self.camera)
+        )
+    }
+}
+
+/// One board found: the chains of its capture and its vertices.
+struct Seen {
+    chains: StanceChains,
+    vertices: Vec<(Vertex, [f64; 2])>,
+}
+
+/// Both hypotheses for every camera with boards in `results` (what detection found in
+/// `dataset`), fitted from the prediction `params`; in camera order.
+pub fn judge(
+    dataset: &Dataset,
+    results: &[ImageResult],
+    params: &[f64; PARAMETER_COUNT],
+) -> Vec<Turned> {
+    let model = &dataset.model;
+    let by_id: std::collections::HashMap<u64, &crate::dataset::Capture> =
+        dataset.captures.iter().map(|c| (c.id, c)).collect();
+    let mut out = Vec::new();
+    for camera in CameraId::ALL {
+        let upright: Vec<Seen> = results
+            .iter()
+            .filter_map(|r| {
+                let Outcome::Found { corners, .. } = &r.outcome else {
+                    return None;
+                };
+                let capture = by_id.get(&r.capture).filter(|c| c.camera == camera)?;
+                Some(Seen {
+                    chains: model.chains_for(camera, capture.side, &capture.joints),
+                    vertices: corners.iter().map(|c| (c.vertex, c.pixel)).collect(),
+                })
+            })
+            .collect();
+        if upright.is_empty() {
+            continue;
+        }
+        let boards = upright.len();
+        // At most [`MAX_BOARDS`] of them, spread over the captures: the cost stays bounded.
+        let upright: Vec<Seen> = if boards > MAX_BOARDS {
+            let keep: Vec<usize> = (0..MAX_BOARDS).map(|k| k * boards / MAX_BOARDS).collect();
+            upright
+                .into_iter()
+                .enumerate()
+                .filter(|(i, _)| keep.contains(i))
+                .map(|(_, s)| s)
+                .collect()
+        } else {
+            upright
+        };
+        let turned: Vec<Seen> = upright
+            .iter()
+            .map(|s| turn_back(model, camera, s, params))
+            .collect();
+        let (upright_px, _) = fit(model, camera, &upright, params);
+        let (turned_px, turned_deg) = fit(model, camera, &turned, params);
+        out.push(Turned {
+            camera,
+            boards,
+            upright_px,
+            turned_px,
+            turned_deg,
+            width: model.intrinsics(camera).width,
+        });
+    }
+    out
+}
+
+/// The cameras whose pictures [`judge`] calls turned.
+pub fn turned_cameras(
+    dataset: &Dataset,
+    results: &[ImageResult],
+    params: &[f64; PARAMETER_COUNT],
+) -> Vec<Turned> {
+    judge(dataset, results, params)
+        .into_iter()
+        .filter(Turned::is_turned)
+        .collect()
+}
+
+/// The cameras that detection's `results` say are turned (each once, in the order met).
+pub fn of_results(results: &[ImageResult]) -> Vec<Turned> {
+    let mut out: Vec<Turned> = Vec::new();
+    for r in results {
+        if let Outcome::Turned { turned, .. } = &r.outcome
+            && !out.iter().any(|t| t.camera == turned.camera)
+        {
+            out.push(*turned);
+        }
+    }
+    out
+}
+
+/// The board `seen` in a picture of `camera` turned back by 180° about the image centre:
+/// every pixel mirrored through it; when the pattern looks the same turned by 180°, of
+/// the two numberings the image allows, the one the prediction `params` puts nearer.
+fn turn_back(model: &Model, camera: CameraId, seen: &Seen, params: &[f64]) -> Seen {
+    let c = model.intrinsics(camera);
+    let (w, h) = (f64::from(c.width) - 1.0, f64::from(c.height) - 1.0);
+    let mirrored: Vec<(Vertex, [f64; 2])> = seen
+        .vertices
+        .iter()
+        .map(|&(v, p)| (v, [w - p[0], h - p[1]]))
+        .collect();
+    let b = &model.board;
+    let chains = seen.chains.clone();
+    // The pattern's colours turned by 180° are its own when its squares along both sides
+    // add up to an even number (7 × 5: black corners all round).
+    if (b.squares_x + b.squares_y).is_multiple_of(2) {
+        let reversed: Vec<(Vertex, [f64; 2])> = mirrored
+            .iter()
+            .map(|&(v, p)| {
+                let v = Vertex {
+                    row: b.rows() - 1 - v.row,
+                    col: b.cols() - 1 - v.col,
+                };
+                (v, p)
+            })
+            .collect();
+        if rms(&residuals(model, &chains, &reversed, params))
+            < rms(&residuals(model, &chains, &mirrored, params))
+        {
+            return Seen {
+                chains,
+                vertices: reversed,
+            };
+        }
+    }
+    Seen {
+        chains,
+        vertices: mirrored,
+    }
+}
+
+/// How far off (px) a vertex the model puts behind the camera counts.
+const BEHIND_PX: f64 = 1000.0;
+
+/// Residuals (px) of `vertices` against the model at `params`, u and v per vertex.
+fn residuals(
+    model: &Model,
+    chains: &StanceChains,
+    vertices: &[(Vertex, [f64; 2])],
+    params: &[f64],
+) -> Vec<f64> {
+    let which: Vec<Vertex> = vertices.iter().map(|(v, _)| *v).collect();
+    model
+        .project(chains, params, &which)
+        .into_iter()
+        .zip(vertices)
+        .flat_map(|(p, (_, seen))| match p {
+            Some(p) => [p[0] - seen[0], p[1] - seen[1]],
+            None => [BEHIND_PX; 2],
+        })
+        .collect()
+}
+
+/// Root mean square of `r`.
+fn rms(r: &[f64]) -> f64 {
+    (r.iter().map(|x| x * x).sum::<f64>() / r.len().max(1) as f64).sqrt()
+}
+
+/// Every residual of `boards` at `params`.
+fn all_residuals(model: &Model, boards: &[Seen], params: &[f64]) -> Vec<f64> {
+    boards
+        .iter()
+        .flat_map(|b| residuals(model, &b.chains, &b.vertices, params))
+        .collect()
+}
+
+/// The parameters a hypothesis's fit frees for `camera`: its three rotation offsets
+/// (first), and both legs' joint offsets.
+fn free_params(camera: CameraId) -> Vec<usize> {
+    camera
+        .rotation_params()
+        .into_iter()
+        .chain(
+            Param::ALL
+                .into_iter()
+                .filter(|p| matches!(p.group(), ParamGroup::LeftLeg | ParamGroup::RightLeg)),
+        )
+        .map(Param::index)
+        .collect()
+}
+
+/// Most iterations of a hypothesis's fit (Levenberg–Marquardt).
+const ITERATIONS: usize = 30;
+
+/// The RMS (px per coordinate) of `boards` (of `camera`) against the model fitted from
+/// `params` ([`free_params`] free, the rest held there), and how far (deg) the fit turned
+/// the camera.
+fn fit(
+    model: &Model,
+    camera: CameraId,
+    boards: &[Seen],
+    params: &[f64; PARAMETER_COUNT],
+) -> (f64, f64) {
+    let free = free_params(camera);
+    let n = free.len();
+    let at = |x: &DVector<f64>| {
+        let mut p = *params;
+        for (k, &i) in free.iter().enumerate() {
+            p[i] += x[k];
+        }
+        p
+    };
+    let cost = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
+    let mut x = DVector::zeros(n);
+    let mut r = all_residuals(model, boards, &at(&x));
+    let mut lambda = 1e-3;
+    for _ in 0..ITERATIONS {
+        // The Jacobian by forward differences.
+        const STEP: f64 = 1e-7;
+        let mut jac = DMatrix::zeros(r.len(), n);
+        for k in 0..n {
+            let mut hi = x.clone();
+            hi[k] += STEP;
+            let a = all_residuals(model, boards, &at(&hi));
+            for (row, (a, b)) in a.iter().zip(&r).enumerate() {
+                jac[(row, k)] = (a - b) / STEP;
+            }
+        }
+        let jtj = jac.transpose() * &jac;
+        let jtr = jac.transpose() * DVector::from_column_slice(&r);
+        let mut improved = false;
+        for _ in 0..10 {
+            let mut damped = jtj.clone();
+            for k in 0..n {
+                // A parameter no board depends on (a leg without boards) stays put.
+                damped[(k, k)] = damped[(k, k)] * (1.0 + lambda) + 1e-9;
+            }
+            let Some(step) = damped.lu().solve(&(-&jtr)) else {
+                break;
+            };
+            let next = &x + &step;
+            let rn = all_residuals(model, boards, &at(&next));
+            if cost(&rn) < cost(&r) {
+                improved = step.norm() > 1e-10;
+                x = next;
+                r = rn;
+                lambda = (lambda / 10.0).max(1e-9);
+                break;
+            }
+            lambda *= 10.0;
+        }
+        if !improved {
+            break;
+        }
+    }
+    let turn = x.rows(0, 3).norm().to_degrees();
+    (rms(&r), turn)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dataset::Corner;
+    use crate::detect::numbering::turn_deg;
+    use crate::detect::predict;
+    use crate::sim::{SimOptions, simulate};
+
+    /// A simulated robot with offsets as the teams' files show them: lower and upper
+    /// captures, the vertices in view, as detection would report them.
+    fn robot(seed: u64, stances: usize, upper: usize, heads: usize) -> Dataset {
+        let mut model = Model::default();
+        model.upper_camera = Some(model.camera);
+        let options = SimOptions {
+            seed,
+            stances,
+            heads,
+            upper_stances: upper,
+            px_noise: 0.3,
+            team_offsets: true,
+            ..SimOptions::default()
+        };
+        let mut d = simulate(&model, &options).unwrap();
+        let camera_of: std::collections::HashMap<u64, CameraId> =
+            d.captures.iter().map(|c| (c.id, c.camera)).collect();
+        d.corners.retain(|c| {
+            model
+                .intrinsics(camera_of[&c.capture])
+                .contains(c.pixel, 3.0)
+        });
+        d
+    }
+
+    /// What detection makes of `dataset`'s corners, with the pictures of `turned` turned by
+    /// 180° (numbered by the prediction, as detection numbers the symmetric pattern).
+    fn found(dataset: &Dataset, turned: Option<CameraId>) -> Vec<ImageResult> {
+        let model = &dataset.model;
+        let by = dataset.corners_by_capture();
+        dataset
+            .captures
+            .iter()
+            .filter_map(|c| {
+                let corners = by.get(&c.id)?;
+                if corners.len() < 6 {
+                    return None;
+                }
+                let mut corners: Vec<Corner> = corners.to_vec();
+                if Some(c.camera) == turned {
+                    let i = model.intrinsics(c.camera);
+                    let (w, h) = (f64::from(i.width) - 1.0, f64::from(i.height) - 1.0);
+                    for k in &mut corners {
+                        k.pixel = [w - k.pixel[0], h - k.pixel[1]];
+                    }
+                    let pred = predict(model, c, &[0.0; PARAMETER_COUNT]).unwrap();
+                    let at = |v: Vertex| pred[(v.row * model.board.cols() + v.col) as usize];
+                    let p: Vec<[f64; 2]> = corners.iter().map(|k| at(k.vertex)).collect();
+                    let f: Vec<[f64; 2]> = corners.iter().map(|k| k.pixel).collect();
+                    if turn_deg(&f, &p).unwrap().abs() > 90.0 {
+                        for k in &mut corners {
+                            k.vertex = Vertex {
+                                row: model.board.rows() - 1 - k.vertex.row,
+                                col: model.board.cols() - 1 - k.vertex.col,
+                            };
+                        }
+                    }
+                }
+                Some(ImageResult {
+                    capture: c.id,
+                    image: None,
+                    outcome: Outcome::Found {
+                        corners,
+                        order: None,
+                        whole_image: false,
+                        numbered: String::new(),
+                    },
+                })
+            })
+            .collect()
+    }
+
+    /// Every camera's verdict for `dataset` with the pictures of `turned` turned.
+    fn verdicts(dataset: &Dataset, turned: Option<CameraId>) -> Vec<Turned> {
+        judge(dataset, &found(dataset, turned), &[0.0; PARAMETER_COUNT])
+    }
+
+    /// Robots with offsets as the teams' files show them (hidden from the judge, which
+    /// predicts with the nominal model), with few and with many boards per camera: upright
+    /// pictures are never called turned, pictures turned by 180° always, each camera on its
+    /// own; and the margins both ways stay wide (the ratio of the two hypotheses' RMS is
+    /// at least 3 times the threshold away).
+    #[test]
+    fn turned_pictures_are_told_from_upright_ones_on_robots_as_they_are() {
+        let (mut upright_worst, mut turned_worst) = (0.0f64, f64::INFINITY);
+        for (seed, (stances, upper, heads)) in
+            (0..9).zip([(2, 1, 2), (3, 2, 2), (1, 1, 3)].into_iter().cycle())
+        {
+            let d = robot(seed, stances, upper, heads);
+            for v in verdicts(&d, None) {
+                assert!(!v.is_turned(), "seed {seed}: upright called turned: {v:?}");
+                upright_worst = upright_worst.max(v.upright_px / v.turned_px);
+            }
+            for camera in CameraId::ALL {
+                for v in verdicts(&d, Some(camera)) {
+                    assert_eq!(
+                        v.is_turned(),
+                        v.camera == camera,
+                        "seed {seed}, {camera:?} turned: {v:?}"
+                    );
+                    if v.camera == camera {
+                        turned_worst = turned_worst.min(v.upright_px / v.turned_px);
+                        assert!(v.turned_deg <= MAX_FIT_DEG, "{v:?}");
+                    }
+                }
+            }
+        }
+        eprintln!("upright: ratio at most {upright_worst:.3}; turned: at least {turned_worst:.1}");
+        assert!(upright_worst * 3.0 < 1.0 / RATIO, "{upright_worst}");
+        assert!(turned_worst > 3.0 * RATIO, "{turned_worst}");
+    }
+
+    #[test]
+    fn the_message_names_the_camera_its_table_and_the_flip() {
+        let t = Turned {
+            camera: CameraId::Upper,
+            boards: 12,
+            upright_px: 80.0,
+            turned_px: 1.5,
+            turned_deg: 9.0,
+            width: 640,
+        };
+        assert!(t.is_turned());
+        let said = t.to_string();
+        for needle in [
+            "upper camera",
+            "turned by 180°",
+            "flip = true",
+            "[upper_camera]",
+            "selectors 12 and 13",
+            "no calibration",
+        ] {
+            assert!(said.contains(needle), "{needle}: {said}");
+        }
+        let lower = Turned {
+            camera: CameraId::Lower,
+            ..t
+        };
+        assert!(
+            lower.to_string().contains("`flip = false` in [camera]"),
+            "{lower}"
+        );
+        // Too few boards, an upright fit already close, no clear winner, or a turned fit
+        // that needs the camera turned far: not called turned.
+        for not in [
+            Turned {
+                boards: MIN_BOARDS - 1,
+                ..t
+            },
+            Turned {
+                upright_px: 2.9,
+                turned_px: 0.1,
+                ..t
+            },
+            Turned {
+                turned_px: 80.0 / RATIO + 0.1,
+                ..t
+            },
+            Turned {
+                turned_deg: MAX_FIT_DEG + 1.0,
+                ..t
+            },
+        ] {
+            assert!(!not.is_turned(), "{not:?}");
+        }
+        // In a picture twice as wide, twice the pixels.
+        assert!(
+            !Turned {
+                width: 1280,
+                upright_px: 5.9,
+                turned_px: 0.1,
+                ..t
+            }
+            .is_turned()
+        );
+    }
+}

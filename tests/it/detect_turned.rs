@@ -1,0 +1,179 @@
+//! Pictures turned by 180° (a camera's sensor flip not as the camera needs): detection says
+//! so for that camera, and `solve --detect` gives no calibration from them, naming the
+//! camera and the flip; upright pictures of robots with offsets as the teams' files show
+//! them are never called turned. The pictures are rendered by `naocalib simulate
+//! --images` and turned here; the robots' truth is removed before anything reads the
+//! dataset.
+
+use std::path::Path;
+
+use crate::util::{naocalib, read_grey_png, stderr, write_truth};
+use naocalib::dataset::Dataset;
+use naocalib::model::{CameraId, PARAMETER_COUNT, Param, ParamGroup};
+
+/// A robot as the teams' files show its worst: upper camera pitch −10°, lower −8°, every
+/// leg offset ±2°, head offsets and the upper camera's roll as large as seen.
+fn worst_robot() -> [f64; PARAMETER_COUNT] {
+    let mut t = [0.0; PARAMETER_COUNT];
+    let deg = f64::to_radians;
+    for (p, v) in [
+        (Param::UpperCamPitch, -10.0),
+        (Param::UpperCamRoll, 2.5),
+        (Param::UpperCamYaw, -2.0),
+        (Param::CamPitch, -8.0),
+        (Param::CamYaw, 2.0),
+        (Param::CamRoll, -2.0),
+        (Param::HeadYaw, 5.0),
+        (Param::HeadPitch, -4.0),
+    ] {
+        t[p.index()] = deg(v);
+    }
+    for (k, p) in Param::ALL
+        .into_iter()
+        .filter(|p| matches!(p.group(), ParamGroup::LeftLeg | ParamGroup::RightLeg))
+        .enumerate()
+    {
+        t[p.index()] = deg(if k % 3 == 1 { -2.0 } else { 2.0 });
+    }
+    t
+}
+
+/// Renders a small two-camera dataset into `dir` (`how`: `--team-offsets` or `--truth
+/// FILE`), and removes its truth.
+fn render(dir: &Path, seed: u64, how: &[&str]) {
+    let out = naocalib()
+        .args([
+            "simulate",
+            "--images",
+            "--stances",
+            "2",
+            "--upper-stances",
+            "2",
+        ])
+        .args(["--heads", "2", "--seed", &seed.to_string()])
+        .args(how)
+        .arg(dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    std::fs::remove_file(dir.join(naocalib::dataset::TRUTH_TOML)).unwrap();
+}
+
+/// Turns every picture of `camera` in the dataset `dir` by 180°.
+fn turn(dir: &Path, camera: CameraId) {
+    let dataset = Dataset::load_without_corners(dir).unwrap();
+    for c in dataset.captures.iter().filter(|c| c.camera == camera) {
+        let path = dir.join(c.image.as_ref().unwrap());
+        let mut picture = read_grey_png(&path);
+        picture.pixels.reverse();
+        std::fs::write(&path, picture.to_png().unwrap()).unwrap();
+    }
+}
+
+/// Copies the dataset `from` into `to`.
+fn copy(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to.join("images")).unwrap();
+    for entry in walk(from) {
+        let rel = entry.strip_prefix(from).unwrap();
+        std::fs::copy(&entry, to.join(rel)).unwrap();
+    }
+}
+
+/// The files under `dir`.
+fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            out.extend(walk(&p));
+        } else {
+            out.push(p);
+        }
+    }
+    out
+}
+
+#[test]
+fn pictures_turned_by_180_give_no_calibration_and_name_the_camera_and_its_flip() {
+    let tmp = tempfile::tempdir().unwrap();
+    let truth = tmp.path().join("worst.toml");
+    write_truth(&truth, &worst_robot());
+    let truth = truth.to_str().unwrap().to_string();
+    // The worst robot's upper pictures turned; a team-offsets robot's each camera's.
+    let robots: [(u64, Vec<&str>, &[CameraId]); 2] = [
+        (3, vec!["--truth", &truth], &[CameraId::Upper]),
+        (
+            5,
+            vec!["--team-offsets"],
+            &[CameraId::Lower, CameraId::Upper],
+        ),
+    ];
+    for (seed, how, cameras) in robots {
+        let upright = tmp.path().join(format!("upright-{seed}"));
+        render(&upright, seed, &how);
+        // Upright: never called turned; a calibration.
+        let out = naocalib()
+            .args(["solve", "--detect"])
+            .arg(&upright)
+            .output()
+            .unwrap();
+        let err = stderr(&out);
+        assert!(out.status.success(), "seed {seed}: {err}");
+        assert!(!err.contains("turned"), "seed {seed}: {err}");
+        assert!(err.contains("0 not found"), "seed {seed}: {err}");
+
+        for &camera in cameras {
+            let turned = tmp.path().join(format!("{}-turned-{seed}", camera.name()));
+            copy(&upright, &turned);
+            turn(&turned, camera);
+            // solve --detect: no calibration, the camera and its flip named.
+            let out = naocalib()
+                .args(["solve", "--detect"])
+                .arg(&turned)
+                .output()
+                .unwrap();
+            let err = stderr(&out);
+            assert_eq!(out.status.code(), Some(1), "seed {seed}, {camera:?}: {err}");
+            assert!(out.stdout.is_empty(), "a calibration was given");
+            let (flip, table) = match camera {
+                CameraId::Upper => ("flip = true", "[upper_camera]"),
+                CameraId::Lower => ("flip = false", "[camera]"),
+            };
+            let the = format!("the {} camera's pictures are turned by 180°", camera.name());
+            for needle in [
+                the.as_str(),
+                flip,
+                table,
+                "selectors 12 and 13",
+                "no calibration",
+            ] {
+                assert!(err.contains(needle), "seed {seed}: {needle}: {err}");
+            }
+            let other = match camera {
+                CameraId::Upper => "the lower camera's pictures",
+                CameraId::Lower => "the upper camera's pictures",
+            };
+            assert!(!err.contains(other), "{err}");
+            // detect: says so per image and for the camera, writes none of its vertices.
+            if seed == 3 {
+                let out = naocalib().arg("detect").arg(&turned).output().unwrap();
+                let err = stderr(&out);
+                assert_eq!(out.status.code(), Some(2), "{err}");
+                assert!(
+                    err.contains("not used: the upper camera's pictures are turned"),
+                    "{err}"
+                );
+                assert!(err.contains(&the) && err.contains(flip), "{err}");
+                let dataset = Dataset::load(&turned).unwrap();
+                let upper: Vec<u64> = dataset
+                    .captures
+                    .iter()
+                    .filter(|c| c.camera == CameraId::Upper)
+                    .map(|c| c.id)
+                    .collect();
+                assert!(!dataset.corners.is_empty());
+                assert!(dataset.corners.iter().all(|c| !upper.contains(&c.capture)));
+            }
+        }
+    }
+}
