@@ -162,48 +162,159 @@ fn criterion(var: impl Iterator<Item = f64>, weights: &[f64], power: f64) -> f64
         .sum()
 }
 
+/// Work space of [`criterion_with`], kept from candidate to candidate.
+#[derive(Debug, Default)]
+struct Scratch {
+    /// `A = C[:, cols]·Gᵀ`, column `r` at `r·n`; solved in place into `L⁻¹·Aᵀ`.
+    a: Vec<f64>,
+    /// `S = I + G·A[cols, :]` (column-major), factorised in place.
+    s: Vec<f64>,
+    /// The eight partial sums of each parameter's squared norm.
+    acc: Vec<f64>,
+    /// The variances after the addition.
+    var: Vec<f64>,
+}
+
 /// The criterion after adding capture `info` to the design with covariance `cov`
 /// (Woodbury: `(M + GᵀG)⁻¹ = C − C·Gᵀ·(I + G·C·Gᵀ)⁻¹·G·C`, only its diagonal).
+///
+/// Every parameter's arithmetic is that of the plain matrix expressions (nalgebra's
+/// Cholesky factorisation, triangular solve and dot product, operation for operation), done
+/// for all parameters at once in work space that is reused, so that a design is the same
+/// number for number as with those expressions.
 fn criterion_with(
     cov: &DMatrix<f64>,
     info: &CaptureInformation,
     weights: &[f64],
     power: f64,
+    w: &mut Scratch,
 ) -> f64 {
     let n = cov.nrows();
     let k = info.factor.nrows();
-    // A = C[:, cols]·Gᵀ  (n × k)
-    let mut a: DMatrix<f64> = DMatrix::zeros(n, k);
+    let cov = cov.as_slice();
+    let g = info.factor.as_slice();
+    // A = C[:, cols]·Gᵀ  (n × k), accumulated over the columns in order.
+    w.a.clear();
+    w.a.resize(n * k, 0.0);
     for (c, &col) in info.columns.iter().enumerate() {
+        let from = &cov[col * n..col * n + n];
         for r in 0..k {
-            let g = info.factor[(r, c)];
-            if g != 0.0 {
-                for i in 0..n {
-                    a[(i, r)] += cov[(i, col)] * g;
+            let gv = g[r + c * k];
+            if gv != 0.0 {
+                for (a, x) in w.a[r * n..r * n + n].iter_mut().zip(from) {
+                    *a += *x * gv;
                 }
             }
         }
     }
     // S = I + G·A[cols, :]
-    let mut s: DMatrix<f64> = DMatrix::identity(k, k);
+    w.s.clear();
+    w.s.resize(k * k, 0.0);
+    for r in 0..k {
+        w.s[r + r * k] = 1.0;
+    }
     for r in 0..k {
         for (c, &col) in info.columns.iter().enumerate() {
-            let g = info.factor[(r, c)];
+            let gv = g[r + c * k];
             for q in 0..k {
-                s[(r, q)] += g * a[(col, q)];
+                w.s[r + q * k] += gv * w.a[q * n + col];
             }
         }
     }
-    let Some(chol) = s.cholesky() else {
-        return f64::INFINITY;
+    // Cholesky S = L·Lᵀ in place (the lower triangle), column by column.
+    let s = &mut w.s;
+    for j in 0..k {
+        for m in 0..j {
+            let factor = -s[j + m * k];
+            for p in j..k {
+                s[p + j * k] = factor * s[p + m * k] + s[p + j * k];
+            }
+        }
+        let diag = s[j + j * k];
+        // Not positive definite (or not a number): the capture adds nothing usable.
+        if diag.is_nan() || diag <= 0.0 {
+            return f64::INFINITY;
+        }
+        let denom = diag.sqrt();
+        s[j + j * k] = denom;
+        for p in j + 1..k {
+            s[p + j * k] /= denom;
+        }
+    }
+    // L⁻¹·Aᵀ: forward substitution, every parameter's column at once.
+    for r in 0..k {
+        let d = s[r + r * k];
+        let (done, rest) = w.a.split_at_mut((r + 1) * n);
+        let row = &mut done[r * n..];
+        for x in row.iter_mut() {
+            *x /= d;
+        }
+        for p in r + 1..k {
+            let l = s[p + r * k];
+            let target = &mut rest[(p - r - 1) * n..(p - r) * n];
+            for (y, x) in target.iter_mut().zip(row.iter()) {
+                *y += -*x * l;
+            }
+        }
+    }
+    // diag(A·S⁻¹·Aᵀ): each parameter's squared norm, summed as nalgebra's dot product sums
+    // (eight partial sums over whole blocks of eight, then the rest).
+    let blocks = k / 8 * 8;
+    w.acc.clear();
+    w.acc.resize(8 * n, 0.0);
+    for b in (0..blocks).step_by(8) {
+        for m in 0..8 {
+            let row = &w.a[(b + m) * n..(b + m + 1) * n];
+            for (acc, x) in w.acc[m * n..(m + 1) * n].iter_mut().zip(row) {
+                *acc += *x * *x;
+            }
+        }
+    }
+    w.var.clear();
+    w.var.extend((0..n).map(|i| {
+        let acc = |m: usize| w.acc[m * n + i];
+        let mut res = 0.0;
+        res += acc(0) + acc(4);
+        res += acc(1) + acc(5);
+        res += acc(2) + acc(6);
+        res += acc(3) + acc(7);
+        for t in blocks..k {
+            let x = w.a[t * n + i];
+            res += x * x;
+        }
+        cov[i * n + i] - res
+    }));
+    criterion(w.var.iter().copied(), weights, power)
+}
+
+/// The unused capture of `pool` whose addition to the design with covariance `cov` gives
+/// the smallest criterion (of equal ones the first), with that criterion: the pool's two
+/// halves searched on two threads.
+fn best_addition(
+    pool: &[&CaptureInformation],
+    used: &[bool],
+    cov: &DMatrix<f64>,
+    weights: &[f64],
+    power: f64,
+) -> Option<(usize, f64)> {
+    let search = |range: std::ops::Range<usize>| {
+        let mut w = Scratch::default();
+        range
+            .filter(|c| !used[*c])
+            .map(|c| (c, criterion_with(cov, pool[c], weights, power, &mut w)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
     };
-    // diag(A·S⁻¹·Aᵀ) = column norms of L⁻¹·Aᵀ.
-    let y = chol
-        .l()
-        .solve_lower_triangular(&a.transpose())
-        .unwrap_or_else(|| a.transpose());
-    let var = (0..n).map(|i| cov[(i, i)] - y.column(i).norm_squared());
-    criterion(var, weights, power)
+    let half = pool.len() / 2;
+    let (first, second) = std::thread::scope(|scope| {
+        let first = scope.spawn(|| search(0..half));
+        let second = search(half..pool.len());
+        (first.join().expect("design thread"), second)
+    });
+    match (first, second) {
+        (Some(a), Some(b)) if b.1.total_cmp(&a.1).is_lt() => Some(b),
+        (Some(a), _) => Some(a),
+        (None, b) => b,
+    }
 }
 
 /// Inverse of a symmetric positive definite matrix (with a tiny ridge when needed).
@@ -294,16 +405,9 @@ pub fn select(
             accumulate(&mut m, pool[c], 1.0);
         }
     }
-    let best_addition = |cov: &DMatrix<f64>, used: &[bool], power: f64| -> Option<(usize, f64)> {
-        pool.iter()
-            .enumerate()
-            .filter(|(c, _)| !used[*c])
-            .map(|(c, info)| (c, criterion_with(cov, info, weights, power)))
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-    };
     while chosen.len() < count.min(pool.len()) {
         let cov = inverse(&m);
-        let Some((c, _)) = best_addition(&cov, &used, 1.0) else {
+        let Some((c, _)) = best_addition(pool, &used, &cov, weights, 1.0) else {
             break;
         };
         used[c] = true;
@@ -320,13 +424,6 @@ pub fn select(
         .fold(0.0, f64::max)
         .max(1e-300);
     let scaled: Vec<f64> = weights.iter().map(|w| w / scale).collect();
-    let best_swap = |cov: &DMatrix<f64>, used: &[bool]| -> Option<(usize, f64)> {
-        pool.iter()
-            .enumerate()
-            .filter(|(c, _)| !used[*c])
-            .map(|(c, info)| (c, criterion_with(cov, info, &scaled, options.power)))
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-    };
     for _ in 0..options.exchange_passes {
         let mut improved = false;
         for slot in chosen.iter_mut() {
@@ -336,7 +433,7 @@ pub fn select(
             accumulate(&mut m, pool[current], -1.0);
             used[current] = false;
             let cov = inverse(&m);
-            let pick = match best_swap(&cov, &used) {
+            let pick = match best_addition(pool, &used, &cov, &scaled, options.power) {
                 Some((c, value)) if value < now * (1.0 - 1e-9) => {
                     improved |= c != current;
                     c
@@ -425,5 +522,140 @@ pub fn predict(free: &[Param], infos: &[&CaptureInformation]) -> Prediction {
         std,
         rank: report.rank,
         undetermined: report.undetermined.iter().map(|d| d.describe()).collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    /// [`criterion_with`] in plain matrix expressions.
+    fn criterion_with_matrices(
+        cov: &DMatrix<f64>,
+        info: &CaptureInformation,
+        weights: &[f64],
+        power: f64,
+    ) -> f64 {
+        let n = cov.nrows();
+        let k = info.factor.nrows();
+        let mut a: DMatrix<f64> = DMatrix::zeros(n, k);
+        for (c, &col) in info.columns.iter().enumerate() {
+            for r in 0..k {
+                let g = info.factor[(r, c)];
+                if g != 0.0 {
+                    for i in 0..n {
+                        a[(i, r)] += cov[(i, col)] * g;
+                    }
+                }
+            }
+        }
+        let mut s: DMatrix<f64> = DMatrix::identity(k, k);
+        for r in 0..k {
+            for (c, &col) in info.columns.iter().enumerate() {
+                let g = info.factor[(r, c)];
+                for q in 0..k {
+                    s[(r, q)] += g * a[(col, q)];
+                }
+            }
+        }
+        let Some(chol) = s.cholesky() else {
+            return f64::INFINITY;
+        };
+        let y = chol
+            .l()
+            .solve_lower_triangular(&a.transpose())
+            .unwrap_or_else(|| a.transpose());
+        let var = (0..n).map(|i| cov[(i, i)] - y.column(i).norm_squared());
+        criterion(var, weights, power)
+    }
+
+    /// A random capture's information on `rank` rows over some of `n` parameters.
+    fn random_information(rng: &mut impl Rng, n: usize, rank: usize) -> CaptureInformation {
+        let mut columns: Vec<usize> = (0..n).filter(|_| rng.random_bool(0.5)).collect();
+        if columns.is_empty() {
+            columns.push(rng.random_range(0..n));
+        }
+        let factor = DMatrix::from_fn(rank, columns.len(), |_, _| {
+            if rng.random_bool(0.1) {
+                0.0
+            } else {
+                rng.random_range(-3.0..3.0)
+            }
+        });
+        CaptureInformation { columns, factor }
+    }
+
+    #[test]
+    fn the_criterion_after_an_addition_is_that_of_the_matrix_expressions_bit_for_bit() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for (n, rank) in [
+            (1, 1),
+            (5, 3),
+            (21, 7),
+            (21, 8),
+            (32, 14),
+            (32, 16),
+            (40, 17),
+        ] {
+            let pool: Vec<CaptureInformation> = (0..3 * n)
+                .map(|_| random_information(&mut rng, n, rank))
+                .collect();
+            let m =
+                information(n, &pool.iter().collect::<Vec<_>>()) + DMatrix::identity(n, n) * 1e-3;
+            let cov = inverse(&m);
+            let weights: Vec<f64> = (0..n).map(|_| rng.random_range(0.1..2.0)).collect();
+            let mut w = Scratch::default();
+            for info in &pool {
+                for power in [1.0, 16.0] {
+                    let fast = criterion_with(&cov, info, &weights, power, &mut w);
+                    let plain = criterion_with_matrices(&cov, info, &weights, power);
+                    assert_eq!(fast.to_bits(), plain.to_bits(), "n {n}, rank {rank}");
+                }
+            }
+            // A covariance that is not positive definite is refused alike.
+            let bad = -cov.clone();
+            let info = &pool[0];
+            assert_eq!(
+                criterion_with(&bad, info, &weights, 1.0, &mut w),
+                criterion_with_matrices(&bad, info, &weights, 1.0)
+            );
+        }
+    }
+
+    #[test]
+    fn the_best_addition_is_the_first_of_the_smallest() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        let n = 12;
+        let mut pool: Vec<CaptureInformation> = (0..41)
+            .map(|_| random_information(&mut rng, n, 5))
+            .collect();
+        // Equal captures in both halves: the first of them wins.
+        pool[30] = pool[3].clone();
+        pool[35] = pool[3].clone();
+        let refs: Vec<&CaptureInformation> = pool.iter().collect();
+        let cov = inverse(&(information(n, &refs) + DMatrix::identity(n, n)));
+        let weights = vec![1.0; n];
+        let mut used = vec![false; pool.len()];
+        used[7] = true;
+        let serial = refs
+            .iter()
+            .enumerate()
+            .filter(|(c, _)| !used[*c])
+            .map(|(c, info)| (c, criterion_with_matrices(&cov, info, &weights, 16.0)))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        assert_eq!(best_addition(&refs, &used, &cov, &weights, 16.0), serial);
+        // The best made equal to one in the second half: still the first.
+        let (best, _) = serial.unwrap();
+        pool[40] = pool[best].clone();
+        let refs: Vec<&CaptureInformation> = pool.iter().collect();
+        assert_eq!(
+            best_addition(&refs, &used, &cov, &weights, 16.0).map(|b| b.0),
+            Some(best.min(40))
+        );
+        assert_eq!(
+            best_addition(&refs, &vec![true; 41], &cov, &weights, 1.0),
+            None
+        );
     }
 }

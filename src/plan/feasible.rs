@@ -150,13 +150,18 @@ fn uncertain(camera: CameraId, side: Side, f: &Feasibility) -> Vec<(Param, f64)>
 /// The projected vertices and the angle between the board normal and the line of sight
 /// for parameters `params`; `None` when a vertex is behind the camera.
 fn view(model: &Model, chains: &StanceChains, params: &[f64]) -> Option<(Vec<[f64; 2]>, f64)> {
-    let to_camera = crate::sim::line_of_sight(&chains.camera_to_board(params));
+    let pose = chains.camera_to_board(params);
+    let to_camera = crate::sim::line_of_sight(&pose);
     let dist = to_camera.iter().map(|x| x * x).sum::<f64>().sqrt();
     let angle = (to_camera[2] / dist).clamp(-1.0, 1.0).acos();
-    let vertices: Vec<_> = model.board.vertices().collect();
+    // Model::project, with the pose found once.
     let uv = model
-        .project(chains, params, &vertices)
-        .into_iter()
+        .board
+        .vertices()
+        .map(|v| {
+            let p = model.board.vertex_position(v);
+            chains.projection.project(params, &pose.apply(&p))
+        })
         .collect::<Option<Vec<_>>>()?;
     Some((uv, angle))
 }
@@ -342,6 +347,33 @@ pub fn check_for(
     joints: &JointAngles,
     f: &Feasibility,
 ) -> Result<(), Infeasible> {
+    within_margins(camera, joints, f)?;
+    if let Some(what) = collision::collision(&model.robot, &f.body, joints) {
+        return Err(Infeasible::Collision(what));
+    }
+    in_view_and_reach(model, camera, side, joints, f)
+}
+
+/// [`check_for`] of a posture whose legs are known to be free of collision (the head
+/// moves no part of the collision model).
+fn check_legs_free(
+    model: &Model,
+    camera: CameraId,
+    side: Side,
+    joints: &JointAngles,
+    f: &Feasibility,
+) -> Result<(), Infeasible> {
+    within_margins(camera, joints, f)?;
+    in_view_and_reach(model, camera, side, joints, f)
+}
+
+/// The joint limits less the margins, the head's yaw-dependent pitch range, one
+/// HipYawPitch.
+fn within_margins(
+    camera: CameraId,
+    joints: &JointAngles,
+    f: &Feasibility,
+) -> Result<(), Infeasible> {
     for j in Joint::ALL {
         let (lo, hi) = j.limits();
         let q = joints.get(j);
@@ -358,9 +390,18 @@ pub fn check_for(
     if joints.get(Joint::LHipYawPitch) != joints.get(Joint::RHipYawPitch) {
         return Err(Infeasible::HipYawPitch);
     }
-    if let Some(what) = collision::collision(&model.robot, &f.body, joints) {
-        return Err(Infeasible::Collision(what));
-    }
+    Ok(())
+}
+
+/// The board in view for every offset, in plain sight, and the posture reachable straight
+/// from rest.
+fn in_view_and_reach(
+    model: &Model,
+    camera: CameraId,
+    side: Side,
+    joints: &JointAngles,
+    f: &Feasibility,
+) -> Result<(), Infeasible> {
     if !board_in_view_of(model, camera, side, joints, f) {
         return Err(Infeasible::View);
     }
@@ -424,26 +465,68 @@ pub fn aim_head_for(
     joint_margin: f64,
     centre: &[f64; PARAMETER_COUNT],
 ) -> Option<JointAngles> {
-    let zero = *centre;
-    let intrinsics = model.intrinsics(camera);
-    let centre = |j: &JointAngles| -> Option<[f64; 2]> {
-        let pose = model.chains_for(camera, side, j).camera_to_board(&zero);
-        intrinsics.project(&pose.translation)
-    };
-    let mut start = *joints;
-    let sole = model
-        .robot
-        .sole_chain(side, joints, &[0.0; 6])
-        .eval(&zero)
-        .translation;
-    start.set(Joint::HeadYaw, sole[1].atan2(sole[0]));
-    start.set(Joint::HeadPitch, 0.2);
-    let (j, reached) = crate::sim::steer_head(centre, start, target, 0.5, 15)?;
-    let within = |joint: Joint| {
-        let (lo, hi) = joint.limits();
-        (lo + joint_margin..=hi - joint_margin).contains(&j.get(joint))
-    };
-    (reached && within(Joint::HeadYaw) && within(Joint::HeadPitch)).then_some(j)
+    Aim::new(model, camera, side, joints, centre).at(target, joint_margin)
+}
+
+/// The aiming of the head at the board of one leg stance ([`aim_head_for`]): the board's
+/// pose, which the head does not move, and the start of the search, found once for every
+/// image point aimed at.
+struct Aim<'a> {
+    model: &'a Model,
+    camera: CameraId,
+    params: [f64; PARAMETER_COUNT],
+    /// `T_OB` at `params`.
+    board: crate::model::Pose<f64>,
+    /// The stance with the head turned towards the sole.
+    start: JointAngles,
+}
+
+impl<'a> Aim<'a> {
+    fn new(
+        model: &'a Model,
+        camera: CameraId,
+        side: Side,
+        joints: &JointAngles,
+        centre: &[f64; PARAMETER_COUNT],
+    ) -> Self {
+        let board = model.chains_for(camera, side, joints).board.eval(centre);
+        let sole = model
+            .robot
+            .sole_chain(side, joints, &[0.0; 6])
+            .eval(centre)
+            .translation;
+        let mut start = *joints;
+        start.set(Joint::HeadYaw, sole[1].atan2(sole[0]));
+        start.set(Joint::HeadPitch, 0.2);
+        Aim {
+            model,
+            camera,
+            params: *centre,
+            board,
+            start,
+        }
+    }
+
+    /// The head posture that puts the board centre at pixel `target`, if within the
+    /// head's limits less `joint_margin`.
+    fn at(&self, target: [f64; 2], joint_margin: f64) -> Option<JointAngles> {
+        let intrinsics = self.model.intrinsics(self.camera);
+        let centre = |j: &JointAngles| -> Option<[f64; 2]> {
+            let pose = self
+                .model
+                .robot
+                .camera_chain_of(self.camera, j)
+                .eval(&self.params)
+                .inverse_then(&self.board);
+            intrinsics.project(&pose.translation)
+        };
+        let (j, reached) = crate::sim::steer_head(centre, self.start, target, 0.5, 15)?;
+        let within = |joint: Joint| {
+            let (lo, hi) = joint.limits();
+            (lo + joint_margin..=hi - joint_margin).contains(&j.get(joint))
+        };
+        (reached && within(Joint::HeadYaw) && within(Joint::HeadPitch)).then_some(j)
+    }
 }
 
 /// One feasible capture of the pool: a leg stance (shared by its head postures) and the
@@ -551,22 +634,17 @@ fn postures(
         return Vec::new();
     };
     let mut out: Vec<JointAngles> = Vec::new();
+    let aim = Aim::new(model, camera, side, &joints, &f.centre);
     for target in targets {
         if out.len() == heads {
             break;
         }
-        let Some(aimed) = aim_head_for(
-            model,
-            camera,
-            side,
-            &joints,
-            *target,
-            f.margin(camera, Joint::HeadPitch),
-            &f.centre,
-        ) else {
+        let Some(aimed) = aim.at(*target, f.margin(camera, Joint::HeadPitch)) else {
             continue;
         };
-        if check_for(model, camera, side, &aimed, f).is_ok() {
+        // The legs are those found free of collision above (the head moves none of the
+        // collision model's parts).
+        if check_legs_free(model, camera, side, &aimed, f).is_ok() {
             out.push(aimed);
         }
     }
