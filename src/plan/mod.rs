@@ -390,17 +390,16 @@ pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
         return Err(PlanError::Moves(k));
     }
     let via = moves.iter().flatten().map(|way| way.len() - 1).sum();
-    let duration = route::duration(model, body, &options.timing, &rest, &postures);
+    let duration = route::duration_of(&options.timing, &rest, &postures, &moves);
     let mut stances: Vec<usize> = chosen.iter().map(|&k| pool[k].stance).collect();
     stances.sort_unstable();
     stances.dedup();
 
     let random_postures: Vec<JointAngles> = random.iter().map(|c| c.2).collect();
-    let baseline_duration = route::duration(model, body, &options.timing, &rest, &random_postures);
-    let baseline_blocked = route::moves(model, body, &rest, &random_postures)
-        .iter()
-        .filter(|m| m.is_err())
-        .count();
+    let random_moves = route::moves(model, body, &rest, &random_postures);
+    let baseline_duration =
+        route::duration_of(&options.timing, &rest, &random_postures, &random_moves);
+    let baseline_blocked = random_moves.iter().filter(|m| m.is_err()).count();
     Ok(Plan {
         captures,
         prediction,
