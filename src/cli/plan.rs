@@ -20,10 +20,16 @@ pub struct PlanArgs {
     /// The stance schedule to write (CSV: capture,board,HeadYaw,…,RAnkleRoll in radians,
     /// and a camera column, lower or upper, when some capture is by the upper camera).
     out: PathBuf,
-    /// Number of captures, both legs together.
-    #[arg(long, default_value_t = 144,
+    /// Number of captures, both legs together [default: 144; with --budget-s, as many as
+    /// fit, at most this].
+    #[arg(long,
           value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(2..=5000))]
-    captures: usize,
+    captures: Option<usize>,
+    /// The robot time the measurement phase may take (s, 1 … 36000): the plan takes as many
+    /// captures as fit, its predicted duration from rest through every capture and back,
+    /// every move included (at most --captures when given).
+    #[arg(long, value_name = "SECONDS", value_parser = budget_s)]
+    budget_s: Option<f64>,
     /// Parameter families the calibration will free, comma-separated; the plan is made for
     /// them (the help lists the registry's families).
     #[arg(long, value_name = "FAMILIES", default_value = "paper", value_parser = parse_families,
@@ -140,6 +146,16 @@ fn offset_deg(text: &str) -> Result<f64, String> {
     }
 }
 
+/// A measurement phase's budget: 1 … 36000 s.
+fn budget_s(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(v) if (1.0..=36000.0).contains(&v) => Ok(v),
+        _ => Err(format!(
+            "must be a number of seconds from 1 to 36000, got '{text}'"
+        )),
+    }
+}
+
 fn sigma_ratio(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {
         Ok(v) if (0.1..=10.0).contains(&v) => Ok(v),
@@ -192,7 +208,7 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
         }
     }
     let mut options = PlanOptions {
-        captures: args.captures,
+        captures: args.captures.unwrap_or(PlanOptions::default().captures),
         fixed,
         levels: NoiseLevels {
             px: args.px_noise,
@@ -215,8 +231,16 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
             options.feasibility.centre[p.index()] = p.unit().from_report(value);
         }
     }
+    let intrinsics_free = options
+        .cameras
+        .iter()
+        .flat_map(|c| c.projection_params())
+        .any(|p| !options.fixed.is_fixed(p));
     let start = Instant::now();
-    let plan = naocalib::plan::plan(&model, &options)?;
+    let plan = match args.budget_s {
+        Some(budget) => naocalib::plan::plan_within(&model, &options, budget, args.captures)?,
+        None => naocalib::plan::plan(&model, &options)?,
+    };
     let elapsed = start.elapsed().as_secs_f64();
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty())
         && !dir.is_dir()
@@ -314,6 +338,40 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
          way (the paper's took 590 s)",
         plan.duration, plan.via, plan.baseline_duration, plan.baseline_blocked
     );
+    if let Some(budget) = args.budget_s {
+        let _ = writeln!(
+            out,
+            "budget: {} captures fit a measurement phase of {budget} s (predicted {:.1} s{})",
+            plan.captures.len(),
+            plan.duration,
+            match args.captures {
+                Some(n) if n == plan.captures.len() => format!(", --captures {n}"),
+                _ => String::new(),
+            }
+        );
+    }
+    if intrinsics_free {
+        for c in &plan.coverage {
+            let [lo, hi] = c.centres;
+            let _ = writeln!(
+                out,
+                "{} camera's image: board vertices in {} of the {} cells of a {}×{} grid, \
+                 {} of its 4 corners; board centres u {:.0}–{:.0} of {} px, v {:.0}–{:.0} of {} px",
+                c.camera.name(),
+                c.covered(),
+                naocalib::plan::coverage::COLS * naocalib::plan::coverage::ROWS,
+                naocalib::plan::coverage::COLS,
+                naocalib::plan::coverage::ROWS,
+                c.corners(),
+                lo[0],
+                hi[0],
+                c.size[0],
+                lo[1],
+                hi[1],
+                c.size[1]
+            );
+        }
+    }
     super::print_out(out)?;
     Ok(ExitCode::SUCCESS)
 }

@@ -227,7 +227,7 @@ fn criterion_with(
         for m in 0..j {
             let factor = -s[j + m * k];
             for p in j..k {
-                s[p + j * k] = factor * s[p + m * k] + s[p + j * k];
+                s[p + j * k] += factor * s[p + m * k];
             }
         }
         let diag = s[j + j * k];
@@ -654,7 +654,7 @@ mod tests {
             Some(best.min(40))
         );
         assert_eq!(
-            best_addition(&refs, &vec![true; 41], &cov, &weights, 1.0),
+            best_addition(&refs, &[true; 41], &cov, &weights, 1.0),
             None
         );
     }

@@ -541,6 +541,8 @@ pub struct Candidate {
     pub joints: JointAngles,
     /// Index of its leg stance in the pool (captures of one stance differ in the head).
     pub stance: usize,
+    /// The image point the head aimed the board centre at (px).
+    pub target: [f64; 2],
 }
 
 /// The resting leg's postures, tried in turn: `(HipRoll outward, HipPitch, KneePitch,
@@ -606,6 +608,34 @@ fn aim_targets(model: &Model, camera: CameraId) -> Vec<[f64; 2]> {
         .collect()
 }
 
+/// The directions a camera's image is swept in when its intrinsics are free: the four
+/// corners, then the four edges, as offsets (fractions of the image's width and height)
+/// from the camera's first [`aim_targets`] point.
+const SWEEP: [(f64, f64); 8] = [
+    (-0.34, -0.3),
+    (0.34, 0.3),
+    (0.34, -0.3),
+    (-0.34, 0.3),
+    (0.0, -0.36),
+    (0.42, 0.0),
+    (0.0, 0.36),
+    (-0.42, 0.0),
+];
+
+/// The image points a stance's swept head posture aims the board centre at, in order of
+/// preference: out along direction `k` of [`SWEEP`] from the camera's first aim point,
+/// the farthest first, then nearer (the board must stay in view for every offset).
+fn sweep_targets(model: &Model, camera: CameraId, k: usize) -> Vec<[f64; 2]> {
+    let intrinsics = model.intrinsics(camera);
+    let (w, h) = (intrinsics.width as f64, intrinsics.height as f64);
+    let [u, v] = aim_targets(model, camera)[0];
+    let (du, dv) = SWEEP[k % SWEEP.len()];
+    [1.0, 0.85, 0.7, 0.6, 0.5, 0.4, 0.3]
+        .iter()
+        .map(|s| [u + s * du * w, v + s * dv * h])
+        .collect()
+}
+
 /// Up to `heads` feasible captures of the stance `joints` of the measured leg `side` (the
 /// other leg put into the first of its [`RESTING`] postures that collides with nothing,
 /// the head aimed at the [`aim_targets`] in turn, each posture passing [`check`]); empty
@@ -618,7 +648,20 @@ fn postures(
     heads: usize,
     targets: &[[f64; 2]],
     f: &Feasibility,
-) -> Vec<JointAngles> {
+) -> Vec<(JointAngles, [f64; 2])> {
+    aimed_postures(model, camera, side, joints, &[(targets, heads)], f)
+}
+
+/// [`postures`] for several lists of image points: for each `(targets, count)` of `aims`
+/// up to `count` postures aimed at `targets` in turn, each with the point it aims at.
+fn aimed_postures(
+    model: &Model,
+    camera: CameraId,
+    side: Side,
+    joints: &JointAngles,
+    aims: &[(&[[f64; 2]], usize)],
+    f: &Feasibility,
+) -> Vec<(JointAngles, [f64; 2])> {
     let other = match side {
         Side::Left => Side::Right,
         Side::Right => Side::Left,
@@ -633,19 +676,23 @@ fn postures(
     else {
         return Vec::new();
     };
-    let mut out: Vec<JointAngles> = Vec::new();
+    let mut out = Vec::new();
     let aim = Aim::new(model, camera, side, &joints, &f.centre);
-    for target in targets {
-        if out.len() == heads {
-            break;
-        }
-        let Some(aimed) = aim.at(*target, f.margin(camera, Joint::HeadPitch)) else {
-            continue;
-        };
-        // The legs are those found free of collision above (the head moves none of the
-        // collision model's parts).
-        if check_legs_free(model, camera, side, &aimed, f).is_ok() {
-            out.push(aimed);
+    for (targets, count) in aims {
+        let mut found = 0;
+        for target in targets.iter() {
+            if found == *count {
+                break;
+            }
+            let Some(aimed) = aim.at(*target, f.margin(camera, Joint::HeadPitch)) else {
+                continue;
+            };
+            // The legs are those found free of collision above (the head moves none of the
+            // collision model's parts).
+            if check_legs_free(model, camera, side, &aimed, f).is_ok() {
+                out.push((aimed, *target));
+                found += 1;
+            }
         }
     }
     out
@@ -681,7 +728,9 @@ fn towards_limits(lo: f64, hi: f64, rng: &mut impl Rng) -> f64 {
 /// less the margin, drawn mostly near the limits), each with up to `heads` head postures (the board
 /// aimed at the image centre and at points around it), all passing [`check`], within
 /// `tries` random leg postures; then up to `tries` more draws look only for stances that
-/// load a joint with a sign of gravity torque the pool lacks.
+/// load a joint with a sign of gravity torque the pool lacks. With `sweep` (the camera's
+/// intrinsics are free) each stance gets one head posture more, aimed out towards a corner
+/// or an edge of the image, the stances taking the directions of [`SWEEP`] in turn.
 #[allow(clippy::too_many_arguments)] // each is one plain setting of the pool
 pub fn candidates(
     model: &Model,
@@ -689,12 +738,16 @@ pub fn candidates(
     side: Side,
     stances: usize,
     heads: usize,
+    sweep: bool,
     tries: usize,
     f: &Feasibility,
     first_stance: usize,
     rng: &mut impl Rng,
 ) -> Vec<Candidate> {
     let targets = aim_targets(model, camera);
+    let swept: Vec<Vec<[f64; 2]>> = (0..SWEEP.len())
+        .map(|k| sweep_targets(model, camera, k))
+        .collect();
     let mut out = Vec::new();
     let mut found = 0;
     // Which signs of each joint's gravity torque the pool has: compliance and play can only
@@ -723,7 +776,19 @@ pub fn candidates(
         if found >= stances && !new_sign {
             continue;
         }
-        let postures = postures(model, camera, side, &joints, heads, &targets, f);
+        let postures = if sweep {
+            let out = &swept[found % SWEEP.len()];
+            aimed_postures(
+                model,
+                camera,
+                side,
+                &joints,
+                &[(&targets, heads), (out, 1)],
+                f,
+            )
+        } else {
+            postures(model, camera, side, &joints, heads, &targets, f)
+        };
         if postures.is_empty() {
             continue;
         }
@@ -734,11 +799,12 @@ pub fn candidates(
                 signs[k][s] |= these[k][s];
             }
         }
-        out.extend(postures.into_iter().map(|joints| Candidate {
+        out.extend(postures.into_iter().map(|(joints, target)| Candidate {
             camera,
             side,
             joints,
             stance,
+            target,
         }));
     }
     out
@@ -751,8 +817,9 @@ pub const FUTILE_TRIES: usize = 4000;
 
 /// Up to `count` feasible variants of the capture `base` (one head posture each): its
 /// measured leg's angles moved by up to ± `spread` (rad) each, kept within the limits less
-/// the margin, the other leg parked with the same HipYawPitch. Numbered as stances from
-/// `first_stance`. Used to refine a design around the stances it picked.
+/// the margin, the other leg parked with the same HipYawPitch, the head aimed as for a
+/// pool stance, or with `sweep` at the image point the base aimed at. Numbered as stances
+/// from `first_stance`. Used to refine a design around the stances it picked.
 #[allow(clippy::too_many_arguments)] // each is one plain setting of the refinement
 pub fn variants(
     model: &Model,
@@ -760,13 +827,18 @@ pub fn variants(
     count: usize,
     tries: usize,
     spread: f64,
+    sweep: bool,
     f: &Feasibility,
     first_stance: usize,
     rng: &mut impl Rng,
 ) -> Vec<Candidate> {
     let side = base.side;
     let camera = base.camera;
-    let targets = aim_targets(model, camera);
+    let targets = if sweep {
+        vec![base.target]
+    } else {
+        aim_targets(model, camera)
+    };
     let mut out = Vec::new();
     for _ in 0..tries {
         if out.len() == count {
@@ -778,12 +850,14 @@ pub fn variants(
             let q = joints.get(j) + rng.random_range(-spread..=spread);
             joints.set(j, q.clamp(lo + f.joint_margin, hi - f.joint_margin));
         }
-        if let Some(aimed) = postures(model, camera, side, &joints, 1, &targets, f).pop() {
+        if let Some((aimed, target)) = postures(model, camera, side, &joints, 1, &targets, f).pop()
+        {
             out.push(Candidate {
                 camera,
                 side,
                 joints: aimed,
                 stance: first_stance + out.len(),
+                target,
             });
         }
     }
