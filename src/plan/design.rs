@@ -54,44 +54,7 @@ pub fn capture_information_for(
     levels: NoiseLevels,
 ) -> Vec<Option<CaptureInformation>> {
     let zero = [0.0; PARAMETER_COUNT];
-    let vertices: Vec<Vertex> = model.board.vertices().collect();
-    let mut terms = Vec::with_capacity(captures.len());
-    let mut index = Vec::with_capacity(captures.len());
-    for (camera, side, joints) in captures {
-        let chains = model.chains_for(*camera, *side, joints);
-        let Some(pixels) = model
-            .project(&chains, &zero, &vertices)
-            .into_iter()
-            .collect::<Option<Vec<_>>>()
-        else {
-            index.push(None);
-            continue;
-        };
-        let term = CaptureTerm {
-            capture: terms.len() as u64,
-            chains,
-            observations: vertices
-                .iter()
-                .zip(&pixels)
-                .map(|(v, uv)| Observation {
-                    vertex: *v,
-                    point: model.board.vertex_position(*v),
-                    pixel: *uv,
-                })
-                .collect(),
-            whitening: None,
-        };
-        index.push(Some(terms.len()));
-        terms.push(term);
-    }
-    let mut problem = Problem {
-        camera: model.camera,
-        captures: terms,
-        initial: zero,
-        fixed: fixed.clone(),
-        loss: Loss::Squared,
-        tolerances: Tolerances::default(),
-    };
+    let (mut problem, index) = problem_of(model, captures, fixed);
     // The noise model's whitening at the given levels (nothing is estimated when both are
     // given; the residuals are zero here).
     let given = NoiseOptions {
@@ -131,6 +94,71 @@ pub fn capture_information_for(
             })
         })
         .collect()
+}
+
+/// The least-squares problem `solve` poses for the captures `(camera, side, joints)` at
+/// the nominal model (every offset zero), the pixels those it predicts, without noise
+/// model; and for each capture its index among the problem's (`None` for a board (partly)
+/// behind the camera).
+fn problem_of(
+    model: &Model,
+    captures: &[(CameraId, Side, JointAngles)],
+    fixed: &FixedSet,
+) -> (Problem, Vec<Option<usize>>) {
+    let zero = [0.0; PARAMETER_COUNT];
+    let vertices: Vec<Vertex> = model.board.vertices().collect();
+    let mut terms = Vec::with_capacity(captures.len());
+    let mut index = Vec::with_capacity(captures.len());
+    for (camera, side, joints) in captures {
+        let chains = model.chains_for(*camera, *side, joints);
+        let Some(pixels) = model
+            .project(&chains, &zero, &vertices)
+            .into_iter()
+            .collect::<Option<Vec<_>>>()
+        else {
+            index.push(None);
+            continue;
+        };
+        let term = CaptureTerm {
+            capture: terms.len() as u64,
+            chains,
+            observations: vertices
+                .iter()
+                .zip(&pixels)
+                .map(|(v, uv)| Observation {
+                    vertex: *v,
+                    point: model.board.vertex_position(*v),
+                    pixel: *uv,
+                })
+                .collect(),
+            whitening: None,
+        };
+        index.push(Some(terms.len()));
+        terms.push(term);
+    }
+    let problem = Problem {
+        camera: model.camera,
+        captures: terms,
+        initial: zero,
+        fixed: fixed.clone(),
+        loss: Loss::Squared,
+        tolerances: Tolerances::default(),
+    };
+    (problem, index)
+}
+
+/// The free parameters `solve` would hold at their nominal value for a dataset of these
+/// captures ([`crate::solve::identify::undetermined`]: an extended parameter whose
+/// Jacobian column the parameters before it nearly produce, as the principal point and the
+/// camera rotation do when every board is seen near the image centre), with the
+/// combination each forms.
+pub fn held_by_solve(
+    model: &Model,
+    captures: &[(CameraId, Side, JointAngles)],
+    fixed: &FixedSet,
+) -> Vec<crate::solve::identify::Undetermined> {
+    let (problem, _) = problem_of(model, captures, fixed);
+    crate::solve::identify::undetermined(&problem).unwrap_or_default()
 }
 
 /// Adds `sign · M_c` to the information `m`.

@@ -545,8 +545,18 @@ impl Pool {
             );
             spread /= 2.0;
         }
-        let prediction = design::predict(
-            &pool.fixed.free(),
+        let chosen_captures: Vec<(CameraId, Side, JointAngles)> = chosen
+            .iter()
+            .map(|&k| {
+                let c = &pool.candidates[k];
+                (c.camera, c.side, c.joints)
+            })
+            .collect();
+        let prediction = honest_prediction(
+            model,
+            options,
+            &chosen_captures,
+            &pool.fixed,
             &chosen.iter().map(|&k| &pool.infos[k]).collect::<Vec<_>>(),
         );
         let angles: Vec<JointAngles> = chosen.iter().map(|&k| pool.candidates[k].joints).collect();
@@ -601,7 +611,7 @@ impl Pool {
         let lower_fixed = options.fixed.clone().for_upper_camera(false);
         let random_infos = information_parallel(model, &random, &lower_fixed, options.levels);
         let random_refs: Vec<&design::CaptureInformation> = random_infos.iter().flatten().collect();
-        let baseline = design::predict(&lower_fixed.free(), &random_refs);
+        let baseline = honest_prediction(model, options, &random, &lower_fixed, &random_refs);
         let body = &options.feasibility.body;
         let rest = route::rest_posture();
         let random_postures: Vec<JointAngles> = random.iter().map(|c| c.2).collect();
@@ -622,6 +632,51 @@ impl Pool {
             stances: design.stances,
             coverage,
         })
+    }
+}
+
+/// The prediction for the captures `captures` (with their information `infos` about the
+/// parameters `fixed` leaves free) as `solve` will fit them: a free parameter that `solve`
+/// holds at its nominal value for such a dataset ([`design::held_by_solve`]) is predicted
+/// undetermined, with the combination it forms, and the others' σ are those of the fit
+/// without it.
+fn honest_prediction(
+    model: &Model,
+    options: &PlanOptions,
+    captures: &[(CameraId, Side, JointAngles)],
+    fixed: &FixedSet,
+    infos: &[&design::CaptureInformation],
+) -> Prediction {
+    let free = fixed.free();
+    let held = design::held_by_solve(model, captures, fixed);
+    if held.is_empty() {
+        return design::predict(&free, infos);
+    }
+    let mut kept_fixed = fixed.clone();
+    for u in &held {
+        kept_fixed.set(u.param, true);
+    }
+    let infos = information_parallel(model, captures, &kept_fixed, options.levels);
+    let kept = design::predict(
+        &kept_fixed.free(),
+        &infos.iter().flatten().collect::<Vec<_>>(),
+    );
+    let mut undetermined = kept.undetermined.clone();
+    undetermined.extend(held.iter().map(|u| {
+        format!(
+            "{} (solve holds it at its nominal value: the captures cannot tell {} apart)",
+            u.param,
+            u.direction.describe()
+        )
+    }));
+    Prediction {
+        std: free
+            .iter()
+            .map(|p| kept.std_of(*p).unwrap_or(f64::INFINITY))
+            .collect(),
+        free,
+        rank: kept.rank,
+        undetermined,
     }
 }
 
