@@ -17,10 +17,16 @@ pub struct PlanArgs {
     /// The stance schedule to write (CSV: capture,board,HeadYaw,…,RAnkleRoll in radians,
     /// and a camera column, lower or upper, when some capture is by the upper camera).
     out: PathBuf,
-    /// Number of captures, both legs together.
-    #[arg(long, default_value_t = 144,
+    /// Number of captures, both legs together [default: 144; with --budget-s, as many as
+    /// fit, at most this].
+    #[arg(long,
           value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(2..=5000))]
-    captures: usize,
+    captures: Option<usize>,
+    /// The robot time the measurement phase may take (s, 1 … 36000): the plan takes as many
+    /// captures as fit, its predicted duration from rest through every capture and back,
+    /// every move included (at most --captures when given).
+    #[arg(long, value_name = "SECONDS", value_parser = budget_s)]
+    budget_s: Option<f64>,
     /// Parameter families the calibration will free, comma-separated; the plan is made for
     /// them (the help lists the registry's families).
     #[arg(long, value_name = "FAMILIES", default_value = "paper", value_parser = parse_families,
@@ -111,6 +117,16 @@ fn offset_deg(text: &str) -> Result<f64, String> {
     }
 }
 
+/// A measurement phase's budget: 1 … 36000 s.
+fn budget_s(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(v) if (1.0..=36000.0).contains(&v) => Ok(v),
+        _ => Err(format!(
+            "must be a number of seconds from 1 to 36000, got '{text}'"
+        )),
+    }
+}
+
 fn sigma_ratio(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {
         Ok(v) if (0.1..=10.0).contains(&v) => Ok(v),
@@ -124,6 +140,7 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
         out: args.out.clone(),
         force: args.force,
         captures: args.captures,
+        budget_s: args.budget_s,
         families: args.families.0.clone(),
         px_noise: args.px_noise,
         joint_noise_deg: args.joint_noise_deg,

@@ -150,13 +150,18 @@ fn uncertain(camera: CameraId, side: Side, f: &Feasibility) -> Vec<(Param, f64)>
 /// The projected vertices and the angle between the board normal and the line of sight
 /// for parameters `params`; `None` when a vertex is behind the camera.
 fn view(model: &Model, chains: &StanceChains, params: &[f64]) -> Option<(Vec<[f64; 2]>, f64)> {
-    let to_camera = crate::sim::line_of_sight(&chains.camera_to_board(params));
+    let pose = chains.camera_to_board(params);
+    let to_camera = crate::sim::line_of_sight(&pose);
     let dist = to_camera.iter().map(|x| x * x).sum::<f64>().sqrt();
     let angle = (to_camera[2] / dist).clamp(-1.0, 1.0).acos();
-    let vertices: Vec<_> = model.board.vertices().collect();
+    // Model::project, with the pose found once.
     let uv = model
-        .project(chains, params, &vertices)
-        .into_iter()
+        .board
+        .vertices()
+        .map(|v| {
+            let p = model.board.vertex_position(v);
+            chains.projection.project(params, &pose.apply(&p))
+        })
         .collect::<Option<Vec<_>>>()?;
     Some((uv, angle))
 }
@@ -342,6 +347,33 @@ pub fn check_for(
     joints: &JointAngles,
     f: &Feasibility,
 ) -> Result<(), Infeasible> {
+    within_margins(camera, joints, f)?;
+    if let Some(what) = collision::collision(&model.robot, &f.body, joints) {
+        return Err(Infeasible::Collision(what));
+    }
+    in_view_and_reach(model, camera, side, joints, f)
+}
+
+/// [`check_for`] of a posture whose legs are known to be free of collision (the head
+/// moves no part of the collision model).
+fn check_legs_free(
+    model: &Model,
+    camera: CameraId,
+    side: Side,
+    joints: &JointAngles,
+    f: &Feasibility,
+) -> Result<(), Infeasible> {
+    within_margins(camera, joints, f)?;
+    in_view_and_reach(model, camera, side, joints, f)
+}
+
+/// The joint limits less the margins, the head's yaw-dependent pitch range, one
+/// HipYawPitch.
+fn within_margins(
+    camera: CameraId,
+    joints: &JointAngles,
+    f: &Feasibility,
+) -> Result<(), Infeasible> {
     for j in Joint::ALL {
         let (lo, hi) = j.limits();
         let q = joints.get(j);
@@ -358,9 +390,18 @@ pub fn check_for(
     if joints.get(Joint::LHipYawPitch) != joints.get(Joint::RHipYawPitch) {
         return Err(Infeasible::HipYawPitch);
     }
-    if let Some(what) = collision::collision(&model.robot, &f.body, joints) {
-        return Err(Infeasible::Collision(what));
-    }
+    Ok(())
+}
+
+/// The board in view for every offset, in plain sight, and the posture reachable straight
+/// from rest.
+fn in_view_and_reach(
+    model: &Model,
+    camera: CameraId,
+    side: Side,
+    joints: &JointAngles,
+    f: &Feasibility,
+) -> Result<(), Infeasible> {
     if !board_in_view_of(model, camera, side, joints, f) {
         return Err(Infeasible::View);
     }
@@ -424,26 +465,68 @@ pub fn aim_head_for(
     joint_margin: f64,
     centre: &[f64; PARAMETER_COUNT],
 ) -> Option<JointAngles> {
-    let zero = *centre;
-    let intrinsics = model.intrinsics(camera);
-    let centre = |j: &JointAngles| -> Option<[f64; 2]> {
-        let pose = model.chains_for(camera, side, j).camera_to_board(&zero);
-        intrinsics.project(&pose.translation)
-    };
-    let mut start = *joints;
-    let sole = model
-        .robot
-        .sole_chain(side, joints, &[0.0; 6])
-        .eval(&zero)
-        .translation;
-    start.set(Joint::HeadYaw, sole[1].atan2(sole[0]));
-    start.set(Joint::HeadPitch, 0.2);
-    let (j, reached) = crate::sim::steer_head(centre, start, target, 0.5, 15)?;
-    let within = |joint: Joint| {
-        let (lo, hi) = joint.limits();
-        (lo + joint_margin..=hi - joint_margin).contains(&j.get(joint))
-    };
-    (reached && within(Joint::HeadYaw) && within(Joint::HeadPitch)).then_some(j)
+    Aim::new(model, camera, side, joints, centre).at(target, joint_margin)
+}
+
+/// The aiming of the head at the board of one leg stance ([`aim_head_for`]): the board's
+/// pose, which the head does not move, and the start of the search, found once for every
+/// image point aimed at.
+struct Aim<'a> {
+    model: &'a Model,
+    camera: CameraId,
+    params: [f64; PARAMETER_COUNT],
+    /// `T_OB` at `params`.
+    board: crate::model::Pose<f64>,
+    /// The stance with the head turned towards the sole.
+    start: JointAngles,
+}
+
+impl<'a> Aim<'a> {
+    fn new(
+        model: &'a Model,
+        camera: CameraId,
+        side: Side,
+        joints: &JointAngles,
+        centre: &[f64; PARAMETER_COUNT],
+    ) -> Self {
+        let board = model.chains_for(camera, side, joints).board.eval(centre);
+        let sole = model
+            .robot
+            .sole_chain(side, joints, &[0.0; 6])
+            .eval(centre)
+            .translation;
+        let mut start = *joints;
+        start.set(Joint::HeadYaw, sole[1].atan2(sole[0]));
+        start.set(Joint::HeadPitch, 0.2);
+        Aim {
+            model,
+            camera,
+            params: *centre,
+            board,
+            start,
+        }
+    }
+
+    /// The head posture that puts the board centre at pixel `target`, if within the
+    /// head's limits less `joint_margin`.
+    fn at(&self, target: [f64; 2], joint_margin: f64) -> Option<JointAngles> {
+        let intrinsics = self.model.intrinsics(self.camera);
+        let centre = |j: &JointAngles| -> Option<[f64; 2]> {
+            let pose = self
+                .model
+                .robot
+                .camera_chain_of(self.camera, j)
+                .eval(&self.params)
+                .inverse_then(&self.board);
+            intrinsics.project(&pose.translation)
+        };
+        let (j, reached) = crate::sim::steer_head(centre, self.start, target, 0.5, 15)?;
+        let within = |joint: Joint| {
+            let (lo, hi) = joint.limits();
+            (lo + joint_margin..=hi - joint_margin).contains(&j.get(joint))
+        };
+        (reached && within(Joint::HeadYaw) && within(Joint::HeadPitch)).then_some(j)
+    }
 }
 
 /// One feasible capture of the pool: a leg stance (shared by its head postures) and the
@@ -458,6 +541,8 @@ pub struct Candidate {
     pub joints: JointAngles,
     /// Index of its leg stance in the pool (captures of one stance differ in the head).
     pub stance: usize,
+    /// The image point the head aimed the board centre at (px).
+    pub target: [f64; 2],
 }
 
 /// The resting leg's postures, tried in turn: `(HipRoll outward, HipPitch, KneePitch,
@@ -523,6 +608,34 @@ fn aim_targets(model: &Model, camera: CameraId) -> Vec<[f64; 2]> {
         .collect()
 }
 
+/// The directions a camera's image is swept in when its intrinsics are free: the four
+/// corners, then the four edges, as offsets (fractions of the image's width and height)
+/// from the camera's first [`aim_targets`] point.
+const SWEEP: [(f64, f64); 8] = [
+    (-0.34, -0.3),
+    (0.34, 0.3),
+    (0.34, -0.3),
+    (-0.34, 0.3),
+    (0.0, -0.36),
+    (0.42, 0.0),
+    (0.0, 0.36),
+    (-0.42, 0.0),
+];
+
+/// The image points a stance's swept head posture aims the board centre at, in order of
+/// preference: out along direction `k` of [`SWEEP`] from the camera's first aim point,
+/// the farthest first, then nearer (the board must stay in view for every offset).
+fn sweep_targets(model: &Model, camera: CameraId, k: usize) -> Vec<[f64; 2]> {
+    let intrinsics = model.intrinsics(camera);
+    let (w, h) = (intrinsics.width as f64, intrinsics.height as f64);
+    let [u, v] = aim_targets(model, camera)[0];
+    let (du, dv) = SWEEP[k % SWEEP.len()];
+    [1.0, 0.85, 0.7, 0.6, 0.5, 0.4, 0.3]
+        .iter()
+        .map(|s| [u + s * du * w, v + s * dv * h])
+        .collect()
+}
+
 /// Up to `heads` feasible captures of the stance `joints` of the measured leg `side` (the
 /// other leg put into the first of its [`RESTING`] postures that collides with nothing,
 /// the head aimed at the [`aim_targets`] in turn, each posture passing [`check`]); empty
@@ -535,7 +648,20 @@ fn postures(
     heads: usize,
     targets: &[[f64; 2]],
     f: &Feasibility,
-) -> Vec<JointAngles> {
+) -> Vec<(JointAngles, [f64; 2])> {
+    aimed_postures(model, camera, side, joints, &[(targets, heads)], f)
+}
+
+/// [`postures`] for several lists of image points: for each `(targets, count)` of `aims`
+/// up to `count` postures aimed at `targets` in turn, each with the point it aims at.
+fn aimed_postures(
+    model: &Model,
+    camera: CameraId,
+    side: Side,
+    joints: &JointAngles,
+    aims: &[(&[[f64; 2]], usize)],
+    f: &Feasibility,
+) -> Vec<(JointAngles, [f64; 2])> {
     let other = match side {
         Side::Left => Side::Right,
         Side::Right => Side::Left,
@@ -550,24 +676,23 @@ fn postures(
     else {
         return Vec::new();
     };
-    let mut out: Vec<JointAngles> = Vec::new();
-    for target in targets {
-        if out.len() == heads {
-            break;
-        }
-        let Some(aimed) = aim_head_for(
-            model,
-            camera,
-            side,
-            &joints,
-            *target,
-            f.margin(camera, Joint::HeadPitch),
-            &f.centre,
-        ) else {
-            continue;
-        };
-        if check_for(model, camera, side, &aimed, f).is_ok() {
-            out.push(aimed);
+    let mut out = Vec::new();
+    let aim = Aim::new(model, camera, side, &joints, &f.centre);
+    for (targets, count) in aims {
+        let mut found = 0;
+        for target in targets.iter() {
+            if found == *count {
+                break;
+            }
+            let Some(aimed) = aim.at(*target, f.margin(camera, Joint::HeadPitch)) else {
+                continue;
+            };
+            // The legs are those found free of collision above (the head moves none of the
+            // collision model's parts).
+            if check_legs_free(model, camera, side, &aimed, f).is_ok() {
+                out.push((aimed, *target));
+                found += 1;
+            }
         }
     }
     out
@@ -603,7 +728,9 @@ fn towards_limits(lo: f64, hi: f64, rng: &mut impl Rng) -> f64 {
 /// less the margin, drawn mostly near the limits), each with up to `heads` head postures (the board
 /// aimed at the image centre and at points around it), all passing [`check`], within
 /// `tries` random leg postures; then up to `tries` more draws look only for stances that
-/// load a joint with a sign of gravity torque the pool lacks.
+/// load a joint with a sign of gravity torque the pool lacks. With `sweep` (the camera's
+/// intrinsics are free) each stance gets one head posture more, aimed out towards a corner
+/// or an edge of the image, the stances taking the directions of [`SWEEP`] in turn.
 #[allow(clippy::too_many_arguments)] // each is one plain setting of the pool
 pub fn candidates(
     model: &Model,
@@ -611,12 +738,16 @@ pub fn candidates(
     side: Side,
     stances: usize,
     heads: usize,
+    sweep: bool,
     tries: usize,
     f: &Feasibility,
     first_stance: usize,
     rng: &mut impl Rng,
 ) -> Vec<Candidate> {
     let targets = aim_targets(model, camera);
+    let swept: Vec<Vec<[f64; 2]>> = (0..SWEEP.len())
+        .map(|k| sweep_targets(model, camera, k))
+        .collect();
     let mut out = Vec::new();
     let mut found = 0;
     // Which signs of each joint's gravity torque the pool has: compliance and play can only
@@ -645,7 +776,19 @@ pub fn candidates(
         if found >= stances && !new_sign {
             continue;
         }
-        let postures = postures(model, camera, side, &joints, heads, &targets, f);
+        let postures = if sweep {
+            let out = &swept[found % SWEEP.len()];
+            aimed_postures(
+                model,
+                camera,
+                side,
+                &joints,
+                &[(&targets, heads), (out, 1)],
+                f,
+            )
+        } else {
+            postures(model, camera, side, &joints, heads, &targets, f)
+        };
         if postures.is_empty() {
             continue;
         }
@@ -656,11 +799,12 @@ pub fn candidates(
                 signs[k][s] |= these[k][s];
             }
         }
-        out.extend(postures.into_iter().map(|joints| Candidate {
+        out.extend(postures.into_iter().map(|(joints, target)| Candidate {
             camera,
             side,
             joints,
             stance,
+            target,
         }));
     }
     out
@@ -673,8 +817,9 @@ pub const FUTILE_TRIES: usize = 4000;
 
 /// Up to `count` feasible variants of the capture `base` (one head posture each): its
 /// measured leg's angles moved by up to ± `spread` (rad) each, kept within the limits less
-/// the margin, the other leg parked with the same HipYawPitch. Numbered as stances from
-/// `first_stance`. Used to refine a design around the stances it picked.
+/// the margin, the other leg parked with the same HipYawPitch, the head aimed as for a
+/// pool stance, or with `sweep` at the image point the base aimed at. Numbered as stances
+/// from `first_stance`. Used to refine a design around the stances it picked.
 #[allow(clippy::too_many_arguments)] // each is one plain setting of the refinement
 pub fn variants(
     model: &Model,
@@ -682,13 +827,18 @@ pub fn variants(
     count: usize,
     tries: usize,
     spread: f64,
+    sweep: bool,
     f: &Feasibility,
     first_stance: usize,
     rng: &mut impl Rng,
 ) -> Vec<Candidate> {
     let side = base.side;
     let camera = base.camera;
-    let targets = aim_targets(model, camera);
+    let targets = if sweep {
+        vec![base.target]
+    } else {
+        aim_targets(model, camera)
+    };
     let mut out = Vec::new();
     for _ in 0..tries {
         if out.len() == count {
@@ -700,12 +850,14 @@ pub fn variants(
             let q = joints.get(j) + rng.random_range(-spread..=spread);
             joints.set(j, q.clamp(lo + f.joint_margin, hi - f.joint_margin));
         }
-        if let Some(aimed) = postures(model, camera, side, &joints, 1, &targets, f).pop() {
+        if let Some((aimed, target)) = postures(model, camera, side, &joints, 1, &targets, f).pop()
+        {
             out.push(Candidate {
                 camera,
                 side,
                 joints: aimed,
                 stance: first_stance + out.len(),
+                target,
             });
         }
     }

@@ -33,6 +33,7 @@
 //! so that the gain is visible before the robot moves.
 
 pub mod collision;
+pub mod coverage;
 pub mod design;
 pub mod feasible;
 pub mod order;
@@ -156,6 +157,9 @@ pub struct Plan {
     pub pool: usize,
     /// Number of distinct leg stances in the plan.
     pub stances: usize,
+    /// Where the boards lie in each camera's image ([`coverage::coverage`] at the centre
+    /// of feasibility).
+    pub coverage: Vec<coverage::Coverage>,
 }
 
 /// Why no plan could be made.
@@ -180,6 +184,17 @@ pub enum PlanError {
         /// Feasible captures found.
         found: usize,
     },
+    /// Not even the shortest plan's measurement phase fits the budget.
+    #[error(
+        "no plan fits a measurement phase of {budget} s: the shortest planned (2 captures) \
+         takes {shortest:.0} s"
+    )]
+    Budget {
+        /// The budget (s).
+        budget: f64,
+        /// The predicted duration of the 2-capture plan (s).
+        shortest: f64,
+    },
     /// No order of the captures has a collision-free way for every move (the move to
     /// capture `k` in execution order, or the return to rest when `k` is the number of
     /// captures).
@@ -195,225 +210,476 @@ pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
     if options.captures < 2 {
         return Err(PlanError::Options("--captures must be at least 2".into()));
     }
-    let positive = |x: f64| x.is_finite() && x > 0.0;
-    let joint = options.levels.joint;
-    if !(positive(options.levels.px) && joint.is_finite() && joint >= 0.0) {
+    let pool = Pool::new(model, options)?;
+    let design = pool.design(model, options, options.captures)?;
+    pool.finish(model, options, design)
+}
+
+/// Makes a plan for `model` whose measurement phase, every move included
+/// ([`Plan::duration`], [`route::duration`]), takes at most `budget` seconds of robot time:
+/// as many captures as fit, at most `most` (none fewer than 2). The plan is the one
+/// [`plan`] makes for that count (the same pool, design and order); the count is found by
+/// planning counts in turn, each guessed from the durations of those planned before, until
+/// it fits and one more would not (or it is `most`).
+pub fn plan_within(
+    model: &Model,
+    options: &PlanOptions,
+    budget: f64,
+    most: Option<usize>,
+) -> Result<Plan, PlanError> {
+    if !(budget.is_finite() && budget > 0.0) {
         return Err(PlanError::Options(
-            "the pixel noise must be positive and the joint noise not negative".into(),
+            "the budget must be a positive number of seconds".into(),
         ));
     }
-    if options.fixed.free().is_empty() {
-        return Err(PlanError::Options("no parameter is free".into()));
+    let most = most.unwrap_or(MOST_CAPTURES);
+    if most < 2 {
+        return Err(PlanError::Options("--captures must be at least 2".into()));
     }
-    let upper = options.cameras.contains(&CameraId::Upper);
-    let fixed = options.fixed.clone().for_upper_camera(upper);
-    let mut pools: Vec<Vec<feasible::Candidate>> = Vec::new();
-    let mut first = 0;
-    for camera in CameraId::ALL {
-        if !options.cameras.contains(&camera) {
-            continue;
-        }
-        let (stances, heads, seed) = match camera {
-            CameraId::Lower => (options.pool_stances, options.heads, options.seed),
-            CameraId::Upper => (
-                options.upper_pool_stances,
-                options.upper_heads,
-                options.seed ^ 0x0bbe_0000,
-            ),
-        };
-        // Both legs drawn in parallel, each from its own seeded generator.
-        let found: Vec<Vec<feasible::Candidate>> = std::thread::scope(|scope| {
-            let handles: Vec<_> = Side::BOTH
-                .into_iter()
-                .enumerate()
-                .map(|(k, side)| {
-                    scope.spawn(move || {
-                        let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_add(k as u64));
-                        feasible::candidates(
-                            model,
-                            camera,
-                            side,
-                            stances,
-                            heads,
-                            stances * 400,
-                            &options.feasibility,
-                            first + k * stances,
-                            &mut rng,
-                        )
-                    })
-                })
-                .collect();
-            handles
-                .into_iter()
-                .map(|h| h.join().expect("pool thread"))
-                .collect()
-        });
-        first += 2 * stances;
-        // Lower captures must fill a quarter of the plan per leg; upper ones are optional
-        // but a leg without any would leave its pool to chance.
-        let need = match camera {
-            CameraId::Lower => options.captures.div_ceil(4),
-            CameraId::Upper => 1,
-        };
-        for (side, pool) in Side::BOTH.iter().zip(&found) {
-            if pool.len() < need {
-                return Err(PlanError::Pool {
-                    camera: camera.name(),
-                    side: side.name(),
-                    found: pool.len(),
-                });
-            }
-        }
-        pools.extend(found);
-    }
-    let mut pool: Vec<feasible::Candidate> = Vec::new();
-    let mut infos: Vec<design::CaptureInformation> = Vec::new();
-    let free = fixed.free();
-    let admit = |candidates: Vec<feasible::Candidate>,
-                 pool: &mut Vec<feasible::Candidate>,
-                 infos: &mut Vec<design::CaptureInformation>| {
-        let pairs: Vec<(CameraId, Side, JointAngles)> = candidates
+    let pool = Pool::new(model, options)?;
+    // Durations found so far, by count.
+    let mut tried: Vec<(usize, Design)> = Vec::new();
+    let mut count = most.min(options.captures.max(2));
+    loop {
+        let design = pool.design(model, options, count)?;
+        tried.push((count, design));
+        let fits = |d: &Design| d.duration <= budget;
+        let best = tried.iter().filter(|(_, d)| fits(d)).map(|(n, _)| *n).max();
+        let over = tried
             .iter()
-            .map(|c| (c.camera, c.side, c.joints))
+            .filter(|(_, d)| !fits(d))
+            .map(|(n, _)| *n)
+            .min();
+        let next = match (best, over) {
+            (Some(n), _) if n == most => None,
+            (Some(n), Some(m)) if m == n + 1 => None,
+            (None, Some(2)) => {
+                let shortest = tried
+                    .iter()
+                    .find(|(n, _)| *n == 2)
+                    .map_or(f64::NAN, |(_, d)| d.duration);
+                return Err(PlanError::Budget { budget, shortest });
+            }
+            _ => {
+                // The count where the durations of the two counts planned nearest the
+                // budget meet it (a line through them; through zero with one).
+                let mut near: Vec<(usize, f64)> =
+                    tried.iter().map(|(n, d)| (*n, d.duration)).collect();
+                near.sort_by(|a, b| (a.1 - budget).abs().total_cmp(&(b.1 - budget).abs()));
+                let (n, d) = near[0];
+                let per = match near.get(1) {
+                    Some(&(m, e)) if m != n && (e - d) / (m as f64 - n as f64) > 0.0 => {
+                        (e - d) / (m as f64 - n as f64)
+                    }
+                    _ => d / n as f64,
+                };
+                let guess = (n as f64 + (budget - d) / per).floor().max(0.0) as usize;
+                let lo = best.map_or(2, |b| b + 1);
+                let hi = over.map_or(most, |o| o - 1);
+                Some(guess.clamp(lo, hi))
+            }
+        };
+        match next {
+            Some(n) => count = n,
+            None => break,
+        }
+    }
+    let n = tried
+        .iter()
+        .filter(|(_, d)| d.duration <= budget)
+        .map(|(n, _)| *n)
+        .max()
+        .expect("a count that fits");
+    let design = tried
+        .into_iter()
+        .find(|(m, _)| *m == n)
+        .map(|(_, d)| d)
+        .expect("planned");
+    pool.finish(model, options, design)
+}
+
+/// The most captures a budgeted plan takes without `--captures`.
+pub const MOST_CAPTURES: usize = 5000;
+
+/// The feasible captures to design from, with the information each carries.
+struct Pool {
+    /// The free parameters (the upper camera's when planned for).
+    fixed: FixedSet,
+    /// Whether the boards sweep the lower and the upper camera's image (their intrinsics
+    /// are free).
+    sweeps: [bool; 2],
+    candidates: Vec<feasible::Candidate>,
+    infos: Vec<design::CaptureInformation>,
+    /// Lower-camera captures per leg.
+    lower: [usize; 2],
+    /// Stances numbered so far.
+    stances: usize,
+    /// The design's weights of the free parameters (see [`design::weights`]).
+    focus: Vec<f64>,
+}
+
+/// A design of the pool, in execution order, before the comparison with random stances.
+struct Design {
+    captures: Vec<PlannedCapture>,
+    prediction: Prediction,
+    duration: f64,
+    via: usize,
+    pool: usize,
+    stances: usize,
+}
+
+impl Pool {
+    /// The pool of `options` for `model` (see the module documentation).
+    fn new(model: &Model, options: &PlanOptions) -> Result<Pool, PlanError> {
+        let positive = |x: f64| x.is_finite() && x > 0.0;
+        let joint = options.levels.joint;
+        if !(positive(options.levels.px) && joint.is_finite() && joint >= 0.0) {
+            return Err(PlanError::Options(
+                "the pixel noise must be positive and the joint noise not negative".into(),
+            ));
+        }
+        if options.fixed.free().is_empty() {
+            return Err(PlanError::Options("no parameter is free".into()));
+        }
+        let upper = options.cameras.contains(&CameraId::Upper);
+        let fixed = options.fixed.clone().for_upper_camera(upper);
+        // The boards sweep the image of a camera whose intrinsics are free.
+        let sweeps = CameraId::ALL.map(|camera| {
+            camera
+                .projection_params()
+                .iter()
+                .any(|p| !fixed.is_fixed(*p))
+        });
+        let mut pools: Vec<Vec<feasible::Candidate>> = Vec::new();
+        let mut lower = [0; 2];
+        let mut first = 0;
+        for camera in CameraId::ALL {
+            if !options.cameras.contains(&camera) {
+                continue;
+            }
+            let sweep = sweeps[camera as usize];
+            let (stances, heads, seed) = match camera {
+                CameraId::Lower => (options.pool_stances, options.heads, options.seed),
+                CameraId::Upper => (
+                    options.upper_pool_stances,
+                    options.upper_heads,
+                    options.seed ^ 0x0bbe_0000,
+                ),
+            };
+            // Both legs drawn in parallel, each from its own seeded generator.
+            let found: Vec<Vec<feasible::Candidate>> = std::thread::scope(|scope| {
+                let handles: Vec<_> = Side::BOTH
+                    .into_iter()
+                    .enumerate()
+                    .map(|(k, side)| {
+                        scope.spawn(move || {
+                            let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_add(k as u64));
+                            feasible::candidates(
+                                model,
+                                camera,
+                                side,
+                                stances,
+                                heads,
+                                sweep,
+                                stances * 400,
+                                &options.feasibility,
+                                first + k * stances,
+                                &mut rng,
+                            )
+                        })
+                    })
+                    .collect();
+                handles
+                    .into_iter()
+                    .map(|h| h.join().expect("pool thread"))
+                    .collect()
+            });
+            first += 2 * stances;
+            match camera {
+                CameraId::Lower => lower = [found[0].len(), found[1].len()],
+                // Upper captures are optional, but a leg without any would leave its pool
+                // to chance.
+                CameraId::Upper => {
+                    for (side, pool) in Side::BOTH.iter().zip(&found) {
+                        if pool.is_empty() {
+                            return Err(PlanError::Pool {
+                                camera: camera.name(),
+                                side: side.name(),
+                                found: 0,
+                            });
+                        }
+                    }
+                }
+            }
+            pools.extend(found);
+        }
+        let free = fixed.free();
+        // The parameters whose worst σ the design minimises: the 15 angle offsets (camera
+        // rotation and leg joints) when free, otherwise every free parameter.
+        let upper_focus = options.upper_sigma_ratio.powi(-2);
+        let mut focus: Vec<f64> = free
+            .iter()
+            .map(|p| match p.group() {
+                crate::model::ParamGroup::UpperCamera => upper_focus,
+                _ if is_angle_offset(*p) => 1.0,
+                _ => 0.0,
+            })
             .collect();
-        let new = information_parallel(model, &pairs, &fixed, options.levels);
-        for (c, info) in candidates.into_iter().zip(new) {
+        if focus.iter().all(|f| *f == 0.0) {
+            focus.fill(1.0);
+        }
+        let mut pool = Pool {
+            fixed,
+            sweeps,
+            candidates: Vec::new(),
+            infos: Vec::new(),
+            lower,
+            stances: first,
+            focus,
+        };
+        pool.admit(model, options, pools.into_iter().flatten().collect());
+        Ok(pool)
+    }
+
+    /// Adds the candidates whose board is in front of the camera, with their information.
+    fn admit(&mut self, model: &Model, options: &PlanOptions, new: Vec<feasible::Candidate>) {
+        let pairs: Vec<(CameraId, Side, JointAngles)> =
+            new.iter().map(|c| (c.camera, c.side, c.joints)).collect();
+        let infos = information_parallel(model, &pairs, &self.fixed, options.levels);
+        for (c, info) in new.into_iter().zip(infos) {
             if let Some(info) = info {
-                pool.push(c);
-                infos.push(info);
+                self.candidates.push(c);
+                self.infos.push(info);
             }
         }
-    };
-    admit(pools.into_iter().flatten().collect(), &mut pool, &mut infos);
-    let random = random_stances(model, options.captures, 3, options.seed)?;
-    let random: Vec<(CameraId, Side, JointAngles)> = random
-        .into_iter()
-        .map(|(side, joints)| (CameraId::Lower, side, joints))
-        .collect();
-    // The random stances are the lower camera's: the upper camera's offsets stay out.
-    let lower_fixed = options.fixed.clone().for_upper_camera(false);
-    let random_infos = information_parallel(model, &random, &lower_fixed, options.levels);
-    let random_refs: Vec<&design::CaptureInformation> = random_infos.iter().flatten().collect();
-    let baseline = design::predict(&lower_fixed.free(), &random_refs);
-    // The parameters whose worst σ the design minimises: the 15 angle offsets (camera
-    // rotation and leg joints) when free, otherwise every free parameter.
-    let upper_focus = options.upper_sigma_ratio.powi(-2);
-    let mut focus: Vec<f64> = free
-        .iter()
-        .map(|p| match p.group() {
-            crate::model::ParamGroup::UpperCamera => upper_focus,
-            _ if is_angle_offset(*p) => 1.0,
-            _ => 0.0,
-        })
-        .collect();
-    if focus.iter().all(|f| *f == 0.0) {
-        focus.fill(1.0);
     }
-    let mut chosen = design::select(
-        &infos.iter().collect::<Vec<_>>(),
-        free.len(),
-        &focus,
-        options.captures,
-        &[],
-        &options.design,
-    );
-    // Refinement: variants of the picked captures join the pool, and the design is
-    // improved from where it is.
-    let mut next_stance = first;
-    let mut spread = options.spread;
-    for round in 0..options.refine_rounds {
-        let bases: Vec<feasible::Candidate> = chosen.iter().map(|&k| pool[k].clone()).collect();
-        let half = bases.len() / 2;
-        let per = options.variants;
-        let found: Vec<feasible::Candidate> = std::thread::scope(|scope| {
-            let handles: Vec<_> = [&bases[..half], &bases[half..]]
-                .into_iter()
-                .enumerate()
-                .map(|(k, part)| {
-                    let first = next_stance + k * half * per;
-                    scope.spawn(move || {
-                        let mut rng = ChaCha8Rng::seed_from_u64(
-                            options.seed ^ (0x5eed_0000 + 2 * round as u64 + k as u64),
-                        );
-                        let mut out = Vec::new();
-                        for (i, base) in part.iter().enumerate() {
-                            out.extend(feasible::variants(
-                                model,
-                                base,
-                                per,
-                                4 * per,
-                                spread,
-                                &options.feasibility,
-                                first + i * per,
-                                &mut rng,
-                            ));
-                        }
-                        out
-                    })
-                })
-                .collect();
-            handles
-                .into_iter()
-                .flat_map(|h| h.join().expect("refinement thread"))
-                .collect()
-        });
-        next_stance += bases.len() * per;
-        admit(found, &mut pool, &mut infos);
-        chosen = design::select(
-            &infos.iter().collect::<Vec<_>>(),
-            free.len(),
-            &focus,
-            options.captures,
-            &chosen,
+
+    /// The design of `count` captures from this pool (with its refinement, which adds to a
+    /// copy of the pool), ordered for execution.
+    fn design(
+        &self,
+        model: &Model,
+        options: &PlanOptions,
+        count: usize,
+    ) -> Result<Design, PlanError> {
+        // Lower captures must fill a quarter of the plan per leg.
+        if options.cameras.contains(&CameraId::Lower) {
+            for (side, found) in Side::BOTH.iter().zip(self.lower) {
+                if found < count.div_ceil(4) {
+                    return Err(PlanError::Pool {
+                        camera: CameraId::Lower.name(),
+                        side: side.name(),
+                        found,
+                    });
+                }
+            }
+        }
+        let mut pool = Pool {
+            fixed: self.fixed.clone(),
+            sweeps: self.sweeps,
+            candidates: self.candidates.clone(),
+            infos: self.infos.clone(),
+            lower: self.lower,
+            stances: self.stances,
+            focus: self.focus.clone(),
+        };
+        let n = pool.focus.len();
+        let mut chosen = design::select(
+            &pool.infos.iter().collect::<Vec<_>>(),
+            n,
+            &pool.focus,
+            count,
+            &[],
             &options.design,
         );
-        spread /= 2.0;
-    }
-    let prediction = design::predict(
-        &free,
-        &chosen.iter().map(|&k| &infos[k]).collect::<Vec<_>>(),
-    );
-
-    let angles: Vec<JointAngles> = chosen.iter().map(|&k| pool[k].joints).collect();
-    let body = &options.feasibility.body;
-    let rest = route::rest_posture();
-    let tour = order::order(model, body, &rest, &angles, &options.timing);
-    let captures: Vec<PlannedCapture> = tour
-        .iter()
-        .map(|&i| PlannedCapture {
-            camera: pool[chosen[i]].camera,
-            side: pool[chosen[i]].side,
-            joints: pool[chosen[i]].joints,
+        // Refinement: variants of the picked captures join the pool, and the design is
+        // improved from where it is.
+        let mut spread = options.spread;
+        let sweeps = pool.sweeps;
+        for round in 0..options.refine_rounds {
+            let bases: Vec<feasible::Candidate> =
+                chosen.iter().map(|&k| pool.candidates[k].clone()).collect();
+            let half = bases.len() / 2;
+            let per = options.variants;
+            let next_stance = pool.stances;
+            let found: Vec<feasible::Candidate> = std::thread::scope(|scope| {
+                let handles: Vec<_> = [&bases[..half], &bases[half..]]
+                    .into_iter()
+                    .enumerate()
+                    .map(|(k, part)| {
+                        let first = next_stance + k * half * per;
+                        scope.spawn(move || {
+                            let mut rng = ChaCha8Rng::seed_from_u64(
+                                options.seed ^ (0x5eed_0000 + 2 * round as u64 + k as u64),
+                            );
+                            let mut out = Vec::new();
+                            for (i, base) in part.iter().enumerate() {
+                                out.extend(feasible::variants(
+                                    model,
+                                    base,
+                                    per,
+                                    4 * per,
+                                    spread,
+                                    sweeps[base.camera as usize],
+                                    &options.feasibility,
+                                    first + i * per,
+                                    &mut rng,
+                                ));
+                            }
+                            out
+                        })
+                    })
+                    .collect();
+                handles
+                    .into_iter()
+                    .flat_map(|h| h.join().expect("refinement thread"))
+                    .collect()
+            });
+            pool.stances += bases.len() * per;
+            pool.admit(model, options, found);
+            chosen = design::select(
+                &pool.infos.iter().collect::<Vec<_>>(),
+                n,
+                &pool.focus,
+                count,
+                &chosen,
+                &options.design,
+            );
+            spread /= 2.0;
+        }
+        let chosen_captures: Vec<(CameraId, Side, JointAngles)> = chosen
+            .iter()
+            .map(|&k| {
+                let c = &pool.candidates[k];
+                (c.camera, c.side, c.joints)
+            })
+            .collect();
+        let prediction = honest_prediction(
+            model,
+            options,
+            &chosen_captures,
+            &pool.fixed,
+            &chosen.iter().map(|&k| &pool.infos[k]).collect::<Vec<_>>(),
+        );
+        let angles: Vec<JointAngles> = chosen.iter().map(|&k| pool.candidates[k].joints).collect();
+        let body = &options.feasibility.body;
+        let rest = route::rest_posture();
+        let tour = order::order(model, body, &rest, &angles, &options.timing);
+        let captures: Vec<PlannedCapture> = tour
+            .iter()
+            .map(|&i| {
+                let c = &pool.candidates[chosen[i]];
+                PlannedCapture {
+                    camera: c.camera,
+                    side: c.side,
+                    joints: c.joints,
+                }
+            })
+            .collect();
+        let postures: Vec<JointAngles> = captures.iter().map(|c| c.joints).collect();
+        let moves = route::moves(model, body, &rest, &postures);
+        if let Some(k) = moves.iter().position(Result::is_err) {
+            return Err(PlanError::Moves(k));
+        }
+        let via = moves.iter().flatten().map(|way| way.len() - 1).sum();
+        let duration = route::duration_of(&options.timing, &rest, &postures, &moves);
+        let mut stances: Vec<usize> = chosen.iter().map(|&k| pool.candidates[k].stance).collect();
+        stances.sort_unstable();
+        stances.dedup();
+        Ok(Design {
+            captures,
+            prediction,
+            duration,
+            via,
+            pool: pool.candidates.len(),
+            stances: stances.len(),
         })
-        .collect();
-    let postures: Vec<JointAngles> = captures.iter().map(|c| c.joints).collect();
-    let moves = route::moves(model, body, &rest, &postures);
-    if let Some(k) = moves.iter().position(Result::is_err) {
-        return Err(PlanError::Moves(k));
     }
-    let via = moves.iter().flatten().map(|way| way.len() - 1).sum();
-    let duration = route::duration(model, body, &options.timing, &rest, &postures);
-    let mut stances: Vec<usize> = chosen.iter().map(|&k| pool[k].stance).collect();
-    stances.sort_unstable();
-    stances.dedup();
 
-    let random_postures: Vec<JointAngles> = random.iter().map(|c| c.2).collect();
-    let baseline_duration = route::duration(model, body, &options.timing, &rest, &random_postures);
-    let baseline_blocked = route::moves(model, body, &rest, &random_postures)
-        .iter()
-        .filter(|m| m.is_err())
-        .count();
-    Ok(Plan {
-        captures,
-        prediction,
-        baseline,
-        duration,
-        via,
-        baseline_duration,
-        baseline_blocked,
-        pool: pool.len(),
-        stances: stances.len(),
-    })
+    /// The plan of `design`: compared with the simulator's random stances at its count.
+    fn finish(
+        &self,
+        model: &Model,
+        options: &PlanOptions,
+        design: Design,
+    ) -> Result<Plan, PlanError> {
+        let count = design.captures.len();
+        let random = random_stances(model, count, 3, options.seed)?;
+        let random: Vec<(CameraId, Side, JointAngles)> = random
+            .into_iter()
+            .map(|(side, joints)| (CameraId::Lower, side, joints))
+            .collect();
+        // The random stances are the lower camera's: the upper camera's offsets stay out.
+        let lower_fixed = options.fixed.clone().for_upper_camera(false);
+        let random_infos = information_parallel(model, &random, &lower_fixed, options.levels);
+        let random_refs: Vec<&design::CaptureInformation> = random_infos.iter().flatten().collect();
+        let baseline = honest_prediction(model, options, &random, &lower_fixed, &random_refs);
+        let body = &options.feasibility.body;
+        let rest = route::rest_posture();
+        let random_postures: Vec<JointAngles> = random.iter().map(|c| c.2).collect();
+        let random_moves = route::moves(model, body, &rest, &random_postures);
+        let baseline_duration =
+            route::duration_of(&options.timing, &rest, &random_postures, &random_moves);
+        let baseline_blocked = random_moves.iter().filter(|m| m.is_err()).count();
+        let coverage = coverage::coverage(model, &design.captures, &options.feasibility.centre);
+        Ok(Plan {
+            captures: design.captures,
+            prediction: design.prediction,
+            baseline,
+            duration: design.duration,
+            via: design.via,
+            baseline_duration,
+            baseline_blocked,
+            pool: design.pool,
+            stances: design.stances,
+            coverage,
+        })
+    }
+}
+
+/// The prediction for the captures `captures` (with their information `infos` about the
+/// parameters `fixed` leaves free) as `solve` will fit them: a free parameter that `solve`
+/// holds at its nominal value for such a dataset ([`design::held_by_solve`]) is predicted
+/// undetermined, with the combination it forms, and the others' σ are those of the fit
+/// without it.
+fn honest_prediction(
+    model: &Model,
+    options: &PlanOptions,
+    captures: &[(CameraId, Side, JointAngles)],
+    fixed: &FixedSet,
+    infos: &[&design::CaptureInformation],
+) -> Prediction {
+    let free = fixed.free();
+    let held = design::held_by_solve(model, captures, fixed);
+    if held.is_empty() {
+        return design::predict(&free, infos);
+    }
+    let mut kept_fixed = fixed.clone();
+    for u in &held {
+        kept_fixed.set(u.param, true);
+    }
+    let infos = information_parallel(model, captures, &kept_fixed, options.levels);
+    let kept = design::predict(
+        &kept_fixed.free(),
+        &infos.iter().flatten().collect::<Vec<_>>(),
+    );
+    let mut undetermined = kept.undetermined.clone();
+    undetermined.extend(held.iter().map(|u| {
+        format!(
+            "{} (solve holds it at its nominal value: the captures cannot tell {} apart)",
+            u.param,
+            u.direction.describe()
+        )
+    }));
+    Prediction {
+        std: free
+            .iter()
+            .map(|p| kept.std_of(*p).unwrap_or(f64::INFINITY))
+            .collect(),
+        free,
+        rank: kept.rank,
+        undetermined,
+    }
 }
 
 /// Whether `p` is one of the paper's 15 angle offsets: the camera rotation and the 12 leg
@@ -527,4 +793,55 @@ pub fn to_stances(captures: &[PlannedCapture]) -> Vec<Stance> {
             postures: vec![c.joints],
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small plan's options: few stances in the pool, one refinement round.
+    fn small(captures: usize) -> PlanOptions {
+        PlanOptions {
+            captures,
+            pool_stances: 30,
+            refine_rounds: 1,
+            ..PlanOptions::default()
+        }
+    }
+
+    #[test]
+    fn a_budgeted_plan_takes_as_many_captures_as_fit_and_is_the_plan_of_that_count() {
+        let model = Model::default();
+        let budget = 40.0;
+        let within = plan_within(&model, &small(12), budget, None).expect("a plan");
+        let n = within.captures.len();
+        assert!(within.duration <= budget, "{} s", within.duration);
+        // One more does not fit; the plan is the one made for its count.
+        let more = plan(&model, &small(n + 1)).expect("a plan");
+        assert!(
+            more.duration > budget,
+            "{} captures take {} s",
+            n + 1,
+            more.duration
+        );
+        assert_eq!(plan(&model, &small(n)).expect("a plan"), within);
+        // At most --captures, within the budget.
+        let capped = plan_within(&model, &small(12), budget, Some(n - 3)).expect("a plan");
+        assert_eq!(capped.captures.len(), n - 3);
+        assert!(capped.duration <= budget);
+        // A budget nothing fits, and one that is no budget.
+        match plan_within(&model, &small(12), 3.0, None) {
+            Err(PlanError::Budget { budget, shortest }) => {
+                assert_eq!(budget, 3.0);
+                assert!(shortest > 3.0);
+            }
+            other => panic!("{other:?}"),
+        }
+        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert!(matches!(
+                plan_within(&model, &small(12), bad, None),
+                Err(PlanError::Options(_))
+            ));
+        }
+    }
 }

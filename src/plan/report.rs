@@ -97,6 +97,46 @@ pub fn summary(request: &PlanRequest, planned: &Planned) -> String {
          way (the paper's took 590 s)",
         plan.duration, plan.via, plan.baseline_duration, plan.baseline_blocked
     );
+    if let Some(budget) = request.budget_s {
+        let _ = writeln!(
+            out,
+            "budget: {} captures fit a measurement phase of {budget} s (predicted {:.1} s{})",
+            plan.captures.len(),
+            plan.duration,
+            match request.captures {
+                Some(n) if n == plan.captures.len() => format!(", --captures {n}"),
+                _ => String::new(),
+            }
+        );
+    }
+    let intrinsics_free = planned
+        .options
+        .cameras
+        .iter()
+        .flat_map(|c| c.projection_params())
+        .any(|p| !planned.options.fixed.is_fixed(p));
+    if intrinsics_free {
+        for c in &plan.coverage {
+            let [lo, hi] = c.centres;
+            let _ = writeln!(
+                out,
+                "{} camera's image: board vertices in {} of the {} cells of a {}×{} grid, \
+                 {} of its 4 corners; board centres u {:.0}–{:.0} of {} px, v {:.0}–{:.0} of {} px",
+                c.camera.name(),
+                c.covered(),
+                super::coverage::COLS * super::coverage::ROWS,
+                super::coverage::COLS,
+                super::coverage::ROWS,
+                c.corners(),
+                lo[0],
+                hi[0],
+                c.size[0],
+                lo[1],
+                hi[1],
+                c.size[1]
+            );
+        }
+    }
     out
 }
 

@@ -21,8 +21,11 @@ pub struct PlanRequest {
     pub out: PathBuf,
     /// Replace an existing `out`.
     pub force: bool,
-    /// Number of captures, both legs together.
-    pub captures: usize,
+    /// Number of captures, both legs together (144 when not given; with `budget_s`, as
+    /// many as fit, at most this).
+    pub captures: Option<usize>,
+    /// The robot time the measurement phase may take (s): as many captures as fit.
+    pub budget_s: Option<f64>,
     /// The families the calibration will free.
     pub families: Vec<Family>,
     /// Pixel noise σ the prediction assumes (px).
@@ -161,7 +164,7 @@ impl PlanRequest {
     ) -> Result<PlanOptions, PlanRequestError> {
         let cameras = self.cameras(model)?;
         let mut options = PlanOptions {
-            captures: self.captures,
+            captures: self.captures.unwrap_or(PlanOptions::default().captures),
             fixed: self.fixed(cameras.contains(&CameraId::Upper)),
             levels: NoiseLevels {
                 px: self.px_noise,
@@ -220,7 +223,10 @@ pub fn run(request: &PlanRequest) -> Result<Planned, PlanRequestError> {
     let around = request.read_around()?;
     let options = request.options(&model, around.as_ref())?;
     let start = Instant::now();
-    let plan = plan(&model, &options)?;
+    let plan = match request.budget_s {
+        Some(budget) => super::plan_within(&model, &options, budget, request.captures)?,
+        None => plan(&model, &options)?,
+    };
     let seconds = start.elapsed().as_secs_f64();
     if let Some(dir) = request.out.parent().filter(|d| !d.as_os_str().is_empty())
         && !dir.is_dir()
@@ -288,7 +294,8 @@ mod tests {
         PlanRequest {
             out: PathBuf::from("plan.csv"),
             force: false,
-            captures: 24,
+            captures: Some(24),
+            budget_s: None,
             families: vec![Family::Paper],
             px_noise: 0.2,
             joint_noise_deg: 0.5,

@@ -278,7 +278,16 @@ pub fn step_times(
     rest: &JointAngles,
     captures: &[JointAngles],
 ) -> Vec<f64> {
-    let moves = moves(model, body, rest, captures);
+    step_times_of(timing, rest, captures, &moves(model, body, rest, captures))
+}
+
+/// [`step_times`] of the moves `moves` ([`moves`] of `captures` from `rest`).
+pub fn step_times_of(
+    timing: &Timing,
+    rest: &JointAngles,
+    captures: &[JointAngles],
+    moves: &[Result<Vec<JointAngles>, NoRoute>],
+) -> Vec<f64> {
     let mut at = *rest;
     let n = captures.len();
     moves
@@ -306,6 +315,16 @@ pub fn duration(
     captures: &[JointAngles],
 ) -> f64 {
     step_times(model, body, timing, rest, captures).iter().sum()
+}
+
+/// [`duration`] of the moves `moves` ([`moves`] of `captures` from `rest`).
+pub fn duration_of(
+    timing: &Timing,
+    rest: &JointAngles,
+    captures: &[JointAngles],
+    moves: &[Result<Vec<JointAngles>, NoRoute>],
+) -> f64 {
+    step_times_of(timing, rest, captures, moves).iter().sum()
 }
 
 #[cfg(test)]

@@ -56,6 +56,8 @@ mod plan_around;
 #[cfg(feature = "detect")]
 mod plan_cameras;
 #[cfg(feature = "detect")]
+mod plan_intrinsics;
+#[cfg(feature = "detect")]
 mod plan_moves;
 mod plot_files;
 mod pure_rust_agreement;

@@ -236,7 +236,10 @@ const UPPER: [&str; 3] = ["UpperCamYaw", "UpperCamPitch", "UpperCamRoll"];
 /// The plan with the upper camera first (`--upper-sigma-ratio 0.6`) predicts its σ at
 /// most 0.025°; 16 robots measured with it (0.1 px, 0.1° joint noise, truth hidden and off
 /// the files) give every free parameter an err/σ consistent with N(0, 1) and the upper
-/// camera's reported σ within 10 % of the prediction.
+/// camera's reported σ within 10 % of the prediction. A robot whose misfit test raises a
+/// false alarm (the simulated data hold no effect the model lacks; the test's family-wise
+/// rate is 1 %) is reported with the capture-clustered sandwich σ, a noisier estimate of
+/// the same σ: at most one such robot, within 15 %.
 #[test]
 fn the_upper_first_plan_is_honest_and_gives_the_upper_camera_0_025() {
     let s = session();
@@ -251,7 +254,8 @@ fn the_upper_first_plan_is_honest_and_gives_the_upper_camera_0_025() {
         assert!(sigma <= 0.025, "{name}: predicted σ {sigma}");
     }
     let mut z = Vec::new();
-    let mut reported: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
+    // Each robot's upper-camera σ, and whether its misfit test raised an alarm.
+    let mut reported: BTreeMap<&str, Vec<(f64, bool)>> = BTreeMap::new();
     for seed in 1..=16u64 {
         let dir = s.bench.path(&format!("run{seed:02}"));
         let truth = truth(&s.files, 100 + seed);
@@ -277,10 +281,11 @@ fn the_upper_first_plan_is_honest_and_gives_the_upper_camera_0_025() {
             .unwrap();
         assert!(out.status.success(), "solve: {}", stderr(&out));
         let result: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let alarm = result["misfit"]["detected"] == true;
         for (p, value, sigma) in estimates(&result) {
             z.push((value - p.unit().to_report(truth[p.index()])) / sigma);
             if let Some(name) = upper.iter().find(|n| **n == p.name()) {
-                reported.entry(name).or_default().push(sigma);
+                reported.entry(name).or_default().push((sigma, alarm));
             }
         }
     }
@@ -293,20 +298,46 @@ fn the_upper_first_plan_is_honest_and_gives_the_upper_camera_0_025() {
     assert!((0.85..=1.15).contains(&rms), "rms err/σ {rms}");
     assert!(beyond3 as f64 <= 0.01 * n, "{beyond3} of {n} beyond 3σ");
     for (name, predicted) in upper.iter().zip(upper_std(&s.upper_first_predicted)) {
-        let mut stds = reported[*name].clone();
-        assert_eq!(stds.len(), 16, "{name} free in every run");
+        let robots = &reported[*name];
+        assert_eq!(robots.len(), 16, "{name} free in every run");
+        let mut stds: Vec<f64> = robots.iter().map(|r| r.0).collect();
         stds.sort_by(f64::total_cmp);
-        let (median, worst) = ((stds[7] + stds[8]) / 2.0, stds[15]);
+        let median = (stds[7] + stds[8]) / 2.0;
+        // The σ of the robots without and with a misfit alarm.
+        let of = |alarm: bool| -> Vec<f64> {
+            robots
+                .iter()
+                .filter(|r| r.1 == alarm)
+                .map(|r| r.0)
+                .collect()
+        };
+        let (silent, alarmed) = (of(false), of(true));
+        let worst = |r: &[f64]| r.iter().copied().fold(0.0, f64::max);
         eprintln!(
-            "{name}: reported σ median {median:.4}°, at most {worst:.4}° (predicted {predicted:.4}°)"
+            "{name}: reported σ median {median:.4}°, at most {:.4}° ({} robots; {} with a \
+             misfit alarm, at most {:.4}°) (predicted {predicted:.4}°)",
+            worst(&silent),
+            silent.len(),
+            alarmed.len(),
+            worst(&alarmed)
         );
-        // The typical robot gets at least the precision planned for; a robot whose truth moves
-        // vertices out of the image loses them, and with them a little of it.
+        // Every robot gets the precision planned for; one flagged by a false alarm gets
+        // it as the sandwich estimates it.
         assert!(
             median <= 1.10 * predicted,
             "{name}: median reported σ {median}"
         );
-        assert!(worst <= 1.15 * predicted, "{name}: reported σ {worst}");
+        assert!(
+            worst(&silent) <= 1.10 * predicted,
+            "{name}: reported σ {:?}",
+            silent
+        );
+        assert!(
+            alarmed.len() <= 1,
+            "{name}: {} misfit alarms",
+            alarmed.len()
+        );
+        assert!(worst(&alarmed) <= 1.15 * predicted, "{name}: {:?}", alarmed);
     }
 }
 
