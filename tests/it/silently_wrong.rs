@@ -133,7 +133,10 @@ fn a_plan_names_exactly_the_parameters_its_design_leaves_undetermined() {
         assert_eq!(named, table, "{args:?}: {report}");
         if let Some(expected) = expected {
             for p in expected {
-                assert!(named.iter().any(|n| n == p), "{args:?}: {p} not named: {report}");
+                assert!(
+                    named.iter().any(|n| n == p),
+                    "{args:?}: {p} not named: {report}"
+                );
             }
         }
     }
