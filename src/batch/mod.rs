@@ -373,3 +373,34 @@ impl Batch {
 }
 
 pub use report::{BatchJson, OutputFiles, run_file_names};
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A dataset named twice — as itself, through its parent, through a symbolic link and
+    /// with `..` in its path — is found once; two datasets stay two.
+    #[test]
+    fn a_dataset_named_twice_is_found_once() {
+        let root = tempfile::tempdir().unwrap();
+        let runs = root.path().join("runs");
+        for name in ["a", "b"] {
+            std::fs::create_dir_all(runs.join(name)).unwrap();
+            std::fs::write(runs.join(name).join(CAPTURES_CSV), "").unwrap();
+        }
+        let link = root.path().join("link");
+        #[cfg(unix)]
+        std::os::unix::fs::symlink(runs.join("a"), &link).unwrap();
+        let mut named = vec![
+            runs.join("a"),
+            runs.clone(),
+            runs.join("b").join("..").join("a"),
+        ];
+        if cfg!(unix) {
+            named.push(link);
+        }
+        let (found, failures) = find_datasets(&named);
+        assert!(failures.is_empty(), "{failures:?}");
+        assert_eq!(found, vec![runs.join("a"), runs.join("b")]);
+    }
+}
