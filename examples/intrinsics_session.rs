@@ -184,24 +184,29 @@ fn main() {
                     offset_deg,
                 ),
             )?;
-            let paper = plan::plan_within(
-                &model,
-                &options(&[], &both, &files, ratio, offset_deg),
-                300.0,
-                None,
+            let (paper, _, _) = plan::request::narrowing_the_upper_box(
+                options(&[], &both, &files, ratio, offset_deg),
+                plan::request::UPPER_OFFSET_DEG,
+                |o| plan::plan_within(&model, o, 300.0, None),
             )?;
             let start = Instant::now();
             let intrinsics = options(&[Family::Intrinsics], &both, &files, ratio, offset_deg);
-            let planned = plan::plan_within(&model, &intrinsics, 300.0, None)?;
+            // As `naocalib plan` does: the upper camera's box narrowed if it must be.
+            let (planned, _, narrowed) = plan::request::narrowing_the_upper_box(
+                intrinsics,
+                plan::request::UPPER_OFFSET_DEG,
+                |o| plan::plan_within(&model, o, 300.0, None),
+            )?;
             Ok::<_, plan::PlanError>((
                 lower,
                 lower_intrinsics,
                 paper,
                 planned,
                 start.elapsed().as_secs_f64(),
+                narrowed,
             ))
         })();
-        let (lower, lower_intrinsics, paper, planned, seconds) = match made {
+        let (lower, lower_intrinsics, paper, planned, seconds, narrowed) = match made {
             Ok(made) => made,
             Err(e) => {
                 table.push(format!("robot {robot}: {pitches}: no plan: {e}"));
@@ -219,11 +224,12 @@ fn main() {
             .filter(|c| c.camera == CameraId::Upper)
             .count();
         table.push(format!(
-            "robot {robot}: {pitches}; {} captures ({} upper) in {:.1} s of robot time, planned in {seconds:.1} s; worst of 15 {w_lower:.4}° / {w_lower_i:.4}° / {w_paper:.4}° / {w_intr:.4}° (lower only 144 / lower only 144 + intrinsics / both / both + intrinsics); UpperCam {:.4}/{:.4}/{:.4}°",
+            "robot {robot}: {pitches}; {} captures ({} upper) in {:.1} s of robot time, planned in {seconds:.1} s; worst of 15 {w_lower:.4}° / {w_lower_i:.4}° / {w_paper:.4}° / {w_intr:.4}° (lower only 144 / lower only 144 + intrinsics / both / both + intrinsics); UpperCam {:.4}/{:.4}/{:.4}°{}",
             planned.captures.len(),
             upper_count,
             planned.duration,
             u_intr[0], u_intr[1], u_intr[2],
+            narrowed.map_or(String::new(), |b| format!("; the upper camera's box narrowed to ±{b}°")),
         ));
         let stances = plan::to_stances(&planned.captures);
         for repeat in 0..repeats {

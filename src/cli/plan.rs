@@ -58,9 +58,11 @@ pub struct PlanArgs {
     /// mm), centred on the --around calibration. Lying on its back the NAO sees a sandal
     /// through its upper camera only from 220–390 mm, where the board spans most of the
     /// image, so no capture stays in view over ±3°; the robot's imported calibration knows
-    /// its offsets far better, and capture and detection check each picture again.
-    #[arg(long, default_value_t = 0.5, value_parser = offset_deg)]
-    upper_offset_deg: f64,
+    /// its offsets far better, and capture and detection check each picture again
+    /// [default: 0.5, halved down to 0.125 when no upper-camera capture of a leg stays in
+    /// view over it].
+    #[arg(long, value_parser = offset_deg)]
+    upper_offset_deg: Option<f64>,
     /// The σ the design aims at for the upper camera's rotation offsets, as a fraction of
     /// the worst σ of the lower camera's and legs' 15 angle offsets (0.1 … 10). Lower puts
     /// more of the captures on the upper camera: its offsets get smaller σ, the 15 larger.

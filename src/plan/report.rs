@@ -13,6 +13,11 @@ use super::{Prediction, is_angle_offset};
 pub fn summary(request: &PlanRequest, planned: &Planned) -> String {
     let (plan, f) = (&planned.plan, &planned.options.feasibility);
     let upper = planned.options.cameras.contains(&CameraId::Upper);
+    let upper_offset = planned.narrowed.unwrap_or(
+        request
+            .upper_offset_deg
+            .unwrap_or(super::request::UPPER_OFFSET_DEG),
+    );
     let mut out = String::new();
     let left = plan
         .captures
@@ -65,8 +70,17 @@ pub fn summary(request: &PlanRequest, planned: &Planned) -> String {
              its upper camera only from 220–390 mm, where the board spans most of the image and no capture \
              stays in view over ±3°; its imported calibration knows the offsets far better, \
              and capture and detection check every picture again",
-            request.upper_offset_deg, request.upper_offset_deg
+            upper_offset, upper_offset
         );
+        if let Some(narrowed) = planned.narrowed {
+            let _ = writeln!(
+                out,
+                "upper camera: no capture of a leg stayed in view for every offset within \
+                 ±{}°, so its box of offsets was narrowed to ±{narrowed}° (--upper-offset-deg \
+                 sets it)",
+                narrowed * 2.0
+            );
+        }
     }
     let _ = writeln!(
         out,

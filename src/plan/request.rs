@@ -40,8 +40,10 @@ pub struct PlanRequest {
     pub offset_deg: f64,
     /// The cameras to plan for; those the model has when not given.
     pub cameras: Option<Vec<CameraId>>,
-    /// The box of offsets for upper-camera captures (deg, and mm).
-    pub upper_offset_deg: f64,
+    /// The box of offsets for upper-camera captures (deg, and mm); not given:
+    /// [`UPPER_OFFSET_DEG`], narrowed as far as [`NARROWEST_UPPER_OFFSET_DEG`] when no
+    /// upper-camera capture of a leg stays in view over it.
+    pub upper_offset_deg: Option<f64>,
     /// The σ aimed at for the upper camera's offsets, relative to the 15 angle offsets'.
     pub upper_sigma_ratio: f64,
     /// Leg stances drawn into each camera's pool per leg.
@@ -179,7 +181,10 @@ impl PlanRequest {
         };
         options.feasibility.offset_angle = self.offset_deg.to_radians();
         options.feasibility.offset_length = self.offset_deg;
-        options.feasibility.upper_offset = self.upper_offset_deg.to_radians();
+        options.feasibility.upper_offset = self
+            .upper_offset_deg
+            .unwrap_or(UPPER_OFFSET_DEG)
+            .to_radians();
         if let Some(current) = around {
             for (p, value) in current.start_values(model) {
                 options.feasibility.centre[p.index()] = p.unit().from_report(value);
@@ -202,6 +207,41 @@ impl PlanRequest {
     }
 }
 
+/// The upper camera's box of offsets when none is asked for (deg): lying on its back the
+/// NAO sees a sandal through its upper camera only from 220–390 mm, where the board spans
+/// most of the image; the robot's imported calibration knows its offsets far better.
+pub const UPPER_OFFSET_DEG: f64 = 0.5;
+
+/// How far the box of [`UPPER_OFFSET_DEG`] is halved when no upper-camera capture of a leg
+/// stays in view over it (a robot whose upper camera looks past a sandal at the edge of
+/// SPQR's per-robot files, pitch −10.2°): capture and detection check every picture again.
+pub const NARROWEST_UPPER_OFFSET_DEG: f64 = 0.125;
+
+/// `make(options)`, and when it finds no upper-camera capture of a leg that stays in view
+/// for every offset in the upper camera's box of offsets (`box_deg`, as `options` have it),
+/// `make` again with the box halved, down to [`NARROWEST_UPPER_OFFSET_DEG`]: what was
+/// made, the options it was made with and the box it was narrowed to (deg; `None` when not
+/// narrowed).
+pub fn narrowing_the_upper_box<T>(
+    mut options: PlanOptions,
+    box_deg: f64,
+    make: impl Fn(&PlanOptions) -> Result<T, PlanError>,
+) -> Result<(T, PlanOptions, Option<f64>), PlanError> {
+    let mut narrowed: Option<f64> = None;
+    loop {
+        match make(&options) {
+            Err(PlanError::Pool {
+                camera: "upper", ..
+            }) if narrowed.unwrap_or(f64::INFINITY) > NARROWEST_UPPER_OFFSET_DEG => {
+                let half = narrowed.unwrap_or(box_deg) * 0.5;
+                options.feasibility.upper_offset = half.to_radians();
+                narrowed = Some(half);
+            }
+            made => return made.map(|made| (made, options, narrowed)),
+        }
+    }
+}
+
 /// A plan made and written.
 #[derive(Debug, Clone)]
 pub struct Planned {
@@ -211,6 +251,9 @@ pub struct Planned {
     pub options: PlanOptions,
     /// The planning's wall time (s).
     pub seconds: f64,
+    /// The upper camera's box of offsets when it was narrowed from [`UPPER_OFFSET_DEG`]
+    /// (deg): none of a leg's captures stayed in view over the wider ones.
+    pub narrowed: Option<f64>,
 }
 
 /// Designs the schedule of `request` and writes it: every check of the output and the
@@ -223,9 +266,14 @@ pub fn run(request: &PlanRequest) -> Result<Planned, PlanRequestError> {
     let around = request.read_around()?;
     let options = request.options(&model, around.as_ref())?;
     let start = Instant::now();
-    let plan = match request.budget_s {
-        Some(budget) => super::plan_within(&model, &options, budget, request.captures)?,
-        None => plan(&model, &options)?,
+    let make = |options: &PlanOptions| match request.budget_s {
+        Some(budget) => super::plan_within(&model, options, budget, request.captures),
+        None => plan(&model, options),
+    };
+    let (plan, options, narrowed) = if request.upper_offset_deg.is_none() {
+        narrowing_the_upper_box(options, UPPER_OFFSET_DEG, make)?
+    } else {
+        (make(&options)?, options, None)
     };
     let seconds = start.elapsed().as_secs_f64();
     if let Some(dir) = request.out.parent().filter(|d| !d.as_os_str().is_empty())
@@ -246,6 +294,7 @@ pub fn run(request: &PlanRequest) -> Result<Planned, PlanRequestError> {
         plan,
         options,
         seconds,
+        narrowed,
     })
 }
 
@@ -303,7 +352,7 @@ mod tests {
             camera: None,
             offset_deg: 2.0,
             cameras: None,
-            upper_offset_deg: 0.5,
+            upper_offset_deg: None,
             upper_sigma_ratio: 0.9,
             pool: 40,
             around: None,

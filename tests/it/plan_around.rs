@@ -79,3 +79,83 @@ fn stances_planned_around_the_robot_keep_its_board_in_view() {
         "the plan around zero happens to hold this robot too ({lost} captures lost)"
     );
 }
+
+/// A robot at the edge of SPQR's per-robot files (upper camera pitch −10.2°), whose upper
+/// camera sees its right sandal only for offsets within less than ±0.5° of its files: the
+/// plan narrows the upper camera's box of offsets, says so and plans, unless the box was
+/// asked for, then it says that no capture of the right leg stays in view.
+#[test]
+fn the_upper_cameras_box_is_narrowed_only_when_no_capture_stays_in_view() {
+    use naocalib::export::{Entry, Posture};
+    use naocalib::plan::request::{PlanRequest, run};
+    let dir = tempfile::tempdir().unwrap();
+    let files: [(Param, f64); 18] = [
+        (Param::CamYaw, 1.384),
+        (Param::CamPitch, -4.738),
+        (Param::CamRoll, 0.537),
+        (Param::LHipYawPitch, -0.627),
+        (Param::LHipRoll, 0.889),
+        (Param::LHipPitch, 0.530),
+        (Param::LKneePitch, 1.149),
+        (Param::LAnklePitch, 0.585),
+        (Param::LAnkleRoll, 0.122),
+        (Param::RHipYawPitch, -1.133),
+        (Param::RHipRoll, 1.228),
+        (Param::RHipPitch, 0.986),
+        (Param::RKneePitch, 0.301),
+        (Param::RAnklePitch, -2.301),
+        (Param::RAnkleRoll, 1.462),
+        (Param::UpperCamYaw, -0.010),
+        (Param::UpperCamPitch, -10.216),
+        (Param::UpperCamRoll, 0.036),
+    ];
+    let cal = crate::util::converged_calibration(Posture::Lying, |p| Entry {
+        param: p,
+        value: files.iter().find(|(q, _)| *q == p).map_or(0.0, |(_, v)| *v),
+        std: Some(0.05),
+        fixed: false,
+    });
+    let around = dir.path().join("nao.toml");
+    std::fs::write(&around, cal.to_toml()).unwrap();
+    let camera = dir.path().join("dataset.toml");
+    let v6 = "width = 640\nheight = 480\nfx = 598.3\nfy = 598.0\ncx = 320.0\ncy = 240.0\n";
+    std::fs::write(&camera, format!("[camera]\n{v6}\n[upper_camera]\n{v6}")).unwrap();
+    let request = |upper_offset_deg| PlanRequest {
+        out: dir.path().join("plan.csv"),
+        force: true,
+        captures: Some(24),
+        budget_s: None,
+        families: vec![naocalib::model::Family::Paper],
+        px_noise: 0.1,
+        joint_noise_deg: 0.1,
+        seed: 1,
+        camera: Some(camera.clone()),
+        offset_deg: 1.0,
+        cameras: None,
+        upper_offset_deg,
+        upper_sigma_ratio: 0.88,
+        pool: 40,
+        around: Some(around.clone()),
+    };
+    let asked = run(&request(Some(0.5))).expect_err("no capture in view over ±0.5°");
+    let text = asked.to_string();
+    assert!(
+        text.contains("upper-camera captures for the right leg"),
+        "{text}"
+    );
+    let planned = run(&request(None)).expect("planned with a narrower box");
+    let narrowed = planned.narrowed.expect("narrowed");
+    assert!(narrowed < 0.5 && narrowed >= 0.125, "{narrowed}");
+    let upper = planned
+        .plan
+        .captures
+        .iter()
+        .filter(|c| c.camera == naocalib::model::CameraId::Upper)
+        .count();
+    assert!(upper > 0, "no upper captures");
+    let report = naocalib::plan::report::summary(&request(None), &planned);
+    assert!(
+        report.contains(&format!("narrowed to ±{narrowed}°")),
+        "{report}"
+    );
+}
