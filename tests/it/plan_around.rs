@@ -145,7 +145,7 @@ fn the_upper_cameras_box_is_narrowed_only_when_no_capture_stays_in_view() {
     );
     let planned = run(&request(None)).expect("planned with a narrower box");
     let narrowed = planned.narrowed.expect("narrowed");
-    assert!(narrowed < 0.5 && narrowed >= 0.125, "{narrowed}");
+    assert!((0.125..0.5).contains(&narrowed), "{narrowed}");
     let upper = planned
         .plan
         .captures
