@@ -610,7 +610,7 @@ fn aim_targets(model: &Model, camera: CameraId) -> Vec<[f64; 2]> {
 
 /// The directions a camera's image is swept in when its intrinsics are free: the four
 /// corners, then the four edges, as offsets (fractions of the image's width and height)
-/// from the camera's first [`aim_targets`] point.
+/// from the camera's first `aim_targets` point.
 pub const SWEEP: [(f64, f64); 8] = [
     (-0.34, -0.3),
     (0.34, 0.3),
