@@ -35,26 +35,6 @@ use naocalib::run::{self, RunOptions};
 use naocalib::sim::camera::CameraPreset;
 use naocalib::sim::{self, SimOptions};
 
-/// A robot as the teams' files show it, with both cameras' intrinsics off the a-priori
-/// values (internal units: rad, mm, px).
-fn team_robot(model: &Model, rng: &mut impl Rng) -> [f64; PARAMETER_COUNT] {
-    let mut truth = sim::draw_team_truth(rng);
-    truth[Param::HeadYaw.index()] = 0.0;
-    truth[Param::HeadPitch.index()] = 0.0;
-    for camera in CameraId::ALL {
-        let apriori = model.intrinsics(camera);
-        let [fx, fy, cx, cy, _, _] = camera.projection_params();
-        let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
-        let scale = sign * rng.random_range(0.01..=0.03);
-        let aspect = rng.random_range(-0.002..=0.002);
-        truth[fx.index()] = scale * apriori.fx;
-        truth[fy.index()] = (scale + aspect) * apriori.fy;
-        truth[cx.index()] = rng.random_range(-10.0..=10.0);
-        truth[cy.index()] = rng.random_range(-10.0..=10.0);
-    }
-    truth
-}
-
 /// What the robot's files say: the truth's camera angles off by up to 0.3°, its leg offsets
 /// by up to 0.5° (what a team's calibration misses); nothing of the sandals or intrinsics.
 fn files_of(truth: &[f64; PARAMETER_COUNT], rng: &mut impl Rng) -> [f64; PARAMETER_COUNT] {
@@ -162,7 +142,7 @@ fn main() {
     let mut sessions = 0;
     for robot in 1..=robots {
         let mut rng = ChaCha8Rng::seed_from_u64(4000 + robot);
-        let truth = team_robot(&model, &mut rng);
+        let truth = sim::draw_team_truth_with_intrinsics(&model, &mut rng);
         let files = files_of(&truth, &mut rng);
         let pitches = format!(
             "lower pitch {:.1}°, upper pitch {:.1}°",

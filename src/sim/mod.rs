@@ -193,6 +193,31 @@ pub fn draw_team_truth(rng: &mut impl Rng) -> [f64; PARAMETER_COUNT] {
     truth
 }
 
+/// A robot as [`draw_team_truth`] draws it, its head offsets at zero (the fit holds them
+/// there), with both cameras' focal lengths 1–3 % off the a-priori values of `model` (fx
+/// and fy together, within 0.2 % of each other) and their optical centres up to 10 px off
+/// (internal units): the teams' one set of intrinsics on a robot whose cameras differ.
+pub fn draw_team_truth_with_intrinsics(
+    model: &Model,
+    rng: &mut impl Rng,
+) -> [f64; PARAMETER_COUNT] {
+    let mut truth = draw_team_truth(rng);
+    truth[Param::HeadYaw.index()] = 0.0;
+    truth[Param::HeadPitch.index()] = 0.0;
+    for camera in CameraId::ALL {
+        let apriori = model.intrinsics(camera);
+        let [fx, fy, cx, cy, _, _] = camera.projection_params();
+        let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+        let scale = sign * rng.random_range(0.01..=0.03);
+        let aspect = rng.random_range(-0.002..=0.002);
+        truth[fx.index()] = scale * apriori.fx;
+        truth[fy.index()] = (scale + aspect) * apriori.fy;
+        truth[cx.index()] = rng.random_range(-10.0..=10.0);
+        truth[cy.index()] = rng.random_range(-10.0..=10.0);
+    }
+    truth
+}
+
 /// An angle drawn uniformly from `lo…hi` degrees, in radians.
 fn deg(rng: &mut impl Rng, lo: f64, hi: f64) -> f64 {
     rng.random_range(lo..hi).to_radians()

@@ -14,7 +14,7 @@ use naocalib::run::{self, RunOptions};
 use naocalib::sim::camera::CameraPreset;
 use naocalib::sim::{self, SimOptions};
 
-use crate::util::{missed_by_a_team, team_robot_with_intrinsics};
+use crate::util::missed_by_a_team;
 
 /// Four robots whose truths differ from one robot's files by what a team's calibration
 /// misses, each with its own intrinsics, measured with one plan made around those files
@@ -30,7 +30,7 @@ fn a_planned_session_recovers_both_cameras_intrinsics_on_team_sized_robots() {
         ..Model::default()
     };
     let mut rng = ChaCha8Rng::seed_from_u64(40);
-    let files = team_robot_with_intrinsics(&model, &mut rng);
+    let files = sim::draw_team_truth_with_intrinsics(&model, &mut rng);
     let mut fixed = FixedSet::default();
     for p in Family::Intrinsics.params() {
         fixed.set(p, false);
@@ -94,7 +94,7 @@ fn a_planned_session_recovers_both_cameras_intrinsics_on_team_sized_robots() {
     let mut z = Vec::new();
     for robot in 0..4u64 {
         let mut truth = missed_by_a_team(&files, &mut rng);
-        let own = team_robot_with_intrinsics(&model, &mut rng);
+        let own = sim::draw_team_truth_with_intrinsics(&model, &mut rng);
         for camera in CameraId::ALL {
             for p in camera.projection_params() {
                 truth[p.index()] = own[p.index()];

@@ -205,32 +205,6 @@ pub fn read_grey_png(path: &Path) -> naocalib::sim::render::GreyImage {
     }
 }
 
-/// A robot as SPL teams' per-robot files show robots ([`naocalib::sim::draw_team_truth`]),
-/// its head offsets at zero (the fit holds them there), with both cameras' focal lengths
-/// 1–3 % off the a-priori values of `model` (fx and fy together, within 0.2 % of each
-/// other) and their optical centres up to 10 px off (internal units).
-pub fn team_robot_with_intrinsics(
-    model: &naocalib::model::Model,
-    rng: &mut impl rand::Rng,
-) -> [f64; naocalib::model::PARAMETER_COUNT] {
-    use naocalib::model::{CameraId, Param};
-    let mut truth = naocalib::sim::draw_team_truth(rng);
-    truth[Param::HeadYaw.index()] = 0.0;
-    truth[Param::HeadPitch.index()] = 0.0;
-    for camera in CameraId::ALL {
-        let apriori = model.intrinsics(camera);
-        let [fx, fy, cx, cy, _, _] = camera.projection_params();
-        let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
-        let scale = sign * rng.random_range(0.01..=0.03);
-        let aspect = rng.random_range(-0.002..=0.002);
-        truth[fx.index()] = scale * apriori.fx;
-        truth[fy.index()] = (scale + aspect) * apriori.fy;
-        truth[cx.index()] = rng.random_range(-10.0..=10.0);
-        truth[cy.index()] = rng.random_range(-10.0..=10.0);
-    }
-    truth
-}
-
 /// `robot` off by what a team's calibration misses (each camera angle by up to 0.3°, each
 /// leg offset by up to 0.5°), the rest as `robot` has it: what the files say of a robot
 /// whose truth this is, or the truth of a robot whose files `robot` is.
