@@ -103,6 +103,29 @@ pub fn summary(request: &PlanRequest, planned: &Planned) -> String {
     out.push_str(&table(&plan.prediction, &plan.baseline));
     out.push_str(&rank("plan", &plan.prediction));
     out.push_str(&rank("random stances", &plan.baseline));
+    let unswept: Vec<&str> = plan
+        .prediction
+        .undetermined_params()
+        .into_iter()
+        .filter(|p| {
+            planned
+                .options
+                .cameras
+                .iter()
+                .any(|c| c.projection_params().contains(p))
+        })
+        .map(|p| p.name())
+        .collect();
+    if !unswept.is_empty() {
+        let _ = writeln!(
+            out,
+            "{}: the boards stay near the image's centre when they must stay in view for \
+             every offset within ±{}°; plan around the robot's calibration (--around) with a \
+             smaller box (--offset-deg 1) so that they sweep the image",
+            unswept.join(", "),
+            request.offset_deg
+        );
+    }
     let _ = writeln!(
         out,
         "\nmeasurement phase: predicted {:.0} s for the plan, from rest through every capture \

@@ -157,3 +157,48 @@ fn a_planned_session_recovers_both_cameras_intrinsics_on_team_sized_robots() {
     assert!((0.75..=1.3).contains(&rms), "rms err/σ {rms}");
     assert!(worst < 4.0, "an estimate {worst}σ off");
 }
+
+/// A plan for the lower camera's intrinsics whose boards must stay in view over the default
+/// ±3° of offsets cannot sweep the image: it names the centre's coordinate it leaves
+/// undetermined and says how to plan one that sweeps it; with `--offset-deg 1` every free
+/// parameter is determined and nothing is said.
+#[test]
+fn a_plan_that_cannot_sweep_the_image_says_how_to_plan_one_that_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("plan.csv");
+    let config = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sample/dataset.toml");
+    let run = |offset: &str| {
+        let o = crate::util::naocalib()
+            .args(["plan", out.to_str().unwrap(), "--force", "--camera"])
+            .arg(&config)
+            .args([
+                "--families",
+                "paper,intrinsics",
+                "--captures",
+                "48",
+                "--pool",
+                "60",
+            ])
+            .args(["--offset-deg", offset])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8(o.stdout).unwrap()
+    };
+    let wide = run("3");
+    let hint = wide
+        .lines()
+        .find(|l| l.contains("so that they sweep the image"))
+        .unwrap_or_else(|| panic!("no hint:\n{wide}"));
+    assert!(hint.starts_with("Cy") || hint.starts_with("Cx"), "{hint}");
+    assert!(
+        hint.contains("±3°") && hint.contains("--offset-deg 1"),
+        "{hint}"
+    );
+    let narrow = run("1");
+    assert!(
+        narrow.contains("every free parameter determined"),
+        "{narrow}"
+    );
+    assert!(!narrow.contains("sweep the image"), "{narrow}");
+}
