@@ -147,7 +147,7 @@ pub fn find_datasets(paths: &[PathBuf]) -> (Vec<PathBuf>, Vec<Failure>) {
     // device and inode: looked up at once, not compared with every one found.
     let mut seen = std::collections::HashSet::new();
     let mut add = |p: PathBuf, found: &mut Vec<PathBuf>| {
-        let fresh = match identity(&p) {
+        let fresh = match crate::output::identity(&p) {
             Some(id) => seen.insert(id),
             None => !found.iter().any(|f| crate::output::same_file(f, &p)),
         };
@@ -199,20 +199,6 @@ pub fn find_datasets(paths: &[PathBuf]) -> (Vec<PathBuf>, Vec<Failure>) {
         }
     }
     (found, failures)
-}
-
-/// The device and inode of the directory `p` (None where they cannot be read).
-fn identity(p: &Path) -> Option<(u64, u64)> {
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::MetadataExt;
-        std::fs::metadata(p).ok().map(|m| (m.dev(), m.ino()))
-    }
-    #[cfg(not(unix))]
-    {
-        let _ = p;
-        None
-    }
 }
 
 /// Solves the datasets in the directories `dirs` on all cores (see

@@ -39,7 +39,7 @@ use std::path::{Path, PathBuf};
 
 pub use error::WriteError;
 use paths::{dangling_link_on_the_way, parent_dir};
-pub use paths::{file_in_the_way, same_file};
+pub use paths::{file_in_the_way, identity, same_file};
 pub use rewrite::{check_rewritable, rewrite, write_new_like};
 pub use staged::Staged;
 pub use staged::published;

@@ -7,19 +7,29 @@ use std::path::{Path, PathBuf};
 /// and `..` (for a path that does not exist: its resolved directory and its name), or, on
 /// Unix, the same device and inode.
 pub fn same_file(a: &Path, b: &Path) -> bool {
-    #[cfg(unix)]
+    if let (Some(x), Some(y)) = (identity(a), identity(b))
+        && x == y
     {
-        use std::os::unix::fs::MetadataExt;
-        if let (Ok(x), Ok(y)) = (std::fs::metadata(a), std::fs::metadata(b))
-            && x.dev() == y.dev()
-            && x.ino() == y.ino()
-        {
-            return true;
-        }
+        return true;
     }
     match (resolve(a), resolve(b)) {
         (Some(x), Some(y)) => x == y,
         _ => a == b,
+    }
+}
+
+/// The device and inode of the file `p` names, links followed (Unix; `None` where they
+/// cannot be read, and elsewhere).
+pub fn identity(p: &Path) -> Option<(u64, u64)> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        std::fs::metadata(p).ok().map(|m| (m.dev(), m.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = p;
+        None
     }
 }
 
