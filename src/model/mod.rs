@@ -131,14 +131,23 @@ impl Model {
         vertices: &[Vertex],
     ) -> Vec<Option<[T; 2]>> {
         let pose = chains.camera_to_board(params);
-        let projection = &chains.projection;
-        vertices
-            .iter()
-            .map(|v| {
-                let p = self.board.vertex_position(*v).map(scalar::lift::<T>);
-                projection.project(params, &pose.apply(&p))
-            })
+        self.project_posed(chains, &pose, params, vertices.iter().copied())
             .collect()
+    }
+
+    /// [`Model::project`] with the board's pose in the camera frame, `pose`
+    /// ([`StanceChains::camera_to_board`] at `params`), already found.
+    pub fn project_posed<'a, T: Scalar>(
+        &'a self,
+        chains: &'a StanceChains,
+        pose: &'a Pose<T>,
+        params: &'a [T],
+        vertices: impl IntoIterator<Item = Vertex> + 'a,
+    ) -> impl Iterator<Item = Option<[T; 2]>> + 'a {
+        vertices.into_iter().map(move |v| {
+            let p = self.board.vertex_position(v).map(scalar::lift::<T>);
+            chains.projection.project(params, &pose.apply(&p))
+        })
     }
 
     /// The camera with the intrinsics and distortion parameters of `params` (internal

@@ -154,14 +154,8 @@ fn view(model: &Model, chains: &StanceChains, params: &[f64]) -> Option<(Vec<[f6
     let to_camera = crate::sim::line_of_sight(&pose);
     let dist = to_camera.iter().map(|x| x * x).sum::<f64>().sqrt();
     let angle = (to_camera[2] / dist).clamp(-1.0, 1.0).acos();
-    // Model::project, with the pose found once.
     let uv = model
-        .board
-        .vertices()
-        .map(|v| {
-            let p = model.board.vertex_position(v);
-            chains.projection.project(params, &pose.apply(&p))
-        })
+        .project_posed(chains, &pose, params, model.board.vertices())
         .collect::<Option<Vec<_>>>()?;
     Some((uv, angle))
 }
