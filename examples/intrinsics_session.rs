@@ -211,7 +211,7 @@ fn main() {
             u_intr[0], u_intr[1], u_intr[2],
             narrowed.map_or(String::new(), |b| format!("; the upper camera's box narrowed to ±{b}°")),
         ));
-        let stances = plan::to_stances(&planned.captures);
+        let (stances, cameras) = plan::to_schedule(&planned.captures);
         for repeat in 0..repeats {
             let seed = robot * 100 + repeat;
             let mut dataset = sim::simulate(
@@ -222,7 +222,7 @@ fn main() {
                     joint_noise: 0.1f64.to_radians(),
                     truth: Some(truth),
                     schedule: Some(stances.clone()),
-                    schedule_cameras: planned.captures.iter().map(|c| c.camera).collect(),
+                    schedule_cameras: cameras.clone(),
                     ..SimOptions::default()
                 },
             )

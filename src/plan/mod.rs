@@ -795,6 +795,15 @@ pub fn to_stances(captures: &[PlannedCapture]) -> Vec<Stance> {
         .collect()
 }
 
+/// The plan as the simulator's schedule: its stances ([`to_stances`]) and the camera of
+/// each (`SimOptions::schedule` and `schedule_cameras`).
+pub fn to_schedule(captures: &[PlannedCapture]) -> (Vec<Stance>, Vec<CameraId>) {
+    (
+        to_stances(captures),
+        captures.iter().map(|c| c.camera).collect(),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

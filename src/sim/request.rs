@@ -175,11 +175,8 @@ impl SimRequest {
         if plan.is_empty() {
             return Err(SimRequestError::EmptyPlan(path.clone()));
         }
-        let cameras = crate::dataset::read_captures(path)?
-            .iter()
-            .map(|c| c.camera)
-            .collect();
-        Ok((Some(crate::plan::to_stances(&plan)), cameras))
+        let (stances, cameras) = crate::plan::to_schedule(&plan);
+        Ok((Some(stances), cameras))
     }
 
     /// The simulated robot's model: the camera preset with the distortion, and the same

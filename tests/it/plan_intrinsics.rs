@@ -90,7 +90,7 @@ fn a_planned_session_recovers_both_cameras_intrinsics_on_team_sized_robots() {
         );
     }
 
-    let stances = plan::to_stances(&planned.captures);
+    let (stances, cameras) = plan::to_schedule(&planned.captures);
     let mut z = Vec::new();
     for robot in 0..4u64 {
         let mut truth = missed_by_a_team(&files, &mut rng);
@@ -116,7 +116,7 @@ fn a_planned_session_recovers_both_cameras_intrinsics_on_team_sized_robots() {
                 joint_noise: 0.1f64.to_radians(),
                 truth: Some(truth),
                 schedule: Some(stances.clone()),
-                schedule_cameras: planned.captures.iter().map(|c| c.camera).collect(),
+                schedule_cameras: cameras.clone(),
                 ..SimOptions::default()
             },
         )
