@@ -123,6 +123,23 @@ impl Default for PlanOptions {
     }
 }
 
+impl PlanOptions {
+    /// Per camera ([`CameraId`] order), whether the boards sweep its image: it is planned
+    /// for and its intrinsics are free in the problem the plan is for (the upper camera's
+    /// as [`FixedSet::for_upper_camera`] has them).
+    pub fn sweeps(&self) -> [bool; 2] {
+        let upper = self.cameras.contains(&CameraId::Upper);
+        let fixed = self.fixed.clone().for_upper_camera(upper);
+        CameraId::ALL.map(|camera| {
+            self.cameras.contains(&camera)
+                && camera
+                    .projection_params()
+                    .iter()
+                    .any(|p| !fixed.is_fixed(*p))
+        })
+    }
+}
+
 /// One capture of a plan.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PlannedCapture {
@@ -344,12 +361,7 @@ impl Pool {
         let upper = options.cameras.contains(&CameraId::Upper);
         let fixed = options.fixed.clone().for_upper_camera(upper);
         // The boards sweep the image of a camera whose intrinsics are free.
-        let sweeps = CameraId::ALL.map(|camera| {
-            camera
-                .projection_params()
-                .iter()
-                .any(|p| !fixed.is_fixed(*p))
-        });
+        let sweeps = options.sweeps();
         let mut pools: Vec<Vec<feasible::Candidate>> = Vec::new();
         let mut lower = [0; 2];
         let mut first = 0;
@@ -807,6 +819,33 @@ pub fn to_schedule(captures: &[PlannedCapture]) -> (Vec<Stance>, Vec<CameraId>) 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The boards sweep a planned camera whose intrinsics are free, the upper one's as its
+    /// problem has them: named or by family, and never a camera not planned for.
+    #[test]
+    fn the_boards_sweep_the_planned_cameras_whose_intrinsics_are_free() {
+        let options = |free: &str, cameras: &[CameraId]| PlanOptions {
+            fixed: FixedSet::from_lists(free, "").unwrap(),
+            cameras: cameras.to_vec(),
+            ..PlanOptions::default()
+        };
+        let both = [CameraId::Lower, CameraId::Upper];
+        assert_eq!(options("", &both).sweeps(), [false, false]);
+        assert_eq!(
+            options("intrinsics", &[CameraId::Lower]).sweeps(),
+            [true, false]
+        );
+        assert_eq!(options("intrinsics", &both).sweeps(), [true, true]);
+        assert_eq!(options("UpperFx", &both).sweeps(), [false, true]);
+        assert_eq!(
+            options("UpperFx", &[CameraId::Lower]).sweeps(),
+            [false, false]
+        );
+        assert_eq!(
+            options("intrinsics", &[CameraId::Upper]).sweeps(),
+            [false, true]
+        );
+    }
 
     /// A small plan's options: few stances in the pool, one refinement round.
     fn small(captures: usize) -> PlanOptions {

@@ -146,13 +146,7 @@ pub fn summary(request: &PlanRequest, planned: &Planned) -> String {
             }
         );
     }
-    let intrinsics_free = planned
-        .options
-        .cameras
-        .iter()
-        .flat_map(|c| c.projection_params())
-        .any(|p| !planned.options.fixed.is_fixed(p));
-    if intrinsics_free {
+    if planned.options.sweeps().contains(&true) {
         for c in &plan.coverage {
             let [lo, hi] = c.centres;
             let _ = writeln!(
