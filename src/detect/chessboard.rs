@@ -2,12 +2,12 @@
 //! image, refined with `cornerSubPix`, checked against one homography and numbered by the
 //! model's orientation (or in OpenCV's order without the model).
 
-use opencv::core::Mat;
+use crate::sim::render::GreyImage;
 
 use super::assign::{self, Grid};
 use super::guided::Board;
 use super::predict::{predict, predicted_roi};
-use super::{DetectOptions, Outcome, board_grid, find};
+use super::{DetectOptions, Outcome, board_grid, cv, find};
 use crate::dataset::{Capture, Corner, Dataset};
 use crate::model::{Camera, PARAMETER_COUNT, Vertex};
 
@@ -106,12 +106,12 @@ type Checked = Result<Vec<[f64; 2]>, String>;
 /// homography explains them all (after removing the lens distortion): within a tenth of a
 /// square with the model, a quarter without.
 fn checked(
-    grey: &Mat,
+    grey: &GreyImage,
     mut points: Vec<[f64; 2]>,
     grid: Grid,
     options: &DetectOptions,
     cam: &Camera,
-) -> opencv::Result<Checked> {
+) -> cv::Result<Checked> {
     find::refine(grey, &mut points, grid, options.subpix_factor)?;
     let board_xy: Vec<[f64; 2]> = (0..grid.len())
         .map(|k| [(k as u32 % grid.cols) as f64, (k as u32 / grid.cols) as f64])
@@ -146,11 +146,11 @@ fn checked(
 pub(super) fn chessboard(
     dataset: &Dataset,
     capture: &Capture,
-    grey: &Mat,
+    grey: &GreyImage,
     grid: Grid,
     options: &DetectOptions,
     search: Search,
-) -> opencv::Result<Outcome> {
+) -> cv::Result<Outcome> {
     let finder = Finder {
         dataset,
         capture,
@@ -195,7 +195,7 @@ struct Finder<'a> {
     /// The capture whose image is searched.
     capture: &'a Capture,
     /// The image (8-bit grey).
-    grey: &'a Mat,
+    grey: &'a GreyImage,
     /// The pattern looked for.
     grid: Grid,
     /// How to detect.
@@ -214,7 +214,7 @@ struct Numbering {
 
 impl Finder<'_> {
     /// Refines and checks the points OpenCV found, if any ([`checked`]).
-    fn check(&self, points: Option<Vec<[f64; 2]>>) -> opencv::Result<Option<Checked>> {
+    fn check(&self, points: Option<Vec<[f64; 2]>>) -> cv::Result<Option<Checked>> {
         let intrinsics = self.dataset.model.intrinsics(self.capture.camera);
         match points {
             None => Ok(None),
@@ -226,7 +226,7 @@ impl Finder<'_> {
 
     /// The points found where `search` says, refined and checked (`None` when nothing is
     /// found), and whether the whole image was searched after the predicted region.
-    fn find(&self, search: Search) -> opencv::Result<(Option<Checked>, bool)> {
+    fn find(&self, search: Search) -> cv::Result<(Option<Checked>, bool)> {
         let (grey, grid, options) = (self.grey, self.grid, self.options);
         let (found, whole_image) = match search {
             Search::Whole { half: true } => match self.check(find::find_board_half(grey, grid)?)? {
@@ -254,7 +254,7 @@ impl Finder<'_> {
                     grey,
                     grid,
                     roi,
-                    find::EXHAUSTIVE_FLAGS,
+                    cv::Search::Exhaustive,
                 )?)?
             }
             found => found,
@@ -265,7 +265,7 @@ impl Finder<'_> {
     /// The points found where the model predicts the board, else in the whole image (at
     /// half resolution when the predicted squares are large enough), and whether the
     /// whole image was searched after a predicted region.
-    fn predicted(&self) -> opencv::Result<(Option<Checked>, bool)> {
+    fn predicted(&self) -> cv::Result<(Option<Checked>, bool)> {
         let (dataset, grey, grid, options) = (self.dataset, self.grey, self.grid, self.options);
         let model = &dataset.model;
         let roi = if options.use_model {

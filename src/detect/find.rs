@@ -1,62 +1,37 @@
 //! The OpenCV part: finding the chessboard and refining its vertices to sub-pixel accuracy.
 
-use opencv::calib3d;
-use opencv::core::{self, Mat, Point2f, Rect, Size, TermCriteria, Vector};
-use opencv::imgproc;
-use opencv::prelude::*;
-
 use super::assign::Grid;
+use super::cv::{self, Roi, Search};
+use crate::sim::render::GreyImage;
 
-/// Flags for `findChessboardCorners`: adaptive thresholding on a normalised image, and a
-/// fast check that gives up early on images without a board.
-pub const FIND_FLAGS: i32 = calib3d::CALIB_CB_ADAPTIVE_THRESH
-    | calib3d::CALIB_CB_NORMALIZE_IMAGE
-    | calib3d::CALIB_CB_FAST_CHECK;
-
-/// Flags for the exhaustive `findChessboardCorners`: as [`FIND_FLAGS`] without the fast
-/// check, which gives up on some oblique boards that the full search finds.
-pub const EXHAUSTIVE_FLAGS: i32 =
-    calib3d::CALIB_CB_ADAPTIVE_THRESH | calib3d::CALIB_CB_NORMALIZE_IMAGE;
-
-/// Runs `findChessboardCorners` on `image` (8-bit greyscale), or on the part `roi` of it;
-/// the points are in full-image pixels, in OpenCV's order.
+/// Runs `findChessboardCorners` on `image` (8-bit greyscale), or on the part `roi` of it,
+/// with the fast check that gives up early on images without a board; the points are in
+/// full-image pixels, in OpenCV's order.
 pub fn find_board(
-    image: &Mat,
+    image: &GreyImage,
     grid: Grid,
-    roi: Option<Rect>,
-) -> opencv::Result<Option<Vec<[f64; 2]>>> {
-    find_board_with(image, grid, roi, FIND_FLAGS)
+    roi: Option<Roi>,
+) -> cv::Result<Option<Vec<[f64; 2]>>> {
+    find_board_with(image, grid, roi, Search::Fast)
 }
 
-/// [`find_board`] with the finder's `flags` (e.g. [`EXHAUSTIVE_FLAGS`]).
+/// [`find_board`] with the finder's `search` (e.g. [`Search::Exhaustive`], without the
+/// fast check, which gives up on some oblique boards that the full search finds).
 pub fn find_board_with(
-    image: &Mat,
+    image: &GreyImage,
     grid: Grid,
-    roi: Option<Rect>,
-    flags: i32,
-) -> opencv::Result<Option<Vec<[f64; 2]>>> {
-    let size = Size::new(grid.cols as i32, grid.rows as i32);
-    let mut corners = Vector::<Point2f>::new();
-    let (found, offset) = match roi {
-        Some(rect) => {
-            let view = Mat::roi(image, rect)?;
-            (
-                calib3d::find_chessboard_corners(&view, size, &mut corners, flags)?,
-                [rect.x as f64, rect.y as f64],
-            )
-        }
-        None => (
-            calib3d::find_chessboard_corners(image, size, &mut corners, flags)?,
-            [0.0, 0.0],
-        ),
-    };
-    if !found || corners.len() != grid.len() {
+    roi: Option<Roi>,
+    search: Search,
+) -> cv::Result<Option<Vec<[f64; 2]>>> {
+    let corners = cv::find_chessboard(image, roi, grid.cols as usize, grid.rows as usize, search)?;
+    if corners.len() != grid.len() {
         return Ok(None);
     }
+    let offset = roi.map_or([0.0, 0.0], |r| [r.x as f64, r.y as f64]);
     Ok(Some(
         corners
             .iter()
-            .map(|p| [p.x as f64 + offset[0], p.y as f64 + offset[1]])
+            .map(|p| [p[0] as f64 + offset[0], p[1] as f64 + offset[1]])
             .collect(),
     ))
 }
@@ -65,16 +40,8 @@ pub fn find_board_with(
 /// height (each pixel the mean of four): a quarter of the pixels, and far quicker where no
 /// whole board is (OpenCV then tries tens of thresholds). The points are in full-image
 /// pixels, in OpenCV's order, to be refined at full resolution ([`refine`]).
-pub fn find_board_half(image: &Mat, grid: Grid) -> opencv::Result<Option<Vec<[f64; 2]>>> {
-    let mut half = Mat::default();
-    imgproc::resize(
-        image,
-        &mut half,
-        Size::new(image.cols() / 2, image.rows() / 2),
-        0.0,
-        0.0,
-        imgproc::INTER_AREA,
-    )?;
+pub fn find_board_half(image: &GreyImage, grid: Grid) -> cv::Result<Option<Vec<[f64; 2]>>> {
+    let half = cv::resize_half(image)?;
     // Pixel x of the half image covers full pixels 2x and 2x + 1: its centre is 2x + 0.5.
     Ok(find_board(&half, grid, None)?.map(|points| {
         points
@@ -108,36 +75,35 @@ pub fn local_square(points: &[[f64; 2]], grid: Grid) -> Vec<f64> {
 
 /// Refines `points` in place with `cornerSubPix`, each with a half-window of `factor` times
 /// its local square size (at least 2 px), so that the window never reaches the next vertex.
-pub fn refine(image: &Mat, points: &mut [[f64; 2]], grid: Grid, factor: f64) -> opencv::Result<()> {
+pub fn refine(
+    image: &GreyImage,
+    points: &mut [[f64; 2]],
+    grid: Grid,
+    factor: f64,
+) -> cv::Result<()> {
     let squares = local_square(points, grid);
     let half: Vec<i32> = squares
         .iter()
         .map(|s| ((factor * s).round() as i32).clamp(2, 30))
         .collect();
-    let criteria = TermCriteria::new(
-        core::TermCriteria_Type::COUNT as i32 | core::TermCriteria_Type::EPS as i32,
-        50,
-        1e-4,
-    )?;
     let mut sizes = half.clone();
     sizes.sort_unstable();
     sizes.dedup();
     for w in sizes {
         let members: Vec<usize> = (0..points.len()).filter(|&k| half[k] == w).collect();
-        let mut pts: Vector<Point2f> = members
+        let mut pts: Vec<[f32; 2]> = members
             .iter()
-            .map(|&k| Point2f::new(points[k][0] as f32, points[k][1] as f32))
+            .map(|&k| [points[k][0] as f32, points[k][1] as f32])
             .collect();
-        imgproc::corner_sub_pix(
-            image,
-            &mut pts,
-            Size::new(w, w),
-            Size::new(-1, -1),
-            criteria,
-        )?;
+        cv::corner_sub_pix(image, &mut pts, w, SUBPIX_ITERATIONS, SUBPIX_EPS)?;
         for (k, p) in members.iter().zip(pts.iter()) {
-            points[*k] = [p.x as f64, p.y as f64];
+            points[*k] = [p[0] as f64, p[1] as f64];
         }
     }
     Ok(())
 }
+
+/// `cornerSubPix` stops after this many iterations …
+pub const SUBPIX_ITERATIONS: i32 = 50;
+/// … or when a step is shorter than this (px).
+pub const SUBPIX_EPS: f64 = 1e-4;

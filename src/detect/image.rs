@@ -4,11 +4,9 @@
 
 use std::path::{Component, Path, PathBuf};
 
-use opencv::core::Mat;
-use opencv::prelude::*;
-
 use super::DetectError;
 use crate::model::CameraId;
+use crate::sim::render::GreyImage;
 
 /// The full path of `image` in `dir`, checked to stay inside `dir` (also through symbolic
 /// links).
@@ -31,7 +29,7 @@ pub fn resolve_image(dir: &Path, image: &Path) -> Result<PathBuf, DetectError> {
 }
 
 /// Reads an image file as 8-bit greyscale.
-pub fn read_grey(path: &Path) -> Result<Mat, DetectError> {
+pub fn read_grey(path: &Path) -> Result<GreyImage, DetectError> {
     decode_grey(path, &read_bytes(path)?)
 }
 
@@ -42,7 +40,7 @@ pub(super) fn read_sized(
     path: &Path,
     size: [u32; 2],
     camera_id: CameraId,
-) -> Result<Mat, DetectError> {
+) -> Result<GreyImage, DetectError> {
     let camera = size;
     let bytes = read_bytes(path)?;
     if !bytes.is_empty() {
@@ -58,7 +56,7 @@ pub(super) fn read_sized(
     }
     let grey = decode_grey(path, &bytes)?;
     drop(bytes);
-    let size = [grey.cols() as u32, grey.rows() as u32];
+    let size = [grey.width, grey.height];
     if size != camera {
         return Err(DetectError::Size {
             path: path.to_path_buf(),
@@ -133,14 +131,10 @@ fn check_header(path: &Path, bytes: &[u8]) -> Result<[u32; 2], DetectError> {
 
 /// Decodes image bytes (PNG, JPEG, BMP or PGM) as 8-bit greyscale. The size in the header
 /// is checked against [`MAX_SIDE`] and [`MAX_PIXELS`] before anything is decoded.
-pub fn decode_grey(path: &Path, bytes: &[u8]) -> Result<Mat, DetectError> {
+pub fn decode_grey(path: &Path, bytes: &[u8]) -> Result<GreyImage, DetectError> {
     let decode = |message: String| DetectError::Decode {
         path: path.to_path_buf(),
         message,
-    };
-    let cv = |e: opencv::Error| DetectError::OpenCv {
-        path: path.to_path_buf(),
-        message: e.message,
     };
     if bytes.is_empty() {
         return Err(DetectError::Empty {
@@ -149,13 +143,19 @@ pub fn decode_grey(path: &Path, bytes: &[u8]) -> Result<Mat, DetectError> {
     }
     check_header(path, bytes)?;
     if bytes.starts_with(b"\x89PNG") {
-        let (grey, width, height) = decode_png(bytes).map_err(decode)?;
-        let mat = Mat::new_rows_cols_with_data(height as i32, width as i32, &grey).map_err(cv)?;
-        return mat.try_clone().map_err(cv);
+        let (pixels, width, height) = decode_png(bytes).map_err(decode)?;
+        return Ok(GreyImage {
+            width,
+            height,
+            pixels,
+        });
     }
-    let (grey, width, height) = decode_other(bytes).map_err(decode)?;
-    let mat = Mat::new_rows_cols_with_data(height as i32, width as i32, &grey).map_err(cv)?;
-    mat.try_clone().map_err(cv)
+    let (pixels, width, height) = decode_other(bytes).map_err(decode)?;
+    Ok(GreyImage {
+        width,
+        height,
+        pixels,
+    })
 }
 
 /// Decodes a JPEG, BMP or PGM into 8-bit grey levels (colour as in [`decode_png`]).

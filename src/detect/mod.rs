@@ -29,6 +29,7 @@
 
 pub mod assign;
 mod chessboard;
+pub mod cv;
 pub mod find;
 pub mod guard;
 pub mod guided;
@@ -42,7 +43,7 @@ pub mod turned;
 
 use std::path::Path;
 
-use opencv::core::Mat;
+use crate::sim::render::GreyImage;
 use rayon::prelude::*;
 
 use crate::dataset::{Capture, Corner, Dataset};
@@ -144,6 +145,7 @@ pub fn detect_into(
             dir: dataset.dir.clone(),
         });
     }
+    cv::load()?;
     let results = detect_dataset(dataset, options, done);
     let summary = Summary::of(&results);
     let turned = turned::of_results(&results);
@@ -251,7 +253,7 @@ fn detect_image(
     let path = resolve_image(&dataset.dir, image)?;
     let intrinsics = model.intrinsics(capture.camera);
     let grey = read_sized(&path, [intrinsics.width, intrinsics.height], capture.camera)?;
-    let cv = |e: opencv::Error| DetectError::OpenCv {
+    let cv = |e: cv::Error| DetectError::OpenCv {
         path: path.clone(),
         message: e.message,
     };
@@ -277,7 +279,7 @@ fn detect_image(
     };
     if mode == Mode::Full && matches!(outcome, Outcome::NotFound) {
         // No board at all: say so when the picture is too dark to show one.
-        let bytes = opencv::prelude::MatTraitConstManual::data_bytes(&grey).map_err(cv)?;
+        let bytes = &grey.pixels;
         let brightness = bytes.iter().map(|&b| b as f64).sum::<f64>() / bytes.len().max(1) as f64;
         if brightness < crate::robot::check::MIN_BRIGHTNESS {
             return Ok(Outcome::TooDark {
@@ -310,16 +312,16 @@ enum Guided {
 fn guided_search(
     dataset: &Dataset,
     capture: &Capture,
-    grey: &Mat,
+    grey: &GreyImage,
     options: &DetectOptions,
     mode: Mode,
-) -> opencv::Result<Guided> {
+) -> cv::Result<Guided> {
     let model = &dataset.model;
     let params = options.prediction();
     let pose = model
         .chains_for(capture.camera, capture.side, &capture.joints)
         .camera_to_board(&params);
-    let integral = guided::Integral::new(grey)?;
+    let integral = guided::Integral::new(grey);
     let camera = model.intrinsics_at(capture.camera, &params);
     let uncertainty_deg = match mode {
         Mode::Quick => 0.0,
@@ -387,7 +389,7 @@ pub fn detect_dataset(
     // The images are the unit of parallelism: OpenCV's own worker threads would only compete
     // with them.
     if options.jobs > 1 {
-        let _ = opencv::core::set_num_threads(1);
+        let _ = cv::set_num_threads(1);
     }
     let passes = Passes {
         dataset,

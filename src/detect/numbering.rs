@@ -398,8 +398,7 @@ pub fn turn_check(found: &[[f64; 2]], predicted: &[[f64; 2]]) -> Result<f64, Str
 #[cfg(test)]
 mod tests {
     use super::*;
-    use opencv::core::Mat;
-    use opencv::prelude::*;
+    use crate::sim::render::GreyImage;
 
     /// A board seen face-on: board plane (mm) to pixels, `sx` and `sy` px per mm, the
     /// board's centre at (320, 240).
@@ -428,11 +427,11 @@ mod tests {
                 });
             }
         }
-        let image = Mat::new_rows_cols_with_data(480, 640, &grey)
-            .unwrap()
-            .try_clone()
-            .unwrap();
-        Integral::new(&image).unwrap()
+        Integral::new(&GreyImage {
+            width: 640,
+            height: 480,
+            pixels: grey,
+        })
     }
 
     /// The middle 2 × 2 inner vertices (col, row) of `model`'s board.

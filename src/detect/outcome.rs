@@ -274,6 +274,9 @@ pub enum NoCorners {
         /// The dataset directory.
         dir: PathBuf,
     },
+    /// OpenCV (naocalib's plugin) could not be loaded.
+    #[error(transparent)]
+    OpenCv(#[from] super::cv::Error),
     /// No board was found in any image.
     #[error(
         "{}: no board found in any of its {images} images ({summary}); first: {first}",

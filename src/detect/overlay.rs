@@ -3,15 +3,13 @@
 
 use std::path::{Path, PathBuf};
 
-use opencv::core::{Mat, Point, Scalar};
-use opencv::imgproc;
-use opencv::prelude::*;
-
 use crate::dataset::{Corner, Dataset};
 use crate::model::PARAMETER_COUNT;
 use crate::output::{WriteOptions, write_atomic};
 
+use super::cv::{self, Shape};
 use super::{DetectError, ImageResult, Outcome};
+use crate::sim::render::GreyImage;
 
 /// Colour of the detected vertices (green crosses).
 pub const DETECTED: [f64; 3] = [0.0, 200.0, 0.0];
@@ -20,72 +18,55 @@ pub const BEFORE: [f64; 3] = [0.0, 0.0, 255.0];
 /// Colour of the calibrated model's projection (blue circles).
 pub const AFTER: [f64; 3] = [255.0, 128.0, 0.0];
 
-fn point(p: [f64; 2]) -> Point {
+fn point(p: [f64; 2]) -> [i32; 2] {
     // Drawn with 4 fractional bits (shift 4) for sub-pixel placement.
-    Point::new((p[0] * 16.0).round() as i32, (p[1] * 16.0).round() as i32)
-}
-
-fn colour(c: [f64; 3]) -> Scalar {
-    Scalar::new(c[0], c[1], c[2], 0.0)
+    [(p[0] * 16.0).round() as i32, (p[1] * 16.0).round() as i32]
 }
 
 /// Draws on a colour copy of `grey`: the `before` and `after` projections as circles and the
 /// `detected` vertices as crosses; returns it as PNG bytes.
 pub fn draw(
-    grey: &Mat,
+    grey: &GreyImage,
     detected: &[[f64; 2]],
     before: Option<&[[f64; 2]]>,
     after: Option<&[[f64; 2]]>,
-) -> opencv::Result<Vec<u8>> {
-    let mut img = Mat::default();
-    imgproc::cvt_color(grey, &mut img, imgproc::COLOR_GRAY2BGR, 0)?;
+) -> cv::Result<Vec<u8>> {
+    let mut shapes: Vec<Shape> = Vec::new();
     for (points, c) in [(before, BEFORE), (after, AFTER)] {
         for p in points.unwrap_or(&[]) {
-            imgproc::circle(
-                &mut img,
-                point(*p),
-                4 * 16,
-                colour(c),
-                1,
-                imgproc::LINE_AA,
-                4,
-            )?;
+            shapes.push(cv::circle(point(*p), 4 * 16, c));
         }
     }
     for p in detected {
         let q = point(*p);
         for (dx, dy) in [(3, 3), (3, -3)] {
-            imgproc::line(
-                &mut img,
-                Point::new(q.x - dx * 16, q.y - dy * 16),
-                Point::new(q.x + dx * 16, q.y + dy * 16),
-                colour(DETECTED),
-                1,
-                imgproc::LINE_AA,
-                4,
-            )?;
+            shapes.push(cv::line(
+                [q[0] - dx * 16, q[1] - dy * 16],
+                [q[0] + dx * 16, q[1] + dy * 16],
+                DETECTED,
+            ));
         }
     }
-    encode_png(&img)
+    let bgr = cv::draw(grey, &shapes)?;
+    encode_png(&bgr, grey.width, grey.height).map_err(|e| cv::Error {
+        message: e.to_string(),
+    })
 }
 
-/// Encodes an 8-bit BGR image as RGB PNG bytes.
-fn encode_png(bgr: &Mat) -> opencv::Result<Vec<u8>> {
+/// Encodes an 8-bit BGR image of `width × height` as RGB PNG bytes.
+fn encode_png(bgr: &[u8], width: u32, height: u32) -> Result<Vec<u8>, png::EncodingError> {
     let rgb: Vec<u8> = bgr
-        .data_bytes()?
         .chunks_exact(3)
         .flat_map(|p| [p[2], p[1], p[0]])
         .collect();
-    let encoding =
-        |e: png::EncodingError| opencv::Error::new(opencv::core::StsError, e.to_string());
     let mut out = Vec::new();
-    let mut encoder = png::Encoder::new(&mut out, bgr.cols() as u32, bgr.rows() as u32);
+    let mut encoder = png::Encoder::new(&mut out, width, height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
     encoder.set_compression(png::Compression::Fast);
-    let mut writer = encoder.write_header().map_err(encoding)?;
-    writer.write_image_data(&rgb).map_err(encoding)?;
-    writer.finish().map_err(encoding)?;
+    let mut writer = encoder.write_header()?;
+    writer.write_image_data(&rgb)?;
+    writer.finish()?;
     Ok(out)
 }
 
@@ -117,7 +98,7 @@ pub fn write(
     let before = super::predict(model, capture, &[0.0; PARAMETER_COUNT]);
     let after = after.and_then(|p| super::predict(model, capture, p));
     let out = path(dir, capture.id);
-    let cv = |e: opencv::Error| DetectError::OpenCv {
+    let cv = |e: cv::Error| DetectError::OpenCv {
         path: out.clone(),
         message: e.message,
     };

@@ -1,7 +1,7 @@
 //! Where the nominal model (all offsets zero) and the logged joints put the board in the
 //! image: its vertices, and the region the chessboard finder searches.
 
-use opencv::core::Rect;
+use super::cv::Roi;
 
 use crate::dataset::Capture;
 use crate::model::{Model, PARAMETER_COUNT, Vertex};
@@ -28,7 +28,7 @@ pub(super) fn predicted_roi(
     model: &Model,
     capture: &Capture,
     params: &[f64; PARAMETER_COUNT],
-) -> Option<Rect> {
+) -> Option<Roi> {
     let b = &model.board;
     let (hx, hy) = (
         (b.squares_x as f64 / 2.0 + 1.0) * b.square,
@@ -56,10 +56,10 @@ pub(super) fn predicted_roi(
     if x1 - x0 < 32.0 || y1 - y0 < 32.0 || (x1 - x0) * (y1 - y0) > 0.8 * w * h {
         return None;
     }
-    Some(Rect::new(
-        x0 as i32,
-        y0 as i32,
-        (x1 - x0) as i32,
-        (y1 - y0) as i32,
-    ))
+    Some(Roi {
+        x: x0 as i32,
+        y: y0 as i32,
+        width: (x1 - x0) as i32,
+        height: (y1 - y0) as i32,
+    })
 }

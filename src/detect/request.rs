@@ -65,6 +65,9 @@ pub enum DetectRequestError {
     /// No job to process the images.
     #[error("--jobs must be at least 1")]
     NoJobs,
+    /// OpenCV (naocalib's plugin) could not be loaded.
+    #[error(transparent)]
+    OpenCv(#[from] super::cv::Error),
     /// No vertex was found, and the corners.csv holds some: it is left as it was.
     #[error(
         "{}: no vertex found in any of {images} images ({summary}); {} and its {count} \
@@ -176,6 +179,7 @@ impl DetectRequest {
                 ));
             }
         }
+        super::cv::load()?;
         Ok(Prepared {
             request: self,
             dataset,

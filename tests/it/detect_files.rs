@@ -6,10 +6,8 @@ use crate::util::{naocalib, stderr};
 use std::path::{Path, PathBuf};
 
 use naocalib::dataset::Dataset;
+use naocalib::detect::cv;
 use naocalib::sim::render::GreyImage;
-use opencv::core::{Point2f, Size, TermCriteria, Vector};
-use opencv::prelude::*;
-use opencv::{calib3d, imgproc};
 
 const SAMPLES: [&str; 6] = [
     "left01.jpg",
@@ -69,31 +67,15 @@ fn sample_dataset(dir: &Path) {
 /// goes astray by several pixels; so does 0.3 of the median square.)
 fn opencv_reference(path: &Path, half: i32) -> Vec<[f64; 2]> {
     let grey = naocalib::detect::read_grey(path).unwrap();
-    let mut corners = Vector::<Point2f>::new();
-    let found = calib3d::find_chessboard_corners(
-        &grey,
-        Size::new(9, 6),
-        &mut corners,
-        calib3d::CALIB_CB_ADAPTIVE_THRESH | calib3d::CALIB_CB_NORMALIZE_IMAGE,
-    )
-    .unwrap();
-    assert!(found, "OpenCV finds the board in {}", path.display());
-    let criteria = TermCriteria::new(
-        opencv::core::TermCriteria_Type::COUNT as i32 | opencv::core::TermCriteria_Type::EPS as i32,
-        30,
-        0.001,
-    )
-    .unwrap();
-    imgproc::corner_sub_pix(
-        &grey,
-        &mut corners,
-        Size::new(half, half),
-        Size::new(-1, -1),
-        criteria,
-    )
-    .unwrap();
-    assert!(!grey.empty());
-    corners.iter().map(|p| [p.x as f64, p.y as f64]).collect()
+    let mut corners = cv::find_chessboard(&grey, None, 9, 6, cv::Search::Exhaustive).unwrap();
+    assert_eq!(
+        corners.len(),
+        54,
+        "OpenCV finds the board in {}",
+        path.display()
+    );
+    cv::corner_sub_pix(&grey, &mut corners, half, 30, 0.001).unwrap();
+    corners.iter().map(|p| [p[0] as f64, p[1] as f64]).collect()
 }
 
 #[test]

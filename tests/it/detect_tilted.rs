@@ -242,7 +242,7 @@ fn opencv_boards_are_found(dataset: &Dataset) -> (usize, usize) {
         let path = dataset.dir.join(capture.image.as_ref().unwrap());
         let grey = detect::read_grey(&path).unwrap();
         let opencv =
-            detect::find::find_board_with(&grey, grid, None, detect::find::EXHAUSTIVE_FLAGS)
+            detect::find::find_board_with(&grey, grid, None, detect::cv::Search::Exhaustive)
                 .unwrap();
         if opencv.is_some() {
             got += 1;

@@ -685,7 +685,7 @@ fn detection_finds_the_rendered_pattern_with_the_models_numbering() {
             board,
             ..Model::default()
         };
-        let integral = guided::Integral::new(&image).unwrap();
+        let integral = guided::Integral::new(&image);
         let found = guided::detect(&image, &integral, &model, &camera, &pose, 0.3, 2.0)
             .unwrap()
             .unwrap_or_else(|e| panic!("{side:?}: not found: {e}"));

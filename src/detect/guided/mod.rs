@@ -31,10 +31,10 @@
 
 mod pattern;
 
+use crate::detect::cv;
+use crate::detect::find::{SUBPIX_EPS, SUBPIX_ITERATIONS};
+use crate::sim::render::GreyImage;
 use nalgebra::Matrix3;
-use opencv::core::{self, Mat, Point2f, Size, TermCriteria, Vector};
-use opencv::imgproc;
-use opencv::prelude::*;
 
 use crate::model::{Camera, Model, Pose, Vertex};
 
@@ -103,14 +103,14 @@ impl Board {
 /// `factor` is the half-window of `cornerSubPix` in squares; `uncertainty_deg` how far
 /// (as an angle of view) the prediction may be off.
 pub fn detect(
-    image: &Mat,
+    image: &GreyImage,
     integral: &Integral,
     model: &Model,
     camera: &Camera,
     pose: &Pose<f64>,
     factor: f64,
     uncertainty_deg: f64,
-) -> opencv::Result<Result<Board, String>> {
+) -> cv::Result<Result<Board, String>> {
     let prediction = predict(model, camera, pose);
     if prediction.len() < MIN_VERTICES {
         return Ok(Err("the model puts the board behind the camera".into()));
@@ -133,7 +133,7 @@ pub fn detect(
 /// the board, and the settings every step of the search shares.
 struct Search<'a> {
     /// The image (8-bit grey).
-    image: &'a Mat,
+    image: &'a GreyImage,
     /// Its integral image, for the saddle scores.
     integral: &'a Integral,
     /// The model (its board's geometry).
@@ -195,7 +195,7 @@ impl Search<'_> {
     /// The whole search: the alignments of the prediction with the image, the vertices
     /// each leads to, numbered by the image; the board when one numbering is clearly
     /// best supported.
-    fn run(&self, uncertainty_deg: f64) -> opencv::Result<Result<Board, String>> {
+    fn run(&self, uncertainty_deg: f64) -> cv::Result<Result<Board, String>> {
         let candidates = match self.alignments(uncertainty_deg) {
             Ok(c) => c,
             Err(reason) => return Ok(Err(reason)),
@@ -318,7 +318,7 @@ impl Search<'_> {
     /// homography) moved by `shift`: each where its saddle peaks, refined and checked,
     /// those fitting one homography kept; then the vertices that homography predicts,
     /// likewise ([`Search::grow`]). `None` when too few are found.
-    fn search(&self, seen: &[Predicted], shift: [f64; 2]) -> opencv::Result<Option<Found>> {
+    fn search(&self, seen: &[Predicted], shift: [f64; 2]) -> cv::Result<Option<Found>> {
         let mut found: Indexed = Vec::new();
         for (k, p) in seen.iter().enumerate() {
             let guess = [p.pixel[0] + shift[0], p.pixel[1] + shift[1]];
@@ -331,7 +331,7 @@ impl Search<'_> {
 
     /// The vertices of `found` that fit one homography, and those that homography predicts
     /// (twice over); `None` when too few are left.
-    fn grow(&self, found: &[(usize, [f64; 2])]) -> opencv::Result<Option<Found>> {
+    fn grow(&self, found: &[(usize, [f64; 2])]) -> cv::Result<Option<Found>> {
         let Some((mut h, mut kept)) = self.consistent(found) else {
             return Ok(None);
         };
@@ -372,7 +372,7 @@ impl Search<'_> {
 
     /// Finds the vertex `p` near `guess`: where its saddle peaks, refined with
     /// `cornerSubPix`, and still a saddle there.
-    fn locate(&self, p: &Predicted, guess: [f64; 2]) -> opencv::Result<Option<[f64; 2]>> {
+    fn locate(&self, p: &Predicted, guess: [f64; 2]) -> cv::Result<Option<[f64; 2]>> {
         let Some(start) = p.peak(self.integral, guess) else {
             return Ok(None);
         };
@@ -384,9 +384,9 @@ impl Search<'_> {
     /// `cornerSubPix` in a half-window of about [`Search::factor`] squares that stays
     /// inside the image; `None` when it is too near the border, or leaves its start by a
     /// quarter of a square (at least 3 px) or more.
-    fn refine(&self, p: &Predicted, start: [f64; 2]) -> opencv::Result<Option<[f64; 2]>> {
+    fn refine(&self, p: &Predicted, start: [f64; 2]) -> cv::Result<Option<[f64; 2]>> {
         let image = self.image;
-        let (w, h) = (image.cols() as f64, image.rows() as f64);
+        let (w, h) = (image.width as f64, image.height as f64);
         let room = start[0]
             .min(start[1])
             .min(w - 1.0 - start[0])
@@ -397,26 +397,14 @@ impl Search<'_> {
         if half < MIN_HALF_WINDOW {
             return Ok(None);
         }
-        let mut pts =
-            Vector::<Point2f>::from_iter([Point2f::new(start[0] as f32, start[1] as f32)]);
-        let criteria = TermCriteria::new(
-            core::TermCriteria_Type::COUNT as i32 | core::TermCriteria_Type::EPS as i32,
-            50,
-            1e-4,
-        )?;
-        imgproc::corner_sub_pix(
-            image,
-            &mut pts,
-            Size::new(half, half),
-            Size::new(-1, -1),
-            criteria,
-        )?;
-        let q = pts.get(0)?;
-        if q.x == start[0] as f32 && q.y == start[1] as f32 {
+        let mut pts = [[start[0] as f32, start[1] as f32]];
+        cv::corner_sub_pix(image, &mut pts, half, SUBPIX_ITERATIONS, SUBPIX_EPS)?;
+        let q = pts[0];
+        if q[0] == start[0] as f32 && q[1] == start[1] as f32 {
             // cornerSubPix leaves a point where its window holds no usable gradients.
             return Ok(None);
         }
-        let q = [q.x as f64, q.y as f64];
+        let q = [q[0] as f64, q[1] as f64];
         let moved = ((q[0] - start[0]).powi(2) + (q[1] - start[1]).powi(2)).sqrt();
         let inside = q[0] - half as f64 - 1.0 >= 0.0
             && q[1] - half as f64 - 1.0 >= 0.0
@@ -463,7 +451,7 @@ impl Search<'_> {
     /// supported first: the alignments numbered (best supported first), or why none is.
     /// An alignment sharing a vertex's pixel with one already settled is on the same
     /// lattice, which the image numbers the same way: not settled again.
-    fn settle_all(&self, mut outcomes: Vec<Found>) -> opencv::Result<Result<Vec<Found>, String>> {
+    fn settle_all(&self, mut outcomes: Vec<Found>) -> cv::Result<Result<Vec<Found>, String>> {
         outcomes.sort_by_key(|f| std::cmp::Reverse(f.support()));
         let mut settled: Vec<Found> = Vec::new();
         let mut undecided = None;
@@ -491,7 +479,7 @@ impl Search<'_> {
     /// vertices. Then the prediction must rule out the 180° turn
     /// ([`numbering::turn_check`]). `Err` with the reason when the numbering cannot be
     /// decided.
-    fn settle(&self, mut found: Found) -> opencv::Result<Result<Found, String>> {
+    fn settle(&self, mut found: Found) -> cv::Result<Result<Found, String>> {
         let mut total_shift = (0, 0);
         for _ in 0..3 {
             let decided = match self.decide(&found) {

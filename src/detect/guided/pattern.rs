@@ -3,11 +3,10 @@
 //! to compare that with.
 
 use nalgebra::Matrix3;
-use opencv::core::Mat;
-use opencv::prelude::*;
 
 use crate::detect::assign;
 use crate::model::{Camera, Model, Pose, Vertex};
+use crate::sim::render::GreyImage;
 
 /// Where the colour samples lie: this fraction of a square along both board axes.
 const SAMPLE: f64 = 0.3;
@@ -27,9 +26,9 @@ pub struct Integral {
 
 impl Integral {
     /// The integral image of an 8-bit greyscale `image`.
-    pub fn new(image: &Mat) -> opencv::Result<Integral> {
-        let (width, height) = (image.cols() as usize, image.rows() as usize);
-        let bytes = image.data_bytes()?;
+    pub fn new(image: &GreyImage) -> Integral {
+        let (width, height) = (image.width as usize, image.height as usize);
+        let bytes = &image.pixels;
         let w1 = width + 1;
         let mut sums = vec![0u32; w1 * (height + 1)];
         for v in 0..height {
@@ -40,11 +39,11 @@ impl Integral {
                 sums[(v + 1) * w1 + u + 1] = sums[v * w1 + u + 1] + row;
             }
         }
-        Ok(Integral {
+        Integral {
             width,
             height,
             sums,
-        })
+        }
     }
 
     /// The mean grey level of the square of half-size `h` ≥ 1 around pixel `(x, y)`
