@@ -192,3 +192,42 @@ fn force_without_any_board_keeps_corners_csv() {
     );
     assert_eq!(std::fs::read(dir.join("corners.csv")).unwrap(), good);
 }
+
+/// OpenCV is naocalib's plugin, loaded by the commands that detect and by no other: the
+/// executable does not link it, a solve runs without it, and `detect` and `solve --detect`
+/// without it (or with a file that is not it) stop before any image is read, naming the
+/// file.
+#[test]
+fn opencv_is_loaded_only_to_detect_and_its_absence_is_named() {
+    let exe = std::fs::read(assert_cmd::cargo::cargo_bin("naocalib")).unwrap();
+    assert!(
+        !exe.windows(10).any(|w| w == b"libopencv_"),
+        "the executable names an OpenCV library"
+    );
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("d");
+    rendered(&dir);
+    let missing = tmp.path().join("no-plugin.so");
+    let solved = naocalib()
+        .env("NAOCALIB_OPENCV_PLUGIN", &missing)
+        .arg("solve")
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sample"))
+        .output()
+        .unwrap();
+    assert!(solved.status.success(), "{}", stderr(&solved));
+    let corners = std::fs::read(dir.join("corners.csv")).ok();
+    let not_a_plugin = tmp.path().join("captures.so");
+    std::fs::copy(dir.join("captures.csv"), &not_a_plugin).unwrap();
+    for (plugin, why) in [(&missing, "cannot open"), (&not_a_plugin, "did not load")] {
+        for args in [&["detect"][..], &["solve", "--detect"][..]] {
+            let out = naocalib()
+                .env("NAOCALIB_OPENCV_PLUGIN", plugin)
+                .args(args)
+                .arg(&dir)
+                .output()
+                .unwrap();
+            assert_clean_failure(&out, &["OpenCV plugin", &plugin.display().to_string(), why]);
+        }
+    }
+    assert_eq!(std::fs::read(dir.join("corners.csv")).ok(), corners);
+}
