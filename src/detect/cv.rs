@@ -53,11 +53,8 @@ fn file_name() -> String {
     )
 }
 
-/// Where the plugin is looked for, in order.
+/// Where the plugin is looked for when [`PLUGIN_VARIABLE`] is not set, in order.
 fn candidates() -> Vec<PathBuf> {
-    if let Some(path) = std::env::var_os(PLUGIN_VARIABLE) {
-        return vec![PathBuf::from(path)];
-    }
     let name = file_name();
     let Some(dir) = std::env::current_exe()
         .ok()
@@ -113,26 +110,35 @@ fn plugin() -> Result<&'static Plugin> {
     static PLUGIN: OnceLock<std::result::Result<Plugin, String>> = OnceLock::new();
     PLUGIN
         .get_or_init(|| {
-            let candidates = candidates();
-            let mut tried = Vec::new();
-            for path in &candidates {
-                if path.exists() || candidates.len() == 1 {
-                    return open(path).map_err(|e| {
-                        format!(
-                            "naocalib's OpenCV plugin {} did not load: {e}",
-                            path.display()
-                        )
-                    });
-                }
-                tried.push(path.display().to_string());
+            let opened = |path: &std::path::Path| {
+                open(path).map_err(|e| {
+                    format!(
+                        "naocalib's OpenCV plugin {} did not load: {e}",
+                        path.display()
+                    )
+                })
+            };
+            if let Some(path) = std::env::var_os(PLUGIN_VARIABLE) {
+                return opened(std::path::Path::new(&path));
             }
-            Err(format!(
-                "naocalib's OpenCV plugin {} is not in {}; it is built with naocalib \
-                 (cargo build --release) and belongs next to the naocalib executable, or set \
-                 {PLUGIN_VARIABLE} to its path",
-                file_name(),
-                tried.join(", ")
-            ))
+            let candidates = candidates();
+            match candidates.iter().find(|p| p.exists()) {
+                Some(path) => opened(path),
+                None => Err(format!(
+                    "naocalib's OpenCV plugin {} is not in {}; it is built with naocalib \
+                     (cargo build --release) and belongs next to the naocalib executable, or \
+                     set {PLUGIN_VARIABLE} to its path",
+                    file_name(),
+                    match candidates.is_empty() {
+                        true => "the executable's directory (which cannot be found)".into(),
+                        false => candidates
+                            .iter()
+                            .map(|p| p.display().to_string())
+                            .collect::<Vec<_>>()
+                            .join(", "),
+                    }
+                )),
+            }
         })
         .as_ref()
         .map_err(|message| Error {
