@@ -180,15 +180,15 @@ fn status(status: i32, message: &abi::Message) -> Result<()> {
 }
 
 /// `findChessboardCorners` for a pattern of `cols × rows` inner corners in `image`, or in
-/// its part `roi`: the corners in the part's pixels, in OpenCV's order, as many as OpenCV
-/// gave (none when it found no board, and only the first `cols × rows` when it gave more).
+/// its part `roi`: the corners in the part's pixels, in OpenCV's order; `None` when it found
+/// no board, or other than `cols × rows` corners.
 pub fn find_chessboard(
     image: &GreyImage,
     roi: Option<Roi>,
     cols: usize,
     rows: usize,
     search: Search,
-) -> Result<Vec<[f32; 2]>> {
+) -> Result<Option<Vec<[f32; 2]>>> {
     let plugin = plugin()?;
     let grey = view(image)?;
     let mut out = vec![0f32; 2 * cols * rows];
@@ -208,8 +208,8 @@ pub fn find_chessboard(
         )
     };
     status(s, &message)?;
-    out.truncate(2 * (count.max(0) as usize).min(cols * rows));
-    Ok(out.chunks_exact(2).map(|p| [p[0], p[1]]).collect())
+    Ok((count > 0 && count as usize == cols * rows)
+        .then(|| out.chunks_exact(2).map(|p| [p[0], p[1]]).collect()))
 }
 
 /// `image` shrunk to half its width and height with `INTER_AREA` (each pixel the mean of

@@ -23,10 +23,11 @@ pub fn find_board_with(
     roi: Option<Roi>,
     search: Search,
 ) -> cv::Result<Option<Vec<[f64; 2]>>> {
-    let corners = cv::find_chessboard(image, roi, grid.cols as usize, grid.rows as usize, search)?;
-    if corners.len() != grid.len() {
+    let Some(corners) =
+        cv::find_chessboard(image, roi, grid.cols as usize, grid.rows as usize, search)?
+    else {
         return Ok(None);
-    }
+    };
     let offset = roi.map_or([0.0, 0.0], |r| [r.x as f64, r.y as f64]);
     Ok(Some(
         corners

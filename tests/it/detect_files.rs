@@ -67,13 +67,9 @@ fn sample_dataset(dir: &Path) {
 /// goes astray by several pixels; so does 0.3 of the median square.)
 fn opencv_reference(path: &Path, half: i32) -> Vec<[f64; 2]> {
     let grey = naocalib::detect::read_grey(path).unwrap();
-    let mut corners = cv::find_chessboard(&grey, None, 9, 6, cv::Search::Exhaustive).unwrap();
-    assert_eq!(
-        corners.len(),
-        54,
-        "OpenCV finds the board in {}",
-        path.display()
-    );
+    let mut corners = cv::find_chessboard(&grey, None, 9, 6, cv::Search::Exhaustive)
+        .unwrap()
+        .unwrap_or_else(|| panic!("OpenCV finds the board in {}", path.display()));
     cv::corner_sub_pix(&grey, &mut corners, half, 30, 0.001).unwrap();
     corners.iter().map(|p| [p[0] as f64, p[1] as f64]).collect()
 }
