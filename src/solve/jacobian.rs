@@ -265,25 +265,37 @@ impl Linearisation {
             rss: 0.0,
             rows: 0,
         };
-        for c in 0..captures {
-            let local: Vec<Param> = self
-                .capture_params(c)
+        for (c, stored) in self.captures.iter().enumerate() {
+            // The capture's parameters among `columns`, and where each goes.
+            let (local, at): (Vec<Param>, Vec<usize>) = stored
+                .params
                 .iter()
-                .copied()
-                .filter(|p| column[p.index()].is_some())
-                .collect();
-            let slice = self.capture(c, &local, problem.captures[c].whitening.as_ref());
-            let jtj = slice.jacobian.transpose() * &slice.jacobian;
-            let jtr = slice.jacobian.tr_mul(&slice.residuals);
-            for (a, pa) in local.iter().enumerate() {
-                let ca = column[pa.index()].expect("a chosen column");
+                .filter_map(|p| column[p.index()].map(|k| (*p, k)))
+                .unzip();
+            let whitening = problem.captures[c].whitening.as_ref();
+            let sliced;
+            let (jacobian, residuals) = if local.len() == stored.params.len() && whitening.is_none()
+            {
+                (&stored.jacobian, &stored.residuals)
+            } else {
+                sliced = self.capture(c, &local, whitening);
+                (&sliced.jacobian, &sliced.residuals)
+            };
+            let jtj = jacobian.transpose() * jacobian;
+            let jtr = jacobian.tr_mul(residuals);
+            for (a, &ca) in at.iter().enumerate() {
                 sums.gradients[(c, ca)] = jtr[a];
-                for (b, pb) in local.iter().enumerate() {
-                    sums.gram[(ca, column[pb.index()].expect("a chosen column"))] += jtj[(a, b)];
+            }
+            // Column by column of `jtj` into the chosen columns of the Gram matrix.
+            let gram = sums.gram.as_mut_slice();
+            for (&cb, products) in at.iter().zip(jtj.column_iter()) {
+                let into = &mut gram[cb * n..(cb + 1) * n];
+                for (&ca, &v) in at.iter().zip(products.as_slice()) {
+                    into[ca] += v;
                 }
             }
-            sums.rss += slice.residuals.norm_squared();
-            sums.rows += slice.residuals.len();
+            sums.rss += residuals.norm_squared();
+            sums.rows += residuals.len();
         }
         sums
     }
