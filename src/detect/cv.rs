@@ -129,13 +129,14 @@ fn plugin() -> Result<&'static Plugin> {
                      (cargo build --release) and belongs next to the naocalib executable, or \
                      set {PLUGIN_VARIABLE} to its path",
                     file_name(),
-                    match candidates.is_empty() {
-                        true => "the executable's directory (which cannot be found)".into(),
-                        false => candidates
+                    if candidates.is_empty() {
+                        "the executable's directory (which cannot be found)".into()
+                    } else {
+                        candidates
                             .iter()
                             .map(|p| p.display().to_string())
                             .collect::<Vec<_>>()
-                            .join(", "),
+                            .join(", ")
                     }
                 )),
             }
