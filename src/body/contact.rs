@@ -1,8 +1,9 @@
 //! Contact between the body's parts and with the floor, lines of sight past the body, and
 //! the smallest clearance of a posture, for a NAO lying on its back.
 //!
-//! Which pairs are checked: each leg's parts against the other leg's, against the torso,
-//! the pelvis (not the thighs, which start inside it), the head and both arms; the foot,
+//! Which pairs are checked: each leg's parts against the other leg's, against the torso and
+//! the pelvis (not the thighs, whose boxes hold the round housing at the hip), the head and
+//! both arms; the foot,
 //! toe and sandal against their own thigh; every leg part against the floor. Parts joined
 //! by a joint (thigh–tibia, tibia–foot, arm–torso) are not checked against each other.
 //! A box is tested against a capsule through spheres spaced at most 5 mm along the
@@ -89,7 +90,9 @@ fn checked(a: &Part, b: &Part) -> bool {
         (false, true) => (b, a),
         (false, false) => return false,
     };
-    !(other.kind == Kind::Pelvis && leg.kind == Kind::Thigh)
+    // A thigh's box holds its top, the HipPitch motor's housing, which is round about the
+    // hip's axis: its corners would meet the waist and the pelvis at any raised thigh.
+    !(leg.kind == Kind::Thigh && matches!(other.kind, Kind::Pelvis | Kind::Torso))
 }
 
 /// The foot, toe or sandal `a` against its own leg's thigh `b`.
@@ -322,7 +325,7 @@ mod tests {
             (LHipRoll, 0.75),
             (LHipPitch, -1.2),
             (LKneePitch, 1.6),
-            (RHipRoll, -0.2),
+            (RHipRoll, -0.35),
         ]);
         let laid = BodyModel {
             arms: crate::body::ArmPosture::BESIDE_BODY,
@@ -341,22 +344,33 @@ mod tests {
     }
 
     #[test]
-    fn clearance_is_zero_in_contact_and_grows_as_the_legs_part() {
+    fn clearance_is_zero_exactly_where_there_is_contact() {
         use Joint::*;
         let robot = RobotGeometry::default();
         let board = Board::default();
         let body = BodyModel::default();
-        let at = |roll: f64| {
-            let posed = body.pose(
-                &robot,
-                &board,
-                &pose(&[(LHipRoll, roll), (RHipRoll, -roll)]),
-            );
-            clearance(&posed, body.floor_x)
+        let posed = |roll: f64| {
+            // Both legs straight, lifted off the floor by 0.3 rad, spread by `roll`.
+            let joints = pose(&[
+                (LHipRoll, roll),
+                (RHipRoll, -roll),
+                (LHipPitch, -0.3),
+                (RHipPitch, -0.3),
+            ]);
+            body.pose(&robot, &board, &joints)
         };
-        assert_eq!(at(0.0).mm, 0.0);
-        let (a, b) = (at(0.25), at(0.35));
-        assert!(a.mm > 0.0 && b.mm > a.mm, "{a:?} {b:?}");
+        let touching = clearance(&posed(0.0), body.floor_x);
+        assert_eq!(touching.mm, 0.0);
+        assert!(
+            touching.between.starts_with("left") && touching.between.contains("/ right"),
+            "{touching:?}"
+        );
+        assert!(clearance(&posed(0.25), body.floor_x).mm > 0.0);
+        for k in 0..=40 {
+            let p = posed(k as f64 * 0.01);
+            let c = clearance(&p, body.floor_x);
+            assert_eq!(c.mm == 0.0, contact(&p, body.floor_x).is_some(), "{c:?}");
+        }
     }
 
     #[test]
@@ -371,18 +385,22 @@ mod tests {
             .iter()
             .find(|p| p.kind == Kind::Thigh && p.side == Some(Side::Right))
             .unwrap();
-        let Shape::Capsule(c) = thigh.shape else {
-            panic!()
+        let (mid, _) = thigh.shape.bounds();
+        // A line from above the thigh down through its middle, and one beside it (out of
+        // the body, to the robot's right).
+        let line = |dy: f64| {
+            (
+                [mid[0] + 300.0, mid[1] + dy, mid[2]],
+                [mid[0] - 20.0, mid[1] + dy, mid[2]],
+            )
         };
-        let mid: [f64; 3] = std::array::from_fn(|i| 0.5 * (c.a[i] + c.b[i]));
-        let (eye, target) = (
-            [mid[0] + 5.0, mid[1] - 300.0, mid[2]],
-            [mid[0] + 5.0, mid[1] + 300.0, mid[2]],
-        );
+        let (eye, target) = line(0.0);
         let what = sight_blocked(&posed, Side::Left, eye, &[target], 0.0);
         assert_eq!(what.as_deref(), Some("right thigh"));
-        let lift = |p: [f64; 3]| [p[0] + 400.0, p[1], p[2]];
-        let what = sight_blocked(&posed, Side::Left, lift(eye), &[lift(target)], 0.0);
-        assert_eq!(what, None);
+        let (eye, target) = line(-150.0);
+        assert_eq!(sight_blocked(&posed, Side::Left, eye, &[target], 0.0), None);
+        // Grown by the distance to its side, the thigh blocks the line beside it too.
+        let what = sight_blocked(&posed, Side::Left, eye, &[target], 120.0);
+        assert!(what.is_some());
     }
 }

@@ -32,8 +32,9 @@ use crate::model::{Axis, Board, Joint, JointAngles, Pose, RobotGeometry, Side};
 pub enum Kind {
     /// The chest and back, from above the hips to the neck.
     Torso,
-    /// The hips' housing between the thighs.
+    /// The hips' housing between the thighs (HipYawPitch and HipRoll at zero).
     Pelvis,
+
     /// The head (never in its own cameras' way: it is left out of the lines of sight).
     Head,
     /// A shoulder's housing.
@@ -108,49 +109,57 @@ impl Part {
 }
 
 /// The sizes of the body's solids (mm), each in its link's frame, grown by
-/// [`BodyModel::MARGIN`] over the real part.
+/// [`BodyModel::MARGIN`] over the real part (docs/BODY.md).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BodyModel {
-    /// Radius of the thigh capsules (hip → knee).
-    pub thigh_radius: f64,
-    /// Radius of the tibia capsules (knee → ankle).
-    pub tibia_radius: f64,
-    /// Foot box (heel to the ball, the ankle's height) in the left sole frame: low corner
-    /// (mirrored in y for the right foot).
+    /// Thigh box in the left HipPitch frame (origin at the hip joints): low corner
+    /// (mirrored in y for the right leg).
+    pub thigh_lo: [f64; 3],
+    /// Thigh box: high corner.
+    pub thigh_hi: [f64; 3],
+    /// Tibia box in the left KneePitch frame (origin at the knee): low corner.
+    pub tibia_lo: [f64; 3],
+    /// Tibia box: high corner.
+    pub tibia_hi: [f64; 3],
+    /// Foot box (heel to the ball, with the ankle's housing) in the left sole frame: low
+    /// corner.
     pub foot_lo: [f64; 3],
     /// Foot box: high corner.
     pub foot_hi: [f64; 3],
-    /// Toe box (in front of the ball, lower) in the left sole frame: low corner.
-    pub toe_lo: [f64; 3],
-    /// Toe box: high corner.
-    pub toe_hi: [f64; 3],
-    /// The sandal plate's heel end (x in the sole frame) and thickness below the sole.
+    /// The toe, lower than the foot and lowest at its tip, as boxes in the left sole frame:
+    /// `(lo, hi)` each.
+    pub toes: [([f64; 3], [f64; 3]); 2],
+    /// The sandal plate's heel end (x in the sole frame).
     pub sandal_heel: f64,
     /// Thickness of the sandal plate below the sole (mm).
     pub sandal_thickness: f64,
     /// The plate's margin around the printed pattern (mm).
     pub sandal_margin: f64,
-    /// Torso box in `O`: low corner.
-    pub torso_lo: [f64; 3],
-    /// Torso box in `O`: high corner.
-    pub torso_hi: [f64; 3],
-    /// Pelvis box in `O`: low corner.
+    /// The torso as boxes in `O` (waist, chest, shoulder girdle, neck): `(lo, hi)` each.
+    pub torso: [([f64; 3], [f64; 3]); 4],
+    /// Pelvis box in `O` (the HipYawPitch and HipRoll housings at zero): low corner.
     pub pelvis_lo: [f64; 3],
     /// Pelvis box in `O`: high corner.
     pub pelvis_hi: [f64; 3],
-    /// The head's sphere: centre in the HeadPitch frame and radius.
+    /// The head's sphere: centre in the HeadPitch frame.
     pub head_centre: [f64; 3],
     /// Radius of the head's sphere.
     pub head_radius: f64,
     /// Radius of the shoulder spheres, centred on the shoulder joints.
     pub shoulder_radius: f64,
-    /// Radius of the upper arm capsules (shoulder → elbow).
+    /// The upper arm capsule's ends along the left ShoulderRoll frame's x axis.
+    pub upper_arm: [f64; 2],
+    /// Radius of the upper arm capsules.
     pub upper_arm_radius: f64,
-    /// Radius of the forearm capsules (elbow → fingertips).
+    /// The forearm-and-hand capsule's ends along the ElbowRoll frame's x axis (the hand at
+    /// any WristYaw, fingers open or closed).
+    pub forearm: [f64; 2],
+    /// Radius of the forearm-and-hand capsules.
     pub forearm_radius: f64,
-    /// From the wrist to the fingertips along the hand (mm).
-    pub hand_length: f64,
-    /// The floor under the robot's back: nothing may reach below this `x_O`.
+    /// The floor under the robot: nothing may reach below this `x_O`. Lying on its back
+    /// with the legs straight, the NAO rests on its back (−52.7 mm) and its heels (−59.4 mm
+    /// in the sole frame); the floor lies at the heels' depth grown by the margin, so that
+    /// the legs may move as low as they lie, no lower.
     pub floor_x: f64,
     /// Where the arms are for the whole capture run ([`ArmPosture::CAPTURE`]).
     pub arms: ArmPosture,
@@ -170,29 +179,57 @@ impl BodyModel {
 }
 
 impl Default for BodyModel {
-    /// The NAO V6 (H25), each part grown by [`BodyModel::MARGIN`].
+    /// The NAO V6 (H25): the official meshes' extents in each link's frame (docs/BODY.md),
+    /// each grown by [`BodyModel::MARGIN`].
     fn default() -> Self {
+        let m = BodyModel::MARGIN;
+        let grow = |lo: [f64; 3], hi: [f64; 3]| (lo.map(|x| x - m), hi.map(|x| x + m));
+        // The thigh below the hip's axis; above it (at most 19 mm), the HipPitch motor's
+        // round housing is the pelvis box's.
+        let (thigh_lo, mut thigh_hi) = grow([-44.7, -41.3, -124.2], [51.2, 48.8, 19.0]);
+        thigh_hi[2] = 0.0;
+        let (tibia_lo, tibia_hi) = grow([-39.6, -41.3, -125.8], [50.1, 52.0, 21.8]);
+        // The sole stands on the sandal: the foot's boxes start at the sole's plane.
+        let (mut foot_lo, foot_hi) = grow([-59.4, -38.8, 0.0], [60.0, 51.7, 65.0]);
+        foot_lo[2] = 0.0;
+        let toe = |lo: [f64; 3], hi: [f64; 3]| {
+            let (mut lo, hi) = grow(lo, hi);
+            lo[2] = 0.0;
+            (lo, hi)
+        };
         BodyModel {
-            thigh_radius: 37.0,
-            tibia_radius: 35.0,
-            foot_lo: [-60.0, -45.0, 0.0],
-            foot_hi: [60.0, 55.0, 60.0],
-            toe_lo: [60.0, -45.0, 0.0],
-            toe_hi: [115.0, 55.0, 32.0],
-            sandal_heel: -60.0,
+            thigh_lo,
+            thigh_hi,
+            tibia_lo,
+            tibia_hi,
+            foot_lo,
+            foot_hi,
+            toes: [
+                toe([55.0, -38.8, 0.0], [85.0, 48.2, 33.5]),
+                toe([80.0, -37.3, 0.0], [102.4, 42.7, 28.7]),
+            ],
+            sandal_heel: -64.4,
             sandal_thickness: 8.0,
             sandal_margin: 20.0,
-            torso_lo: [-62.0, -80.0, 45.0],
-            torso_hi: [65.0, 80.0, 215.0],
-            pelvis_lo: [-50.0, -45.0, -20.0],
-            pelvis_hi: [50.0, 45.0, 45.0],
-            head_centre: [0.0, 0.0, 60.0],
-            head_radius: 80.0,
-            shoulder_radius: 45.0,
-            upper_arm_radius: 35.0,
-            forearm_radius: 32.0,
-            hand_length: 110.0,
-            floor_x: -62.0,
+            torso: [
+                grow([-52.6, -48.1, 45.0], [52.0, 48.1, 105.0]),
+                grow([-52.7, -72.2, 105.0], [58.9, 72.2, 165.0]),
+                grow([-52.7, -87.0, 165.0], [57.6, 87.0, 195.0]),
+                grow([-31.0, -87.0, 195.0], [29.0, 87.0, 218.3]),
+            ],
+            // The hips' housings at zero hip angles (x −58.9 … 24.2, |y| ≤ 64.6,
+            // z −34.8 … 43.3) and the thighs' tops above the hip axis (x −44.7 … 51.2,
+            // |y| ≤ 98.8, z ≤ 19).
+            pelvis_lo: [-63.9, -103.8, -39.8],
+            pelvis_hi: [56.2, 103.8, 48.3],
+            head_centre: [0.6, 0.0, 54.3],
+            head_radius: 73.7 + m,
+            shoulder_radius: 42.0 + m,
+            upper_arm: [-7.0, 82.0],
+            upper_arm_radius: 45.5 + m,
+            forearm: [0.0, 125.0],
+            forearm_radius: 50.6 + m,
+            floor_x: -65.0,
             arms: ArmPosture::CAPTURE,
         }
     }
@@ -331,33 +368,20 @@ impl BodyModel {
             let sole = &soles[k];
             let board_frame = sole.compose(&board.mount());
             let (sandal_lo, sandal_hi) = sandal_in_board(self, board);
-            let leg = [
-                (
-                    Kind::Thigh,
-                    Shape::Capsule(Capsule {
-                        a: frames.hip.translation,
-                        b: frames.knee.translation,
-                        radius: self.thigh_radius,
-                    }),
-                ),
-                (
-                    Kind::Tibia,
-                    Shape::Capsule(Capsule {
-                        a: frames.knee.translation,
-                        b: frames.ankle.translation,
-                        radius: self.tibia_radius,
-                    }),
-                ),
+            let (tl, th) = (mirror(self.thigh_lo), mirror(self.thigh_hi));
+            let (kl, kh) = (mirror(self.tibia_lo), mirror(self.tibia_hi));
+            let mut leg = vec![
+                (Kind::Thigh, boxed(&frames.hip, tl, th)),
+                (Kind::Tibia, boxed(&frames.knee, kl, kh)),
                 (
                     Kind::Foot,
                     boxed(sole, mirror(self.foot_lo), mirror(self.foot_hi)),
                 ),
-                (
-                    Kind::Toe,
-                    boxed(sole, mirror(self.toe_lo), mirror(self.toe_hi)),
-                ),
-                (Kind::Sandal, boxed(&board_frame, sandal_lo, sandal_hi)),
             ];
+            for (lo, hi) in self.toes {
+                leg.push((Kind::Toe, boxed(sole, mirror(lo), mirror(hi))));
+            }
+            leg.push((Kind::Sandal, boxed(&board_frame, sandal_lo, sandal_hi)));
             parts.extend(leg.into_iter().map(|(kind, shape)| Part {
                 kind,
                 side: Some(side),
@@ -365,11 +389,13 @@ impl BodyModel {
             }));
         }
         let origin = Pose::identity();
-        parts.push(Part {
-            kind: Kind::Torso,
-            side: None,
-            shape: boxed(&origin, self.torso_lo, self.torso_hi),
-        });
+        for (lo, hi) in self.torso {
+            parts.push(Part {
+                kind: Kind::Torso,
+                side: None,
+                shape: boxed(&origin, lo, hi),
+            });
+        }
         parts.push(Part {
             kind: Kind::Pelvis,
             side: None,

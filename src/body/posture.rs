@@ -7,6 +7,8 @@
 //! LoLA enforces them).
 
 use super::{BodyModel, Capsule, Kind, Part, Shape, Sphere};
+use std::f64::consts::FRAC_PI_2;
+
 use crate::model::{Axis, Pose, Side};
 
 /// The arm joints in LoLA's names and the plan's column order: left arm, then right.
@@ -45,8 +47,8 @@ impl ArmPosture {
     /// Arms lying beside the body, as the robot is laid down (shoulders pitched 90°, the
     /// arms along the body toward the feet, slightly out).
     pub const BESIDE_BODY: ArmPosture = ArmPosture([
-        1.5708, 0.15, 0.0, -0.1, 0.0, //
-        1.5708, -0.15, 0.0, 0.1, 0.0,
+        FRAC_PI_2, 0.15, 0.0, -0.1, 0.0, //
+        FRAC_PI_2, -0.15, 0.0, 0.1, 0.0,
     ]);
 
     /// Where capture puts the arms for the whole run: spread on the floor, 70° out from
@@ -54,8 +56,8 @@ impl ArmPosture {
     /// nearly straight). Out of every planned line of sight and of every leg's reach
     /// (`naocalib plan` checks both against the body model and prints the clearance).
     pub const CAPTURE: ArmPosture = ArmPosture([
-        1.5708, 1.2217, 0.0, -0.1, 0.0, //
-        1.5708, -1.2217, 0.0, 0.1, 0.0,
+        FRAC_PI_2, 1.2217, 0.0, -0.1, 0.0, //
+        FRAC_PI_2, -1.2217, 0.0, 0.1, 0.0,
     ]);
 
     /// The five angles of the arm on `side` (ShoulderPitch, ShoulderRoll, ElbowYaw,
@@ -105,8 +107,8 @@ pub fn arm_frames(side: Side, arms: &ArmPosture) -> [Pose<f64>; 3] {
 /// The solids of the arm on `side`: the shoulder's sphere, the upper arm, the forearm
 /// with the hand.
 pub fn arm_parts(body: &BodyModel, side: Side, arms: &ArmPosture) -> [Part; 3] {
-    let [shoulder, elbow, wrist] = arm_frames(side, arms);
-    let fingertips = wrist.apply(&[body.hand_length, 0.0, 0.0]);
+    let [shoulder, elbow, _] = arm_frames(side, arms);
+    let along = |frame: &Pose<f64>, x: f64| frame.apply(&[x, 0.0, 0.0]);
     let part = |kind, shape| Part {
         kind,
         side: Some(side),
@@ -123,16 +125,16 @@ pub fn arm_parts(body: &BodyModel, side: Side, arms: &ArmPosture) -> [Part; 3] {
         part(
             Kind::UpperArm,
             Shape::Capsule(Capsule {
-                a: shoulder.translation,
-                b: elbow.translation,
+                a: along(&shoulder, body.upper_arm[0]),
+                b: along(&shoulder, body.upper_arm[1]),
                 radius: body.upper_arm_radius,
             }),
         ),
         part(
             Kind::Forearm,
             Shape::Capsule(Capsule {
-                a: elbow.translation,
-                b: fingertips,
+                a: along(&elbow, body.forearm[0]),
+                b: along(&elbow, body.forearm[1]),
                 radius: body.forearm_radius,
             }),
         ),

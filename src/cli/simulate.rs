@@ -64,6 +64,11 @@ pub struct SimulateArgs {
     /// Image vignetting: relative loss of brightness in the corners (with --images).
     #[arg(long, default_value_t = 0.3, requires = "images")]
     vignetting: f64,
+    /// Draw the robot's own body in front of the boards (with --images): legs, each foot
+    /// standing on its sandal, torso, pelvis and the arms spread as capture holds them,
+    /// from the body model (docs/BODY.md).
+    #[arg(long, requires = "images")]
+    body: bool,
     /// The simulated lower camera: v4 (the paper's: 640×480, f 562.5 px), v6 (V6 field of
     /// view 56.3°×43.7° at 640×480) or v6-1280x960; its intrinsics go into dataset.toml.
     #[arg(long, default_value = "v4", value_name = "CAMERA", value_parser = parse_camera)]
@@ -101,6 +106,7 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
         blur: args.blur,
         grey_noise: args.grey_noise,
         vignetting: args.vignetting,
+        body: args.body,
         camera: args.camera,
         stance_file: args.stance_file.clone(),
         near_border: args.near_border,

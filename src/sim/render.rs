@@ -47,8 +47,7 @@ pub struct RenderOptions {
 }
 
 impl Default for RenderOptions {
-    /// Blur σ 0.8 px, noise σ 2, 30 % vignetting, 8 × 8 supersampling at edges, the NAO
-    /// V6's body drawn with the arms where capture holds them.
+    /// Blur σ 0.8 px, noise σ 2, 30 % vignetting, 8 × 8 supersampling at edges, no body.
     fn default() -> Self {
         RenderOptions {
             blur: 0.8,
@@ -59,7 +58,7 @@ impl Default for RenderOptions {
             black: 35.0,
             white: 215.0,
             seed: 1,
-            body: Some(BodyModel::default()),
+            body: None,
         }
     }
 }

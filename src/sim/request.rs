@@ -48,6 +48,8 @@ pub struct SimRequest {
     pub grey_noise: f64,
     /// Image vignetting.
     pub vignetting: f64,
+    /// Draw the robot's own body in front of the boards.
+    pub body: bool,
     /// The simulated lower camera (and the upper one, the same model).
     pub camera: CameraPreset,
     /// A plan whose stances are photographed instead of random ones.
@@ -225,6 +227,7 @@ impl SimRequest {
                     noise: self.grey_noise,
                     vignetting: self.vignetting,
                     seed: self.seed,
+                    body: self.body.then(crate::body::BodyModel::default),
                     ..Default::default()
                 },
                 force: true,
@@ -403,6 +406,7 @@ mod tests {
             blur: 0.8,
             grey_noise: 2.0,
             vignetting: 0.3,
+            body: false,
             camera: CameraPreset::V4,
             stance_file: None,
             near_border: false,

@@ -127,3 +127,137 @@ pub fn body_view(
     let eye = model.chains_for(camera, side, joints).camera.eval(&truth);
     BodyView::new(&posed, &eye)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{Board, Vertex};
+    use crate::sim::render::{RenderOptions, render, render_with};
+
+    /// SPEC §12's pose B: the left board in view of the lower camera.
+    fn pose_b() -> JointAngles {
+        use Joint::*;
+        let mut j = JointAngles::default();
+        for (joint, q) in [
+            (HeadYaw, 0.58),
+            (HeadPitch, 0.422),
+            (LHipYawPitch, 0.119),
+            (LHipRoll, 0.761),
+            (LHipPitch, -0.503),
+            (LKneePitch, 1.694),
+            (LAnklePitch, -0.893),
+            (LAnkleRoll, 0.647),
+            (RHipYawPitch, 0.119),
+            (RHipRoll, 0.235),
+            (RHipPitch, -0.888),
+            (RKneePitch, 1.285),
+            (RAnklePitch, 0.607),
+            (RAnkleRoll, 0.061),
+        ] {
+            j.set(joint, q);
+        }
+        j
+    }
+
+    /// The view of the left leg's parts of `kinds` alone (the torso's boxes stand close to
+    /// the camera in pose B and are left out of these tests of the legs).
+    fn left_leg_view(model: &Model, joints: &JointAngles, kinds: &[Kind]) -> BodyView {
+        let params = [0.0; PARAMETER_COUNT];
+        let body = BodyModel::default();
+        let soles = Side::BOTH.map(|s| crate::body::leg_frames(&model.robot, s, joints).sole);
+        let mut posed = body.pose_with_soles(&model.robot, &model.board, joints, &soles);
+        posed
+            .parts
+            .retain(|p| p.side == Some(Side::Left) && kinds.contains(&p.kind));
+        let eye = model
+            .chains_for(CameraId::Lower, Side::Left, joints)
+            .camera
+            .eval(&params);
+        BodyView::new(&posed, &eye)
+    }
+
+    /// The ray from the camera through a vertex of the paper's board meets the toe standing
+    /// on it for the first column (x_S = 107.5 mm, beside the toe's tip at 102 mm), and
+    /// meets nothing for the last.
+    #[test]
+    fn the_foot_stands_on_its_board_and_hides_the_column_beside_the_toe() {
+        let model = Model::default();
+        let params = [0.0; PARAMETER_COUNT];
+        let joints = pose_b();
+        let view = left_leg_view(&model, &joints, &[Kind::Toe]);
+        let chains = model.chains_for(CameraId::Lower, Side::Left, &joints);
+        let board = chains.camera_to_board(&params);
+        let ray = |col: u32, row: u32| {
+            let p = board.apply(&model.board.vertex_position(Vertex { row, col }));
+            let depth = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+            (view.hit(-p[1] / p[0], -p[2] / p[0], depth - 1e-6), depth)
+        };
+        for row in 0..model.board.rows() {
+            let (hit, _) = ray(0, row);
+            let (k, _) = hit.expect("the toe hides the first column");
+            assert_eq!(view.body.parts[k].kind, Kind::Toe, "row {row}");
+            assert!(ray(model.board.cols() - 1, row).0.is_none(), "row {row}");
+        }
+        // A board 60 mm further out is clear of the toe.
+        let far = Model {
+            board: Board {
+                mount_origin: [230.0, 0.0, 0.0],
+                ..model.board
+            },
+            ..model
+        };
+        let view = left_leg_view(&far, &joints, &[Kind::Toe, Kind::Foot]);
+        let board = far
+            .chains_for(CameraId::Lower, Side::Left, &joints)
+            .camera_to_board(&params);
+        let p = board.apply(&far.board.vertex_position(Vertex { row: 1, col: 0 }));
+        let depth = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        assert!(view.hit(-p[1] / p[0], -p[2] / p[0], depth).is_none());
+    }
+
+    /// Drawn without blur and noise, the body changes exactly the pixels it covers: where
+    /// no line of sight through a pixel meets it the picture is the board's alone, and
+    /// where the pixel's centre sees it nearer than the board the grey is the body's.
+    #[test]
+    fn the_body_is_drawn_where_it_stands_in_front_and_nowhere_else() {
+        let model = Model::default();
+        let params = [0.0; PARAMETER_COUNT];
+        let joints = pose_b();
+        let options = RenderOptions {
+            blur: 0.0,
+            noise: 0.0,
+            vignetting: 0.0,
+            ..RenderOptions::default()
+        };
+        let chains = model.chains_for(CameraId::Lower, Side::Left, &joints);
+        let pose = chains.camera_to_board(&params);
+        let leg = [Kind::Thigh, Kind::Tibia, Kind::Foot, Kind::Toe];
+        let view = left_leg_view(&model, &joints, &leg);
+        let bare = render(&model, &pose, &options, 5).unwrap();
+        let drawn = render_with(&model, &pose, Some(&view), &options, 5).unwrap();
+        let camera = &model.camera;
+        let (mut covered, mut clear) = (0, 0);
+        for v in (0..camera.height).step_by(3) {
+            for u in (0..camera.width).step_by(3) {
+                let at = |du: f64, dv: f64| {
+                    let [a, b] = camera.undistort(u as f64 + du, v as f64 + dv);
+                    view.hit(a, b, f64::INFINITY).is_some()
+                };
+                let corners = [(-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5), (0.5, 0.5)];
+                let (g0, g1) = (bare.get(u, v), drawn.get(u, v));
+                if corners.iter().all(|&(du, dv)| !at(du, dv)) && !at(0.0, 0.0) {
+                    assert_eq!(g0, g1, "({u}, {v}) has no body in it");
+                    clear += 1;
+                } else if corners.iter().all(|&(du, dv)| at(du, dv)) {
+                    let [a, b] = camera.undistort(u as f64, v as f64);
+                    let (_, grey) = view.hit(a, b, f64::INFINITY).unwrap();
+                    // In front of everything the board's plane holds here?
+                    if (f64::from(g1) - grey).abs() < 1.0 {
+                        covered += 1;
+                    }
+                }
+            }
+        }
+        assert!(covered > 500 && clear > 500, "{covered} {clear}");
+    }
+}

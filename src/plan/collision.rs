@@ -1,0 +1,509 @@
+//! Self-collision of the legs, feet and sandals with each other, with the body and with the
+//! floor, for a NAO lying on its back.
+//!
+//! The model is deliberately simple and errs on the safe side:
+//! - thighs (hip → knee) and tibias (knee → ankle) are capsules (a segment swept by a
+//!   sphere);
+//! - each foot and each sandal is a box in its sole frame;
+//! - the torso is a box from above the hips to the neck;
+//! - the floor is the plane `x_O = floor_x` under the robot's back.
+//!
+//! Checked: the two legs against each other (capsules, boxes), each sandal and foot against
+//! its own thigh, every tibia, foot and sandal against the torso, and everything against
+//! the floor. A box is tested against a capsule through spheres spaced along the capsule's
+//! segment (at most a few millimetres closer than the exact test), box against box with the
+//! separating-axis test.
+
+use std::f64::consts::FRAC_PI_4;
+
+use crate::model::{Axis, JointAngles, Pose, RobotGeometry, Side};
+
+/// An oriented box: a frame and the extent along its axes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OrientedBox {
+    /// The box frame in `O`.
+    pub centre: [f64; 3],
+    /// Columns: the box axes in `O`.
+    pub axes: [[f64; 3]; 3],
+    /// Half the edge lengths along the box axes (mm).
+    pub half: [f64; 3],
+}
+
+impl OrientedBox {
+    /// The box spanning `lo..hi` (coordinates of `frame`).
+    fn in_frame(frame: &Pose<f64>, lo: [f64; 3], hi: [f64; 3]) -> OrientedBox {
+        let mid: [f64; 3] = std::array::from_fn(|k| (lo[k] + hi[k]) / 2.0);
+        OrientedBox {
+            centre: frame.apply(&mid),
+            axes: std::array::from_fn(|k| std::array::from_fn(|i| frame.rotation[i][k])),
+            half: std::array::from_fn(|k| (hi[k] - lo[k]).abs() / 2.0),
+        }
+    }
+
+    /// Distance of point `p` from the box (0 inside).
+    pub fn distance(&self, p: [f64; 3]) -> f64 {
+        let d = sub(p, self.centre);
+        (0..3)
+            .map(|k| (dot(d, self.axes[k]).abs() - self.half[k]).max(0.0).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    }
+
+    /// The eight corners.
+    pub fn corners(&self) -> [[f64; 3]; 8] {
+        std::array::from_fn(|n| {
+            let mut p = self.centre;
+            for k in 0..3 {
+                let s = if n >> k & 1 == 1 { 1.0 } else { -1.0 };
+                for (pi, ai) in p.iter_mut().zip(self.axes[k]) {
+                    *pi += s * self.half[k] * ai;
+                }
+            }
+            p
+        })
+    }
+
+    /// Whether two boxes overlap (separating-axis test).
+    pub fn overlaps(&self, other: &OrientedBox) -> bool {
+        let mut axes: Vec<[f64; 3]> = Vec::with_capacity(15);
+        axes.extend(self.axes);
+        axes.extend(other.axes);
+        for a in self.axes {
+            for b in other.axes {
+                let c = cross(a, b);
+                if dot(c, c) > 1e-12 {
+                    axes.push(c);
+                }
+            }
+        }
+        let d = sub(other.centre, self.centre);
+        axes.iter().all(|axis| {
+            let radius = |b: &OrientedBox| {
+                (0..3)
+                    .map(|k| b.half[k] * dot(b.axes[k], *axis).abs())
+                    .sum::<f64>()
+            };
+            dot(d, *axis).abs() <= radius(self) + radius(other)
+        })
+    }
+}
+
+/// A segment swept by a sphere.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Capsule {
+    /// One end of the segment [mm, in `O`].
+    pub a: [f64; 3],
+    /// The other end.
+    pub b: [f64; 3],
+    /// Radius (mm).
+    pub radius: f64,
+}
+
+impl Capsule {
+    /// Points along the segment, at most `step` mm apart.
+    fn samples(&self, step: f64) -> impl Iterator<Item = [f64; 3]> + '_ {
+        let n = (norm(sub(self.b, self.a)) / step).ceil().max(1.0) as usize;
+        (0..=n).map(move |k| {
+            let t = k as f64 / n as f64;
+            std::array::from_fn(|i| self.a[i] + t * (self.b[i] - self.a[i]))
+        })
+    }
+
+    /// Whether the capsule touches the box (one of the spheres along its segment, at most
+    /// 5 mm apart, reaches into it).
+    pub fn hits_box(&self, b: &OrientedBox) -> bool {
+        // No point of the segment is nearer the box than its midpoint less half its
+        // length (the distance to a box changes no faster than the point moves): a box
+        // farther than that from every sphere is missed by all of them, and only a box
+        // within reach needs the spheres counted (a micrometre spared for rounding).
+        let mid: [f64; 3] = std::array::from_fn(|i| (self.a[i] + self.b[i]) / 2.0);
+        let half = norm(sub(self.b, self.a)) / 2.0;
+        if b.distance(mid) > self.radius + half + 1e-3 {
+            return false;
+        }
+        self.samples(5.0).any(|p| b.distance(p) < self.radius)
+    }
+
+    /// Whether two capsules touch (exact segment distance).
+    pub fn hits(&self, other: &Capsule) -> bool {
+        segment_distance(self.a, self.b, other.a, other.b) < self.radius + other.radius
+    }
+}
+
+/// Sizes of the collision model (mm).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyModel {
+    /// Radius of the thigh capsules.
+    pub thigh_radius: f64,
+    /// Radius of the tibia capsules.
+    pub tibia_radius: f64,
+    /// Foot box in the sole frame: low corner.
+    pub foot_lo: [f64; 3],
+    /// Foot box in the sole frame: high corner.
+    pub foot_hi: [f64; 3],
+    /// Sandal box (plate with the pattern) in the sole frame: low corner.
+    pub sandal_lo: [f64; 3],
+    /// Sandal box in the sole frame: high corner.
+    pub sandal_hi: [f64; 3],
+    /// Torso box in `O`: low corner.
+    pub torso_lo: [f64; 3],
+    /// Torso box in `O`: high corner.
+    pub torso_hi: [f64; 3],
+    /// The floor under the robot's back: nothing may reach below this `x_O`.
+    pub floor_x: f64,
+}
+
+impl Default for BodyModel {
+    /// A NAO H25 with the default sandals (pattern 17 cm ahead of the ankle, 7 × 5 squares of
+    /// 25 mm), a little larger than the real parts.
+    fn default() -> Self {
+        BodyModel {
+            thigh_radius: 32.0,
+            tibia_radius: 30.0,
+            foot_lo: [-55.0, -45.0, 0.0],
+            foot_hi: [110.0, 45.0, 50.0],
+            sandal_lo: [-55.0, -70.0, -8.0],
+            sandal_hi: [265.0, 70.0, 0.0],
+            torso_lo: [-60.0, -80.0, 50.0],
+            torso_hi: [60.0, 80.0, 200.0],
+            floor_x: -60.0,
+        }
+    }
+}
+
+/// The collision shapes of one leg.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LegShapes {
+    /// Hip → knee.
+    pub thigh: Capsule,
+    /// Knee → ankle.
+    pub tibia: Capsule,
+    /// The foot.
+    pub foot: OrientedBox,
+    /// The sandal.
+    pub sandal: OrientedBox,
+}
+
+/// The shapes of the leg on `side` at the angles `joints` (nominal geometry).
+pub fn leg_shapes(
+    robot: &RobotGeometry,
+    body: &BodyModel,
+    side: Side,
+    joints: &JointAngles,
+) -> LegShapes {
+    let s = side.sign();
+    let q = side.leg_joints().map(|j| joints.get(j));
+    let hip = Pose::translation(0.0, s * robot.hip_offset_y, 0.0)
+        .compose(&Pose::rotation(Axis::X, s * FRAC_PI_4))
+        .compose(&Pose::rotation(Axis::Z, -s * q[0]))
+        .compose(&Pose::rotation(Axis::X, -s * FRAC_PI_4))
+        .compose(&Pose::rotation(Axis::X, q[1]))
+        .compose(&Pose::rotation(Axis::Y, q[2]));
+    let knee = hip
+        .compose(&Pose::translation(0.0, 0.0, -robot.thigh))
+        .compose(&Pose::rotation(Axis::Y, q[3]));
+    let ankle = knee.compose(&Pose::translation(0.0, 0.0, -robot.tibia));
+    let sole = ankle
+        .compose(&Pose::rotation(Axis::Y, q[4]))
+        .compose(&Pose::rotation(Axis::X, q[5]))
+        .compose(&Pose::translation(0.0, 0.0, -robot.foot_height));
+    let mirror = |p: [f64; 3]| [p[0], s * p[1], p[2]];
+    let (foot_lo, foot_hi) = (mirror(body.foot_lo), mirror(body.foot_hi));
+    LegShapes {
+        thigh: Capsule {
+            a: hip.translation,
+            b: knee.translation,
+            radius: body.thigh_radius,
+        },
+        tibia: Capsule {
+            a: knee.translation,
+            b: ankle.translation,
+            radius: body.tibia_radius,
+        },
+        foot: OrientedBox::in_frame(&sole, foot_lo, foot_hi),
+        sandal: OrientedBox::in_frame(&sole, body.sandal_lo, body.sandal_hi),
+    }
+}
+
+/// The first collision found at the angles `joints`, named (`"left sandal / torso"`), or
+/// `None` when the stance is free of collisions.
+pub fn collision(robot: &RobotGeometry, body: &BodyModel, joints: &JointAngles) -> Option<String> {
+    let legs = Side::BOTH.map(|side| leg_shapes(robot, body, side, joints));
+    let torso = OrientedBox::in_frame(&Pose::identity(), body.torso_lo, body.torso_hi);
+    let name = |k: usize| Side::BOTH[k].name();
+    let hit = |what: String| Some(what);
+
+    for (k, leg) in legs.iter().enumerate() {
+        let capsules = [("thigh", &leg.thigh), ("tibia", &leg.tibia)];
+        let boxes = [("foot", &leg.foot), ("sandal", &leg.sandal)];
+        // The floor.
+        for (part, c) in capsules {
+            if c.a[0] - c.radius < body.floor_x || c.b[0] - c.radius < body.floor_x {
+                return hit(format!("{} {part} / floor", name(k)));
+            }
+        }
+        for (part, b) in boxes {
+            if b.corners().iter().any(|p| p[0] < body.floor_x) {
+                return hit(format!("{} {part} / floor", name(k)));
+            }
+        }
+        // The torso (the thigh starts at the hip, below the torso box).
+        for (part, c) in capsules {
+            if c.hits_box(&torso) {
+                return hit(format!("{} {part} / torso", name(k)));
+            }
+        }
+        for (part, b) in boxes {
+            if b.overlaps(&torso) {
+                return hit(format!("{} {part} / torso", name(k)));
+            }
+            // The foot and the sandal against the leg's own thigh.
+            if leg.thigh.hits_box(b) {
+                return hit(format!("{} {part} / {} thigh", name(k), name(k)));
+            }
+        }
+    }
+    // The legs against each other.
+    let [l, r] = &legs;
+    let capsules = |leg: &LegShapes| [("thigh", leg.thigh), ("tibia", leg.tibia)];
+    let boxes = |leg: &LegShapes| [("foot", leg.foot), ("sandal", leg.sandal)];
+    for (pl, cl) in capsules(l) {
+        for (pr, cr) in capsules(r) {
+            if cl.hits(&cr) {
+                return hit(format!("left {pl} / right {pr}"));
+            }
+        }
+        for (pr, br) in boxes(r) {
+            if cl.hits_box(&br) {
+                return hit(format!("left {pl} / right {pr}"));
+            }
+        }
+    }
+    for (pl, bl) in boxes(l) {
+        for (pr, cr) in capsules(r) {
+            if cr.hits_box(&bl) {
+                return hit(format!("left {pl} / right {pr}"));
+            }
+        }
+        for (pr, br) in boxes(r) {
+            if bl.overlaps(&br) {
+                return hit(format!("left {pl} / right {pr}"));
+            }
+        }
+    }
+    None
+}
+
+/// The first part of the leg on `side` that blocks the line of sight from `eye` to one of
+/// `targets` (points in `O`, mm), named (`"right thigh"`), or `None` when every target is
+/// in plain sight of it. Thighs and tibias are tested exactly, the foot and sandal boxes at
+/// points 5 mm apart along each line.
+pub fn sight_blocked(
+    robot: &RobotGeometry,
+    body: &BodyModel,
+    joints: &JointAngles,
+    side: Side,
+    eye: [f64; 3],
+    targets: &[[f64; 3]],
+) -> Option<String> {
+    let leg = leg_shapes(robot, body, side, joints);
+    let name = side.name();
+    for &t in targets {
+        for (part, c) in [("thigh", &leg.thigh), ("tibia", &leg.tibia)] {
+            if segment_distance(eye, t, c.a, c.b) < c.radius {
+                return Some(format!("{name} {part}"));
+            }
+        }
+        let line = Capsule {
+            a: eye,
+            b: t,
+            radius: 0.0,
+        };
+        for (part, b) in [("foot", &leg.foot), ("sandal", &leg.sandal)] {
+            if line.samples(5.0).any(|p| b.distance(p) <= 0.0) {
+                return Some(format!("{name} {part}"));
+            }
+        }
+    }
+    None
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// Smallest distance between the segments `p0–p1` and `q0–q1`.
+fn segment_distance(p0: [f64; 3], p1: [f64; 3], q0: [f64; 3], q1: [f64; 3]) -> f64 {
+    let d1 = sub(p1, p0);
+    let d2 = sub(q1, q0);
+    let r = sub(p0, q0);
+    let (a, e, f) = (dot(d1, d1), dot(d2, d2), dot(d2, r));
+    let (s, t) = if a <= 1e-12 && e <= 1e-12 {
+        (0.0, 0.0)
+    } else if a <= 1e-12 {
+        (0.0, (f / e).clamp(0.0, 1.0))
+    } else {
+        let c = dot(d1, r);
+        if e <= 1e-12 {
+            ((-c / a).clamp(0.0, 1.0), 0.0)
+        } else {
+            let b = dot(d1, d2);
+            let denom = a * e - b * b;
+            let mut s = if denom > 1e-12 {
+                ((b * f - c * e) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let mut t = (b * s + f) / e;
+            if t < 0.0 {
+                t = 0.0;
+                s = (-c / a).clamp(0.0, 1.0);
+            } else if t > 1.0 {
+                t = 1.0;
+                s = ((b - c) / a).clamp(0.0, 1.0);
+            }
+            (s, t)
+        }
+    };
+    let closest_p: [f64; 3] = std::array::from_fn(|i| p0[i] + d1[i] * s);
+    let closest_q: [f64; 3] = std::array::from_fn(|i| q0[i] + d2[i] * t);
+    norm(sub(closest_p, closest_q))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Joint;
+
+    fn pose(pairs: &[(Joint, f64)]) -> JointAngles {
+        let mut j = JointAngles::default();
+        for (joint, v) in pairs {
+            j.set(*joint, *v);
+        }
+        j
+    }
+
+    #[test]
+    fn a_sight_line_through_a_thigh_or_sandal_is_blocked_and_one_beside_it_is_not() {
+        let robot = RobotGeometry::default();
+        let body = BodyModel::default();
+        let joints = pose(&[(Joint::RHipPitch, -0.5), (Joint::RKneePitch, 1.0)]);
+        let leg = leg_shapes(&robot, &body, Side::Right, &joints);
+        let mid: [f64; 3] = std::array::from_fn(|i| 0.5 * (leg.thigh.a[i] + leg.thigh.b[i]));
+        // A line across the thigh's middle, perpendicular to it in the y direction.
+        let across = |dy: f64| {
+            (
+                [mid[0], mid[1] - 300.0 + dy, mid[2]],
+                [mid[0], mid[1] + 300.0 + dy, mid[2]],
+            )
+        };
+        let (eye, target) = across(0.0);
+        assert_eq!(
+            sight_blocked(&robot, &body, &joints, Side::Right, eye, &[target]).as_deref(),
+            Some("right thigh")
+        );
+        // Well above the leg (towards the ceiling, +x when lying on the back).
+        let (eye, target) = across(0.0);
+        let lift = |p: [f64; 3]| [p[0] + 400.0, p[1], p[2]];
+        assert_eq!(
+            sight_blocked(
+                &robot,
+                &body,
+                &joints,
+                Side::Right,
+                lift(eye),
+                &[lift(target)]
+            ),
+            None
+        );
+        // Straight through the sandal's centre.
+        let c = leg.sandal.centre;
+        let through = [c[0] - 1.0, c[1], c[2] + 1.0];
+        let far = [c[0] + 1.0, c[1], c[2] - 1.0];
+        assert!(sight_blocked(&robot, &body, &joints, Side::Right, far, &[through]).is_some());
+    }
+
+    #[test]
+    fn segment_distance_cases() {
+        let d = segment_distance(
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.5, 1.0, 0.0],
+            [0.5, 2.0, 0.0],
+        );
+        assert!((d - 1.0).abs() < 1e-12);
+        let d = segment_distance(
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [2.0, 0.0, 1.0],
+            [3.0, 0.0, 1.0],
+        );
+        assert!((d - 2f64.sqrt()).abs() < 1e-12);
+        // Crossing segments.
+        let d = segment_distance(
+            [-1.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        );
+        assert!(d.abs() < 1e-12);
+    }
+
+    #[test]
+    fn boxes_overlap_or_not() {
+        let a = OrientedBox::in_frame(&Pose::identity(), [0.0; 3], [1.0; 3]);
+        let b = OrientedBox::in_frame(&Pose::translation(0.9, 0.9, 0.9), [0.0; 3], [1.0; 3]);
+        let c = OrientedBox::in_frame(&Pose::translation(1.5, 0.0, 0.0), [0.0; 3], [1.0; 3]);
+        // Turned by 45° about z and placed beside a's corner edge: separated only along a
+        // cross axis or the turned box's own axis.
+        let turned = Pose::translation(2.3, 0.5, 0.5).compose(&Pose::rotation(Axis::Z, FRAC_PI_4));
+        let d = OrientedBox::in_frame(&turned, [-0.5; 3], [0.5; 3]);
+        assert!(a.overlaps(&b) && b.overlaps(&a));
+        assert!(!a.overlaps(&c) && !c.overlaps(&a));
+        assert!(!a.overlaps(&d) && !d.overlaps(&a));
+        assert!((a.distance([2.0, 0.5, 0.5]) - 1.0).abs() < 1e-12);
+        assert_eq!(a.distance([0.5, 0.5, 0.5]), 0.0);
+    }
+
+    #[test]
+    fn lying_spread_is_free_and_known_collisions_are_found() {
+        let robot = RobotGeometry::default();
+        let body = BodyModel::default();
+        use Joint::*;
+        // Lying with the legs slightly spread (as the resting leg is parked) is free; with the
+        // legs parallel the 14 cm wide sandals overlap the other foot.
+        let spread = pose(&[(LHipRoll, 0.15), (RHipRoll, -0.15)]);
+        assert_eq!(collision(&robot, &body, &spread), None);
+        assert!(collision(&robot, &body, &JointAngles::default()).is_some());
+        // Both hips rolled inward as far as they go: the knees and feet meet.
+        let crossed = pose(&[(LHipRoll, -0.37), (RHipRoll, 0.37)]);
+        let what = collision(&robot, &body, &crossed).expect("legs collide");
+        assert!(what.contains("left") && what.contains("right"), "{what}");
+        // A straight leg pushed backwards goes through the floor.
+        let floor = pose(&[(LHipPitch, 0.48)]);
+        assert!(
+            collision(&robot, &body, &floor)
+                .expect("floor")
+                .contains("floor")
+        );
+        // Hip and knee fully bent bring the sandal into the torso or the own thigh.
+        let folded = pose(&[(LHipPitch, -1.5), (LKneePitch, 2.1), (LAnklePitch, 0.9)]);
+        assert!(collision(&robot, &body, &folded).is_some());
+    }
+}
