@@ -13,6 +13,8 @@ mod batch_solve;
 mod capture;
 mod capture_body;
 mod capture_cameras;
+mod capture_guard;
+mod capture_honest;
 #[cfg(feature = "ceres")]
 mod ceres_agreement;
 #[cfg(feature = "detect")]
