@@ -47,6 +47,7 @@ mod export_update;
 mod export_upper;
 mod extended;
 mod fuzz_readers;
+mod held_honest;
 mod hostile_inputs;
 mod hostile_outputs;
 mod lola_faults;
