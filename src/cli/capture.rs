@@ -144,10 +144,12 @@ pub fn rest_guard(args: &RestGuardArgs) -> Result<ExitCode> {
             libc::signal(signal, libc::SIG_IGN);
         }
     }
-    let mut motion = naocalib::robot::motion::MotionOptions::default();
-    motion.leg_speed = args.leg_speed.to_radians();
-    motion.head_speed = args.head_speed.to_radians();
-    motion.ramp_cycles = args.ramp_cycles;
+    let motion = naocalib::robot::motion::MotionOptions {
+        leg_speed: args.leg_speed.to_radians(),
+        head_speed: args.head_speed.to_radians(),
+        ramp_cycles: args.ramp_cycles,
+        ..Default::default()
+    };
     let stdin = std::io::stdin().lock();
     let taken = capture::guard::run(&args.lola, &motion, stdin, &mut std::io::stdout())
         .context("capture ended without taking the robot to rest, and the rest guard could not")?;

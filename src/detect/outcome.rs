@@ -222,8 +222,9 @@ pub struct Summary {
     pub turned: usize,
     /// The cameras (lower, upper) whose pictures are turned by 180°.
     pub turned_cameras: [bool; 2],
-    /// Boards found but not used: their picture on its own is turned by 180°.
-    pub turned_alone: usize,
+    /// Boards found but not used: their picture on its own is turned by 180° (a `u32`,
+    /// so that the summary fits the errors that carry it).
+    pub turned_alone: u32,
 }
 
 impl Summary {

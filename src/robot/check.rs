@@ -353,7 +353,13 @@ impl Watched {
             self.note(format!("{fault}: a run stops"));
         }
         if let Some(Err(stop)) = self.body.as_mut().map(|b| b.check(m)) {
-            self.note(format!("{stop} (a run stops)"));
+            self.note(match stop {
+                super::body::BodyStop::ChestButton => format!(
+                    "the chest button held for {} cycles: a run stops at once",
+                    self.limits.body.chest_cycles
+                ),
+                other => format!("{other} (a run stops)"),
+            });
         }
         self.check_motors(m);
     }
