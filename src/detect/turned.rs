@@ -19,6 +19,10 @@
 //! most [`MAX_FIT_DEG`] — a margin that the offsets real robots carry (legs up to 2°,
 //! camera pitch corrections to −10°, head and board offsets) stay far from on upright
 //! pictures (`tests` over simulated robots).
+//!
+//! Then each picture on its own ([`judge_pictures`]): a board that fits turned back far
+//! better than as taken, the model fitted to its camera's other boards, is named and left
+//! out; a camera with fewer than [`MIN_BOARDS`] boards cannot be judged, and says so.
 
 use std::fmt;
 
@@ -258,8 +262,8 @@ pub fn judge_pictures(
         .collect()
 }
 
-/// What a picture's board gives in [`judge_pictures`]: its RMS as taken and turned back,
-/// and whether it is called turned; or, when its camera has too few boards, their number.
+/// A board's RMS as taken and turned back and whether it is called turned; or, when its
+/// camera has too few boards, their number.
 type Judged = Result<(f64, f64, bool), usize>;
 
 /// Every board of `results` judged as [`judge_pictures`] says, in the order of `results`.
