@@ -235,6 +235,11 @@ fn check_guard(phase: Phase, record: &[RecordRow]) {
     );
     // Within 2 s of capture's last message (the robot runs on between clients).
     let seconds = (end.cycle - last.cycle) as f64 * CYCLE_S;
+    eprintln!(
+        "{phase:?}: taken over at stiffness {s:.2}, limp at rest {seconds:.2} s after \
+         capture's last message ({} messages from the guard)",
+        guard.len()
+    );
     assert!(
         seconds <= 2.0,
         "{phase:?}: limp {seconds:.2} s after capture died"
