@@ -114,6 +114,63 @@ pub fn guard(args: &CameraGuardArgs) -> Result<ExitCode> {
     Err(guard::run(args.parent, &args.line).into())
 }
 
+/// `naocalib rest-guard --lola SOCKET …` (hidden): the process capture starts before it
+/// connects to LoLA, that takes the robot to rest when capture dies without doing so
+/// (`naocalib::robot::capture::guard`); capture's pipe is its standard input.
+#[derive(Debug, Args)]
+pub struct RestGuardArgs {
+    /// LoLA's socket.
+    #[arg(long, value_name = "SOCKET")]
+    lola: PathBuf,
+    /// Leg joint speed limit (deg/s).
+    #[arg(long, value_parser = within(1.0, 60.0, " deg/s"))]
+    leg_speed: f64,
+    /// Head joint speed limit (deg/s).
+    #[arg(long, value_parser = within(1.0, 180.0, " deg/s"))]
+    head_speed: f64,
+    /// Cycles of the stiffness ramp-down.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    ramp_cycles: u32,
+}
+
+/// Runs the rest guard: ignores the signals a terminal sends (they are capture's to act
+/// on), watches capture's pipe, and takes the robot to rest when capture is gone.
+pub fn rest_guard(args: &RestGuardArgs) -> Result<ExitCode> {
+    // SIGTTOU too: in a group of its own it may be in the background of capture's
+    // terminal, and must not be stopped for writing there.
+    for signal in capture::STOP_SIGNALS.into_iter().chain([libc::SIGTTOU]) {
+        // SAFETY: ignoring a signal in this single-threaded process.
+        unsafe {
+            libc::signal(signal, libc::SIG_IGN);
+        }
+    }
+    let motion = naocalib::robot::motion::MotionOptions {
+        leg_speed: args.leg_speed.to_radians(),
+        head_speed: args.head_speed.to_radians(),
+        ramp_cycles: args.ramp_cycles,
+        ..Default::default()
+    };
+    let stdin = std::io::stdin().lock();
+    let taken = capture::guard::run(&args.lola, &motion, stdin, &mut std::io::stdout())
+        .context("capture ended without taking the robot to rest, and the rest guard could not")?;
+    if let Some(t) = taken {
+        note!(
+            "naocalib: capture ended without taking the robot to rest: the rest guard took \
+             it over at stiffness {:.2}, commanded the rest posture and ramped the stiffness \
+             to 0 in {} cycles ({:.2} s){}",
+            t.stiffness,
+            t.cycles,
+            capture::cycles_to_seconds(u64::from(t.cycles)),
+            if t.answered {
+                ""
+            } else {
+                ", the last ones blind (LoLA stopped answering)"
+            }
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
 /// Runs `naocalib capture --check DIR`: prints the table; exit 1 when something does not
 /// hold.
 fn dry_run(request: &CaptureRequest, save: &Path) -> Result<ExitCode> {
@@ -166,6 +223,13 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
     let (cameras, opened) = CaptureRequest::open_cameras(&setups, scratch.path())?;
     said.extend(opened);
     let stop = capture::stop_on_signals().context("cannot watch for Ctrl-C, SIGTERM or SIGHUP")?;
+    // The rest guard watches before LoLA is reached: whatever ends capture once it holds
+    // the robot, the robot ends at rest and limp.
+    let mut guard = request
+        .guard
+        .as_deref()
+        .map(|program| capture::guard::Guard::spawn(program, &args.lola, &options.motion))
+        .transpose()?;
     let mut connection = Connection::connect(&args.lola, options.safety.silent_cycles)?;
     // The robot's checks on LoLA's first message, before anything is written or sent.
     let (first, checks) = check::first_message(&mut connection, &options.safety)?;
@@ -196,12 +260,22 @@ pub fn run(args: &CaptureArgs) -> Result<ExitCode> {
             _ => Print::Line(event.to_string()),
         });
     };
+    if let Some(guard) = &mut guard {
+        guard.arm()?;
+    }
     let report = Session::new(model, rows, &options)
         .observe(&mut events)
         .stop_on(&stop)
         .run(out, cameras, &mut link);
     // The robot is limp (or gone): let LoLA go before anything may wait for the terminal.
     drop(connection);
+    // Limp, or never commanded: the guard is done; else it takes the robot to rest now.
+    if let Some(guard) = guard {
+        match &report {
+            Ok(r) if !r.limp => guard.hand_over(),
+            _ => guard.release(),
+        }
+    }
     terminal.close();
     let account = request::account(dir, &report?, rows.len(), stop.load(Ordering::Relaxed));
     for line in &account.lines {

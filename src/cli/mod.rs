@@ -79,6 +79,9 @@ enum Command {
     /// The guard of a `command:` camera's processes (capture's own use).
     #[command(name = "camera-guard", hide = true)]
     CameraGuard(capture::CameraGuardArgs),
+    /// The guard that takes the robot to rest when capture dies (capture's own use).
+    #[command(name = "rest-guard", hide = true)]
+    RestGuard(capture::RestGuardArgs),
 }
 
 /// A progress bar on stderr over `len` items called `what` (`images`, `datasets`): done,
@@ -167,5 +170,6 @@ pub fn run(cli: &Cli) -> Result<ExitCode> {
         #[cfg(feature = "detect")]
         Command::Detect(args) => detect::run(args),
         Command::CameraGuard(args) => capture::guard(args),
+        Command::RestGuard(args) => capture::rest_guard(args),
     }
 }

@@ -77,9 +77,9 @@ pub struct SimulateRobotArgs {
     /// Fault: the chest button pressed from this cycle on.
     #[arg(long, value_name = "CYCLE")]
     chest_at: Option<u64>,
-    /// Fault: a motor reports this temperature status (1 … 3) from this cycle on (e.g.
-    /// LKneePitch=2@300).
-    #[arg(long, value_name = "JOINT=STATUS@CYCLE")]
+    /// Fault: a motor reports this temperature status (1 … 3) from this cycle on, up to
+    /// END if given (e.g. LKneePitch=2@300, LKneePitch=1@300..1800).
+    #[arg(long, value_name = "JOINT=STATUS@CYCLE[..END]")]
     status: Option<String>,
     /// Fault: the battery down to 3 % from this cycle on.
     #[arg(long, value_name = "CYCLE")]

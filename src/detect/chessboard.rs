@@ -325,8 +325,8 @@ impl Finder<'_> {
         let a = assign::assign(points, &predicted, grid, size)?;
         Ok(Numbering {
             numbered: format!(
-                "numbered by OpenCV's whole {}×{} grid, its 180° turn ruled out by the \
-                 prediction (turned {:.0}° against it)",
+                "numbered by OpenCV's whole {}×{} grid, as the prediction turns it ({:.0}° \
+                 against it)",
                 grid.cols, grid.rows, a.rotation_deg
             ),
             vertices: a.vertices,

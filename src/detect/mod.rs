@@ -423,6 +423,25 @@ pub fn detect_dataset(
         for t in turned::turned_cameras(dataset, &results, &options.prediction()) {
             mark_turned(dataset, &mut results, t);
         }
+        // Then each picture on its own: one turned among upright ones is left out; where
+        // its camera has too few boards, the picture says it could not be judged.
+        for (capture, turn) in turned::judge_pictures(dataset, &results, &options.prediction()) {
+            let Some(r) = results.iter_mut().find(|r| r.capture == capture) else {
+                continue;
+            };
+            match (&mut r.outcome, turn) {
+                (Outcome::Found { corners, .. }, turned::PictureTurn::Turned { .. }) => {
+                    r.outcome = Outcome::TurnedAlone {
+                        found: corners.len(),
+                        turn,
+                    };
+                }
+                (Outcome::Found { numbered, .. }, turned::PictureTurn::Unjudged { .. }) => {
+                    numbered.push_str(&format!("; {turn}"));
+                }
+                _ => {}
+            }
+        }
     }
     for r in &results {
         done(r);
@@ -568,7 +587,8 @@ fn whole(result: &ImageResult, grid: Grid) -> bool {
         Outcome::NoImage
         | Outcome::Failed(_)
         | Outcome::TooDark { .. }
-        | Outcome::Turned { .. } => true,
+        | Outcome::Turned { .. }
+        | Outcome::TurnedAlone { .. } => true,
         Outcome::Found { corners, .. } => corners.len() == grid.len(),
         Outcome::NotFound | Outcome::Rejected { .. } => false,
     }
@@ -595,7 +615,8 @@ fn worth_again(
         Outcome::NoImage
         | Outcome::Failed(_)
         | Outcome::TooDark { .. }
-        | Outcome::Turned { .. } => false,
+        | Outcome::Turned { .. }
+        | Outcome::TurnedAlone { .. } => false,
         Outcome::NotFound | Outcome::Rejected { .. } => true,
         Outcome::Found { corners, .. } => {
             corners.len() < grid.len()

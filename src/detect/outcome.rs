@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use super::assign;
 use super::image::{MAX_PIXELS, MAX_SIDE};
-use super::turned::Turned;
+use super::turned::{PictureTurn, Turned};
 use crate::dataset::Corner;
 use crate::model::CameraId;
 use crate::robot::check::MIN_BRIGHTNESS;
@@ -134,6 +134,14 @@ pub enum Outcome {
         /// What says the camera's pictures are turned.
         turned: Turned,
     },
+    /// A board was found, but this picture on its own is turned by 180° (its camera's
+    /// other pictures are not, [`super::turned::judge_pictures`]): not used.
+    TurnedAlone {
+        /// Vertices found.
+        found: usize,
+        /// The judgement.
+        turn: PictureTurn,
+    },
 }
 
 /// The result for one capture.
@@ -190,6 +198,9 @@ impl fmt::Display for ImageResult {
                  180° (set its flip, see the summary)",
                 turned.camera.name()
             ),
+            Outcome::TurnedAlone { found, turn } => {
+                write!(f, ": found {found} vertices, not used: {turn}")
+            }
         }
     }
 }
@@ -211,6 +222,9 @@ pub struct Summary {
     pub turned: usize,
     /// The cameras (lower, upper) whose pictures are turned by 180°.
     pub turned_cameras: [bool; 2],
+    /// Boards found but not used: their picture on its own is turned by 180° (a `u32`,
+    /// so that the summary fits the errors that carry it).
+    pub turned_alone: u32,
 }
 
 impl Summary {
@@ -228,6 +242,7 @@ impl Summary {
                     s.turned += 1;
                     s.turned_cameras[turned.camera as usize] = true;
                 }
+                Outcome::TurnedAlone { .. } => s.turned_alone += 1,
             }
         }
         s
@@ -255,6 +270,13 @@ impl fmt::Display for Summary {
                 ", {} not used: the {} camera's pictures are turned by 180° (set its flip)",
                 self.turned,
                 cameras.join(" and the ")
+            )?;
+        }
+        if self.turned_alone > 0 {
+            write!(
+                f,
+                ", {} not used: their pictures on their own are turned by 180° (see each)",
+                self.turned_alone
             )?;
         }
         Ok(())

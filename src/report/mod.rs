@@ -30,15 +30,60 @@ pub fn shown_parameters(solution: &Solution) -> Vec<Param> {
         .collect()
 }
 
-/// A one-sigma cell: the value, `fixed`, or `undet.` when the data do not determine it.
+/// A one-sigma cell: the value, `fixed`, or `undet.` when the data do not determine it;
+/// marked `†` when it assumes a held parameter at its nominal value
+/// ([`Solution::held_trade_offs`]).
 fn sigma_cell(solution: &Solution, p: Param, std: Option<f64>) -> String {
     if solution.fixed.is_fixed(p) {
         "fixed".into()
     } else if !solution.is_determined(p) {
         "undet.".into()
     } else {
-        std.map_or_else(|| "-".into(), |s| format!("{:.4}", p.unit().to_report(s)))
+        let mark = if solution.held_trade_offs(p).is_empty() {
+            ""
+        } else {
+            "†"
+        };
+        std.map_or_else(
+            || "-".into(),
+            |s| format!("{:.4}{mark}", p.unit().to_report(s)),
+        )
     }
+}
+
+/// The lines saying which reported σ assume a held parameter at its nominal value, and how
+/// far its error moves them ([`Solution::held_trade_offs`]).
+pub fn held_trade_off_lines(solution: &Solution) -> Vec<String> {
+    let mut lines = Vec::new();
+    for p in Param::ALL {
+        let held = solution.held_trade_offs(p);
+        if held.is_empty() {
+            continue;
+        }
+        let names: Vec<String> = held.iter().map(|(q, _)| q.to_string()).collect();
+        let moves: Vec<String> = held
+            .iter()
+            .map(|(q, ratio)| {
+                format!(
+                    "{:.3} {} per {} of {q}",
+                    ratio.abs(),
+                    p.unit().name(),
+                    q.unit().name()
+                )
+            })
+            .collect();
+        lines.push(format!(
+            "  † {p}: its σ {:.4} {} is not honest: it assumes {} at nominal (held, \
+             undetermined), whose error moves {p} by {} — more than its σ; give {} a known \
+             value, or fix {p} too",
+            solution.report_std(p),
+            p.unit().name(),
+            names.join(" and "),
+            moves.join(", "),
+            names.join(" and ")
+        ));
+    }
+    lines
 }
 
 /// The human-readable table: value ± one sigma per parameter, the sandwich and bootstrap
@@ -339,7 +384,18 @@ pub fn model_text(solution: &Solution) -> String {
             u.direction.describe()
         );
     }
+    let held = held_trade_off_lines(solution);
+    for line in &held {
+        let _ = writeln!(out, "{line}");
+    }
     let _ = writeln!(out, "diagnosis: {}", solution.misfit.message);
+    if !held.is_empty() && solution.misfit.detected {
+        let _ = writeln!(
+            out,
+            "  † the misfit may come from the parameters held at nominal (†) rather than from \
+             a missing family: what it points to is no remedy until they are known"
+        );
+    }
     out
 }
 

@@ -125,6 +125,11 @@ pub struct ParameterJson {
     /// The sandwich one sigma, when estimated and determined.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub std_sandwich: Option<f64>,
+    /// The held (undetermined) parameters its σ assumes at their nominal value, each with
+    /// how far its error moves this one (this one's unit per the held one's): when present,
+    /// the σ is not honest (absent otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub std_assumes_held: Option<std::collections::BTreeMap<String, f64>>,
     /// The true value, when the dataset has one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub truth: Option<f64>,
@@ -492,6 +497,14 @@ fn parameter(solution: &Solution, p: Param, truth: Option<&[f64]>) -> ParameterJ
             .sandwich_std
             .filter(|_| estimated)
             .map(|sw| p.unit().to_report(sw[p.index()])),
+        std_assumes_held: Some(
+            solution
+                .held_trade_offs(p)
+                .into_iter()
+                .map(|(held, ratio)| (held.name().to_string(), ratio))
+                .collect::<std::collections::BTreeMap<String, f64>>(),
+        )
+        .filter(|m| !m.is_empty()),
         truth: truth.map(|t| p.unit().to_report(t[p.index()])),
         undetermined,
         unit: Some(p.unit().name().to_string()),

@@ -13,6 +13,7 @@
 //! continuously must wait for the next frame, not hand over one it already holds).
 
 pub mod guard;
+pub mod picture;
 pub mod settings;
 #[cfg(feature = "v4l2")]
 pub mod v4l2;
@@ -23,6 +24,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use crate::model::CameraId;
+pub use picture::{check_picture, decode_grey, header_size, image_kind};
 use settings::UsedSettings;
 
 /// A picture as taken: the encoded image and its extension (`png` or `jpg`).
@@ -253,12 +255,17 @@ impl CameraSpec {
     ) -> Result<(Box<dyn Camera>, settings::FirstPicture), CameraError> {
         let mut cam = self.open(camera, setup)?;
         let picture = cam.take(scratch)?;
-        let (size, grey) = decode_grey(&picture.bytes).map_err(|message| {
+        let s = &setup.settings;
+        let first = |message| {
             CameraError::FirstPicture(format!("the {camera} camera's first picture {message}"))
-        })?;
+        };
+        // Its size by its header first: nothing is allocated for a picture of another size.
+        let (_, claimed) = header_size(&picture.bytes).map_err(first)?;
+        settings::check_first_size(camera, claimed, (s.width, s.height))
+            .map_err(CameraError::FirstPicture)?;
+        let (size, grey) = decode_grey(&picture.bytes, (s.width, s.height)).map_err(first)?;
         let brightness = settings::Brightness::of_grey(&grey);
         let applied = matches!(self, CameraSpec::V4l2(_)).then_some(setup.settings);
-        let s = &setup.settings;
         let used = self.used(camera, s);
         settings::check_first(
             camera,
@@ -324,17 +331,6 @@ impl Setup {
             command_timeout: Duration::from_secs(10),
             guard: None,
         }
-    }
-}
-
-/// The extension of an encoded PNG or JPEG image, from its first bytes.
-pub fn image_kind(bytes: &[u8]) -> Option<&'static str> {
-    if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
-        Some("png")
-    } else if bytes.starts_with(&[0xff, 0xd8, 0xff]) {
-        Some("jpg")
-    } else {
-        None
     }
 }
 
@@ -533,108 +529,6 @@ impl Camera for CommandCamera {
     }
 }
 
-/// Decodes a PNG or JPEG image in full; its extension and size (width, height).
-pub fn decode_size(bytes: &[u8]) -> Result<(&'static str, (u32, u32)), String> {
-    match image_kind(bytes) {
-        Some("png") => {
-            let decoder = png::Decoder::new(std::io::Cursor::new(bytes));
-            let mut reader = decoder
-                .read_info()
-                .map_err(|e| format!("is not a readable PNG: {e}"))?;
-            let size = reader
-                .output_buffer_size()
-                .ok_or("is not a readable PNG: too large")?;
-            let mut buf = vec![0; size];
-            let info = reader
-                .next_frame(&mut buf)
-                .map_err(|e| format!("is not a readable PNG: {e}"))?;
-            Ok(("png", (info.width, info.height)))
-        }
-        Some(_) => {
-            let mut decoder = jpeg_decoder::Decoder::new(std::io::Cursor::new(bytes));
-            let pixels = decoder
-                .decode()
-                .map_err(|e| format!("is not a readable JPEG: {e}"))?;
-            let info = decoder.info().ok_or("is not a readable JPEG: no frame")?;
-            let (w, h) = (info.width as usize, info.height as usize);
-            if pixels.len() < w * h {
-                return Err("is not a readable JPEG: its image data is short".into());
-            }
-            Ok(("jpg", (info.width.into(), info.height.into())))
-        }
-        None => Err("is neither a PNG nor a JPEG".into()),
-    }
-}
-
-/// Decodes a PNG or JPEG image to grey levels (8 bits, the mean of its colour channels):
-/// its size (width, height) and pixels.
-pub fn decode_grey(bytes: &[u8]) -> Result<((u32, u32), Vec<u8>), String> {
-    match image_kind(bytes) {
-        Some("png") => {
-            let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
-            decoder
-                .set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
-            let mut reader = decoder
-                .read_info()
-                .map_err(|e| format!("is not a readable PNG: {e}"))?;
-            let size = reader
-                .output_buffer_size()
-                .ok_or("is not a readable PNG: too large")?;
-            let mut buf = vec![0; size];
-            let info = reader
-                .next_frame(&mut buf)
-                .map_err(|e| format!("is not a readable PNG: {e}"))?;
-            buf.truncate(info.buffer_size());
-            let colours = match info.color_type {
-                png::ColorType::Grayscale | png::ColorType::GrayscaleAlpha => 1,
-                _ => 3,
-            };
-            let channels = info.color_type.samples();
-            Ok(((info.width, info.height), grey_of(&buf, channels, colours)))
-        }
-        Some(_) => {
-            let mut decoder = jpeg_decoder::Decoder::new(std::io::Cursor::new(bytes));
-            let pixels = decoder
-                .decode()
-                .map_err(|e| format!("is not a readable JPEG: {e}"))?;
-            let info = decoder.info().ok_or("is not a readable JPEG: no frame")?;
-            let channels = match info.pixel_format {
-                jpeg_decoder::PixelFormat::L8 => 1,
-                jpeg_decoder::PixelFormat::L16 => {
-                    return Err("is a 16-bit JPEG; 8-bit pictures are expected".into());
-                }
-                jpeg_decoder::PixelFormat::RGB24 => 3,
-                jpeg_decoder::PixelFormat::CMYK32 => 4,
-            };
-            let grey = grey_of(&pixels, channels, channels.min(3));
-            Ok(((info.width.into(), info.height.into()), grey))
-        }
-        None => Err("is neither a PNG nor a JPEG".into()),
-    }
-}
-
-/// The grey level of each pixel of `samples` (`channels` per pixel): the mean of its
-/// first `colours` channels.
-fn grey_of(samples: &[u8], channels: usize, colours: usize) -> Vec<u8> {
-    samples
-        .chunks_exact(channels)
-        .map(|p| (p[..colours].iter().map(|&c| u32::from(c)).sum::<u32>() / colours as u32) as u8)
-        .collect()
-}
-
-/// Checks that a picture decodes in full and has the camera's size (`width`×`height`
-/// from the dataset's camera intrinsics): what `detect` will need of it.
-pub fn check_picture(bytes: &[u8], width: u32, height: u32) -> Result<&'static str, String> {
-    let (extension, size) = decode_size(bytes)?;
-    if size != (width, height) {
-        return Err(format!(
-            "is {}×{} pixels; the camera's intrinsics are for {width}×{height}",
-            size.0, size.1
-        ));
-    }
-    Ok(extension)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -781,11 +675,5 @@ mod tests {
             .unwrap()
             .to_string();
         assert!(e.contains("128×96"), "{e}");
-    }
-
-    #[test]
-    fn grey_levels_of_colour_and_grey_pictures() {
-        assert_eq!(grey_of(&[30, 60, 90, 255, 0, 0, 0, 255], 4, 3), vec![60, 0]);
-        assert_eq!(grey_of(&[7, 9], 1, 1), vec![7, 9]);
     }
 }

@@ -1,7 +1,10 @@
 //! The checks before a robot moves: LoLA answers and its readings are plausible, the robot
 //! lies on its back, its battery, its motors' temperatures and status, its stiffness; each
-//! camera takes a picture of its size that is neither black nor saturated. `naocalib
-//! capture --check` runs them all and moves nothing (a dry run: the table of what holds);
+//! camera takes a picture of its size that is neither black nor saturated; the chest
+//! button not pressed; and, message by message, nothing a run stops or rests on (its
+//! watch: readings, roll, chest button, motors' status, temperatures and currents,
+//! battery). `naocalib capture --check` runs them all and moves nothing (a dry run: the
+//! table of what holds);
 //! `naocalib capture` runs the same before its first move ([`first_message`] and
 //! [`camera`]) and refuses to start unless they hold.
 
@@ -11,15 +14,17 @@ use std::time::Instant;
 use crate::model::{CameraId, Model};
 use crate::output::{WriteOptions, write_atomic};
 
+use super::body::BodyWatch;
 use super::body::{self, Lying};
 use super::camera::settings::{self, Brightness, CameraSettings};
 use super::camera::{Camera, CameraError, CameraSpec, Picture, Setup, decode_grey};
 use super::capture::{CaptureError, CaptureOptions, check_cameras, check_plan, read_plan};
 use super::lola::{
-    ActuatorMessage, BATTERY_CHARGE, Connection, JOINTS, Link, LolaError, SensorMessage,
+    ActuatorMessage, BATTERY_CHARGE, CHEST_BUTTON, Connection, JOINTS, Link, LolaError,
+    SensorMessage,
 };
 use super::plausible::Believed;
-use super::safety::SafetyLimits;
+use super::safety::{SafetyLimits, Verdict, Watch};
 
 /// Darkest mean brightness (0 … 255) a picture may have: below it the board cannot be
 /// found ([`settings::DARK_MEAN`], the one threshold of capture, its dry run and
@@ -164,6 +169,16 @@ pub fn robot(limits: &SafetyLimits, m: &SensorMessage) -> Vec<Check> {
             }
         ),
     );
+    let pressed = m.touch[CHEST_BUTTON] > 0.5;
+    let button = Check::new(
+        "chest button",
+        !pressed,
+        if pressed {
+            "pressed: a capture stops on it; release it (is something lying on the chest?)"
+        } else {
+            "not pressed"
+        },
+    );
     let most = m
         .stiffness
         .iter()
@@ -184,7 +199,7 @@ pub fn robot(limits: &SafetyLimits, m: &SensorMessage) -> Vec<Check> {
             },
         )
     };
-    vec![lying, battery, motors, stiffness]
+    vec![lying, battery, motors, button, stiffness]
 }
 
 /// LoLA's first message, read before a capture commands anything: it must come and its
@@ -224,6 +239,7 @@ pub fn lola(link: &mut dyn Link, limits: &SafetyLimits, cycles: u32) -> Vec<Chec
         position: first.position,
         stiffness: first.stiffness,
     };
+    let mut watched = Watched::new(limits, &first);
     let mut last = first;
     let mut received = 1u32;
     let mut failed = None;
@@ -231,6 +247,7 @@ pub fn lola(link: &mut dyn Link, limits: &SafetyLimits, cycles: u32) -> Vec<Chec
         let next = link.send(&hold).and_then(|()| link.receive());
         match next {
             Ok(m) => {
+                watched.check(&m);
                 last = m;
                 received += 1;
             }
@@ -262,7 +279,109 @@ pub fn lola(link: &mut dyn Link, limits: &SafetyLimits, cycles: u32) -> Vec<Chec
         Err(fault) => Check::new("joint readings", false, fault.to_string()),
     });
     checks.extend(robot(limits, &last));
+    checks.push(watched.check_of(received));
     checks
+}
+
+/// The run's watch over the dry run's messages: every condition a run stops or rests on,
+/// cycle by cycle — readings that jump or are not numbers again, a roll, the chest button
+/// held, a motor's status or temperature, its current, the battery.
+struct Watched {
+    limits: SafetyLimits,
+    believed: Option<Believed>,
+    body: Option<BodyWatch>,
+    motors: Watch,
+    /// The first condition met: the message's number and what a run would do.
+    first: Option<(u32, String)>,
+    seen: u32,
+}
+
+impl Watched {
+    fn new(limits: &SafetyLimits, first: &SensorMessage) -> Watched {
+        let mut w = Watched {
+            limits: *limits,
+            believed: Believed::start(limits.readings, first).ok(),
+            body: BodyWatch::start(limits.body, first).ok(),
+            motors: Watch::default(),
+            first: None,
+            seen: 0,
+        };
+        w.check_motors(first);
+        w
+    }
+
+    fn note(&mut self, what: String) {
+        if self.first.is_none() {
+            self.first = Some((self.seen + 1, what));
+        }
+    }
+
+    fn check_motors(&mut self, m: &SensorMessage) {
+        let l = &self.limits;
+        let what = match self.motors.check(l, m) {
+            Verdict::Fine => return,
+            Verdict::Hot(j, t) => format!(
+                "{} at {t:.1} °C: a run rests until the motors cool",
+                j.name()
+            ),
+            Verdict::Status(j, status, _) => format!(
+                "{} reports status {status}: a run rests until it is 0",
+                j.name()
+            ),
+            Verdict::Overheated(j, t) => format!(
+                "{} at {t:.1} °C (limit {:.0} °C): a run stops",
+                j.name(),
+                l.stop_temperature
+            ),
+            Verdict::Overcurrent(j, a) => format!(
+                "{} drew {a:.2} A for {} cycles (limit {:.2} A): a run stops",
+                j.name(),
+                l.current_cycles,
+                l.max_current
+            ),
+            Verdict::Unreadable(j, what, value) => {
+                format!("{} reports a {what} of {value}: a run stops", j.name())
+            }
+        };
+        self.note(what);
+    }
+
+    /// Checks the next message as a run would.
+    fn check(&mut self, m: &SensorMessage) {
+        self.seen += 1;
+        if let Some(fault) = self.believed.as_mut().and_then(|b| b.check(m)) {
+            self.note(format!("{fault}: a run stops"));
+        }
+        if let Some(Err(stop)) = self.body.as_mut().map(|b| b.check(m)) {
+            self.note(match stop {
+                super::body::BodyStop::ChestButton => format!(
+                    "the chest button held for {} cycles: a run stops at once",
+                    self.limits.body.chest_cycles
+                ),
+                other => format!("{other} (a run stops)"),
+            });
+        }
+        self.check_motors(m);
+    }
+
+    /// The check line: whether none of the run's conditions was met over `received`
+    /// messages.
+    fn check_of(&self, received: u32) -> Check {
+        match &self.first {
+            None => Check::new(
+                "watched",
+                true,
+                format!(
+                    "{received} messages as a run watches them: nothing a run stops or rests on"
+                ),
+            ),
+            Some((k, what)) => Check::new(
+                "watched",
+                false,
+                format!("message {k} of {received}: {what}"),
+            ),
+        }
+    }
 }
 
 /// LoLA's error, with what to do.
@@ -326,9 +445,9 @@ pub fn dry_run(
 }
 
 /// A picture's size (width, height) and mean brightness (0 … 255, of its grey levels:
-/// [`decode_grey`]).
-pub fn brightness(bytes: &[u8]) -> Result<((u32, u32), f64), String> {
-    let (size, grey) = decode_grey(bytes)?;
+/// [`decode_grey`]), when it has the camera's `size`.
+pub fn brightness(bytes: &[u8], size: (u32, u32)) -> Result<((u32, u32), f64), String> {
+    let (size, grey) = decode_grey(bytes, size)?;
     if grey.is_empty() {
         return Err("has no pixels".into());
     }
@@ -363,7 +482,8 @@ pub fn camera(
         Ok(p) => p,
         Err(e) => return Check::new(item, false, e.to_string()),
     };
-    let ((w, h), grey) = match decode_grey(&picture.bytes) {
+    let size = model.intrinsics(id);
+    let ((w, h), grey) = match decode_grey(&picture.bytes, (size.width, size.height)) {
         Ok(found) => found,
         Err(e) => return Check::new(item, false, format!("its picture {e}")),
     };
@@ -374,7 +494,6 @@ pub fn camera(
         write_atomic(&path, &picture.bytes, &WriteOptions::new(true)).map_err(|e| e.to_string())?;
         Ok(path)
     });
-    let size = model.intrinsics(id);
     let mut problems = Vec::new();
     if let Err(e) =
         settings::check_first(id, (w, h), (size.width, size.height), &brightness, settings)

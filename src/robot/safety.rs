@@ -57,9 +57,12 @@ impl Default for SafetyLimits {
 pub enum Verdict {
     /// Everything within the limits.
     Fine,
-    /// A motor is hot, or its status says the firmware starts reducing its stiffness (status
-    /// 1, nao_lola `JointStatuses.msg` line 3): pause at rest until it cools (the joint, °C).
+    /// A motor is hot: pause at rest until it cools (the joint, °C).
     Hot(Joint, f64),
+    /// A motor's status says the firmware starts reducing its stiffness (status 1, nao_lola
+    /// `JointStatuses.msg` line 3): pause at rest until it is 0 (the joint, its status, its
+    /// temperature in °C, which may well be low).
+    Status(Joint, i32, f64),
     /// Stop the run: too hot (the joint, °C).
     Overheated(Joint, f64),
     /// Stop the run: a motor drew too much current for too long (the joint, A).
@@ -149,7 +152,7 @@ impl Watch {
         }
         let (sjoint, status) = worst_status(message);
         if status >= 1 {
-            return Verdict::Hot(sjoint, temperatures.get(sjoint));
+            return Verdict::Status(sjoint, status, temperatures.get(sjoint));
         }
         Verdict::Fine
     }
@@ -201,7 +204,10 @@ mod tests {
         let mut w = Watch::default();
         let mut m = message(50.0, 0.1);
         m.status[lola::index(Joint::RHipPitch)] = 1;
-        assert_eq!(w.check(&limits, &m), Verdict::Hot(Joint::RHipPitch, 40.0));
+        assert_eq!(
+            w.check(&limits, &m),
+            Verdict::Status(Joint::RHipPitch, 1, 40.0)
+        );
         let mut cool = message(40.0, 0.1);
         assert!(limits.cooled(&cool));
         cool.status[lola::index(Joint::RHipPitch)] = 1;

@@ -115,6 +115,30 @@ pub struct BootstrapStd {
 }
 
 impl Solution {
+    /// The held (undetermined) parameters whose direction moves the reported parameter `p`
+    /// by more than its σ per unit (px, deg, mm) they are off, each with how much: `p`'s
+    /// estimate is off by `ratio × (held value − truth)` (report units of `p` per report
+    /// unit of the held one). `p`'s σ assumes each held at its nominal value and leaves
+    /// that error out: it is not honest unless the held one is known. Empty for a fixed
+    /// or undetermined `p`.
+    pub fn held_trade_offs(&self, p: Param) -> Vec<(Param, f64)> {
+        if self.fixed.is_fixed(p) || !self.is_determined(p) {
+            return Vec::new();
+        }
+        let sigma = self.report_std(p);
+        self.undetermined
+            .iter()
+            .filter(|u| u.param != p)
+            .filter_map(|u| {
+                let terms = &u.direction.terms;
+                let own = terms.iter().find(|t| t.0 == u.param)?.1;
+                let c = terms.iter().find(|t| t.0 == p)?.1;
+                let ratio = c / own;
+                (own != 0.0 && ratio.abs() > sigma).then_some((u.param, ratio))
+            })
+            .collect()
+    }
+
     /// Whether the data determine `p` (a held parameter counts as determined).
     pub fn is_determined(&self, p: Param) -> bool {
         !self.undetermined.iter().any(|u| u.param == p)

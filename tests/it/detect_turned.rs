@@ -41,6 +41,11 @@ fn worst_robot() -> [f64; PARAMETER_COUNT] {
 /// Renders a small two-camera dataset into `dir` (`how`: `--team-offsets` or `--truth
 /// FILE`), and removes its truth.
 fn render(dir: &Path, seed: u64, how: &[&str]) {
+    render_upper(dir, seed, how, 2, 2);
+}
+
+/// [`render`] with `upper` upper stances and `heads` head postures.
+fn render_upper(dir: &Path, seed: u64, how: &[&str], upper: usize, heads: usize) {
     let out = naocalib()
         .args([
             "simulate",
@@ -48,9 +53,9 @@ fn render(dir: &Path, seed: u64, how: &[&str]) {
             "--stances",
             "2",
             "--upper-stances",
-            "2",
+            &upper.to_string(),
         ])
-        .args(["--heads", "2", "--seed", &seed.to_string()])
+        .args(["--heads", &heads.to_string(), "--seed", &seed.to_string()])
         .args(how)
         .arg(dir)
         .output()
@@ -61,8 +66,13 @@ fn render(dir: &Path, seed: u64, how: &[&str]) {
 
 /// Turns every picture of `camera` in the dataset `dir` by 180°.
 fn turn(dir: &Path, camera: CameraId) {
+    turn_some(dir, |c| c.camera == camera);
+}
+
+/// Turns the pictures of the captures `which` says by 180°.
+fn turn_some(dir: &Path, which: impl Fn(&naocalib::dataset::Capture) -> bool) {
     let dataset = Dataset::load_without_corners(dir).unwrap();
-    for c in dataset.captures.iter().filter(|c| c.camera == camera) {
+    for c in dataset.captures.iter().filter(|c| which(c)) {
         let path = dir.join(c.image.as_ref().unwrap());
         let mut picture = read_grey_png(&path);
         picture.pixels.reverse();
@@ -176,4 +186,71 @@ fn pictures_turned_by_180_give_no_calibration_and_name_the_camera_and_its_flip()
             }
         }
     }
+}
+
+/// The upper captures of the dataset at `dir`.
+fn upper_captures(dir: &Path) -> Vec<u64> {
+    Dataset::load_without_corners(dir)
+        .unwrap()
+        .captures
+        .iter()
+        .filter(|c| c.camera == CameraId::Upper)
+        .map(|c| c.id)
+        .collect()
+}
+
+/// Three of sixteen upper pictures turned by 180° among upright ones: `detect` judges each
+/// picture on its own — names the turned ones (not the upright), leaves their vertices out
+/// of corners.csv — and the camera is not called turned. Two upper pictures, both turned:
+/// each says whether it is turned cannot be judged; none says the turn was ruled out.
+#[test]
+fn each_picture_is_judged_on_its_own_and_too_few_boards_are_said_so() {
+    let tmp = tempfile::tempdir().unwrap();
+    let many = tmp.path().join("many");
+    render_upper(&many, 5, &["--team-offsets"], 4, 2);
+    let upper = upper_captures(&many);
+    assert_eq!(upper.len(), 16);
+    let turned: Vec<u64> = upper.iter().copied().step_by(5).take(3).collect();
+    turn_some(&many, |c| turned.contains(&c.id));
+    let out = naocalib().arg("detect").arg(&many).output().unwrap();
+    let err = stderr(&out);
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("ruled out"), "{err}");
+    assert!(!err.contains("camera's pictures are turned"), "{err}");
+    let named: Vec<u64> = err
+        .lines()
+        .filter(|l| l.contains("the picture is turned by 180°"))
+        .filter_map(|l| l.strip_prefix("capture ")?.split(' ').next()?.parse().ok())
+        .collect();
+    assert!(
+        named.iter().all(|id| turned.contains(id)),
+        "{named:?}: {err}"
+    );
+    assert!(named.len() >= 2, "{named:?} of {turned:?}: {err}");
+    let dataset = Dataset::load(&many).unwrap();
+    assert!(dataset.corners.iter().all(|c| !named.contains(&c.capture)));
+    assert!(
+        err.contains("not used: their pictures on their own are turned"),
+        "{err}"
+    );
+
+    let few = tmp.path().join("few");
+    render_upper(&few, 3, &["--team-offsets"], 1, 1);
+    let upper = upper_captures(&few);
+    assert_eq!(upper.len(), 2);
+    turn_some(&few, |c| c.camera == CameraId::Upper);
+    let out = naocalib().arg("detect").arg(&few).output().unwrap();
+    let err = stderr(&out);
+    assert!(!err.contains("ruled out"), "{err}");
+    for id in upper {
+        let line = err
+            .lines()
+            .find(|l| l.starts_with(&format!("capture {id} ")))
+            .unwrap_or_else(|| panic!("capture {id}: {err}"));
+        assert!(
+            !line.contains("found") || line.contains("cannot be judged"),
+            "{line}"
+        );
+    }
+    assert!(err.contains("cannot be judged"), "{err}");
 }

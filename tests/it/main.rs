@@ -13,6 +13,8 @@ mod batch_solve;
 mod capture;
 mod capture_body;
 mod capture_cameras;
+mod capture_guard;
+mod capture_honest;
 #[cfg(feature = "ceres")]
 mod ceres_agreement;
 #[cfg(feature = "detect")]
@@ -45,6 +47,7 @@ mod export_update;
 mod export_upper;
 mod extended;
 mod fuzz_readers;
+mod held_honest;
 mod hostile_inputs;
 mod hostile_outputs;
 mod lola_faults;

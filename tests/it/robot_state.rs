@@ -144,26 +144,33 @@ fn a_camera_command_capture_gave_up_on_does_not_run_on() {
     }
 }
 
-/// `capture --resume` after a run killed mid-stance (SIGKILL: no ramp-down) against the
-/// same robot, which holds the last command (stiff at 0.8): the resumed run takes the
-/// stiffness over from what the robot reports, so that over the whole record — both runs
-/// and the change between them — no motor's stiffness steps by more than one ramp step.
+/// `capture --resume` after a run killed mid-stance (SIGKILL: capture's own way out never
+/// runs) against the same robot, which holds the last command (stiff at 0.8) until the
+/// rest guard takes it over and ramps it down: over the whole record — the run, the guard,
+/// the resumed run and the changes between them — no motor's stiffness steps by more than
+/// one ramp step, and the resumed run takes the stiffness over from what the robot reports.
 #[test]
 fn resume_after_a_kill_takes_the_stiffness_over_from_the_robot() {
     use naocalib::robot::motion::{MIN_RAMP_CYCLES, MotionOptions};
     let b = Bench::new();
     let plan = b.path("plan.csv");
     plan_file(&plan, 4, 5);
-    let robot = b.robot("a.sock", "a.csv", &["--speed", "4", "--clients", "2"]);
+    let robot = b.robot("a.sock", "a.csv", &["--speed", "4", "--clients", "3"]);
     let mut first = b
         .capture(&plan, "ds", "a.sock", &b.fixed_camera(), &[])
         .stdout(Stdio::null())
-        .stderr(Stdio::null())
+        .stderr(Stdio::piped())
         .spawn()
         .unwrap();
     wait_for_captures(&b.path("ds"), 1);
     first.kill().unwrap();
-    first.wait().unwrap();
+    // Its standard error closes once the guard, which shares it, is done.
+    let killed = first.wait_with_output().unwrap();
+    assert!(
+        stderr(&killed).contains("the rest guard took it over"),
+        "{}",
+        stderr(&killed)
+    );
     let out = b
         .capture(&plan, "ds", "a.sock", &b.fixed_camera(), &["--resume"])
         .output()

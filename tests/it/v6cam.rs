@@ -128,7 +128,8 @@ fn quadrant(pixels: &[u8], width: usize, top: bool, left: bool) -> f64 {
 /// The grey pixels of a saved PNG and its width.
 fn grey_png(path: &Path) -> (Vec<u8>, usize) {
     let bytes = std::fs::read(path).unwrap();
-    let ((w, _), grey) = naocalib::robot::camera::decode_grey(&bytes).unwrap();
+    let (_, size) = naocalib::robot::camera::header_size(&bytes).unwrap();
+    let ((w, _), grey) = naocalib::robot::camera::decode_grey(&bytes, size).unwrap();
     (grey, w as usize)
 }
 

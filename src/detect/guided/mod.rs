@@ -496,7 +496,7 @@ impl Search<'_> {
                     ..decided
                 };
                 found.numbered = Some(format!(
-                    "{}; 180° turn ruled out by the prediction (turned {turn:.0}° against it)",
+                    "{}; numbered as the prediction turns it ({turn:.0}° against it)",
                     decided.describe()
                 ));
                 return Ok(Ok(found));

@@ -538,6 +538,19 @@ pub fn check_first(
     brightness: &Brightness,
     settings: Option<&CameraSettings>,
 ) -> Result<(), String> {
+    check_first_size(camera, size, expected)?;
+    brightness
+        .check(settings)
+        .map_err(|e| format!("the {camera} camera's first picture {e}"))
+}
+
+/// The size part of [`check_first`]: the camera's first picture (`size`, from its header or
+/// decoded) must have the size of its intrinsics (`expected`).
+pub fn check_first_size(
+    camera: CameraId,
+    size: (u32, u32),
+    expected: (u32, u32),
+) -> Result<(), String> {
     if size != expected {
         return Err(format!(
             "the {camera} camera's first picture is {}×{} pixels; the dataset's intrinsics \
@@ -545,9 +558,7 @@ pub fn check_first(
             size.0, size.1, expected.0, expected.1
         ));
     }
-    brightness
-        .check(settings)
-        .map_err(|e| format!("the {camera} camera's first picture {e}"))
+    Ok(())
 }
 
 #[cfg(test)]

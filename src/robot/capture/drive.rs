@@ -35,8 +35,9 @@ impl From<LolaError> for Halt {
 /// How a move ended that did not settle at its target.
 #[derive(Debug)]
 pub(super) enum Unsettled {
-    /// A head or leg motor is hot (the joint, °C): the legs are to rest until it cools.
-    Hot(Joint, f64),
+    /// A head or leg motor is hot or reports a status above 0 (the joint, °C, its status):
+    /// the legs are to rest until it cools.
+    Hot(Joint, f64, i32),
     /// A joint was obstructed or the joints did not settle (why); the command holds the
     /// joints where they are.
     Abandoned(String),
@@ -61,7 +62,7 @@ pub(super) struct Drive<'a> {
     stiffness: [f64; JOINTS],
     /// LoLA cycles so far.
     pub(super) cycles: u64,
-    hot: Option<(Joint, f64)>,
+    hot: Option<(Joint, f64, i32)>,
     /// On the way out: only a broken link stops the rest and ramp-down.
     finishing: bool,
     /// Whether the ramp-up ended and the robot was moved.
@@ -124,7 +125,8 @@ impl<'a> Drive<'a> {
         }
         match self.watch.check(&self.options.safety, &self.last) {
             Verdict::Fine => self.hot = None,
-            Verdict::Hot(j, t) => self.hot = Some((j, t)),
+            Verdict::Hot(j, t) => self.hot = Some((j, t, 0)),
+            Verdict::Status(j, status, t) => self.hot = Some((j, t, status)),
             Verdict::Overheated(j, t) => {
                 return Err(Halt::Fault(CaptureError::Safety(format!(
                     "{} reached {t:.1} °C (limit {:.0} °C)",
@@ -222,8 +224,8 @@ impl<'a> Drive<'a> {
         for k in 0..path.len() + timeout {
             self.command = *path.get(k).unwrap_or(target);
             self.cycle()?;
-            if watch_hot && let Some((j, t)) = self.hot {
-                return Ok(Some(Unsettled::Hot(j, t)));
+            if watch_hot && let Some((j, t, status)) = self.hot {
+                return Ok(Some(Unsettled::Hot(j, t, status)));
             }
             let reading = self.reading();
             match settle.push(&m, &self.command, &reading) {
@@ -283,16 +285,18 @@ impl<'a> Drive<'a> {
     /// ramp-down; only a broken link stops them. When LoLA's stream cannot be trusted or
     /// read (a message that did not parse, silence, a socket error) the ramp-down is sent
     /// blind, holding the posture; only a closed connection leaves nothing to send to.
-    pub(super) fn finish(&mut self, end: &End) {
+    /// Whether the ramp-down was sent to its end (the robot limp).
+    pub(super) fn finish(&mut self, end: &End) -> bool {
         self.finishing = true;
         match end {
-            End::Stopped(CaptureError::Lola(LolaError::Closed)) => {}
+            End::Stopped(CaptureError::Lola(LolaError::Closed)) => false,
             End::Stopped(CaptureError::Lola(_)) => self.blind_ramp_down(),
             _ => {
                 let back =
                     if self.moved { self.rest() } else { Ok(()) }.and_then(|()| self.ramp_down());
                 match back {
-                    Ok(()) | Err(Halt::Link(LolaError::Closed)) => {}
+                    Ok(()) => true,
+                    Err(Halt::Link(LolaError::Closed)) => false,
                     Err(_) => self.blind_ramp_down(),
                 }
             }
@@ -300,8 +304,8 @@ impl<'a> Drive<'a> {
     }
 
     /// Sends a stiffness ramp-down without reading (after a message that did not parse,
-    /// the stream cannot be trusted): one message per 12 ms.
-    fn blind_ramp_down(&mut self) {
+    /// the stream cannot be trusted): one message per 12 ms. Whether every message was sent.
+    fn blind_ramp_down(&mut self) -> bool {
         let options = &self.options.motion;
         let mut message = self.message();
         let from = message.stiffness;
@@ -312,11 +316,12 @@ impl<'a> Drive<'a> {
             }
             self.link.drain();
             if self.link.send(&message).is_err() {
-                return;
+                return false;
             }
             std::thread::sleep(lola::CYCLE);
         }
         std::thread::sleep(lola::CYCLE);
         self.link.drain();
+        true
     }
 }

@@ -11,7 +11,9 @@
 //! - `drive`: the robot cycle by cycle — ramps, bounded-speed moves, settling, cooling,
 //!   the way out;
 //! - [`session`]: the loop over the plan, its observers and stop flag;
-//! - [`signals`]: the signals that set the stop flag.
+//! - [`signals`]: the signals that set the stop flag;
+//! - [`guard`]: the process that takes the robot to rest when capture dies in a way it
+//!   cannot handle itself (SIGKILL, an abort, the out-of-memory kill).
 //!
 //! The ways between stances are the planner's ([`crate::plan::route`]), so that a plan runs
 //! as it was planned.
@@ -30,6 +32,7 @@ use super::plausible::ReadingFault;
 use super::safety::SafetyLimits;
 
 mod drive;
+pub mod guard;
 pub mod plan;
 pub mod request;
 pub mod session;

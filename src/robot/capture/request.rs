@@ -100,6 +100,7 @@ impl CaptureRequest {
         config: &Path,
     ) -> Result<Vec<(CameraId, CameraSpec, Setup)>, CaptureRequestError> {
         let file_settings = crate::dataset::read_camera_settings(config)?;
+        self.check_settings_named()?;
         Ok(self
             .cameras()?
             .into_iter()
@@ -113,6 +114,27 @@ impl CaptureRequest {
                 (id, spec, setup)
             })
             .collect())
+    }
+
+    /// Refuses a `--camera-setting` that names a camera the run does not have (a setting
+    /// for a camera not given, or a typo of the other camera's name): it would be accepted
+    /// and apply to nothing. One without a camera's name is for every camera given.
+    pub fn check_settings_named(&self) -> Result<(), CaptureRequestError> {
+        let given: Vec<CameraId> = self.cameras()?.iter().map(|(c, _)| *c).collect();
+        for (named, _) in &self.camera_settings {
+            if named.len() != 1 || given.contains(&named[0]) {
+                continue;
+            }
+            let has: Vec<&str> = given.iter().map(|c| c.name()).collect();
+            return Err(CaptureRequestError::Invalid(format!(
+                "--camera-setting {camera}.…: this run has no {camera} camera (its cameras: \
+                 {}); give the setting for one of them, or the {camera} camera with \
+                 --camera {camera}=SPEC",
+                has.join(", "),
+                camera = named[0].name()
+            )));
+        }
+        Ok(())
     }
 
     /// The robot's dataset.toml for a run into `dir`: the one given, else the dataset's.
@@ -310,6 +332,7 @@ mod tests {
             abandoned: Vec::new(),
             cycles: 0,
             end,
+            limp: true,
         };
         let done = account(Path::new("ds"), &report(End::Completed), 9, false);
         assert_eq!(done.exit, 0);

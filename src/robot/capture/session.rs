@@ -47,12 +47,15 @@ pub enum Event {
         /// Why.
         reason: String,
     },
-    /// The legs rest until the motors cool (the joint, °C).
+    /// The legs rest until the motors cool: a motor at the pause temperature, or one whose
+    /// status says the firmware reduces its stiffness (the joint, °C, its status).
     Cooling {
-        /// The hottest joint.
+        /// The hottest joint, or the one with a status above 0.
         joint: Joint,
         /// Its temperature.
         temperature: f64,
+        /// Its status (0: it is hot).
+        status: i32,
     },
 }
 
@@ -70,9 +73,23 @@ impl std::fmt::Display for Event {
                 f,
                 "capture {id} skipped: {reason}; abandoned on the way, the leg returns to rest"
             ),
-            Event::Cooling { joint, temperature } => write!(
+            Event::Cooling {
+                joint,
+                temperature,
+                status: 0,
+            } => write!(
                 f,
                 "{} at {temperature:.1} °C: resting until the motors cool",
+                joint.name()
+            ),
+            Event::Cooling {
+                joint,
+                temperature,
+                status,
+            } => write!(
+                f,
+                "{} reports status {status} (the firmware reduces its stiffness; the motor at \
+                 {temperature:.1} °C): resting until every status is 0 and the motors cool",
                 joint.name()
             ),
         }
@@ -105,6 +122,9 @@ pub struct Report {
     pub cycles: u64,
     /// How it ended.
     pub end: End,
+    /// Whether the robot was left limp: the stiffness ramp-down sent to its end (else the
+    /// connection was lost first, and the rest guard has to take the robot to rest).
+    pub limp: bool,
 }
 
 impl Report {
@@ -238,6 +258,7 @@ impl<'a> Session<'a> {
                 already,
                 cycles: 0,
                 end: End::Completed,
+                limp: false,
             },
         };
         // A panic on the way (a bug) still ends at rest with the stiffness ramped down.
@@ -259,7 +280,7 @@ impl<'a> Session<'a> {
             Err(Halt::Link(e)) => End::Stopped(e.into()),
         };
         // The way out: rest, then the stiffness ramp-down, unless the link is gone.
-        drive.finish(&end);
+        log.report.limp = drive.finish(&end);
         log.report.cycles = drive.cycles;
         for done in worker.finish() {
             if let Err(Halt::Fault(e)) = log.done(done)
@@ -363,12 +384,21 @@ fn visit(
                     drive.rest()?;
                     break;
                 }
-                Stance::Unsettled(Unsettled::Hot(joint, temperature)) => {
-                    log.tell(Event::Cooling { joint, temperature });
+                Stance::Unsettled(Unsettled::Hot(joint, temperature, status)) => {
+                    log.tell(Event::Cooling {
+                        joint,
+                        temperature,
+                        status,
+                    });
                     tries += 1;
                     if tries > options.hot_retries {
+                        let what = if status > 0 {
+                            format!("reports status {status}")
+                        } else {
+                            "overheats".into()
+                        };
                         return Err(Halt::Fault(CaptureError::Safety(format!(
-                            "{} overheats again and again ({temperature:.1} °C)",
+                            "{} {what} again and again ({temperature:.1} °C)",
                             joint.name()
                         ))));
                     }
@@ -699,6 +729,7 @@ mod tests {
             Event::Cooling {
                 joint: Joint::LKneePitch,
                 temperature: 71.0,
+                status: 0,
             },
             Event::Abandoned {
                 id: 1,

@@ -36,7 +36,8 @@ pub struct RobotRequest {
     pub block: Option<String>,
     /// A joint whose motor heats up fast under load.
     pub overheat: Option<String>,
-    /// A motor's temperature status from a cycle on: `JOINT=STATUS@CYCLE`.
+    /// A motor's temperature status from a cycle on, up to an end if given:
+    /// `JOINT=STATUS@CYCLE[..END]`.
     pub status: Option<String>,
     /// Close the connection and exit after this many cycles.
     pub drop_after: Option<u64>,
@@ -97,7 +98,9 @@ impl RobotRequest {
         };
         let block = self.block.as_deref().map(parse_block).transpose()?;
         let overheat = self.overheat.as_deref().map(joint).transpose()?;
-        let status_at = self.status.as_deref().map(parse_status).transpose()?;
+        let status = self.status.as_deref().map(parse_status).transpose()?;
+        let status_at = status.map(|(j, value, at, _)| (j, value, at));
+        let status_until = status.and_then(|(.., end)| end);
         let mut start = JointAngles::default();
         start.set(Joint::LKneePitch, 0.03);
         start.set(Joint::RKneePitch, 0.02);
@@ -125,6 +128,7 @@ impl RobotRequest {
                 roll_at: self.roll_at,
                 chest_at: self.chest_at,
                 status_at,
+                status_until,
                 low_battery_at: self.low_battery_at,
             },
             clients: self.clients as usize,
@@ -195,23 +199,31 @@ pub fn parse_block(text: &str) -> Result<(Joint, f64), RobotRequestError> {
     Ok((joint, deg.to_radians()))
 }
 
-/// `JOINT=STATUS@CYCLE` of a motor's temperature status (1 … 3) from a cycle on.
-pub fn parse_status(text: &str) -> Result<(Joint, i32, u64), RobotRequestError> {
+/// `JOINT=STATUS@CYCLE[..END]` of a motor's temperature status (1 … 3) from a cycle on,
+/// up to (not including) cycle END when given.
+pub fn parse_status(text: &str) -> Result<(Joint, i32, u64, Option<u64>), RobotRequestError> {
     let bad = || {
         RobotRequestError::Invalid(format!(
-            "--status: expected JOINT=STATUS@CYCLE (e.g. LKneePitch=2@300), got '{text}'"
+            "--status: expected JOINT=STATUS@CYCLE[..END] (e.g. LKneePitch=2@300), got '{text}'"
         ))
     };
     let (name, rest) = text.split_once('=').ok_or_else(bad)?;
-    let (value, cycle) = rest.split_once('@').ok_or_else(bad)?;
+    let (value, cycles) = rest.split_once('@').ok_or_else(bad)?;
     let value: i32 = value.trim().parse().map_err(|_| bad())?;
     if !(1..=3).contains(&value) {
         return Err(RobotRequestError::Invalid(format!(
             "--status: a status is 1, 2 or 3, got {value}"
         )));
     }
+    let (cycle, end) = match cycles.split_once("..") {
+        Some((from, to)) => (from, Some(to.trim().parse::<u64>().map_err(|_| bad())?)),
+        None => (cycles, None),
+    };
     let cycle: u64 = cycle.trim().parse().map_err(|_| bad())?;
-    Ok((joint(name.trim())?, value, cycle))
+    if end.is_some_and(|end| end <= cycle) {
+        return Err(bad());
+    }
+    Ok((joint(name.trim())?, value, cycle, end))
 }
 
 #[cfg(test)]
@@ -260,8 +272,13 @@ mod tests {
         assert!(invalid(parse_block("LKneePitch=inf").unwrap_err()).contains("not a number"));
         assert_eq!(
             parse_status("RHipRoll=3@12").unwrap(),
-            (Joint::RHipRoll, 3, 12)
+            (Joint::RHipRoll, 3, 12, None)
         );
+        assert_eq!(
+            parse_status("RHipRoll=1@12..30").unwrap(),
+            (Joint::RHipRoll, 1, 12, Some(30))
+        );
+        assert!(parse_status("RHipRoll=1@12..5").is_err());
         assert!(invalid(parse_status("RHipRoll=4@12").unwrap_err()).contains("1, 2 or 3"));
         assert!(invalid(parse_status("RHipRoll=2").unwrap_err()).contains("JOINT=STATUS@CYCLE"));
         assert!(invalid(joint("Knee").unwrap_err()).starts_with("unknown joint 'Knee'"));
