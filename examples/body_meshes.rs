@@ -464,16 +464,16 @@ struct LinkStats {
     max_gap: f64,
 }
 
-/// Per solid: what the vertices it holds need (each vertex is held by the solid of its link
-/// it lies deepest in).
-#[derive(Default, Clone)]
+/// Per solid (by its place in the posed body, the same at every posture): what the vertices
+/// it holds need. Each vertex is held by the solid of its link that it lies deepest in, so
+/// the solids sized as printed hold every vertex with the margin together.
 struct Need {
     /// The smallest margin of its vertices (negative: outside).
     min_margin: f64,
-    /// For boxes: the extent of its vertices in the box's own frame (left side's terms).
-    lo: [f64; 3],
-    hi: [f64; 3],
-    any: bool,
+    /// For boxes: how far its vertices reach past each face, along the box's axes, low and
+    /// high side (y in the left side's terms: a right-side box is mirrored).
+    past_lo: [f64; 3],
+    past_hi: [f64; 3],
 }
 
 fn main() {
@@ -504,55 +504,61 @@ fn main() {
             ..LinkStats::default()
         })
         .collect();
-    let mut needs: HashMap<(Kind, Option<Side>), Need> = HashMap::new();
+    let mut needs: HashMap<usize, Need> = HashMap::new();
     let postures = postures();
+    let mut solids_at_zero = Vec::new();
     for posture in &postures {
         let model = BodyModel {
             arms: posture.arms,
             ..body
         };
         let posed = model.pose(&robot, &board, &posture.joints);
+        if solids_at_zero.is_empty() {
+            solids_at_zero = posed.parts.clone();
+        }
         for ((link, mesh), st) in links.iter().zip(&meshes).zip(&mut stats) {
-            let solids: Vec<&Part> = posed
+            let solids: Vec<(usize, &Part)> = posed
                 .parts
                 .iter()
-                .filter(|p| {
+                .enumerate()
+                .filter(|(_, p)| {
                     link.enclosed_by.contains(&p.kind)
                         && (p.side.is_none() || link.side.is_none() || p.side == link.side)
                 })
                 .collect();
+            if solids.is_empty() {
+                eprintln!("error: the body model has no solid for link {}", link.name);
+                std::process::exit(2);
+            }
             let pose = frame_pose(&robot, link.frame, link.side, posture);
             let placed: Vec<[f64; 3]> = mesh.iter().map(|v| pose.apply(v)).collect();
             for p in &placed {
-                let (best, m) = solids
+                let (index, part, m) = solids
                     .iter()
-                    .map(|s| (s, margin(&s.shape, *p)))
-                    .fold(None, |acc: Option<(&&Part, f64)>, x| match acc {
-                        Some(a) if a.1 >= x.1 => Some(a),
-                        _ => Some(x),
-                    })
-                    .expect("every link has a solid");
+                    .map(|(k, s)| (*k, *s, margin(&s.shape, *p)))
+                    .max_by(|a, b| a.2.total_cmp(&b.2))
+                    .expect("a solid");
                 st.checked += 1;
                 st.outside += usize::from(m < 0.0);
                 st.min_margin = st.min_margin.min(m);
-                let need = needs.entry((best.kind, best.side)).or_insert(Need {
+                let need = needs.entry(index).or_insert(Need {
                     min_margin: f64::INFINITY,
-                    lo: [f64::INFINITY; 3],
-                    hi: [f64::NEG_INFINITY; 3],
-                    any: false,
+                    past_lo: [f64::NEG_INFINITY; 3],
+                    past_hi: [f64::NEG_INFINITY; 3],
                 });
                 need.min_margin = need.min_margin.min(m);
-                need.any = true;
-                if let Shape::Box(b) = best.shape {
-                    let (lo, hi) = box_bounds(&model, best.kind);
+                if let Shape::Box(b) = part.shape {
                     let d = sub(*p, b.centre);
-                    let s = best.side.map_or(1.0, Side::sign);
                     for k in 0..3 {
-                        let mid = (lo[k] + hi[k]) / 2.0;
-                        let local = mid * if k == 1 { s } else { 1.0 } + dot(d, b.axes[k]);
-                        let left = if k == 1 { s * local } else { local };
-                        need.lo[k] = need.lo[k].min(left);
-                        need.hi[k] = need.hi[k].max(left);
+                        let x = dot(d, b.axes[k]);
+                        let (lo, hi) = (-x - b.half[k], x - b.half[k]);
+                        let (lo, hi) = if k == 1 && part.side == Some(Side::Right) {
+                            (hi, lo)
+                        } else {
+                            (lo, hi)
+                        };
+                        need.past_lo[k] = need.past_lo[k].max(lo);
+                        need.past_hi[k] = need.past_hi[k].max(hi);
                     }
                 }
             }
@@ -561,7 +567,7 @@ fn main() {
                 .map(|u| {
                     let reach = solids
                         .iter()
-                        .map(|s| support(&s.shape, *u))
+                        .map(|(_, s)| support(&s.shape, *u))
                         .fold(f64::NEG_INFINITY, f64::max);
                     let mesh_reach = placed
                         .iter()
@@ -573,40 +579,20 @@ fn main() {
             st.max_gap = st.max_gap.max(gap);
         }
     }
-    print_tables(&links, &stats, &needs, &body, &postures, &paths);
+    print_links(&links, &stats, &postures, &paths);
+    print_solids(&solids_at_zero, &needs);
     if stats.iter().any(|s| s.outside > 0) {
         std::process::exit(1);
     }
 }
 
-/// The box of `kind` in its own frame (left side), as the model defines it.
-fn box_bounds(body: &BodyModel, kind: Kind) -> ([f64; 3], [f64; 3]) {
-    match kind {
-        Kind::Torso => (body.torso_lo, body.torso_hi),
-        Kind::Pelvis => (body.pelvis_lo, body.pelvis_hi),
-        Kind::Foot => (body.foot_lo, body.foot_hi),
-        Kind::Toe => (body.toe_lo, body.toe_hi),
-        _ => ([0.0; 3], [0.0; 3]),
-    }
-}
-
-fn print_tables(
-    links: &[Link],
-    stats: &[LinkStats],
-    needs: &HashMap<(Kind, Option<Side>), Need>,
-    body: &BodyModel,
-    postures: &[Posture],
-    paths: &[PathBuf],
-) {
+fn print_links(links: &[Link], stats: &[LinkStats], postures: &[Posture], paths: &[PathBuf]) {
     let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+    let postures: Vec<&str> = postures.iter().map(|p| p.name).collect();
     println!(
         "Meshes: {}; postures: {}.",
         names.join(", "),
-        postures
-            .iter()
-            .map(|p| p.name)
-            .collect::<Vec<_>>()
-            .join(", ")
+        postures.join(", ")
     );
     println!();
     println!(
@@ -625,68 +611,86 @@ fn print_tables(
             st.max_gap
         );
     }
+}
+
+/// Per solid of the left side and the middle (the right mirrors the left; the larger need
+/// of the two is printed), the size that holds its vertices with [`BodyModel::MARGIN`].
+fn print_solids(parts: &[Part], needs: &HashMap<usize, Need>) {
+    let m = BodyModel::MARGIN;
     println!();
     println!(
-        "Per solid (both sides, every posture), the size that holds each of its vertices with the margin of {} mm:",
-        BodyModel::MARGIN
+        "Per solid (the larger need of both sides, every posture), the size that holds each of its vertices with the margin of {m} mm; a box's faces move outward by the amounts given (negative: inward), along its own axes, y as for the left side:"
     );
     println!();
     println!("| solid | model | smallest margin (mm) | encloses with the margin |");
     println!("| --- | --- | --- | --- |");
-    let m = BodyModel::MARGIN;
-    let kinds = [
-        (Kind::Torso, None),
-        (Kind::Pelvis, None),
-        (Kind::Head, None),
-        (Kind::Shoulder, Some(body.shoulder_radius)),
-        (Kind::UpperArm, Some(body.upper_arm_radius)),
-        (Kind::Forearm, Some(body.forearm_radius)),
-        (Kind::Thigh, Some(body.thigh_radius)),
-        (Kind::Tibia, Some(body.tibia_radius)),
-        (Kind::Foot, None),
-        (Kind::Toe, None),
-    ];
-    for (kind, radius) in kinds {
-        let sides: Vec<&Need> = [None, Some(Side::Left), Some(Side::Right)]
-            .iter()
-            .filter_map(|s| needs.get(&(kind, *s)))
-            .filter(|n| n.any)
-            .collect();
-        if sides.is_empty() {
+    let fmt = |v: [f64; 3]| format!("({:.1}, {:.1}, {:.1})", v[0], v[1], v[2]);
+    for (k, part) in parts.iter().enumerate() {
+        if part.side == Some(Side::Right) {
             continue;
         }
-        let min_margin = sides
+        // The same solid of the other side, if any: the same kind, the same rank among them.
+        let rank = parts[..k]
+            .iter()
+            .filter(|p| p.kind == part.kind && p.side == part.side)
+            .count();
+        let twin = part.side.and_then(|_| {
+            parts
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| p.kind == part.kind && p.side == Some(Side::Right))
+                .nth(rank)
+                .map(|(j, _)| j)
+        });
+        let both: Vec<&Need> = std::iter::once(k)
+            .chain(twin)
+            .filter_map(|j| needs.get(&j))
+            .collect();
+        if both.is_empty() {
+            continue;
+        }
+        let count = parts
+            .iter()
+            .filter(|p| p.kind == part.kind && p.side == part.side)
+            .count();
+        let name = if count > 1 {
+            format!("{} {}", part.kind.name(), rank + 1)
+        } else {
+            part.kind.name().to_string()
+        };
+        let min_margin = both
             .iter()
             .map(|n| n.min_margin)
             .fold(f64::INFINITY, f64::min);
-        let fmt = |v: [f64; 3]| format!("({:.1}, {:.1}, {:.1})", v[0], v[1], v[2]);
-        let (model, fits) = match (kind, radius) {
-            (Kind::Head, _) => (
-                format!("r {:.1} about {}", body.head_radius, fmt(body.head_centre)),
-                format!("r ≥ {:.1}", body.head_radius - min_margin + m),
+        let (model, fits) = match part.shape {
+            Shape::Capsule(c) => (
+                format!("capsule r {:.1}", c.radius),
+                format!("r ≥ {:.1}", c.radius - min_margin + m),
             ),
-            (_, Some(r)) => (
-                format!("r {r:.1}"),
-                format!("r ≥ {:.1}", r - min_margin + m),
+            Shape::Sphere(s) => (
+                format!("sphere r {:.1}", s.radius),
+                format!("r ≥ {:.1}", s.radius - min_margin + m),
             ),
-            _ => {
-                let (lo, hi) = box_bounds(body, kind);
-                let lo_need: [f64; 3] = std::array::from_fn(|k| {
-                    sides.iter().map(|n| n.lo[k]).fold(f64::INFINITY, f64::min) - m
-                });
-                let hi_need: [f64; 3] = std::array::from_fn(|k| {
-                    sides
-                        .iter()
-                        .map(|n| n.hi[k])
-                        .fold(f64::NEG_INFINITY, f64::max)
-                        + m
-                });
+            Shape::Box(b) => {
+                let grow = |f: fn(&Need) -> [f64; 3]| -> [f64; 3] {
+                    std::array::from_fn(|i| {
+                        both.iter()
+                            .map(|n| f(n)[i])
+                            .fold(f64::NEG_INFINITY, f64::max)
+                            + m
+                    })
+                };
+                let half = b.half.map(|h| 2.0 * h);
                 (
-                    format!("{} … {}", fmt(lo), fmt(hi)),
-                    format!("{} … {}", fmt(lo_need), fmt(hi_need)),
+                    format!("box {} (edges)", fmt(half)),
+                    format!(
+                        "low faces {}, high faces {}",
+                        fmt(grow(|n| n.past_lo)),
+                        fmt(grow(|n| n.past_hi))
+                    ),
                 )
             }
         };
-        println!("| {} | {model} | {min_margin:.1} | {fits} |", kind.name());
+        println!("| {name} | {model} | {min_margin:.1} | {fits} |");
     }
 }
