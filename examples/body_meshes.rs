@@ -59,8 +59,9 @@ struct Link {
     enclosed_by: &'static [Kind],
 }
 
-/// The links: URDF name, frame, COLLADA file, SimRobot vertices, the solids that enclose it;
-/// `{s}` stands for `L`/`R`, `{l}` for `l`/`r` (the paired links are listed once).
+/// The links: URDF name, frame, COLLADA file, SimRobot vertices, the solids that enclose it
+/// (the thigh's top, the HipPitch motor's housing, may be the pelvis's; the sole stands on
+/// the sandal); `{s}` stands for `L`/`R`, `{l}` for `l`/`r` (the paired links listed once).
 #[rustfmt::skip]
 const TABLE: [(&str, Frame, &str, &str, &[Kind]); 13] = {
     use Frame::*;
@@ -70,10 +71,10 @@ const TABLE: [(&str, Frame, &str, &str, &[Kind]); 13] = {
         ("Head", Head, "HeadPitch", "naoHeadPitchV6", &[Kind::Head]),
         ("{s}Pelvis", HipYawPitch, "{s}HipYawPitch", "nao{s}HipYawPitch", &[Kind::Pelvis, Kind::Thigh]),
         ("{s}Hip", HipRoll, "{s}HipRoll", "nao{s}HipRoll", &[Kind::Pelvis, Kind::Thigh]),
-        ("{s}Thigh", HipPitch, "{s}HipPitch", "nao{s}HipPitch", &[Kind::Thigh]),
+        ("{s}Thigh", HipPitch, "{s}HipPitch", "nao{s}HipPitch", &[Kind::Thigh, Kind::Pelvis]),
         ("{s}Tibia", KneePitch, "{s}KneePitch", "nao{s}KneePitchV6", &[Kind::Tibia]),
         ("{s}AnklePitch", AnklePitch, "{s}AnklePitch", "nao{s}AnklePitch", &[Kind::Tibia, Kind::Foot]),
-        ("{l}_ankle", AnkleRoll, "{s}AnkleRoll", "nao{s}AnkleRollV6", &[Kind::Foot, Kind::Toe]),
+        ("{l}_ankle", AnkleRoll, "{s}AnkleRoll", "nao{s}AnkleRollV6", &[Kind::Foot, Kind::Toe, Kind::Sandal]),
         ("{s}Shoulder", ShoulderPitch, "{s}ShoulderPitch", "nao{s}ShoulderPitch", &[Kind::Shoulder]),
         ("{s}Bicep", ShoulderRoll, "{s}ShoulderRoll", "nao{s}ShoulderRollV6", &[Kind::Shoulder, Kind::UpperArm]),
         ("{s}ForeArm", ElbowRoll, "{s}ElbowRoll", "nao{s}ElbowRoll", &[Kind::Forearm]),
@@ -626,7 +627,8 @@ fn print_solids(parts: &[Part], needs: &HashMap<usize, Need>) {
     println!("| --- | --- | --- | --- |");
     let fmt = |v: [f64; 3]| format!("({:.1}, {:.1}, {:.1})", v[0], v[1], v[2]);
     for (k, part) in parts.iter().enumerate() {
-        if part.side == Some(Side::Right) {
+        // The right side mirrors the left; the sandal's plate is sized by its pattern.
+        if part.side == Some(Side::Right) || part.kind == Kind::Sandal {
             continue;
         }
         // The same solid of the other side, if any: the same kind, the same rank among them.
