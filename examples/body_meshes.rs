@@ -508,7 +508,10 @@ fn main() {
     let mut needs: HashMap<usize, Need> = HashMap::new();
     let postures = postures();
     let mut solids_at_zero = Vec::new();
+    // Per posture: vertices outside, the smallest margin and the link it is on.
+    let mut per_posture: Vec<(usize, f64, &str)> = Vec::new();
     for posture in &postures {
+        let mut worst = (0usize, f64::INFINITY, "");
         let model = BodyModel {
             arms: posture.arms,
             ..body
@@ -542,6 +545,10 @@ fn main() {
                 st.checked += 1;
                 st.outside += usize::from(m < 0.0);
                 st.min_margin = st.min_margin.min(m);
+                worst.0 += usize::from(m < 0.0);
+                if m < worst.1 {
+                    (worst.1, worst.2) = (m, link.name.as_str());
+                }
                 let need = needs.entry(index).or_insert(Need {
                     min_margin: f64::INFINITY,
                     past_lo: [f64::NEG_INFINITY; 3],
@@ -579,8 +586,15 @@ fn main() {
                 .fold(f64::NEG_INFINITY, f64::max);
             st.max_gap = st.max_gap.max(gap);
         }
+        per_posture.push(worst);
     }
     print_links(&links, &stats, &postures, &paths);
+    println!();
+    println!("| posture | vertices outside | smallest margin (mm) | on link |");
+    println!("| --- | --- | --- | --- |");
+    for (posture, (outside, least, link)) in postures.iter().zip(&per_posture) {
+        println!("| {} | {outside} | {least:.1} | {link} |", posture.name);
+    }
     print_solids(&solids_at_zero, &needs);
     if stats.iter().any(|s| s.outside > 0) {
         std::process::exit(1);
