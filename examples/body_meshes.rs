@@ -3,9 +3,9 @@
 //! postures, must lie inside the solids that stand for that link. Prints per link the
 //! vertices checked, how many lie outside (must be 0), the smallest margin (a vertex's
 //! distance inside the nearest surface of its solids) and the largest gap (how far the solids
-//! reach past the mesh in any direction); then per solid the size that encloses every vertex
-//! it holds with [`BodyModel::MARGIN`]. Exits with 1 when a vertex lies outside, 2 on bad
-//! input.
+//! reach past the mesh in any direction); then per posture the vertices outside and the least
+//! margin; then per solid the size that encloses every vertex it holds with
+//! [`BodyModel::MARGIN`]. Exits with 1 when a vertex lies outside, 2 on bad input.
 //!
 //! The meshes are Aldebaran's and are not part of naocalib; fetch them yourself, either or
 //! both of (all figures are taken over every set given):
