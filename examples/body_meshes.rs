@@ -18,6 +18,7 @@
 //!     cargo run --release --example body_meshes -- nao_description/meshes/V40 NaoV6H25.rsi3
 
 use std::collections::HashMap;
+use std::f64::consts::FRAC_PI_2;
 use std::path::{Path, PathBuf};
 
 use naocalib::body::posture::arm_frames;
@@ -132,7 +133,12 @@ fn fingers(s: &str) -> Vec<(String, Pose<f64>)> {
             rpy(69.07, -11.57, -3.04, 1.25539, 0.976662, -0.264067),
             3,
         ),
-        ("Thumb", rpy(48.95, 0.0, -26.38, -1.5708, 0.0472984, 0.0), 2),
+        // The URDF rounds the thumb's roll to −1.5708.
+        (
+            "Thumb",
+            rpy(48.95, 0.0, -26.38, -FRAC_PI_2, 0.0472984, 0.0),
+            2,
+        ),
     ];
     let mut out = Vec::new();
     for hand in [0.0, 0.5, 1.0] {
