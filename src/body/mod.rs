@@ -7,10 +7,11 @@
 //! legs by the nominal leg chain, the arms by the official URDF's arm chain
 //! (ros-naoqi `nao_robot`, `naoV6` / `nao_description`: `LShoulderPitch` at (0, 98, 100) mm
 //! from the `torso` frame, 85 mm above `O`; the elbow 105 mm along the upper arm and 15 mm
-//! aside; the wrist 55.95 mm along the forearm). The sizes come from B-Human's SimRobot V6
-//! scene (`Config/Scenes/Includes/NaoV6H25.rsi3`: a box or sphere per link) and the V6
-//! datasheet's outline, grown by [`BodyModel::MARGIN`]; docs/BODY.md gives them part by
-//! part.
+//! aside; the wrist 55.95 mm along the forearm). The sizes are the extents of the official
+//! meshes (the V4.0 set of `jrl-umi3218/nao_description` and B-Human's SimRobot V6 scene
+//! `Config/Scenes/Includes/NaoV6H25.rsi3`) in each link's frame, grown by
+//! [`BodyModel::MARGIN`]; docs/BODY.md gives them part by part, and
+//! `examples/body_meshes.rs` checks every mesh vertex inside its solids.
 
 mod contact;
 pub mod posture;
@@ -187,8 +188,9 @@ impl Default for BodyModel {
         // The thigh below the hip's axis; above it (at most 19 mm), the HipPitch motor's
         // round housing is the pelvis box's.
         let (thigh_lo, mut thigh_hi) = grow([-44.7, -41.3, -124.2], [51.2, 48.8, 19.0]);
-        thigh_hi[2] = 0.0;
-        let (tibia_lo, tibia_hi) = grow([-39.6, -41.3, -125.8], [50.1, 52.0, 21.8]);
+        thigh_hi[2] = 0.7;
+        // With the AnklePitch bracket at any ankle pitch.
+        let (tibia_lo, tibia_hi) = grow([-47.0, -41.3, -129.7], [50.1, 52.0, 21.8]);
         // The sole stands on the sandal: the foot's boxes start at the sole's plane.
         let (mut foot_lo, foot_hi) = grow([-59.4, -38.8, 0.0], [60.0, 51.7, 65.0]);
         foot_lo[2] = 0.0;
@@ -212,7 +214,7 @@ impl Default for BodyModel {
             sandal_thickness: 8.0,
             sandal_margin: 20.0,
             torso: [
-                grow([-52.6, -48.1, 45.0], [52.0, 48.1, 105.0]),
+                grow([-52.6, -48.1, 44.4], [52.0, 48.1, 105.0]),
                 grow([-52.7, -72.2, 105.0], [58.9, 72.2, 165.0]),
                 grow([-52.7, -87.0, 165.0], [57.6, 87.0, 195.0]),
                 grow([-31.0, -87.0, 195.0], [29.0, 87.0, 218.3]),
@@ -220,13 +222,14 @@ impl Default for BodyModel {
             // The hips' housings at zero hip angles (x −58.9 … 24.2, |y| ≤ 64.6,
             // z −34.8 … 43.3) and the thighs' tops above the hip axis (x −44.7 … 51.2,
             // |y| ≤ 98.8, z ≤ 19).
-            pelvis_lo: [-63.9, -103.8, -39.8],
-            pelvis_hi: [56.2, 103.8, 48.3],
+            // Swept over HipYawPitch and HipRoll as the meshes' check found them.
+            pelvis_lo: [-64.5, -103.8, -50.4],
+            pelvis_hi: [56.2, 103.8, 50.1],
             head_centre: [0.6, 0.0, 54.3],
             head_radius: 73.7 + m,
             shoulder_radius: 42.0 + m,
             upper_arm: [-7.0, 82.0],
-            upper_arm_radius: 45.5 + m,
+            upper_arm_radius: 45.6 + m,
             forearm: [0.0, 125.0],
             forearm_radius: 50.6 + m,
             floor_x: -65.0,
