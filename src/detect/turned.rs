@@ -424,6 +424,7 @@ mod tests {
                         order: None,
                         whole_image: false,
                         numbered: String::new(),
+                        dropped: Vec::new(),
                     },
                 })
             })
