@@ -5,9 +5,10 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 
+use naocalib::body::BodyModel;
 use naocalib::model::JointAngles;
 use naocalib::model::{CameraId, Family, FixedSet, Model};
-use naocalib::plan::{PlanOptions, collision::BodyModel, order, plan, route};
+use naocalib::plan::{PlanOptions, order, plan, route};
 
 fn bench(c: &mut Criterion) {
     let model = Model::default();

@@ -35,6 +35,7 @@
 #![warn(missing_docs)]
 
 pub mod batch;
+pub mod body;
 pub mod calibration;
 pub mod dataset;
 #[cfg(feature = "detect")]

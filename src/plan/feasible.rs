@@ -6,7 +6,7 @@
 
 use rand::Rng;
 
-use super::collision::{self, BodyModel};
+use crate::body::{self as collision, BodyModel, Kind, Part};
 use crate::model::{
     CameraId, Joint, JointAngles, Model, PARAMETER_COUNT, Param, Side, StanceChains, gravity,
 };
@@ -49,8 +49,16 @@ pub struct Feasibility {
     /// offsets are bounded by [`Feasibility::head_offset`] (0.5°), and capture refuses a
     /// posture within 2° of a limit, so 2° keeps every commanded head angle safe.
     pub upper_head_margin: f64,
-    /// The collision model.
+    /// The body model: self-collision, and the parts the lines of sight must pass.
     pub body: BodyModel,
+    /// How far every line of sight to the pattern must pass the own foot and toe (mm):
+    /// board and foot move together, so the box of offsets moves the line past the toe
+    /// only by the camera's shift seen from the board, ±3° over 300 mm at most, scaled by
+    /// the toe's distance from the board over the camera's (below 1/5): about 3 mm.
+    pub sight_margin_own: f64,
+    /// How far every line of sight must pass every other part of the body (mm): ±3° of
+    /// offset over the 200 mm between the hips and the parts that may come into view.
+    pub sight_margin: f64,
     /// The robot's current calibration (internal units) the box of offsets is centred on
     /// (`naocalib plan --around`); zero by default. Real lower-camera tilt corrections of
     /// −2° to −8° lie outside a ±3° box around zero.
@@ -73,6 +81,8 @@ impl Default for Feasibility {
             upper_offset: 0.5f64.to_radians(),
             upper_head_margin: 2f64.to_radians(),
             body: BodyModel::default(),
+            sight_margin_own: 3.0,
+            sight_margin: 10.0,
             centre: [0.0; PARAMETER_COUNT],
         }
     }
@@ -101,7 +111,7 @@ pub enum Infeasible {
     Collision(String),
     /// The board leaves the image, turns away or is too small for some offsets in the box.
     View,
-    /// The resting leg stands between the camera and the board (named).
+    /// A part of the body stands between the camera and the pattern (named).
     Occluded(String),
     /// The straight move between the rest posture and the capture collides.
     Unreachable,
@@ -342,7 +352,7 @@ pub fn check_for(
     f: &Feasibility,
 ) -> Result<(), Infeasible> {
     within_margins(camera, joints, f)?;
-    if let Some(what) = collision::collision(&model.robot, &f.body, joints) {
+    if let Some(what) = collision::collision(&model.robot, &model.board, &f.body, joints) {
         return Err(Infeasible::Collision(what));
     }
     in_view_and_reach(model, camera, side, joints, f)
@@ -399,23 +409,30 @@ fn in_view_and_reach(
     if !board_in_view_of(model, camera, side, joints, f) {
         return Err(Infeasible::View);
     }
-    // Every vertex in plain sight of the camera past the resting leg (at the centre).
+    // The pattern, each vertex with its refinement window, in plain sight of the camera
+    // past every part of the body (at the centre of the box of offsets).
     let chains = model.chains_for(camera, side, joints);
     let zero = f.centre;
     let eye = chains.camera.eval(&zero).translation;
     let board = chains.board.eval(&zero);
-    let vertices: Vec<[f64; 3]> = model
-        .board
-        .vertices()
-        .map(|v| board.apply(&model.board.vertex_position(v)))
+    let targets: Vec<[f64; 3]> = sight_targets(&model.board)
+        .map(|p| board.apply(&p))
         .collect();
-    let resting = match side {
-        Side::Left => Side::Right,
-        Side::Right => Side::Left,
+    let actual = JointAngles::from_fn(|j| joints.get(j) + zero[j.offset().index()]);
+    let posed = f.body.pose(&model.robot, &model.board, &actual);
+    if let Some(what) = collision::head_contact(&posed) {
+        return Err(Infeasible::Collision(what));
+    }
+    let own_foot = |p: &Part| p.side == Some(side) && matches!(p.kind, Kind::Foot | Kind::Toe);
+    let grow = |p: &Part| {
+        if own_foot(p) {
+            f.sight_margin_own
+        } else {
+            f.sight_margin
+        }
     };
-    if let Some(what) =
-        collision::sight_blocked(&model.robot, &f.body, joints, resting, eye, &vertices)
-    {
+    let own_sandal = |p: &Part| p.side == Some(side) && p.kind == Kind::Sandal;
+    if let Some(what) = collision::sight_blocked_by_body(&posed, eye, &targets, grow, own_sandal) {
         return Err(Infeasible::Occluded(what));
     }
     // Reachable straight from rest and back: then every order of the captures has a way
@@ -425,6 +442,26 @@ fn in_view_and_reach(
         return Err(Infeasible::Unreachable);
     }
     Ok(())
+}
+
+/// The points of the pattern that must be in plain sight (board frame): a lattice at half
+/// a square's spacing over the inner vertices and half a square beyond them, so that every
+/// vertex's refinement window and the squares around it are seen whole.
+pub fn sight_targets(board: &crate::model::Board) -> impl Iterator<Item = [f64; 3]> + '_ {
+    let (nx, ny) = (2 * board.cols() + 1, 2 * board.rows() + 1);
+    let (x0, y0) = (
+        -(board.cols() as f64) * board.square / 2.0,
+        -(board.rows() as f64) * board.square / 2.0,
+    );
+    (0..ny).flat_map(move |j| {
+        (0..nx).map(move |i| {
+            [
+                x0 + i as f64 * board.square / 2.0,
+                y0 + j as f64 * board.square / 2.0,
+                0.0,
+            ]
+        })
+    })
 }
 
 /// Turns the head so that the board centre appears at pixel `target` for the parameters
@@ -666,7 +703,7 @@ fn aimed_postures(
             park(other, &mut parked, k);
             parked
         })
-        .find(|parked| collision::collision(&model.robot, &f.body, parked).is_none())
+        .find(|parked| collision::collision(&model.robot, &model.board, &f.body, parked).is_none())
     else {
         return Vec::new();
     };
@@ -681,8 +718,8 @@ fn aimed_postures(
             let Some(aimed) = aim.at(*target, f.margin(camera, Joint::HeadPitch)) else {
                 continue;
             };
-            // The legs are those found free of collision above (the head moves none of the
-            // collision model's parts).
+            // The legs are those found free of collision above; the head's contact
+            // with them is checked with the lines of sight.
             if check_legs_free(model, camera, side, &aimed, f).is_ok() {
                 out.push((aimed, *target));
                 found += 1;

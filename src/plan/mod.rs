@@ -32,7 +32,6 @@
 //! The same prediction is made for the simulator's random stances at equal capture count,
 //! so that the gain is visible before the robot moves.
 
-pub mod collision;
 pub mod coverage;
 pub mod design;
 pub mod feasible;

@@ -3,8 +3,8 @@
 //! back to rest, has a collision-free way ([`route::route`]; the return to rest a straight
 //! move), with a short predicted duration ([`route::Timing`]).
 
-use super::collision::BodyModel;
 use super::route::{self, Timing};
+use crate::body::BodyModel;
 use crate::model::{JointAngles, Model};
 
 /// The cost of a move without a collision-free way: larger than any tour's time.

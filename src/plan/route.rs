@@ -15,8 +15,8 @@
 //! to settle; then it takes the picture and logs the joints. The phase starts and ends at
 //! the rest posture.
 
-use super::collision::{self, BodyModel};
 use super::feasible::head_pitch_limits;
+use crate::body::{self as collision, BodyModel};
 use crate::model::{Joint, JointAngles, Model, Side};
 
 /// Largest step of any joint between two collision checks along a move (rad).
@@ -52,7 +52,8 @@ pub fn tucked(rest: &JointAngles) -> JointAngles {
 pub fn move_is_free(model: &Model, body: &BodyModel, from: &JointAngles, to: &JointAngles) -> bool {
     let n = steps(from, to);
     let at = |k: usize| from.lerp(to, k as f64 / n as f64);
-    let free = |a: &JointAngles| collision::collision(&model.robot, body, a).is_none();
+    let free =
+        |a: &JointAngles| collision::collision(&model.robot, &model.board, body, a).is_none();
     if free(from) {
         // The common case: the end first, then the points between in coarse-to-fine order,
         // which finds a collision after few checks.
@@ -336,19 +337,19 @@ mod tests {
         let model = Model::default();
         let body = BodyModel::default();
         let rest = rest_posture();
-        assert!(collision::collision(&model.robot, &body, &rest).is_none());
+        assert!(collision::collision(&model.robot, &model.board, &body, &rest).is_none());
         assert!(move_is_free(&model, &body, &rest, &tucked(&rest)));
         // The left leg rolled inward into the right one collides.
         let mut low = rest;
         low.set(Joint::LHipRoll, -0.37);
-        assert!(collision::collision(&model.robot, &body, &low).is_some());
+        assert!(collision::collision(&model.robot, &model.board, &body, &low).is_some());
         assert!(!move_is_free(&model, &body, &rest, &low));
         assert_eq!(route(&model, &body, &rest, &low, &rest), Err(NoRoute));
         let way = route(&model, &body, &rest, &tucked(&rest), &rest).expect("a way");
         assert_eq!(way, vec![tucked(&rest)]);
         // From the legs together (touching) the robot may part them.
         let together = JointAngles::default();
-        assert!(collision::collision(&model.robot, &body, &together).is_some());
+        assert!(collision::collision(&model.robot, &model.board, &body, &together).is_some());
         assert!(move_is_free(&model, &body, &together, &rest));
         assert!(!move_is_free(&model, &body, &rest, &together));
     }

@@ -743,7 +743,11 @@ pub fn snap(
     let seed = state.seed
         ^ posture.wrapping_mul(0x9E37_79B9_7F4A_7C15)
         ^ (camera as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
-    let mut image = render::render(&model, &pose, options, seed)?;
+    let view = options
+        .body
+        .as_ref()
+        .map(|body| crate::sim::scene::body_view(&model, body, camera, side, &joints, &truth));
+    let mut image = render::render_with(&model, &pose, view.as_ref(), options, seed)?;
     let upright = crate::robot::camera::settings::CameraSettings::defaults(camera, 0, 0).flip;
     if settings.flip != upright {
         image.turn_half();

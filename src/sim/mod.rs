@@ -9,6 +9,7 @@
 pub mod camera;
 pub mod render;
 pub mod request;
+pub mod scene;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

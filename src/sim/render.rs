@@ -18,6 +18,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
+use super::scene::{self, BodyView};
+use crate::body::BodyModel;
 use crate::model::{CameraId, JointAngles, Model, Pose, Side};
 
 /// How to render images.
@@ -39,10 +41,14 @@ pub struct RenderOptions {
     pub white: f64,
     /// Seed of the background and noise (each image mixes in its capture id).
     pub seed: u64,
+    /// The robot's body drawn in front of the boards (`None`: the boards alone, in front
+    /// of the background). [`render_all`] and the simulated robot's pictures pose it.
+    pub body: Option<BodyModel>,
 }
 
 impl Default for RenderOptions {
-    /// Blur σ 0.8 px, noise σ 2, 30 % vignetting, 8 × 8 supersampling at edges.
+    /// Blur σ 0.8 px, noise σ 2, 30 % vignetting, 8 × 8 supersampling at edges, the NAO
+    /// V6's body drawn with the arms where capture holds them.
     fn default() -> Self {
         RenderOptions {
             blur: 0.8,
@@ -53,6 +59,7 @@ impl Default for RenderOptions {
             black: 35.0,
             white: 215.0,
             seed: 1,
+            body: Some(BodyModel::default()),
         }
     }
 }
@@ -185,6 +192,9 @@ impl RenderOptions {
 /// coordinates (the inverse of the homography `[r1 r2 t]`).
 struct BoardPlane {
     inv: [[f64; 3]; 3],
+    /// The board's normal and origin in the camera frame.
+    normal: [f64; 3],
+    origin: [f64; 3],
 }
 
 impl BoardPlane {
@@ -210,7 +220,24 @@ impl BoardPlane {
                 *x = (h[a][c] * h[b][d] - h[a][d] * h[b][c]) / det;
             }
         }
-        Some(BoardPlane { inv })
+        Some(BoardPlane {
+            inv,
+            normal: [r[0][2], r[1][2], r[2][2]],
+            origin: *t,
+        })
+    }
+
+    /// Distance (mm) from the camera along the ray through normalised point `(a, b)` to the
+    /// board's plane, or infinity when the plane is not in front along it.
+    fn depth(&self, a: f64, b: f64) -> f64 {
+        let d = [1.0, -a, -b];
+        let n = &self.normal;
+        let along = n[0] * d[0] + n[1] * d[1] + n[2] * d[2];
+        let s = (n[0] * self.origin[0] + n[1] * self.origin[1] + n[2] * self.origin[2]) / along;
+        if along.abs() < 1e-15 || s <= 0.0 {
+            return f64::INFINITY;
+        }
+        s * (1.0 + a * a + b * b).sqrt()
     }
 
     /// Board coordinates `(x_B, y_B)` hit by the ray through normalised point `(a, b)`, or
@@ -241,6 +268,8 @@ struct Pattern {
 
 /// Region of a point off the board plane (behind the camera or beyond the horizon).
 const NO_PLANE: u32 = u32::MAX;
+/// Regions from this one on are the body's parts (`BODY + part`).
+const BODY: u32 = 0x4000_0000;
 
 impl Pattern {
     /// Index of the band along one axis: 0 outside the plate, 1 in the plate margin, then
@@ -270,7 +299,7 @@ impl Pattern {
 
     /// The grey level of a region, or `None` for the background.
     fn shade(&self, region: u32) -> Option<f64> {
-        if region == NO_PLANE {
+        if region >= BODY {
             return None;
         }
         let (bx, by) = (region / 1024, region % 1024);
@@ -389,7 +418,70 @@ pub fn render(
     options: &RenderOptions,
     seed: u64,
 ) -> Result<GreyImage, RenderError> {
+    render_with(model, pose, None, options, seed)
+}
+
+/// What one line of sight meets: a part of the body nearer than the board's plate, else
+/// the board's region.
+fn region_of(
+    pattern: &Pattern,
+    plane: &BoardPlane,
+    body: Option<&BodyView>,
+    a: f64,
+    b: f64,
+) -> u32 {
+    let board = pattern.region(plane.hit(a, b));
+    let Some(body) = body else {
+        return board;
+    };
+    let limit = if pattern.shade(board).is_some() {
+        plane.depth(a, b)
+    } else {
+        f64::INFINITY
+    };
+    match body.hit(a, b, limit) {
+        Some((k, _)) => BODY + k as u32,
+        None => board,
+    }
+}
+
+/// The grey level seen along the line of sight through `(a, b)`: the body where it stands
+/// in front of the plate, else the board, else the background `bg`.
+fn grey_of(
+    pattern: &Pattern,
+    plane: &BoardPlane,
+    body: Option<&BodyView>,
+    a: f64,
+    b: f64,
+    bg: f64,
+) -> f64 {
+    let board = pattern.region(plane.hit(a, b));
+    let shade = pattern.shade(board);
+    if let Some(body) = body {
+        let limit = if shade.is_some() {
+            plane.depth(a, b)
+        } else {
+            f64::INFINITY
+        };
+        if let Some((_, grey)) = body.hit(a, b, limit) {
+            return grey;
+        }
+    }
+    shade.unwrap_or(bg)
+}
+
+/// [`render`] with the robot's body in front of the board (`body`, as
+/// [`scene::body_view`] poses it), drawn shaded, its silhouettes supersampled like the
+/// pattern's edges.
+pub fn render_with(
+    model: &Model,
+    pose: &Pose<f64>,
+    body: Option<&BodyView>,
+    options: &RenderOptions,
+    seed: u64,
+) -> Result<GreyImage, RenderError> {
     options.validate()?;
+    let body = body.filter(|b| !b.is_empty());
     let camera = &model.camera;
     let (width, height) = (camera.width as usize, camera.height as usize);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -410,7 +502,7 @@ pub fn render(
             for i in 0..=width {
                 let n = camera.undistort(i as f64 - 0.5, j as f64 - 0.5);
                 norm[j * gw + i] = n;
-                region[j * gw + i] = pattern.region(plane.hit(n[0], n[1]));
+                region[j * gw + i] = region_of(&pattern, &plane, body, n[0], n[1]);
             }
         }
         let n = options.supersampling as usize;
@@ -420,13 +512,20 @@ pub fn render(
                 let corners = [k, k + 1, k + gw, k + gw + 1];
                 let r = region[k];
                 let bg = img[v * width + u] as f64;
+                let [a00, a10, a01, a11] = corners.map(|c| norm[c]);
                 if corners.iter().all(|&c| region[c] == r) {
-                    if let Some(g) = pattern.shade(r) {
+                    if r >= BODY {
+                        // Shaded at the pixel's centre.
+                        let (a, b) = (
+                            (a00[0] + a10[0] + a01[0] + a11[0]) / 4.0,
+                            (a00[1] + a10[1] + a01[1] + a11[1]) / 4.0,
+                        );
+                        img[v * width + u] = grey_of(&pattern, &plane, body, a, b, bg) as f32;
+                    } else if let Some(g) = pattern.shade(r) {
                         img[v * width + u] = g as f32;
                     }
                     continue;
                 }
-                let [a00, a10, a01, a11] = corners.map(|c| norm[c]);
                 let mut acc = 0.0;
                 for sj in 0..n {
                     let t = (sj as f64 + 0.5) / n as f64;
@@ -436,8 +535,7 @@ pub fn render(
                             (1.0 - t) * ((1.0 - s) * a00[d] + s * a10[d])
                                 + t * ((1.0 - s) * a01[d] + s * a11[d])
                         };
-                        let hit = plane.hit(lerp(0), lerp(1));
-                        acc += pattern.shade(pattern.region(hit)).unwrap_or(bg);
+                        acc += grey_of(&pattern, &plane, body, lerp(0), lerp(1), bg);
                     }
                 }
                 img[v * width + u] = (acc / (n * n) as f64) as f32;
@@ -553,7 +651,10 @@ pub fn render_all(
                             .chains_for(job.camera, job.side, &job.joints)
                             .camera_to_board(params);
                         let seed = options.seed ^ job.id.wrapping_mul(0x9E37_79B9_7F4A_7C15);
-                        let image = render(model, &pose, options, seed)?;
+                        let view = options.body.as_ref().map(|body| {
+                            scene::body_view(model, body, job.camera, job.side, &job.joints, params)
+                        });
+                        let image = render_with(model, &pose, view.as_ref(), options, seed)?;
                         image.write_png(&dir.join(image_name(job.id)))?;
                     }
                 })

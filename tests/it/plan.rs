@@ -38,7 +38,7 @@ fn planned_stances_are_within_limits_and_collision_free() {
             c.joints.get(Joint::RHipYawPitch)
         );
         assert_eq!(
-            plan::collision::collision(&model.robot, &f.body, &c.joints),
+            naocalib::body::collision(&model.robot, &model.board, &f.body, &c.joints),
             None
         );
         assert_eq!(feasible::check(&model, c.side, &c.joints, &f), Ok(()));

@@ -7,9 +7,9 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
+use naocalib::body::{self as collision, BodyModel};
 use naocalib::dataset::Dataset;
 use naocalib::model::{Joint, JointAngles, Model};
-use naocalib::plan::collision::{self, BodyModel};
 use naocalib::plan::route::{self, Timing};
 use naocalib::plan::{self, PlanOptions};
 
@@ -32,7 +32,7 @@ fn collision_on_the_way(model: &Model, a: &JointAngles, b: &JointAngles) -> Opti
         for j in Joint::ALL {
             p.set(j, a.get(j) + t * (b.get(j) - a.get(j)));
         }
-        match collision::collision(&model.robot, &BodyModel::default(), &p) {
+        match collision::collision(&model.robot, &model.board, &BodyModel::default(), &p) {
             None => parted = true,
             Some(what) if parted => return Some(format!("{what} at {t:.3} of the way")),
             Some(_) => {}

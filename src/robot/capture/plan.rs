@@ -5,9 +5,9 @@
 
 use std::path::Path;
 
+use crate::body::{self as collision, BodyModel};
 use crate::dataset::{self, Location};
 use crate::model::{CameraId, Joint, JointAngles, Model, Side};
-use crate::plan::collision::{self, BodyModel};
 use crate::plan::feasible::head_pitch_limits;
 use crate::plan::route;
 
@@ -89,7 +89,7 @@ pub fn unsafe_posture(
             "differs from LHipYawPitch; they are one motor".into(),
         ));
     }
-    collision::collision(&model.robot, &BodyModel::default(), joints)
+    collision::collision(&model.robot, &model.board, &BodyModel::default(), joints)
         .map(|what| ("", format!("collision: {what}")))
 }
 

@@ -6,8 +6,8 @@
 
 use std::sync::atomic::AtomicBool;
 
+use crate::body::BodyModel;
 use crate::model::{CameraId, Joint, Model};
-use crate::plan::collision::BodyModel;
 use crate::plan::route;
 use crate::robot::camera::{Camera, Picture};
 use crate::robot::lola::Link;

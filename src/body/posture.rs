@@ -1,0 +1,173 @@
+//! The arms: their five joints each, the posture capture puts them in, and their solids.
+//!
+//! The arm chain is the official URDF's (ros-naoqi `nao_robot`): for the left arm
+//! `T(0, 98, 185) · Ry(ShoulderPitch) · Rz(ShoulderRoll) · T(105, 15, 0) · Rx(ElbowYaw) ·
+//! Rz(ElbowRoll) · T(55.95, 0, 0) · Rx(WristYaw)` in `O` (the torso frame 85 mm above `O`),
+//! the right arm mirrored in y. The joint limits are the V6's (Aldebaran's joint tables, as
+//! LoLA enforces them).
+
+use super::{BodyModel, Capsule, Kind, Part, Shape, Sphere};
+use crate::model::{Axis, Pose, Side};
+
+/// The arm joints in LoLA's names and the plan's column order: left arm, then right.
+pub const ARM_JOINTS: [&str; 10] = [
+    "LShoulderPitch",
+    "LShoulderRoll",
+    "LElbowYaw",
+    "LElbowRoll",
+    "LWristYaw",
+    "RShoulderPitch",
+    "RShoulderRoll",
+    "RElbowYaw",
+    "RElbowRoll",
+    "RWristYaw",
+];
+
+/// The limits (rad) of the arm joints, in [`ARM_JOINTS`] order.
+pub const ARM_LIMITS: [(f64, f64); 10] = [
+    (-2.0857, 2.0857),
+    (-0.3142, 1.3265),
+    (-2.0857, 2.0857),
+    (-1.5446, -0.0349),
+    (-1.8238, 1.8238),
+    (-2.0857, 2.0857),
+    (-1.3265, 0.3142),
+    (-2.0857, 2.0857),
+    (0.0349, 1.5446),
+    (-1.8238, 1.8238),
+];
+
+/// The angles (rad) of both arms' joints, in [`ARM_JOINTS`] order.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArmPosture(pub [f64; 10]);
+
+impl ArmPosture {
+    /// Arms lying beside the body, as the robot is laid down (shoulders pitched 90°, the
+    /// arms along the body toward the feet, slightly out).
+    pub const BESIDE_BODY: ArmPosture = ArmPosture([
+        1.5708, 0.15, 0.0, -0.1, 0.0, //
+        1.5708, -0.15, 0.0, 0.1, 0.0,
+    ]);
+
+    /// Where capture puts the arms for the whole run: spread on the floor, 70° out from
+    /// the body at the shoulders' height (shoulders pitched 90°, rolled 70° out, elbows
+    /// nearly straight). Out of every planned line of sight and of every leg's reach
+    /// (`naocalib plan` checks both against the body model and prints the clearance).
+    pub const CAPTURE: ArmPosture = ArmPosture([
+        1.5708, 1.2217, 0.0, -0.1, 0.0, //
+        1.5708, -1.2217, 0.0, 0.1, 0.0,
+    ]);
+
+    /// The five angles of the arm on `side` (ShoulderPitch, ShoulderRoll, ElbowYaw,
+    /// ElbowRoll, WristYaw).
+    pub fn arm(&self, side: Side) -> [f64; 5] {
+        let k = match side {
+            Side::Left => 0,
+            Side::Right => 5,
+        };
+        std::array::from_fn(|i| self.0[k + i])
+    }
+
+    /// The first joint outside its limits, named with its angle and limits.
+    pub fn check(&self) -> Result<(), String> {
+        for ((name, (lo, hi)), q) in ARM_JOINTS.iter().zip(ARM_LIMITS).zip(self.0) {
+            if !q.is_finite() || q < lo || q > hi {
+                return Err(format!(
+                    "{name} = {q:.4} rad is outside its limits {lo:.4} … {hi:.4} rad"
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The frames of the arm on `side`: the shoulder (after ShoulderRoll), the elbow (after
+/// ElbowRoll) and the wrist (after WristYaw), in `O`.
+pub fn arm_frames(side: Side, arms: &ArmPosture) -> [Pose<f64>; 3] {
+    let s = side.sign();
+    let q = arms.arm(side);
+    let [x, y, z] = BodyModel::SHOULDER;
+    let shoulder = Pose::translation(x, s * y, z)
+        .compose(&Pose::rotation(Axis::Y, q[0]))
+        .compose(&Pose::rotation(Axis::Z, q[1]));
+    let [ex, ey, ez] = BodyModel::ELBOW;
+    let elbow = shoulder
+        .compose(&Pose::translation(ex, s * ey, ez))
+        .compose(&Pose::rotation(Axis::X, q[2]))
+        .compose(&Pose::rotation(Axis::Z, q[3]));
+    let [wx, wy, wz] = BodyModel::WRIST;
+    let wrist = elbow
+        .compose(&Pose::translation(wx, wy, wz))
+        .compose(&Pose::rotation(Axis::X, q[4]));
+    [shoulder, elbow, wrist]
+}
+
+/// The solids of the arm on `side`: the shoulder's sphere, the upper arm, the forearm
+/// with the hand.
+pub fn arm_parts(body: &BodyModel, side: Side, arms: &ArmPosture) -> [Part; 3] {
+    let [shoulder, elbow, wrist] = arm_frames(side, arms);
+    let fingertips = wrist.apply(&[body.hand_length, 0.0, 0.0]);
+    let part = |kind, shape| Part {
+        kind,
+        side: Some(side),
+        shape,
+    };
+    [
+        part(
+            Kind::Shoulder,
+            Shape::Sphere(Sphere {
+                centre: shoulder.translation,
+                radius: body.shoulder_radius,
+            }),
+        ),
+        part(
+            Kind::UpperArm,
+            Shape::Capsule(Capsule {
+                a: shoulder.translation,
+                b: elbow.translation,
+                radius: body.upper_arm_radius,
+            }),
+        ),
+        part(
+            Kind::Forearm,
+            Shape::Capsule(Capsule {
+                a: elbow.translation,
+                b: fingertips,
+                radius: body.forearm_radius,
+            }),
+        ),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_postures_are_within_the_limits_and_a_wrong_one_is_named() {
+        ArmPosture::CAPTURE.check().unwrap();
+        ArmPosture::BESIDE_BODY.check().unwrap();
+        let mut bad = ArmPosture::CAPTURE;
+        bad.0[6] = 0.5;
+        let e = bad.check().unwrap_err();
+        assert!(e.starts_with("RShoulderRoll = 0.5000 rad"), "{e}");
+    }
+
+    #[test]
+    fn arms_beside_the_body_point_to_the_feet_and_spread_ones_point_out() {
+        for side in Side::BOTH {
+            let [shoulder, _, wrist] = arm_frames(side, &ArmPosture::BESIDE_BODY);
+            let d: [f64; 3] =
+                std::array::from_fn(|i| wrist.translation[i] - shoulder.translation[i]);
+            // Toward the feet (−z), beside the torso (|y| beyond the shoulder's 98 mm).
+            assert!(d[2] < -140.0, "{side:?} {d:?}");
+            assert!(side.sign() * wrist.translation[1] > 98.0, "{d:?}");
+            let [shoulder, _, wrist] = arm_frames(side, &ArmPosture::CAPTURE);
+            let d: [f64; 3] =
+                std::array::from_fn(|i| wrist.translation[i] - shoulder.translation[i]);
+            assert!(side.sign() * d[1] > 140.0, "{side:?} {d:?}");
+            // In the plane of the back (x about the shoulder's).
+            assert!(d[0].abs() < 20.0, "{d:?}");
+        }
+    }
+}
