@@ -5,8 +5,9 @@
 use crate::sim::render::GreyImage;
 
 use super::assign::{self, Grid};
-use super::guided::Board;
+use super::guided::{Board, MIN_VERTICES};
 use super::predict::{predict, predicted_roi};
+use super::saddle::Saddles;
 use super::{DetectOptions, Outcome, board_grid, cv, find};
 use crate::dataset::{Capture, Corner, Dataset};
 use crate::model::{Camera, PARAMETER_COUNT, Vertex};
@@ -180,11 +181,38 @@ pub(super) fn chessboard(
         })
         .collect();
     corners.sort_by_key(|c| c.vertex);
+    // The image test of a clean saddle, as for the guided search's vertices; with the
+    // model only: another pattern's outer squares may be narrower than a square (as in
+    // OpenCV's samples), and no robot stands in front of it.
+    if !options.use_model {
+        return Ok(Outcome::Found {
+            corners,
+            order: Some(numbering.order),
+            whole_image,
+            numbered: numbering.numbered,
+            dropped: Vec::new(),
+        });
+    }
+    let model = &dataset.model;
+    let camera = model.intrinsics(capture.camera);
+    let placed: Vec<(Vertex, [f64; 2])> = corners.iter().map(|c| (c.vertex, c.pixel)).collect();
+    let (kept, dropped) = Saddles::new(grey, model, camera, options.subpix_factor).check(&placed);
+    if kept.len() < MIN_VERTICES {
+        return Ok(Outcome::Rejected {
+            reason: format!(
+                "{} of the {} vertices OpenCV found are dropped for an occluding edge",
+                dropped.len(),
+                placed.len()
+            ),
+        });
+    }
+    corners.retain(|c| kept.iter().any(|(v, _)| *v == c.vertex));
     Ok(Outcome::Found {
         corners,
         order: Some(numbering.order),
         whole_image,
         numbered: numbering.numbered,
+        dropped,
     })
 }
 
@@ -362,6 +390,7 @@ mod tests {
             vertices,
             fitted,
             numbered: String::new(),
+            dropped: Vec::new(),
         }
     }
 

@@ -39,6 +39,7 @@ mod outcome;
 pub mod overlay;
 mod predict;
 pub mod request;
+pub mod saddle;
 pub mod turned;
 
 use std::path::Path;
@@ -351,6 +352,7 @@ fn guided_search(
         order: None,
         whole_image: false,
         numbered: board.numbered.clone(),
+        dropped: board.dropped.clone(),
     };
     if mode == Mode::Quick {
         return Ok(Guided::Done(

@@ -6,10 +6,13 @@
 //! lattice points just outside them (on the pattern's edge, where the outer squares meet
 //! the white plate) are not. Every numbering that keeps all vertices found inside the
 //! pattern (the tentative one shifted by whole squares) is scored against what the image
-//! shows at each lattice point: a saddle of the expected colours, no saddle, or unknown
-//! (out of view, too small, unclear). A numbering is accepted only when it agrees with the
-//! image and every other disagrees clearly more; a board whose visible part fits several
-//! is rejected with the reason (nothing is numbered by guesswork).
+//! shows at each lattice point: a saddle of the expected colours, the pattern's edge (a
+//! white plate on one side, squares of both colours on the other), something else, or
+//! unknown (out of view, too small). Only saddles and the pattern's edge are evidence: a
+//! point that shows neither may be covered (a toe standing on the board, a leg in front of
+//! it), which says nothing of the numbering. A numbering is accepted only when it agrees
+//! with the image and every other disagrees clearly more; a board whose visible part fits
+//! several is rejected with the reason (nothing is numbered by guesswork).
 //!
 //! The 7 × 5 pattern (odd by odd, black corners) looks the same turned by 180°: that turn
 //! alone is resolved by the prediction, and only when the board appears turned against
@@ -27,7 +30,11 @@ use crate::model::{Camera, Model};
 enum Seen {
     /// A saddle with the colours of the tentative numbering (`true`) or the opposite.
     Saddle(bool),
-    /// No saddle: a plain area or a straight edge.
+    /// The pattern's edge: on one side a plain area as bright as the white squares (the
+    /// plate), on the other two squares of both colours.
+    Edge,
+    /// No saddle and not the pattern's edge: a plain area (the plate, the background, a
+    /// part of the robot covering the board) or another edge.
     Plain,
     /// Out of view, too small or unclear.
     Unknown,
@@ -39,8 +46,12 @@ const MIN_SQUARE_PX: f64 = 5.0;
 const MIN_CONTRAST: f64 = 12.0;
 /// How many more disagreements every other numbering must have than the accepted one.
 pub const MARGIN: usize = 3;
-/// Most disagreements the accepted numbering may have (a vertex blurred or occluded).
+/// Most disagreements the accepted numbering may have (a vertex blurred or occluded)…
 const MAX_DISAGREE: usize = 1;
+/// … or this part of its agreements: a column of the pattern covered by a toe whose edge
+/// looks like the pattern's (4 points against the 30 or more a board's visible part
+/// agrees at), and one more. A numbering whose lattice is wrong disagrees far more.
+const MAX_DISAGREE_PART: f64 = 1.0 / 6.0;
 /// Largest in-image turn (deg) of a board against the prediction for the prediction to
 /// decide between a numbering and its 180° turn.
 pub const MAX_TURN_DEG: f64 = 45.0;
@@ -132,7 +143,12 @@ fn look(img: &Integral, camera: &Camera, model: &Model, h: &Matrix3<f64>, i: i32
     }
     let patch = ((0.1 * square).round() as i64).clamp(1, 6);
     let (mut black, mut white) = (Vec::with_capacity(2), Vec::with_capacity(2));
-    for (sx, sy) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)] {
+    // The samples by side: (x > 0, y > 0), (x < 0, y > 0), (x > 0, y < 0), (x < 0, y < 0).
+    let mut around = [0.0; 4];
+    for (k, (sx, sy)) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)]
+        .into_iter()
+        .enumerate()
+    {
         let (dx, dy) = (0.3 * sq * sx, 0.3 * sq * sy);
         let Some(q) = at(dx, dy) else {
             return Seen::Unknown;
@@ -140,6 +156,7 @@ fn look(img: &Integral, camera: &Camera, model: &Model, h: &Matrix3<f64>, i: i32
         let Some(m) = img.mean(q[0], q[1], patch) else {
             return Seen::Unknown;
         };
+        around[k] = m;
         if is_black(model, x + dx, y + dy) {
             black.push(m);
         } else {
@@ -159,11 +176,31 @@ fn look(img: &Integral, camera: &Camera, model: &Model, h: &Matrix3<f64>, i: i32
         Seen::Saddle(true)
     } else if opposite >= strong {
         Seen::Saddle(false)
+    } else if is_edge(&around, strong, range) {
+        Seen::Edge
     } else if range < 0.5 * MIN_CONTRAST || same.max(opposite) <= 0.15 * range {
         Seen::Plain
     } else {
         Seen::Unknown
     }
+}
+
+/// Whether the four samples `around` a lattice point (see [`look`]) show the pattern's
+/// edge along either board axis: one side's two alike (within 15 % of the samples'
+/// `range`) and as bright as the other side's brighter one, the other side's two apart by
+/// at least `strong`.
+fn is_edge(around: &[f64; 4], strong: f64, range: f64) -> bool {
+    // The pairs on each side: x > 0 and x < 0, then y > 0 and y < 0.
+    let sides = [[0, 2], [1, 3], [0, 1], [2, 3]];
+    (0..4).any(|k| {
+        let plate = sides[k];
+        let squares = sides[k ^ 1];
+        let (p0, p1) = (around[plate[0]], around[plate[1]]);
+        let (q0, q1) = (around[squares[0]], around[squares[1]]);
+        (p0 - p1).abs() <= 0.15 * range
+            && (q0 - q1).abs() >= strong
+            && p0.min(p1) >= q0.max(q1) - 0.15 * range
+    })
 }
 
 /// How one numbering (the tentative one shifted by whole squares) fares against the image.
@@ -236,11 +273,12 @@ impl Looks {
                 if ring && (i == a - 1 || i == a + cols) && (j == b - 1 || j == b + rows) {
                     continue;
                 }
+                // A plain look may be the robot's body covering the board: no evidence.
                 let ok = match (inner, self.at(i, j)) {
-                    (_, Seen::Unknown) => None,
+                    (_, Seen::Unknown | Seen::Plain) => None,
                     (true, Seen::Saddle(p)) => Some(p == parity),
-                    (true, Seen::Plain) => Some(false),
-                    (false, Seen::Plain) => Some(true),
+                    (true, Seen::Edge) => Some(false),
+                    (false, Seen::Edge) => Some(true),
                     (false, Seen::Saddle(_)) => Some(false),
                 };
                 match ok {
@@ -314,7 +352,8 @@ pub fn decide(
     scored.sort_by_key(|s| (s.disagree, std::cmp::Reverse(s.agree)));
     let best = scored[0];
     let runner_up = scored.get(1).map(|s| s.disagree);
-    if best.disagree > MAX_DISAGREE {
+    let allowed = MAX_DISAGREE.max((MAX_DISAGREE_PART * best.agree as f64).floor() as usize);
+    if best.disagree > allowed {
         return Err(format!(
             "no numbering fits the image: the best disagrees at {} lattice points",
             best.disagree

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use super::assign;
 use super::image::{MAX_PIXELS, MAX_SIDE};
+use super::saddle::Dropped;
 use super::turned::{PictureTurn, Turned};
 use crate::dataset::Corner;
 use crate::model::CameraId;
@@ -106,6 +107,9 @@ pub enum Outcome {
         whole_image: bool,
         /// How the vertices got their (row, col).
         numbered: String,
+        /// Vertices refined but not reported: they fail the image test of a clean saddle
+        /// ([`super::saddle`]), pulled by an occluding edge or in danger of it.
+        dropped: Vec<Dropped>,
     },
     /// No board was found.
     NotFound,
@@ -167,6 +171,7 @@ impl fmt::Display for ImageResult {
                 order,
                 whole_image,
                 numbered,
+                dropped,
             } => {
                 write!(f, ": found {} vertices", corners.len())?;
                 match order {
@@ -179,6 +184,15 @@ impl fmt::Display for ImageResult {
                 }
                 if !numbered.is_empty() {
                     write!(f, "; {numbered}")?;
+                }
+                if !dropped.is_empty() {
+                    let each: Vec<String> = dropped.iter().map(ToString::to_string).collect();
+                    write!(
+                        f,
+                        "; {} dropped for an occluding edge: {}",
+                        dropped.len(),
+                        each.join(", ")
+                    )?;
                 }
                 Ok(())
             }
@@ -225,6 +239,8 @@ pub struct Summary {
     /// Boards found but not used: their picture on its own is turned by 180° (a `u32`,
     /// so that the summary fits the errors that carry it).
     pub turned_alone: u32,
+    /// Vertices of the boards found dropped for an occluding edge ([`super::saddle`]).
+    pub dropped: usize,
 }
 
 impl Summary {
@@ -232,8 +248,11 @@ impl Summary {
     pub fn of(results: &[ImageResult]) -> Summary {
         let mut s = Summary::default();
         for r in results {
-            match r.outcome {
-                Outcome::Found { .. } => s.found += 1,
+            match &r.outcome {
+                Outcome::Found { dropped, .. } => {
+                    s.found += 1;
+                    s.dropped += dropped.len();
+                }
                 Outcome::NotFound => s.not_found += 1,
                 Outcome::Rejected { .. } | Outcome::TooDark { .. } => s.rejected += 1,
                 Outcome::Failed(_) => s.failed += 1,
@@ -256,6 +275,13 @@ impl fmt::Display for Summary {
             "{} found, {} not found, {} rejected, {} unreadable",
             self.found, self.not_found, self.rejected, self.failed
         )?;
+        if self.dropped > 0 {
+            write!(
+                f,
+                ", {} vertices dropped for an occluding edge",
+                self.dropped
+            )?;
+        }
         if self.no_image > 0 {
             write!(f, ", {} without an image", self.no_image)?;
         }

@@ -81,7 +81,7 @@ pub enum DetectRequestError {
         /// Images searched.
         images: usize,
         /// Their outcomes.
-        summary: Summary,
+        summary: Box<Summary>,
         /// The corners.csv.
         corners: PathBuf,
         /// Its vertices.
@@ -259,7 +259,7 @@ impl Detected<'_> {
             return Err(DetectRequestError::NothingFound {
                 dir: request.dataset.clone(),
                 images: self.results.len(),
-                summary,
+                summary: Box::new(summary),
                 corners: corners_path,
                 count: dataset.corners.len(),
             });

@@ -607,6 +607,7 @@ mod tests {
                         order: None,
                         whole_image: false,
                         numbered: String::new(),
+                        dropped: Vec::new(),
                     },
                 })
             })

@@ -28,6 +28,8 @@ mod detect_dark;
 #[cfg(feature = "detect")]
 mod detect_files;
 #[cfg(feature = "detect")]
+mod detect_occluded;
+#[cfg(feature = "detect")]
 mod detect_render;
 #[cfg(feature = "detect")]
 mod detect_robust;

@@ -38,10 +38,11 @@ use nalgebra::Matrix3;
 
 use crate::model::{Camera, Model, Pose, Vertex};
 
+use super::saddle::{Dropped, Saddles};
 use super::{assign, numbering};
 pub use pattern::Integral;
-use pattern::{MIN_SCORE, Predicted, median_square, predict, reshape, undistorted};
-pub(super) use pattern::{distorted, is_black};
+use pattern::{MIN_SCORE, Predicted, median_square, predict, reshape};
+pub(super) use pattern::{distorted, is_black, undistorted};
 
 /// Vertices by index into the prediction, with their pixels.
 type Indexed = Vec<(usize, [f64; 2])>;
@@ -68,6 +69,9 @@ pub struct Board {
     pub fitted: Vec<(Vertex, Option<[f64; 2]>)>,
     /// How the numbering was decided (for the log).
     pub numbered: String,
+    /// The vertices refined but dropped by the image test ([`super::saddle`]): an
+    /// occluding edge pulled them, or may have.
+    pub dropped: Vec<Dropped>,
 }
 
 impl Board {
@@ -215,7 +219,24 @@ impl Search<'_> {
             Ok(settled) => settled,
             Err(reason) => return Ok(Err(reason)),
         };
-        Ok(best(&settled).map(|found| self.board(found)))
+        Ok(best(&settled).and_then(|found| self.checked(self.board(found))))
+    }
+
+    /// `board` with only the vertices that pass the image test ([`Saddles::check`]), the
+    /// others named as dropped; `Err` when fewer than [`MIN_VERTICES`] pass.
+    fn checked(&self, mut board: Board) -> Result<Board, String> {
+        let saddles = Saddles::new(self.image, self.model, self.camera, self.factor);
+        let (kept, dropped) = saddles.check(&board.vertices);
+        if kept.len() < MIN_VERTICES {
+            return Err(format!(
+                "{} of {} vertices found are dropped for an occluding edge, too few are left",
+                dropped.len(),
+                board.vertices.len()
+            ));
+        }
+        board.vertices = kept;
+        board.dropped = dropped;
+        Ok(board)
     }
 
     /// The shifts of the prediction worth searching from. A small error of the prediction
@@ -572,6 +593,7 @@ impl Search<'_> {
             .collect();
         Board {
             numbered: found.numbered.clone().unwrap_or_default(),
+            dropped: Vec::new(),
             vertices: kept
                 .into_iter()
                 .map(|(k, q)| (self.prediction[k].vertex, q))

@@ -294,7 +294,7 @@ pub(super) fn median_square(predicted: &[Predicted]) -> f64 {
 }
 
 /// The undistorted pixel of `p` (the pinhole image of the same ray).
-pub(super) fn undistorted(camera: &Camera, p: [f64; 2]) -> [f64; 2] {
+pub(in crate::detect) fn undistorted(camera: &Camera, p: [f64; 2]) -> [f64; 2] {
     let [a, b] = camera.undistort(p[0], p[1]);
     [camera.cx + camera.fx * a, camera.cy + camera.fy * b]
 }
