@@ -452,7 +452,10 @@ class CaptureCost : public ceres::CostFunction {
 
     // ∂r/∂amount, row major (m × directions).
     const int m = num_residuals();
-    std::vector<double> gradient(static_cast<std::size_t>(m) * directions, 0.0);
+    // Every entry is written by the passes below (each covers its directions for every
+    // residual), so the buffer is left uninitialised.
+    std::unique_ptr<double[]> buffer(new double[static_cast<std::size_t>(m) * directions]);
+    double* gradient = buffer.get();
     if (directions <= static_cast<std::size_t>(kNarrow)) {
       if (!pass<kNarrow>(values, 0, residuals, gradient)) return false;
     } else {
@@ -485,7 +488,7 @@ class CaptureCost : public ceres::CostFunction {
   // One Jet pass over directions [first, first + N): residuals and their columns of ∂r/∂amount.
   template <int N>
   bool pass(const std::vector<double>& values, std::size_t first, double* residuals,
-            std::vector<double>& gradient) const {
+            double* gradient) const {
     using J = ceres::Jet<double, N>;
     const std::size_t directions = values.size();
     std::vector<J> amounts(directions);

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Record, then check, that naocalib's commands print and write the same results on the
-# bundled sample and on N simulated datasets with a variety of options:
+# Record, then check, that naocalib's commands give the same calibration on the bundled
+# sample and on N simulated datasets (with and without upper captures, with realistic
+# effects and `--model auto`) with a variety of options:
 #
 # - `solve` (JSON and text) on every dataset; `--export`, `--report` and `--plots` on a
 #   subset; `--start-from` a calibration imported from team files;
@@ -10,15 +11,14 @@
 # - `export` (`--dir`, every format; `--out` TOML, standing and lying) of recorded results;
 # - `import` of the exported team files.
 #
-# Only wall times are left out of the comparison (the JSON's "seconds", "seconds_mean",
-# "wall_seconds", "solver_seconds"; the text's "time" lines; compare's solver and wall ms
-# columns). What each command prints on stderr and its exit code are compared too.
-#
 #   scripts/same-outputs.sh record DIR [N]   # before a change: datasets and outputs into DIR
-#   scripts/same-outputs.sh check DIR        # after it: the same commands, compared byte for byte
+#   scripts/same-outputs.sh check DIR        # after it: the same commands, compared
 #
-# A batch JSON whose runs differ only by keys the runs gained (present after, absent
-# before) is counted apart, with the keys named.
+# `check` compares with scripts/compare_outputs.py (python3): every value within 1e-9 of
+# its magnitude (or 1e-12 absolute), every σ and test statistic within 1e-6 relative, the
+# same parameters determined and held, the same diagnosis, stderr and exit status; printed
+# numbers to their last digit. It says where the largest differences are (file, key, both
+# values) and exits non-zero when anything is beyond them. Wall times are left out.
 #
 # Uses target/release/naocalib (build it first: cargo build --release), or $NAOCALIB.
 set -euo pipefail
@@ -50,6 +50,10 @@ effects() {
     *) echo "" ;;
     esac
 }
+# Upper captures on every third dataset.
+upper() {
+    [ $(($1 % 3)) = 0 ] && echo "--upper-stances $((4 + $1 % 5))" || true
+}
 
 case $mode in
 record)
@@ -59,7 +63,7 @@ record)
         d=$dir/data/s$seed
         # shellcheck disable=SC2046
         "$bin" simulate --seed "$seed" --joint-noise-deg 0.1 --stances $((12 + seed % 13)) \
-            $(effects "$seed") --force "$d" >/dev/null
+            $(effects "$seed") $(upper "$seed") --force "$d" >/dev/null
         if [ $((seed % 10)) = 2 ] || [ $((seed % 10)) = 3 ] || [ $((seed % 10)) = 9 ]; then
             # a few gross outliers for the robust fits
             awk -F, -v OFS=, 'NR > 1 && NR % 97 == 0 { $4 += 25 } { print }' "$d/corners.csv" >"$d/c" &&
@@ -160,69 +164,5 @@ for seed in $subset; do
 done
 
 if [ "$mode" = check ]; then
-    tmp=$(mktemp -d)
-    trap 'rm -rf "$tmp"' EXIT
-    # A file without its wall times.
-    strip() { # FILE
-        case $1 in
-        *.json)
-            sed -E 's/^( *"(seconds|seconds_mean|wall_seconds|solver_seconds)": )[^,]*(,?)$/\10\3/' "$1"
-            ;;
-        */compare-*.txt) awk '$2 == "yes" || $2 == "NO" || $2 == "FAILED" { $7 = "-"; $8 = "-" } { print }' "$1" ;;
-        *.txt | *.html) grep -v '^time ' "$1" || true ;;
-        *) cat "$1" ;;
-        esac
-    }
-    # The keys each batch run gained (in the run after, not before).
-    gained() { # BEFORE AFTER
-        local runs='if (.runs? | type) == "array" then .runs else [.] end'
-        jq -r "[$runs | .[] | keys[]] | unique | .[]" "$1" | sort -u >"$tmp/before.keys"
-        jq -r "[$runs | .[] | keys[]] | unique | .[]" "$2" | sort -u >"$tmp/after.keys"
-        comm -13 "$tmp/before.keys" "$tmp/after.keys" | tr '\n' ' '
-    }
-    # The file without the keys its runs gained.
-    without() { # FILE KEYS...
-        local file=$1
-        shift
-        local filter
-        filter=$(printf 'del(.%s) | ' "$@")
-        filter="${filter% | }"
-        jq "if (.runs? | type) == \"array\" then .runs |= map($filter) elif has(\"solver\") then $filter else . end" "$file"
-    }
-    same=0 differ=0 grew=0
-    declare -A keys_gained=()
-    while IFS= read -r rel; do
-        f=$save/$rel g=$out/$rel
-        if [ ! -e "$g" ]; then
-            differ=$((differ + 1))
-            echo "missing: $rel"
-            continue
-        fi
-        strip "$f" >"$tmp/a"
-        strip "$g" >"$tmp/b"
-        if cmp -s "$tmp/a" "$tmp/b"; then
-            same=$((same + 1))
-            continue
-        fi
-        case $rel in
-        batch-*.json | batch-*.out/*.json)
-            k=$(gained "$tmp/a" "$tmp/b")
-            # shellcheck disable=SC2086
-            if [ -n "$k" ] && cmp -s <(without "$tmp/a" $k) <(without "$tmp/b" $k); then
-                grew=$((grew + 1))
-                keys_gained["$k"]=1
-                continue
-            fi
-            ;;
-        esac
-        differ=$((differ + 1))
-        echo "differs: $rel"
-    done < <(cd "$save" && find . -type f | sed 's|^\./||' | sort)
-    extra=$(comm -13 <(cd "$save" && find . -type f | sort) <(cd "$out" && find . -type f | sort) | wc -l)
-    total=$((same + grew + differ))
-    echo "$same of $total outputs identical, $differ differ (wall times left out); $extra new files"
-    if [ "$grew" -gt 0 ]; then
-        echo "$grew batch JSON files identical but for keys their runs gained: ${!keys_gained[*]}"
-    fi
-    [ "$differ" = 0 ]
+    python3 "$repo/scripts/compare_outputs.py" "$save" "$out"
 fi
