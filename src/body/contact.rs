@@ -367,7 +367,10 @@ mod tests {
             assert_eq!(c.mm == 0.0, contact(&p, body.floor_x).is_some(), "{c:?}");
             free += usize::from(c.mm > 0.0);
         }
-        assert!(free > 5, "legs spread up to 0.4 rad are free of contact {free} times");
+        assert!(
+            free > 5,
+            "legs spread up to 0.4 rad are free of contact {free} times"
+        );
     }
 
     #[test]
