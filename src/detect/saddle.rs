@@ -75,7 +75,7 @@ const NOISE_FLOOR: f64 = 1.0;
 /// they surround it: 5 σ of the refinement's error (0.05 px on a clean board), under the
 /// accuracy asked of detection (0.3 px). Where the neighbours lie to one side (the board's
 /// edge and corners) the prediction is an extrapolation, and the limit grows as its error
-/// does ([`leverage`]).
+/// does (`leverage`).
 pub const OFF_LINES_PX: f64 = 0.25;
 /// Fewest neighbours to judge a vertex by its neighbours' lines: within one square all
 /// eight, else those within two squares, at least this many.
@@ -157,7 +157,7 @@ pub type Placed = Vec<(Vertex, [f64; 2])>;
 
 /// The grey-level noise σ of `image`, from the median absolute response to the
 /// Laplacian difference that cancels planes and is 6 σ for white noise (Immerkær's
-/// operator, robust to the edges the median leaves out), at least [`NOISE_FLOOR`].
+/// operator, robust to the edges the median leaves out), at least `NOISE_FLOOR`.
 pub fn noise_sigma(image: &GreyImage) -> f64 {
     let (w, h) = (image.width as usize, image.height as usize);
     if w < 3 || h < 3 {

@@ -16,119 +16,9 @@
 
 use std::f64::consts::FRAC_PI_4;
 
+use crate::body::shapes::segment_distance;
+pub use crate::body::shapes::{Capsule, OrientedBox};
 use crate::model::{Axis, JointAngles, Pose, RobotGeometry, Side};
-
-/// An oriented box: a frame and the extent along its axes.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct OrientedBox {
-    /// The box frame in `O`.
-    pub centre: [f64; 3],
-    /// Columns: the box axes in `O`.
-    pub axes: [[f64; 3]; 3],
-    /// Half the edge lengths along the box axes (mm).
-    pub half: [f64; 3],
-}
-
-impl OrientedBox {
-    /// The box spanning `lo..hi` (coordinates of `frame`).
-    fn in_frame(frame: &Pose<f64>, lo: [f64; 3], hi: [f64; 3]) -> OrientedBox {
-        let mid: [f64; 3] = std::array::from_fn(|k| (lo[k] + hi[k]) / 2.0);
-        OrientedBox {
-            centre: frame.apply(&mid),
-            axes: std::array::from_fn(|k| std::array::from_fn(|i| frame.rotation[i][k])),
-            half: std::array::from_fn(|k| (hi[k] - lo[k]).abs() / 2.0),
-        }
-    }
-
-    /// Distance of point `p` from the box (0 inside).
-    pub fn distance(&self, p: [f64; 3]) -> f64 {
-        let d = sub(p, self.centre);
-        (0..3)
-            .map(|k| (dot(d, self.axes[k]).abs() - self.half[k]).max(0.0).powi(2))
-            .sum::<f64>()
-            .sqrt()
-    }
-
-    /// The eight corners.
-    pub fn corners(&self) -> [[f64; 3]; 8] {
-        std::array::from_fn(|n| {
-            let mut p = self.centre;
-            for k in 0..3 {
-                let s = if n >> k & 1 == 1 { 1.0 } else { -1.0 };
-                for (pi, ai) in p.iter_mut().zip(self.axes[k]) {
-                    *pi += s * self.half[k] * ai;
-                }
-            }
-            p
-        })
-    }
-
-    /// Whether two boxes overlap (separating-axis test).
-    pub fn overlaps(&self, other: &OrientedBox) -> bool {
-        let mut axes: Vec<[f64; 3]> = Vec::with_capacity(15);
-        axes.extend(self.axes);
-        axes.extend(other.axes);
-        for a in self.axes {
-            for b in other.axes {
-                let c = cross(a, b);
-                if dot(c, c) > 1e-12 {
-                    axes.push(c);
-                }
-            }
-        }
-        let d = sub(other.centre, self.centre);
-        axes.iter().all(|axis| {
-            let radius = |b: &OrientedBox| {
-                (0..3)
-                    .map(|k| b.half[k] * dot(b.axes[k], *axis).abs())
-                    .sum::<f64>()
-            };
-            dot(d, *axis).abs() <= radius(self) + radius(other)
-        })
-    }
-}
-
-/// A segment swept by a sphere.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Capsule {
-    /// One end of the segment [mm, in `O`].
-    pub a: [f64; 3],
-    /// The other end.
-    pub b: [f64; 3],
-    /// Radius (mm).
-    pub radius: f64,
-}
-
-impl Capsule {
-    /// Points along the segment, at most `step` mm apart.
-    fn samples(&self, step: f64) -> impl Iterator<Item = [f64; 3]> + '_ {
-        let n = (norm(sub(self.b, self.a)) / step).ceil().max(1.0) as usize;
-        (0..=n).map(move |k| {
-            let t = k as f64 / n as f64;
-            std::array::from_fn(|i| self.a[i] + t * (self.b[i] - self.a[i]))
-        })
-    }
-
-    /// Whether the capsule touches the box (one of the spheres along its segment, at most
-    /// 5 mm apart, reaches into it).
-    pub fn hits_box(&self, b: &OrientedBox) -> bool {
-        // No point of the segment is nearer the box than its midpoint less half its
-        // length (the distance to a box changes no faster than the point moves): a box
-        // farther than that from every sphere is missed by all of them, and only a box
-        // within reach needs the spheres counted (a micrometre spared for rounding).
-        let mid: [f64; 3] = std::array::from_fn(|i| (self.a[i] + self.b[i]) / 2.0);
-        let half = norm(sub(self.b, self.a)) / 2.0;
-        if b.distance(mid) > self.radius + half + 1e-3 {
-            return false;
-        }
-        self.samples(5.0).any(|p| b.distance(p) < self.radius)
-    }
-
-    /// Whether two capsules touch (exact segment distance).
-    pub fn hits(&self, other: &Capsule) -> bool {
-        segment_distance(self.a, self.b, other.a, other.b) < self.radius + other.radius
-    }
-}
 
 /// Sizes of the collision model (mm).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -328,64 +218,6 @@ pub fn sight_blocked(
     None
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-/// Smallest distance between the segments `p0–p1` and `q0–q1`.
-fn segment_distance(p0: [f64; 3], p1: [f64; 3], q0: [f64; 3], q1: [f64; 3]) -> f64 {
-    let d1 = sub(p1, p0);
-    let d2 = sub(q1, q0);
-    let r = sub(p0, q0);
-    let (a, e, f) = (dot(d1, d1), dot(d2, d2), dot(d2, r));
-    let (s, t) = if a <= 1e-12 && e <= 1e-12 {
-        (0.0, 0.0)
-    } else if a <= 1e-12 {
-        (0.0, (f / e).clamp(0.0, 1.0))
-    } else {
-        let c = dot(d1, r);
-        if e <= 1e-12 {
-            ((-c / a).clamp(0.0, 1.0), 0.0)
-        } else {
-            let b = dot(d1, d2);
-            let denom = a * e - b * b;
-            let mut s = if denom > 1e-12 {
-                ((b * f - c * e) / denom).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let mut t = (b * s + f) / e;
-            if t < 0.0 {
-                t = 0.0;
-                s = (-c / a).clamp(0.0, 1.0);
-            } else if t > 1.0 {
-                t = 1.0;
-                s = ((b - c) / a).clamp(0.0, 1.0);
-            }
-            (s, t)
-        }
-    };
-    let closest_p: [f64; 3] = std::array::from_fn(|i| p0[i] + d1[i] * s);
-    let closest_q: [f64; 3] = std::array::from_fn(|i| q0[i] + d2[i] * t);
-    norm(sub(closest_p, closest_q))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -437,48 +269,6 @@ mod tests {
         let through = [c[0] - 1.0, c[1], c[2] + 1.0];
         let far = [c[0] + 1.0, c[1], c[2] - 1.0];
         assert!(sight_blocked(&robot, &body, &joints, Side::Right, far, &[through]).is_some());
-    }
-
-    #[test]
-    fn segment_distance_cases() {
-        let d = segment_distance(
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [0.5, 1.0, 0.0],
-            [0.5, 2.0, 0.0],
-        );
-        assert!((d - 1.0).abs() < 1e-12);
-        let d = segment_distance(
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [2.0, 0.0, 1.0],
-            [3.0, 0.0, 1.0],
-        );
-        assert!((d - 2f64.sqrt()).abs() < 1e-12);
-        // Crossing segments.
-        let d = segment_distance(
-            [-1.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [0.0, -1.0, 0.0],
-            [0.0, 1.0, 0.0],
-        );
-        assert!(d.abs() < 1e-12);
-    }
-
-    #[test]
-    fn boxes_overlap_or_not() {
-        let a = OrientedBox::in_frame(&Pose::identity(), [0.0; 3], [1.0; 3]);
-        let b = OrientedBox::in_frame(&Pose::translation(0.9, 0.9, 0.9), [0.0; 3], [1.0; 3]);
-        let c = OrientedBox::in_frame(&Pose::translation(1.5, 0.0, 0.0), [0.0; 3], [1.0; 3]);
-        // Turned by 45° about z and placed beside a's corner edge: separated only along a
-        // cross axis or the turned box's own axis.
-        let turned = Pose::translation(2.3, 0.5, 0.5).compose(&Pose::rotation(Axis::Z, FRAC_PI_4));
-        let d = OrientedBox::in_frame(&turned, [-0.5; 3], [0.5; 3]);
-        assert!(a.overlaps(&b) && b.overlaps(&a));
-        assert!(!a.overlaps(&c) && !c.overlaps(&a));
-        assert!(!a.overlaps(&d) && !d.overlaps(&a));
-        assert!((a.distance([2.0, 0.5, 0.5]) - 1.0).abs() < 1e-12);
-        assert_eq!(a.distance([0.5, 0.5, 0.5]), 0.0);
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! A simulated NAO V6, lying on its back, serving LoLA on a Unix socket: for testing
 //! `naocalib capture` end to end without a robot.
 //!
-//! Each cycle it writes a [`SensorFrame`] and reads the client's [`ActuatorMessage`]
+//! Each cycle it writes a [`SensorFrame`](lola::SensorFrame) and reads the client's [`ActuatorMessage`]
 //! (it waits for the answer: a client that answers every message, as capture does, sees
 //! exactly LoLA's cycle; it may run faster than real time, [`RobotOptions::speed`]). The
 //! joints follow their commands under stiffness (a first-order lag, time constant
@@ -17,7 +17,7 @@
 //! `capture --camera 'lower=command:…' --camera 'upper=command:…'`).
 //!
 //! It lies as [`RobotOptions::lying`] says (on its back unless told otherwise), and its
-//! IMU says so, as LoLA's does ([`body::imu`]).
+//! IMU says so, as LoLA's does ([`imu`](crate::robot::body::imu)).
 //!
 //! Faults on request ([`Faults`]): a blocked joint, an overheating motor, a connection
 //! dropped, the robot falling silent, a message that does not parse, rolling over, the

@@ -86,7 +86,7 @@ fn decode_size(bytes: &[u8], size: (u32, u32)) -> Result<(&'static str, (u32, u3
 
 /// Decodes a PNG or JPEG image of the camera's `size` to grey levels (8 bits, the mean of
 /// its colour channels): its size (width, height) and pixels. A picture whose header
-/// claims another size is refused before anything is allocated for it ([`check_header`]).
+/// claims another size is refused before anything is allocated for it (`check_header`).
 pub fn decode_grey(bytes: &[u8], size: (u32, u32)) -> Result<((u32, u32), Vec<u8>), String> {
     match check_header(bytes, size)? {
         "png" => {
