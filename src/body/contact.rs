@@ -188,27 +188,6 @@ pub fn clearance(posed: &PosedBody, floor_x: f64) -> Clearance {
     best
 }
 
-/// The shapes of one leg at the angles `joints` (nominal geometry), each named.
-#[derive(Debug, Clone, PartialEq)]
-pub struct LegShapes {
-    /// The leg's parts: thigh, tibia, foot, toe, sandal.
-    pub parts: Vec<Part>,
-}
-
-/// The parts of the leg on `side` at `joints`, with the sandals of `board`.
-pub fn leg_shapes(
-    robot: &RobotGeometry,
-    board: &Board,
-    body: &BodyModel,
-    side: Side,
-    joints: &JointAngles,
-) -> LegShapes {
-    let posed = body.pose(robot, board, joints);
-    LegShapes {
-        parts: posed.leg(side).copied().collect(),
-    }
-}
-
 /// The first part of the body (the head aside) that stands between `eye` and one of
 /// `targets` (points in `O`, mm), grown by `grow` mm, named (`"right thigh"`), or `None`
 /// when every target is in plain sight. Parts for which `skip` holds are left out (the

@@ -18,8 +18,7 @@ pub mod posture;
 pub mod shapes;
 
 pub use contact::{
-    Clearance, LegShapes, clearance, collision, contact, head_contact, leg_shapes, sight_blocked,
-    sight_blocked_by_body,
+    Clearance, clearance, collision, contact, head_contact, sight_blocked, sight_blocked_by_body,
 };
 pub use posture::{ARM_JOINTS, ArmPosture};
 pub use shapes::{Capsule, OrientedBox, Shape, Sphere};

@@ -14,11 +14,9 @@
 //! segment (at most a few millimetres closer than the exact test), box against box with the
 //! separating-axis test.
 
-use std::f64::consts::FRAC_PI_4;
-
 use crate::body::shapes::segment_distance;
 pub use crate::body::shapes::{Capsule, OrientedBox};
-use crate::model::{Axis, JointAngles, Pose, RobotGeometry, Side};
+use crate::model::{JointAngles, Pose, RobotGeometry, Side};
 
 /// Sizes of the collision model (mm).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -82,21 +80,12 @@ pub fn leg_shapes(
     joints: &JointAngles,
 ) -> LegShapes {
     let s = side.sign();
-    let q = side.leg_joints().map(|j| joints.get(j));
-    let hip = Pose::translation(0.0, s * robot.hip_offset_y, 0.0)
-        .compose(&Pose::rotation(Axis::X, s * FRAC_PI_4))
-        .compose(&Pose::rotation(Axis::Z, -s * q[0]))
-        .compose(&Pose::rotation(Axis::X, -s * FRAC_PI_4))
-        .compose(&Pose::rotation(Axis::X, q[1]))
-        .compose(&Pose::rotation(Axis::Y, q[2]));
-    let knee = hip
-        .compose(&Pose::translation(0.0, 0.0, -robot.thigh))
-        .compose(&Pose::rotation(Axis::Y, q[3]));
-    let ankle = knee.compose(&Pose::translation(0.0, 0.0, -robot.tibia));
-    let sole = ankle
-        .compose(&Pose::rotation(Axis::Y, q[4]))
-        .compose(&Pose::rotation(Axis::X, q[5]))
-        .compose(&Pose::translation(0.0, 0.0, -robot.foot_height));
+    let crate::body::LegFrames {
+        hip,
+        knee,
+        ankle,
+        sole,
+    } = crate::body::leg_frames(robot, side, joints);
     let mirror = |p: [f64; 3]| [p[0], s * p[1], p[2]];
     let (foot_lo, foot_hi) = (mirror(body.foot_lo), mirror(body.foot_hi));
     LegShapes {
