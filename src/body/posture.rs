@@ -51,13 +51,14 @@ impl ArmPosture {
         FRAC_PI_2, -0.15, 0.0, 0.1, 0.0,
     ]);
 
-    /// Where capture puts the arms for the whole run: spread on the floor, 70° out from
-    /// the body at the shoulders' height (shoulders pitched 90°, rolled 70° out, elbows
-    /// nearly straight). Out of every planned line of sight and of every leg's reach
-    /// (`naocalib plan` checks both against the body model and prints the clearance).
+    /// Where capture puts the arms for the whole run: above the head, lying on the floor
+    /// beyond it (shoulders pitched −90°, so that the arms point away from the feet, rolled
+    /// 26° out to clear the head, elbows nearly straight). Behind every camera that looks at
+    /// the sandals and out of every leg's reach (`naocalib plan` checks both against the body
+    /// model and prints the clearance).
     pub const CAPTURE: ArmPosture = ArmPosture([
-        FRAC_PI_2, 1.2217, 0.0, -0.1, 0.0, //
-        FRAC_PI_2, -1.2217, 0.0, 0.1, 0.0,
+        -FRAC_PI_2, 0.45, 0.0, -0.05, 0.0, //
+        -FRAC_PI_2, -0.45, 0.0, 0.05, 0.0,
     ]);
 
     /// The five angles of the arm on `side` (ShoulderPitch, ShoulderRoll, ElbowYaw,
@@ -156,7 +157,7 @@ mod tests {
     }
 
     #[test]
-    fn arms_beside_the_body_point_to_the_feet_and_spread_ones_point_out() {
+    fn arms_beside_the_body_point_to_the_feet_and_captures_arms_lie_beyond_the_head() {
         for side in Side::BOTH {
             let [shoulder, _, wrist] = arm_frames(side, &ArmPosture::BESIDE_BODY);
             let d: [f64; 3] =
@@ -167,8 +168,9 @@ mod tests {
             let [shoulder, _, wrist] = arm_frames(side, &ArmPosture::CAPTURE);
             let d: [f64; 3] =
                 std::array::from_fn(|i| wrist.translation[i] - shoulder.translation[i]);
-            assert!(side.sign() * d[1] > 140.0, "{side:?} {d:?}");
-            // In the plane of the back (x about the shoulder's).
+            // Beyond the head (+z), a little out, in the plane of the shoulders.
+            assert!(d[2] > 140.0, "{side:?} {d:?}");
+            assert!(side.sign() * d[1] > 30.0, "{side:?} {d:?}");
             assert!(d[0].abs() < 20.0, "{d:?}");
         }
     }
