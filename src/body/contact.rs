@@ -2,7 +2,8 @@
 //! the smallest clearance of a posture, for a NAO lying on its back.
 //!
 //! Which pairs are checked: each leg's parts against the other leg's, against the torso and
-//! the pelvis (not the thighs, whose boxes hold the round housing at the hip), the head and
+//! the pelvis (not the thighs, whose boxes hold the round housing at the hip, nor the
+//! tibias, which the pelvis box swept over the hip angles would meet at any turned hip), the head and
 //! both arms; the foot,
 //! toe and sandal against their own thigh; every leg part against the floor. Parts joined
 //! by a joint (thigh–tibia, tibia–foot, arm–torso) are not checked against each other.
@@ -91,8 +92,12 @@ fn checked(a: &Part, b: &Part) -> bool {
         (false, false) => return false,
     };
     // A thigh's box holds its top, the HipPitch motor's housing, which is round about the
-    // hip's axis: its corners would meet the waist and the pelvis at any raised thigh.
-    !(leg.kind == Kind::Thigh && matches!(other.kind, Kind::Pelvis | Kind::Torso))
+    // hip's axis: its corners would meet the waist and the pelvis at any raised thigh. The
+    // pelvis box holds the hips' housings swept over every HipYawPitch and HipRoll, which
+    // the legs' own knees reach whenever HipYawPitch turns them: a tibia is kept from the
+    // waist by the torso's boxes and from the hips by its thigh.
+    !((leg.kind == Kind::Thigh && matches!(other.kind, Kind::Pelvis | Kind::Torso))
+        || (leg.kind == Kind::Tibia && other.kind == Kind::Pelvis))
 }
 
 /// The foot, toe or sandal `a` against its own leg's thigh `b`.

@@ -32,6 +32,7 @@
 //! The same prediction is made for the simulator's random stances at equal capture count,
 //! so that the gain is visible before the robot moves.
 
+pub mod body_audit;
 pub mod collision;
 pub mod coverage;
 pub mod design;
@@ -177,6 +178,9 @@ pub struct Plan {
     /// Where the boards lie in each camera's image ([`coverage::coverage`] at the centre
     /// of feasibility).
     pub coverage: Vec<coverage::Coverage>,
+    /// The captures held against the whole body model (docs/BODY.md): clearance, contact,
+    /// vertices hidden.
+    pub body: body_audit::BodyAudit,
 }
 
 /// Why no plan could be made.
@@ -634,6 +638,12 @@ impl Pool {
             route::duration_of(&options.timing, &rest, &random_postures, &random_moves);
         let baseline_blocked = random_moves.iter().filter(|m| m.is_err()).count();
         let coverage = coverage::coverage(model, &design.captures, &options.feasibility.centre);
+        let body = body_audit::audit(
+            model,
+            &crate::body::BodyModel::default(),
+            &design.captures,
+            &options.feasibility.centre,
+        );
         Ok(Plan {
             captures: design.captures,
             prediction: design.prediction,
@@ -645,6 +655,7 @@ impl Pool {
             pool: design.pool,
             stances: design.stances,
             coverage,
+            body,
         })
     }
 }

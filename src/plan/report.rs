@@ -6,6 +6,7 @@ use std::fmt::Write as _;
 
 use crate::model::{CameraId, Side, Unit};
 
+use super::body_audit::BodyAudit;
 use super::request::{PlanRequest, Planned};
 use super::{Prediction, is_angle_offset};
 
@@ -146,6 +147,7 @@ pub fn summary(request: &PlanRequest, planned: &Planned) -> String {
             }
         );
     }
+    out.push_str(&body_lines(&plan.body));
     if planned.options.sweeps().contains(&true) {
         for c in &plan.coverage {
             let [lo, hi] = c.centres;
@@ -168,6 +170,58 @@ pub fn summary(request: &PlanRequest, planned: &Planned) -> String {
             );
         }
     }
+    out
+}
+
+/// What the whole body model (docs/BODY.md, the arms where capture puts them) says of the
+/// plan: its smallest clearance, the captures in which parts touch, and the vertices a part
+/// of the body hides from the camera, part by part.
+pub fn body_lines(audit: &BodyAudit) -> String {
+    let mut out = String::new();
+    if let Some((k, c)) = &audit.clearance {
+        let _ = writeln!(
+            out,
+            "body model (docs/BODY.md, arms beyond the head): smallest clearance {:.1} mm \
+             (capture {k}: {})",
+            c.mm, c.between
+        );
+    }
+    if !audit.contacts.is_empty() {
+        let shown: Vec<String> = audit
+            .contacts
+            .iter()
+            .take(3)
+            .map(|(k, what)| format!("capture {k}: {what}"))
+            .collect();
+        let _ = writeln!(
+            out,
+            "body model: {} captures bring two parts into contact ({}{})",
+            audit.contacts.len(),
+            shown.join("; "),
+            if audit.contacts.len() > 3 {
+                "; …"
+            } else {
+                ""
+            }
+        );
+    }
+    let hidden = audit.hidden_vertices();
+    let parts: Vec<String> = audit
+        .by_part()
+        .iter()
+        .map(|(part, v, b)| format!("{part} {v} on {b}"))
+        .collect();
+    let _ = writeln!(
+        out,
+        "body model: {hidden} of {} planned vertices hidden by the body on {} boards{}",
+        audit.vertices,
+        audit.hidden.len(),
+        if parts.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", parts.join(", "))
+        }
+    );
     out
 }
 

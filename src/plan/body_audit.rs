@@ -1,0 +1,190 @@
+//! The plan held against the body model (docs/BODY.md): for every capture, the whole body
+//! posed with the arms where capture puts them, its smallest clearance (between parts the
+//! model checks, or from the floor), any contact, and which planned vertices a part of the
+//! body hides from the camera. What `naocalib plan` prints beside the rules its captures
+//! were chosen by.
+
+use std::collections::BTreeMap;
+
+use crate::body::{self, BodyModel, Clearance};
+use crate::model::{Model, PARAMETER_COUNT};
+
+use super::PlannedCapture;
+
+/// A board whose pattern the body hides in part.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HiddenBoard {
+    /// The capture's index in the plan.
+    pub capture: usize,
+    /// The inner vertices hidden.
+    pub vertices: usize,
+    /// The part that hides the first of them ("left toe").
+    pub by: String,
+}
+
+/// The plan's captures held against the body model.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BodyAudit {
+    /// The smallest clearance over all captures, with the capture's index.
+    pub clearance: Option<(usize, Clearance)>,
+    /// The captures in which two parts touch, or a part the floor, named.
+    pub contacts: Vec<(usize, String)>,
+    /// The boards with hidden vertices.
+    pub hidden: Vec<HiddenBoard>,
+    /// Inner vertices over all captures.
+    pub vertices: usize,
+}
+
+impl BodyAudit {
+    /// The hidden vertices over all captures.
+    pub fn hidden_vertices(&self) -> usize {
+        self.hidden.iter().map(|h| h.vertices).sum()
+    }
+
+    /// Vertices and boards hidden by each part, the most first: `(part, vertices, boards)`.
+    pub fn by_part(&self) -> Vec<(String, usize, usize)> {
+        let mut tally: BTreeMap<&str, (usize, usize)> = BTreeMap::new();
+        for h in &self.hidden {
+            let t = tally.entry(&h.by).or_default();
+            t.0 += h.vertices;
+            t.1 += 1;
+        }
+        let mut out: Vec<(String, usize, usize)> = tally
+            .into_iter()
+            .map(|(part, (v, b))| (part.to_string(), v, b))
+            .collect();
+        out.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+        out
+    }
+}
+
+/// Holds every capture of `captures` against `body` (nominal model at the offsets
+/// `centre`): clearance, contact and the line of sight from the camera to each inner vertex
+/// (every part but the sandal that carries the pattern).
+pub fn audit(
+    model: &Model,
+    body: &BodyModel,
+    captures: &[PlannedCapture],
+    centre: &[f64; PARAMETER_COUNT],
+) -> BodyAudit {
+    let mut out = BodyAudit {
+        clearance: None,
+        contacts: Vec::new(),
+        hidden: Vec::new(),
+        vertices: 0,
+    };
+    for (k, c) in captures.iter().enumerate() {
+        let posed = body.pose(&model.robot, &model.board, &c.joints);
+        if let Some(what) = body::contact(&posed, body.floor_x).or(body::head_contact(&posed)) {
+            out.contacts.push((k, what));
+        }
+        let clear = body::clearance(&posed, body.floor_x);
+        if out.clearance.as_ref().is_none_or(|(_, b)| clear.mm < b.mm) {
+            out.clearance = Some((k, clear));
+        }
+        let chains = model.chains_for(c.camera, c.side, &c.joints);
+        let eye = chains.camera.eval(centre).translation;
+        let board = chains.board.eval(centre);
+        let mut hidden = 0;
+        let mut first = None;
+        for v in model.board.vertices() {
+            out.vertices += 1;
+            let p = board.apply(&model.board.vertex_position(v));
+            if let Some(part) = body::sight_blocked(&posed, c.side, eye, &[p], 0.0) {
+                hidden += 1;
+                first.get_or_insert(part);
+            }
+        }
+        if let Some(by) = first {
+            out.hidden.push(HiddenBoard {
+                capture: k,
+                vertices: hidden,
+                by,
+            });
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{CameraId, Joint, JointAngles, Side};
+
+    fn capture(joints: JointAngles) -> PlannedCapture {
+        PlannedCapture {
+            camera: CameraId::Lower,
+            side: Side::Left,
+            joints,
+        }
+    }
+
+    #[test]
+    fn hidden_vertices_agree_with_points_along_each_line_and_a_leg_in_the_floor_is_a_contact() {
+        let model = Model::default();
+        let body = BodyModel::default();
+        let centre = [0.0; PARAMETER_COUNT];
+        // The left leg raised, sole towards the head; the head turned to it.
+        let mut raised = crate::plan::route::rest_posture();
+        raised.set(Joint::LHipPitch, -1.2);
+        raised.set(Joint::LKneePitch, 0.3);
+        raised.set(Joint::LAnklePitch, -0.9);
+        raised.set(Joint::HeadPitch, 0.4);
+        raised.set(Joint::HeadYaw, 0.3);
+        // The same with the right leg raised too.
+        let mut both = raised;
+        both.set(Joint::RHipPitch, -1.3);
+        // The left leg pushed down through the floor.
+        let mut low = crate::plan::route::rest_posture();
+        low.set(Joint::LHipPitch, 0.45);
+        let captures = [capture(raised), capture(both), capture(low)];
+        let a = audit(&model, &body, &captures, &centre);
+        assert_eq!(a.vertices, 3 * 24);
+        assert!(
+            a.contacts
+                .iter()
+                .any(|(k, what)| *k == 2 && what.contains("floor")),
+            "{:?}",
+            a.contacts
+        );
+        assert!(a.contacts.iter().all(|(k, _)| *k != 0), "{:?}", a.contacts);
+        // Each line of sight walked in 0.5 mm steps: hidden where a step lies inside a part
+        // other than the pattern's own sandal.
+        for (k, c) in captures.iter().enumerate() {
+            let posed = body.pose(&model.robot, &model.board, &c.joints);
+            let chains = model.chains_for(c.camera, c.side, &c.joints);
+            let eye = chains.camera.eval(&centre).translation;
+            let board = chains.board.eval(&centre);
+            let walked = model
+                .board
+                .vertices()
+                .filter(|v| {
+                    let p = board.apply(&model.board.vertex_position(*v));
+                    let n = 2000;
+                    (1..n).any(|i| {
+                        let t = i as f64 / n as f64;
+                        let q: [f64; 3] = std::array::from_fn(|d| eye[d] + t * (p[d] - eye[d]));
+                        posed.parts.iter().any(|part| {
+                            part.kind != body::Kind::Head
+                                && !(part.kind == body::Kind::Sandal && part.side == Some(c.side))
+                                && part.shape.distance(q) == 0.0
+                        })
+                    })
+                })
+                .count();
+            let found = a
+                .hidden
+                .iter()
+                .find(|h| h.capture == k)
+                .map_or(0, |h| h.vertices);
+            assert_eq!(found, walked, "capture {k}");
+        }
+        assert!(a.hidden_vertices() > 0, "{:?}", a.hidden);
+        let (_, c) = a.clearance.as_ref().unwrap();
+        assert_eq!(c.mm, 0.0);
+        assert_eq!(
+            a.by_part().iter().map(|p| p.1).sum::<usize>(),
+            a.hidden_vertices()
+        );
+    }
+}
