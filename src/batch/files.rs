@@ -60,7 +60,7 @@ impl BatchFiles {
     fn options<'a>(&self, datasets: impl Iterator<Item = &'a Path>) -> WriteOptions {
         WriteOptions::new(self.force).protecting(
             datasets
-                .flat_map(crate::output::dataset_files)
+                .flat_map(crate::dataset::dataset_files)
                 .collect::<Vec<_>>(),
         )
     }

@@ -9,8 +9,9 @@ use serde_json::{Map, Value, json};
 
 use super::drift::{DriftMode, DriftOptions, DriftPair, Grouping};
 use super::{Batch, Run};
+use crate::dataset::dataset_files;
 use crate::export::ExportError;
-use crate::output::{WriteOptions, dataset_files, write_atomic};
+use crate::output::{WriteOptions, write_atomic};
 use crate::report::ResultJson;
 
 /// Most runs shown as columns of the text table; with more, only the summary columns are

@@ -1,24 +1,21 @@
 //! The calibration: every parameter with its one-sigma and unit, how the fit went, where
 //! it came from ([`Origin`]: solved here, or imported from a robot's team files), and the
 //! standing leg offsets robot files carry ([`standing`]). What `solve`, the reports and
-//! every export read; [`mod@file`] is naocalib's own calibration file, TOML or JSON.
+//! every export read; [`mod@file`]: the tables naocalib's own calibration file (written
+//! and read as one of the exports) shares with the result JSON.
 
 pub mod file;
 pub mod intrinsics;
-pub mod prediction;
 pub mod standing;
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
 use crate::dataset::{AngleKind, AngleSource};
-use crate::export::{ExportError, parse_error};
 use crate::model::{CameraId, Model, Param};
 use crate::solve::Solution;
 
-pub use file::{
-    FORMAT, StandingFile, StandingIn, UniqueMap, VERSION, read_calibration, read_start_from,
-};
+pub use file::{StandingFile, StandingIn, UniqueMap};
 pub use intrinsics::{Intrinsics, Prior};
 pub use standing::{EXTRAPOLATION_LIMIT, STANDING_TARGET_DEG, Standing, stand_torque};
 
@@ -288,28 +285,6 @@ impl Calibration {
         self.angles
             .as_ref()
             .is_some_and(|a| a.kind == AngleKind::Corrected)
-    }
-
-    /// The value a team file stores for the offset `param` (deg), whose file held
-    /// `old_stored` (deg): `−α` for raw angles; for angles the file's calibration already
-    /// corrected (true = logged + α with logged = sensor − old), `old_stored − α`.
-    pub fn stored_joint_value(
-        &self,
-        param: Param,
-        old_stored: f64,
-        path: &Path,
-    ) -> Result<f64, ExportError> {
-        let alpha = self.determined_here(param).ok_or_else(|| {
-            parse_error(
-                path,
-                format!("{param} was not determined by this calibration"),
-            )
-        })?;
-        Ok(if self.corrected_angles() {
-            old_stored - alpha
-        } else {
-            -alpha
-        })
     }
 
     /// Whether this is a robot's calibration read by `naocalib import` ([`Origin::Imported`])

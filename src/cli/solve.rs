@@ -98,7 +98,7 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     };
     if let Some(path) = &args.start_from {
         options.start_from = Some(
-            naocalib::calibration::read_start_from(path)
+            naocalib::export::read_start_from(path)
                 .with_context(|| format!("--start-from {}", path.display()))?,
         );
     }

@@ -36,6 +36,22 @@ pub const CORNERS_CSV: &str = "corners.csv";
 /// File name of the true parameters of a simulated dataset (optional).
 pub const TRUTH_TOML: &str = "truth.toml";
 
+/// The files of the dataset in `dir` that a writer must never replace: `dataset.toml`,
+/// `captures.csv`, `corners.csv` and `truth.toml`.
+pub fn dataset_files(dir: &Path) -> Vec<PathBuf> {
+    [DATASET_TOML, CAPTURES_CSV, CORNERS_CSV, TRUTH_TOML]
+        .iter()
+        .map(|f| dir.join(f))
+        .collect()
+}
+
+impl WriteOptions {
+    /// Options that protect the files of the dataset in `dir` (see [`dataset_files`]).
+    pub fn protecting_dataset(dir: &Path, force: bool) -> Self {
+        WriteOptions::new(force).protecting(dataset_files(dir))
+    }
+}
+
 /// One captured image: which camera took it, which board is in view and the logged joint
 /// angles.
 #[derive(Debug, Clone, PartialEq)]

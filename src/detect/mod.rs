@@ -38,6 +38,7 @@ pub mod numbering;
 mod outcome;
 pub mod overlay;
 mod predict;
+pub mod prediction;
 pub mod request;
 pub mod saddle;
 pub mod turned;

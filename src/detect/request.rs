@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::Instant;
 
-use crate::calibration::prediction::{self, PredictionError};
+use super::prediction::{self, PredictionError};
 use crate::dataset::{CORNERS_CSV, Dataset, DatasetError};
 use crate::model::PARAMETER_COUNT;
 use crate::output::{WriteError, WriteOptions};

@@ -42,7 +42,7 @@ pub trait Format: Sync {
     /// The values a file of this format holds, as naocalib parameters in report units
     /// ([`Imported`]: joint offsets as α = −stored, camera corrections converted to
     /// naocalib's offsets). The default refuses: naocalib's own files are read with
-    /// [`crate::calibration::read_calibration`], not imported.
+    /// [`super::read_calibration`], not imported.
     fn read(&self, text: &str, path: &Path) -> Result<Imported, ExportError> {
         let _ = text;
         Err(parse_error(

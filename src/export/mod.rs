@@ -1,9 +1,9 @@
 //! Exports of a calibration — the paper's compensation step: the joint offsets and camera
 //! corrections in forms that people read and robots load.
 //!
-//! - [`crate::calibration`]: naocalib's own calibration TOML/JSON ([`Calibration`], the
-//!   formats of [`own`]), which carries every parameter with its one-sigma, and reads back
-//!   the result JSON of `naocalib solve --json` as well.
+//! - [`own`]: naocalib's own calibration TOML/JSON of a [`Calibration`], which carries
+//!   every parameter with its one-sigma ([`read_calibration`] reads it, and the result
+//!   JSON of `naocalib solve --json` as well).
 //! - a format is one [`Format`] — name, file, description, recognise, write, read,
 //!   update — implemented by a unit struct in its team's module with its units and axis
 //!   conventions, and one line of [`FORMATS`], from which the CLI's `--format` and help,
@@ -77,14 +77,13 @@ use crate::model::{CameraId, Param};
 use read::not_in_layout;
 use write::check_usable;
 
-pub use crate::calibration::{
-    COMPENSATION, Calibration, Entry, FORMAT, Posture, VERSION, read_calibration, read_start_from,
-};
+pub use crate::calibration::{COMPENSATION, Calibration, Entry, Posture};
 pub use bhuman::BHUMAN_JOINTS;
 pub use format::{
     DocRow, Format, NameRule, from_path, help, name_hints, name_patterns, named, names, recognised,
     table,
 };
+pub use own::{FORMAT, VERSION, read_calibration, read_start_from};
 pub use read::{FileRead, import, import_calibration};
 pub use update::{Unchanged, Updated, update};
 pub use write::{

@@ -269,6 +269,30 @@ fn applied_to(
     })
 }
 
+impl Calibration {
+    /// The value a team file stores for the offset `param` (deg), whose file held
+    /// `old_stored` (deg): `−α` for raw angles; for angles the file's calibration already
+    /// corrected (true = logged + α with logged = sensor − old), `old_stored − α`.
+    pub fn stored_joint_value(
+        &self,
+        param: Param,
+        old_stored: f64,
+        path: &Path,
+    ) -> Result<f64, ExportError> {
+        let alpha = self.determined_here(param).ok_or_else(|| {
+            parse_error(
+                path,
+                format!("{param} was not determined by this calibration"),
+            )
+        })?;
+        Ok(if self.corrected_angles() {
+            old_stored - alpha
+        } else {
+            -alpha
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

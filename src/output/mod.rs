@@ -64,29 +64,11 @@ impl WriteOptions {
         }
     }
 
-    /// Options that protect the files of the dataset in `dir` (see [`dataset_files`]).
-    pub fn protecting_dataset(dir: &Path, force: bool) -> Self {
-        WriteOptions {
-            force,
-            inputs: dataset_files(dir),
-        }
-    }
-
     /// These options, also protecting `paths`.
     pub fn protecting(mut self, paths: impl IntoIterator<Item = PathBuf>) -> Self {
         self.inputs.extend(paths);
         self
     }
-}
-
-/// The files of the dataset in `dir` that a writer must never replace: `dataset.toml`,
-/// `captures.csv`, `corners.csv` and `truth.toml`.
-pub fn dataset_files(dir: &Path) -> Vec<PathBuf> {
-    use crate::dataset::{CAPTURES_CSV, CORNERS_CSV, DATASET_TOML, TRUTH_TOML};
-    [DATASET_TOML, CAPTURES_CSV, CORNERS_CSV, TRUTH_TOML]
-        .iter()
-        .map(|f| dir.join(f))
-        .collect()
 }
 
 /// Checks, before anything is written, every output of a command against every input in
@@ -407,7 +389,9 @@ mod tests {
         std::fs::create_dir(&d).unwrap();
         let input = d.join("captures.csv");
         std::fs::write(&input, b"in").unwrap();
-        let options = WriteOptions::protecting_dataset(&d, true);
+        // A dataset's files, protected by name: `truth.toml` does not exist yet.
+        let protected = ["dataset.toml", "captures.csv", "corners.csv", "truth.toml"];
+        let options = WriteOptions::new(true).protecting(protected.map(|f| d.join(f)));
         let dotted = d.join("../data/./captures.csv");
         let e = write_atomic(&dotted, b"x", &options).unwrap_err();
         assert!(matches!(e, WriteError::Input { .. }), "{e}");

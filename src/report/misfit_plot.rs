@@ -15,9 +15,9 @@ use plotters::prelude::*;
 
 use super::plot::{DrawResult, FONT, Figure, PlotError, err, save};
 use crate::dataset::Dataset;
-use crate::export::WriteOptions;
 use crate::model::gravity::leg_torques;
 use crate::model::{Joint, Vertex};
+use crate::output::WriteOptions;
 use crate::solve::Solution;
 
 const U_COLOUR: RGBColor = RGBColor(31, 119, 180);

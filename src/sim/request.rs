@@ -256,7 +256,7 @@ pub fn run(request: &SimRequest) -> Result<Simulated, SimRequestError> {
         .cloned()
         .collect();
     let write_options = WriteOptions::new(request.force).protecting(inputs);
-    let dataset_files = crate::output::dataset_files(&request.out);
+    let dataset_files = crate::dataset::dataset_files(&request.out);
     let files: Vec<&Path> = dataset_files.iter().map(PathBuf::as_path).collect();
     crate::output::check_outputs(&files, &[&request.out], &write_options)?;
     crate::dataset::check_writable(&request.out, true, request.force)?;

@@ -147,7 +147,7 @@ fn provenance_says_solved_or_imported() {
     let result = tmp.path().join("result.json");
     let text = serde_json::to_string_pretty(&ResultJson::from_run(&first).to_value()).unwrap();
     std::fs::write(&result, text).unwrap();
-    let solved = naocalib::calibration::read_start_from(&result).unwrap();
+    let solved = naocalib::export::read_start_from(&result).unwrap();
     assert_eq!(solved.origin, Origin::Solved);
     assert!(!solved.is_import());
 
@@ -174,7 +174,7 @@ fn provenance_says_solved_or_imported() {
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", stderr(&out));
-    let previous = naocalib::calibration::read_start_from(&imported).unwrap();
+    let previous = naocalib::export::read_start_from(&imported).unwrap();
     assert_eq!(previous.origin, Origin::Imported);
     assert!(previous.is_import());
 

@@ -69,7 +69,7 @@ pub fn start_values(
     corrected: bool,
 ) -> Result<[f64; PARAMETER_COUNT], PredictionError> {
     let calibration =
-        super::read_start_from(path).map_err(|source| PredictionError::StartFrom {
+        crate::export::read_start_from(path).map_err(|source| PredictionError::StartFrom {
             path: path.to_path_buf(),
             source,
         })?;
@@ -183,15 +183,15 @@ mod tests {
             Param::LKneePitch => 0.5,
             _ => 0.0,
         };
-        let calibration = super::super::Calibration {
-            origin: super::super::Origin::Solved,
+        let calibration = crate::calibration::Calibration {
+            origin: crate::calibration::Origin::Solved,
             solver: Some("test".into()),
             dataset: None,
             converged: Some(true),
             rms_px: Some([0.1, 0.1]),
             parameters: Param::ALL
                 .iter()
-                .map(|&param| super::super::Entry {
+                .map(|&param| crate::calibration::Entry {
                     param,
                     value: value(param),
                     std: Some(0.01),
@@ -199,7 +199,7 @@ mod tests {
                 })
                 .collect(),
             angles: None,
-            posture: super::super::Posture::Standing,
+            posture: crate::calibration::Posture::Standing,
             standing: Default::default(),
             cameras: Default::default(),
         };
