@@ -204,6 +204,17 @@ pub fn sight_blocked_by_body(
     grow: impl Fn(&Part) -> f64,
     skip: impl Fn(&Part) -> bool,
 ) -> Option<String> {
+    first_blocking(posed, eye, targets, grow, skip).map(Part::name)
+}
+
+/// The part [`sight_blocked_by_body`] names.
+pub fn first_blocking<'a>(
+    posed: &'a PosedBody,
+    eye: [f64; 3],
+    targets: &[[f64; 3]],
+    grow: impl Fn(&Part) -> f64,
+    skip: impl Fn(&Part) -> bool,
+) -> Option<&'a Part> {
     // Only parts whose bounding sphere reaches the cone of the lines of sight can block.
     let near: Vec<&Part> = posed
         .parts
@@ -216,12 +227,9 @@ pub fn sight_blocked_by_body(
                 .any(|&t| point_segment(c, eye, t) < r + grow(p))
         })
         .collect();
-    for &t in targets {
-        if let Some(part) = near.iter().find(|p| p.shape.blocks(eye, t, grow(p))) {
-            return Some(part.name());
-        }
-    }
-    None
+    targets
+        .iter()
+        .find_map(|&t| near.iter().find(|p| p.shape.blocks(eye, t, grow(p))).copied())
 }
 
 /// The first part of the body except the sandal on `side` (whose pattern the targets are)

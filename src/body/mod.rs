@@ -18,7 +18,8 @@ pub mod posture;
 pub mod shapes;
 
 pub use contact::{
-    Clearance, clearance, collision, contact, head_contact, sight_blocked, sight_blocked_by_body,
+    Clearance, clearance, collision, contact, first_blocking, head_contact, sight_blocked,
+    sight_blocked_by_body,
 };
 pub use posture::{ARM_JOINTS, ArmPosture};
 pub use shapes::{Capsule, OrientedBox, Shape, Sphere};

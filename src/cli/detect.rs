@@ -26,6 +26,11 @@ pub struct DetectArgs {
     /// vertices in OpenCV's order.
     #[arg(long)]
     no_model: bool,
+    /// The pictures show the robot lying on its back: drop every vertex its body
+    /// (docs/BODY.md, the arms beyond the head) stands in front of, as the model predicts
+    /// it, whatever the image shows there.
+    #[arg(long, conflicts_with = "no_model")]
+    body: bool,
     /// Write an overlay PNG per image into DIR: detected vertices (green crosses) and the
     /// nominal model's projection (red circles).
     #[arg(long, value_name = "DIR")]
@@ -102,6 +107,7 @@ pub fn run(args: &DetectArgs) -> Result<ExitCode> {
         jobs: args.jobs,
         start_from: args.start_from.clone(),
         repredict: !args.no_repredict,
+        body: args.body,
     };
     let prepared = request.prepare(&mut |line| note!("{line}"))?;
     let bar = progress_bar(prepared.dataset.captures.len());

@@ -28,6 +28,7 @@
 //! [`guard`] names the captures whose residuals after a fit stand out.
 
 pub mod assign;
+pub mod behind;
 mod chessboard;
 pub mod cv;
 pub mod find;
@@ -79,6 +80,10 @@ pub struct DetectOptions {
     /// again with that calibration and detect again where no whole board was found, until
     /// nothing changes ([`MAX_PASSES`] at most).
     pub repredict: bool,
+    /// With the model: the robot's body, whose parts the pictures show; every vertex it
+    /// stands in front of is dropped ([`behind`]). `None` for pictures of the boards
+    /// alone (as the simulator draws them without `--body`).
+    pub body: Option<crate::body::BodyModel>,
 }
 
 /// Most detection passes of the re-predict loop (the first with the given prediction).
@@ -121,6 +126,7 @@ impl Default for DetectOptions {
                 .unwrap_or(1),
             params: None,
             repredict: true,
+            body: None,
         }
     }
 }
@@ -264,7 +270,7 @@ fn detect_image(
     let mut guided_partial = None;
     if options.use_model && options.guided && grid == board_grid(model) {
         match guided_search(dataset, capture, &grey, options, mode).map_err(cv)? {
-            Guided::Done(outcome) => return Ok(outcome),
+            Guided::Done(outcome) => return Ok(drop_hidden(dataset, capture, options, outcome)),
             Guided::Partial { found, half } => {
                 search = chessboard::Search::Whole { half };
                 guided_partial = Some(found);
@@ -279,6 +285,11 @@ fn detect_image(
         (_, Some(partial)) => partial,
         (other, None) => other,
     };
+    let outcome = if grid == board_grid(model) {
+        drop_hidden(dataset, capture, options, outcome)
+    } else {
+        outcome
+    };
     if mode == Mode::Full && matches!(outcome, Outcome::NotFound) {
         // No board at all: say so when the picture is too dark to show one.
         let bytes = &grey.pixels;
@@ -291,6 +302,65 @@ fn detect_image(
         }
     }
     Ok(outcome)
+}
+
+/// `outcome` without the vertices the body model puts behind a part of the robot
+/// ([`behind`]), each named among the dropped; rejected when fewer than
+/// [`guided::MIN_VERTICES`] are left. Only with the model (`use_model`) and a body
+/// ([`DetectOptions::body`]).
+fn drop_hidden(
+    dataset: &Dataset,
+    capture: &Capture,
+    options: &DetectOptions,
+    outcome: Outcome,
+) -> Outcome {
+    let Outcome::Found {
+        mut corners,
+        order,
+        whole_image,
+        numbered,
+        mut dropped,
+    } = outcome
+    else {
+        return outcome;
+    };
+    let hidden = match &options.body {
+        Some(body) if options.use_model => {
+            behind::hidden(&dataset.model, body, capture, &options.prediction())
+        }
+        _ => Vec::new(),
+    };
+    let before = corners.len();
+    corners.retain(|c| {
+        let Some(h) = hidden.iter().find(|h| h.vertex == c.vertex) else {
+            return true;
+        };
+        dropped.push(saddle::Dropped {
+            vertex: c.vertex,
+            pixel: c.pixel,
+            why: saddle::Why::Behind {
+                kind: h.kind,
+                side: h.side,
+            },
+        });
+        false
+    });
+    if corners.len() < guided::MIN_VERTICES && corners.len() < before {
+        return Outcome::Rejected {
+            reason: format!(
+                "{} of the {before} vertices found lie behind the robot's body (body model)",
+                before - corners.len()
+            ),
+        };
+    }
+    dropped.sort_by_key(|d| d.vertex);
+    Outcome::Found {
+        corners,
+        order,
+        whole_image,
+        numbered,
+        dropped,
+    }
 }
 
 /// What the model-guided search makes of one image.

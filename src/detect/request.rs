@@ -40,6 +40,8 @@ pub struct DetectRequest {
     pub start_from: Option<PathBuf>,
     /// Calibrate from the boards found, predict again and detect again.
     pub repredict: bool,
+    /// The pictures show the robot: drop every vertex its body stands in front of.
+    pub body: bool,
 }
 
 /// Why the board could not be detected in a dataset, or its corners not written.
@@ -155,6 +157,7 @@ impl DetectRequest {
                 .map(|p| prediction::start_values_for(p, &dataset))
                 .transpose()?,
             repredict: self.repredict,
+            body: self.body.then(crate::body::BodyModel::default),
             ..DetectOptions::default()
         };
         if let Some(jobs) = self.jobs {
@@ -398,6 +401,7 @@ mod tests {
             jobs: None,
             start_from: None,
             repredict: true,
+            body: false,
         }
     }
 

@@ -113,6 +113,14 @@ pub enum Why {
         /// The limit there.
         limit: f64,
     },
+    /// The body model puts a part of the robot in front of its refinement window
+    /// ([`super::behind`]).
+    Behind {
+        /// The part.
+        kind: crate::body::Kind,
+        /// Its side, for a part of a leg or an arm.
+        side: Option<crate::model::Side>,
+    },
 }
 
 /// A vertex refined but dropped: an occluding edge pulled it, or may have.
@@ -148,6 +156,14 @@ impl fmt::Display for Dropped {
                 f,
                 "{px:.2} px off its neighbours' lines (more than {limit:.2} px)"
             ),
+            Why::Behind { kind, side } => {
+                let side = side.map_or(String::new(), |s| format!("{} ", s.name()));
+                write!(
+                    f,
+                    "the {side}{} stands in front of its window (body model)",
+                    kind.name()
+                )
+            }
         }
     }
 }

@@ -1,0 +1,133 @@
+//! The vertices the robot's own body hides, as the body model predicts them: a vertex whose
+//! refinement window (the squares around it, to half a square either way) is not in plain
+//! sight of the camera past every part of the body (docs/BODY.md) is dropped and named,
+//! whatever the image shows there. The image test of a clean saddle ([`super::saddle`])
+//! sees an edge that crosses a square; this sees a part that stands over the window
+//! before it pulls a vertex by less than the image can tell.
+//!
+//! The lines of sight are those of the model at the prediction's parameters, the body
+//! grown for what the parameters may be off by: 3 mm for the board's own foot and toe
+//! (rigid with the board; only the camera's place moves against them) and for the torso,
+//! pelvis and arms (rigid with the head but for its two joints), 10 mm for the legs'
+//! other parts. A part whose grown solid holds the camera is taken as it is.
+
+use crate::body::{BodyModel, Kind, Part, first_blocking};
+use crate::dataset::Capture;
+use crate::model::{Board, JointAngles, Model, PARAMETER_COUNT, Side, Vertex};
+
+/// How much the board's own foot and toe, the torso, pelvis and arms are grown (mm).
+pub const GROW_OWN: f64 = 3.0;
+/// How much the legs' other parts are grown (mm).
+pub const GROW_OTHER: f64 = 10.0;
+
+/// A vertex the body hides, with the part in front of it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hidden {
+    /// Which vertex.
+    pub vertex: Vertex,
+    /// The part of the body in front of its window.
+    pub kind: Kind,
+    /// Its side, for a part of a leg or an arm.
+    pub side: Option<Side>,
+}
+
+/// The points of `v`'s refinement window in the board frame: the vertex and the eight
+/// points half a square from it.
+fn window(board: &Board, v: Vertex) -> impl Iterator<Item = [f64; 3]> {
+    let [x, y, _] = board.vertex_position(v);
+    let h = board.square / 2.0;
+    (-1..=1).flat_map(move |i| (-1..=1).map(move |j| [x + i as f64 * h, y + j as f64 * h, 0.0]))
+}
+
+/// The vertices of `capture`'s board that `body` hides from its camera, predicted with the
+/// parameters `params` (the logged angles plus their offsets pose the body).
+pub fn hidden(
+    model: &Model,
+    body: &BodyModel,
+    capture: &Capture,
+    params: &[f64; PARAMETER_COUNT],
+) -> Vec<Hidden> {
+    let joints = JointAngles::from_fn(|j| capture.joints.get(j) + params[j.offset().index()]);
+    let chains = model.chains_for(capture.camera, capture.side, &capture.joints);
+    let eye = chains.camera.eval(params).translation;
+    let board = chains.board.eval(params);
+    let posed = body.pose(&model.robot, &model.board, &joints);
+    let side = capture.side;
+    let grow = |p: &Part| {
+        let g = if own_foot(p, side) || !p.kind.is_leg() {
+            GROW_OWN
+        } else {
+            GROW_OTHER
+        };
+        if p.shape.distance(eye) <= g { 0.0 } else { g }
+    };
+    let carrier = |p: &Part| p.kind == Kind::Sandal && p.side == Some(side);
+    model
+        .board
+        .vertices()
+        .filter_map(|v| {
+            let targets: Vec<[f64; 3]> = window(&model.board, v).map(|p| board.apply(&p)).collect();
+            first_blocking(&posed, eye, &targets, grow, carrier).map(|part| Hidden {
+                vertex: v,
+                kind: part.kind,
+                side: part.side,
+            })
+        })
+        .collect()
+}
+
+/// Whether `p` is the foot or toe of the leg on `side`.
+fn own_foot(p: &Part, side: Side) -> bool {
+    p.side == Some(side) && matches!(p.kind, Kind::Foot | Kind::Toe)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{CameraId, Joint};
+
+    fn capture(joints: JointAngles) -> Capture {
+        Capture {
+            id: 0,
+            side: Side::Left,
+            camera: CameraId::Lower,
+            image: None,
+            joints,
+            line: 0,
+        }
+    }
+
+    #[test]
+    fn the_toe_hides_the_column_beside_it_and_a_leg_moved_between_hides_more() {
+        let model = Model::default();
+        let body = BodyModel::default();
+        let zero = [0.0; PARAMETER_COUNT];
+        // The left leg raised, sole towards the head, the head turned to it.
+        let mut raised = crate::plan::route::rest_posture();
+        raised.set(Joint::LHipPitch, -1.2);
+        raised.set(Joint::LKneePitch, 0.3);
+        raised.set(Joint::LAnklePitch, -0.9);
+        raised.set(Joint::HeadPitch, 0.4);
+        raised.set(Joint::HeadYaw, 0.3);
+        let seen = hidden(&model, &body, &capture(raised), &zero);
+        // The paper's board begins under the toe: its first column is hidden, and only by
+        // the own foot; the far column is not.
+        let cols = model.board.cols();
+        for row in 0..model.board.rows() {
+            let first = seen.iter().find(|h| h.vertex == Vertex { row, col: 0 });
+            assert!(
+                first.is_some_and(|h| h.side == Some(Side::Left)),
+                "{seen:?}"
+            );
+            assert!(
+                !seen.iter().any(|h| h.vertex == Vertex { row, col: cols - 1 }),
+                "{seen:?}"
+            );
+        }
+        // A board farther out clears the toe.
+        let mut far = model.clone();
+        far.board.mount_origin[0] = 260.0;
+        let far_seen = hidden(&far, &body, &capture(raised), &zero);
+        assert!(far_seen.len() < seen.len(), "{far_seen:?} vs {seen:?}");
+    }
+}
