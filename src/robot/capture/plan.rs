@@ -1,11 +1,13 @@
 //! The plan as capture reads it, and the checks every row passes before anything is
 //! written or moved: joint limits less a margin, HeadPitch's yaw-dependent range, one
-//! HipYawPitch motor, no collision, a camera for every row; and the predicted time of
-//! running it (the planner's timing model, [`route::step_times`]).
+//! HipYawPitch motor, no collision, a camera for every row, the arm joints within their
+//! limits and one arm posture for the run; and the predicted time of running it (the
+//! planner's timing model, [`route::step_times`]).
 
 use std::path::Path;
 
-use crate::dataset::{self, Location};
+use crate::body::{ARM_JOINTS, ArmPosture};
+use crate::dataset::{self, DatasetError, Location};
 use crate::model::{CameraId, Joint, JointAngles, Model, Side};
 use crate::plan::collision::{self, BodyModel};
 use crate::plan::feasible::head_pitch_limits;
@@ -24,23 +26,131 @@ pub struct PlanRow {
     pub camera: CameraId,
     /// The joint angles to command (rad).
     pub joints: JointAngles,
+    /// The arm posture during the capture (the plan's `LShoulderPitch` … `RWristYaw`
+    /// columns; [`ArmPosture::CAPTURE`] when the plan has none).
+    pub arms: ArmPosture,
     /// The row's line in the plan file.
     pub line: u64,
 }
 
-/// Reads a plan (`capture,board,HeadYaw,…`, an optional `camera`; other columns ignored),
-/// keeping the ids.
+/// Reads a plan (`capture,board,HeadYaw,…`, an optional `camera`, the optional arm
+/// columns `LShoulderPitch` … `RWristYaw`; other columns ignored), keeping the ids. The arm
+/// columns come all ten or none (none: [`ArmPosture::CAPTURE`] for every row); every arm
+/// angle must be within its joint's limits ([`crate::body::posture::ARM_LIMITS`]) and every
+/// row must hold the arms alike (capture keeps them in one posture for the whole run).
+/// Errors name the file, the line and the field.
 pub fn read_plan(path: &Path) -> Result<Vec<PlanRow>, CaptureError> {
-    Ok(dataset::read_captures(path)?
+    let captures = dataset::read_captures(path)?;
+    let lines: Vec<u64> = captures.iter().map(|c| c.line).collect();
+    let arms = read_arms(path, &lines)?;
+    let rows: Vec<PlanRow> = captures
         .into_iter()
-        .map(|c| PlanRow {
+        .zip(arms)
+        .map(|(c, arms)| PlanRow {
             id: c.id,
             side: c.side,
             camera: c.camera,
             joints: c.joints,
+            arms: arms.unwrap_or(ArmPosture::CAPTURE),
             line: c.line,
         })
-        .collect())
+        .collect();
+    check_arms(path, &rows)?;
+    Ok(rows)
+}
+
+/// The arm columns of the plan at `path` (already read as a captures table whose rows are
+/// on `lines`): each row's arm angles, `None` for every row when the header has no arm
+/// column.
+fn read_arms(path: &Path, lines: &[u64]) -> Result<Vec<Option<ArmPosture>>, CaptureError> {
+    let count = lines.len();
+    let bytes = std::fs::read(path).map_err(|e| DatasetError::io(path, "read", e))?;
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(&bytes[..]);
+    // The records as the captures table has them: blank ones skipped, the first the header.
+    let mut records = reader
+        .records()
+        .filter_map(Result::ok)
+        .filter(|r| !r.iter().all(str::is_empty));
+    let Some(header) = records.next() else {
+        return Ok(vec![None; count]);
+    };
+    let columns = ARM_JOINTS.map(|name| header.iter().position(|h| h == name));
+    if columns.iter().all(Option::is_none) {
+        return Ok(vec![None; count]);
+    }
+    let header_line = header.position().map_or(1, |p| p.line());
+    if let Some(k) = columns.iter().position(Option::is_none) {
+        let have = ARM_JOINTS[columns.iter().position(Option::is_some).unwrap_or(0)];
+        return Err(DatasetError::invalid(
+            Location::line(path, header_line).field(ARM_JOINTS[k]),
+            format!(
+                "the header has the arm column '{have}' but no column '{}' (the arm \
+                 columns come all ten or none)",
+                ARM_JOINTS[k]
+            ),
+        )
+        .into());
+    }
+    let columns = columns.map(|c| c.unwrap_or(0));
+    let mut out = Vec::with_capacity(count);
+    for (record, &line) in records.take(count).zip(lines) {
+        let mut q = [0.0; 10];
+        for (k, &col) in columns.iter().enumerate() {
+            let text = record.get(col).unwrap_or("");
+            q[k] = match text.parse::<f64>() {
+                Ok(x) if x.is_finite() => x,
+                _ => {
+                    return Err(DatasetError::invalid(
+                        Location::line(path, line).field(ARM_JOINTS[k]),
+                        if text.is_empty() {
+                            "missing value, expected a number".to_string()
+                        } else {
+                            format!("'{text}' is not a finite number")
+                        },
+                    )
+                    .into());
+                }
+            };
+        }
+        out.push(Some(ArmPosture(q)));
+    }
+    out.resize(count, None);
+    Ok(out)
+}
+
+/// Refuses a row whose arm angle is outside its joint's limits, naming the file, the line
+/// and the joint; and a plan whose rows hold the arms differently (capture holds them in
+/// one posture for the whole run), naming the first row that differs from the first.
+pub fn check_arms(path: &Path, rows: &[PlanRow]) -> Result<(), CaptureError> {
+    for row in rows {
+        if let Some((k, message)) = crate::robot::arms::outside_limits(&row.arms) {
+            return Err(CaptureError::Unsafe {
+                at: Location::line(path, row.line).field(ARM_JOINTS[k]),
+                message,
+            });
+        }
+    }
+    let Some(first) = rows.first() else {
+        return Ok(());
+    };
+    if let Some(row) = rows.iter().find(|r| r.arms != first.arms) {
+        let k = (0..10)
+            .find(|&k| row.arms.0[k] != first.arms.0[k])
+            .unwrap_or(0);
+        return Err(CaptureError::Unsafe {
+            at: Location::line(path, row.line).field(ARM_JOINTS[k]),
+            message: format!(
+                "{} rad differs from line {}'s {} rad: capture holds the arms in one \
+                 posture for the whole run",
+                row.arms.0[k], first.line, first.arms.0[k]
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// Why the posture `joints` may not be commanded: a joint outside its limits less
