@@ -281,3 +281,109 @@ pub fn predicted_steps(model: &Model, rows: &[PlanRow], options: &CaptureOptions
         &postures,
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plan::{PlannedCapture, render_csv};
+
+    /// A plan of three captures as the planner writes it, arm columns and all.
+    fn planned() -> String {
+        let captures: Vec<PlannedCapture> = (0..3)
+            .map(|k| PlannedCapture {
+                camera: CameraId::Lower,
+                side: if k % 2 == 0 { Side::Left } else { Side::Right },
+                joints: crate::plan::route::rest_posture(),
+            })
+            .collect();
+        String::from_utf8(render_csv(&captures)).unwrap()
+    }
+
+    fn read(text: &str) -> Result<Vec<PlanRow>, String> {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("plan.csv");
+        std::fs::write(&path, text).unwrap();
+        read_plan(&path).map_err(|e| {
+            e.to_string()
+                .replace(&dir.path().display().to_string(), "DIR")
+        })
+    }
+
+    /// `text` with field `field` of line `line` (1-based) set to `value`.
+    fn with(text: &str, line: usize, field: &str, value: &str) -> String {
+        let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+        let col = header.iter().position(|h| *h == field).unwrap();
+        let lines: Vec<String> = text
+            .lines()
+            .enumerate()
+            .map(|(k, l)| {
+                if k + 1 != line {
+                    return l.to_string();
+                }
+                let mut f: Vec<&str> = l.split(',').collect();
+                f[col] = value;
+                f.join(",")
+            })
+            .collect();
+        lines.join("\n") + "\n"
+    }
+
+    #[test]
+    fn the_plans_arm_columns_are_read_and_a_plan_without_them_gets_captures_posture() {
+        let rows = read(&planned()).unwrap();
+        assert_eq!(rows.len(), 3);
+        assert!(rows.iter().all(|r| r.arms == ArmPosture::CAPTURE));
+        // Every arm column a name the captures table ignores (no near miss of its own).
+        let moved = planned()
+            .replace("-1.5707963267948966,0.45", "-1.5,0.45")
+            .replace("-1.5707963267948966,-0.45", "-1.5,-0.45");
+        let rows = read(&moved).unwrap();
+        assert_eq!(rows[2].arms.0[0], -1.5);
+        assert_eq!(rows[2].arms.0[5], -1.5);
+        // Without the arm columns: capture's posture.
+        let text = planned();
+        let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+        let keep: Vec<usize> = (0..header.len())
+            .filter(|&k| !ARM_JOINTS.contains(&header[k]))
+            .collect();
+        let without: String = planned()
+            .lines()
+            .map(|l| {
+                let f: Vec<&str> = l.split(',').collect();
+                keep.iter().map(|&k| f[k]).collect::<Vec<_>>().join(",") + "\n"
+            })
+            .collect();
+        assert!(!without.contains("Shoulder"));
+        let rows = read(&without).unwrap();
+        assert!(rows.iter().all(|r| r.arms == ArmPosture::CAPTURE));
+    }
+
+    #[test]
+    fn an_arm_angle_outside_its_limits_or_a_second_arm_posture_is_refused_with_file_line_and_field()
+    {
+        let e = read(&with(&planned(), 3, "RElbowRoll", "1.7")).unwrap_err();
+        assert!(
+            e.starts_with(
+                "DIR/plan.csv line 3, field RElbowRoll: 97.40° is outside the joint's limits \
+                 2.00° … 88.50°; nothing was moved"
+            ),
+            "{e}"
+        );
+        let e = read(&with(&planned(), 4, "LWristYaw", "0.3")).unwrap_err();
+        assert!(
+            e.starts_with("DIR/plan.csv line 4, field LWristYaw: 0.3 rad differs from line 2's 0 rad: capture holds the arms in one posture"),
+            "{e}"
+        );
+        let e = read(&with(&planned(), 2, "LElbowYaw", "x")).unwrap_err();
+        assert!(
+            e.contains("plan.csv line 2, field LElbowYaw: 'x' is not a finite number"),
+            "{e}"
+        );
+        let partial = planned().replacen("RWristYaw", "Note", 1);
+        let e = read(&partial).unwrap_err();
+        assert!(
+            e.contains("line 1, field RWristYaw: the header has the arm column 'LShoulderPitch' but no column 'RWristYaw'"),
+            "{e}"
+        );
+    }
+}
