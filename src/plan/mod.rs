@@ -766,12 +766,19 @@ pub fn random_stances(
 }
 
 /// The plan as CSV: `capture,board,HeadYaw,…,RAnkleRoll` (the columns of `captures.csv`
-/// without `image`), one row per capture in execution order, angles in radians; and a last
-/// column `camera` (`lower`/`upper`) when some capture is by the upper camera.
+/// without `image`), then the arm joints `LShoulderPitch,…,RWristYaw` (the posture capture
+/// holds the arms in, [`crate::body::ArmPosture::CAPTURE`], the same in every row), one row
+/// per capture in execution order, angles in radians; and a last column `camera`
+/// (`lower`/`upper`) when some capture is by the upper camera.
 pub fn render_csv(captures: &[PlannedCapture]) -> Vec<u8> {
     let cameras = captures.iter().any(|c| c.camera != CameraId::Lower);
+    let arms = crate::body::ArmPosture::CAPTURE;
     let mut out = String::from("capture,board");
-    for name in Joint::ALL.map(Joint::name) {
+    for name in Joint::ALL
+        .map(Joint::name)
+        .iter()
+        .chain(&crate::body::ARM_JOINTS)
+    {
         out.push(',');
         out.push_str(name);
     }
@@ -781,7 +788,7 @@ pub fn render_csv(captures: &[PlannedCapture]) -> Vec<u8> {
     out.push('\n');
     for (id, c) in captures.iter().enumerate() {
         out.push_str(&format!("{id},{}", c.side.name()));
-        for (_, q) in c.joints.iter() {
+        for q in c.joints.iter().map(|(_, q)| q).chain(arms.0) {
             // Shortest text that reads back to the same number.
             out.push_str(&format!(",{q}"));
         }
@@ -856,6 +863,45 @@ mod tests {
             options("intrinsics", &[CameraId::Upper]).sweeps(),
             [false, true]
         );
+    }
+
+    /// The CSV carries every capture's arm joints after the leg joints, before the camera,
+    /// and reads back as the plan.
+    #[test]
+    fn the_csv_carries_the_arm_posture_of_every_capture() {
+        let mut joints = JointAngles::default();
+        joints.set(Joint::LKneePitch, 0.5);
+        let captures = [
+            PlannedCapture {
+                camera: CameraId::Lower,
+                side: Side::Left,
+                joints,
+            },
+            PlannedCapture {
+                camera: CameraId::Upper,
+                side: Side::Right,
+                joints,
+            },
+        ];
+        let text = String::from_utf8(render_csv(&captures)).unwrap();
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let first_arm = header.iter().position(|h| *h == "LShoulderPitch").unwrap();
+        assert_eq!(header[first_arm - 1], "RAnkleRoll");
+        assert_eq!(&header[first_arm..first_arm + 10], crate::body::ARM_JOINTS);
+        assert_eq!(header.last(), Some(&"camera"));
+        for line in lines {
+            let fields: Vec<&str> = line.split(',').collect();
+            let arms: Vec<f64> = fields[first_arm..first_arm + 10]
+                .iter()
+                .map(|f| f.parse().unwrap())
+                .collect();
+            assert_eq!(arms, crate::body::ArmPosture::CAPTURE.0);
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("plan.csv");
+        std::fs::write(&path, text).unwrap();
+        assert_eq!(read_csv(&path).unwrap(), captures);
     }
 
     /// A small plan's options: few stances in the pool, one refinement round.

@@ -1,7 +1,8 @@
 //! The checks before a robot moves: LoLA answers and its readings are plausible, the robot
 //! lies on its back, its battery, its motors' temperatures and status, its stiffness; each
 //! camera takes a picture of its size that is neither black nor saturated; the chest
-//! button not pressed; and, message by message, nothing a run stops or rests on (its
+//! button not pressed; where the arms are and where capture will put them; and, message
+//! by message, nothing a run stops or rests on (its
 //! watch: readings, roll, chest button, motors' status, temperatures and currents,
 //! battery). `naocalib capture --check` runs them all and moves nothing (a dry run: the
 //! table of what holds);
@@ -11,6 +12,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use crate::body::ArmPosture;
 use crate::model::{CameraId, Model};
 use crate::output::{WriteOptions, write_atomic};
 
@@ -218,8 +220,14 @@ pub fn first_message(
 /// The dry run's look at LoLA: `cycles` messages read, each answered by holding the
 /// posture and stiffness the first reported (nothing moves, no stiffness changes; nothing
 /// is sent when the first is implausible); the checks of LoLA, the readings and
-/// [`robot`] on the last message.
-pub fn lola(link: &mut dyn Link, limits: &SafetyLimits, cycles: u32) -> Vec<Check> {
+/// [`robot`] on the last message, and where its arms are against the plan's `arms`
+/// ([`arms`]).
+pub fn lola(
+    link: &mut dyn Link,
+    limits: &SafetyLimits,
+    cycles: u32,
+    plan_arms: &ArmPosture,
+) -> Vec<Check> {
     let started = Instant::now();
     let first = match link.receive() {
         Ok(m) => m,
@@ -279,8 +287,27 @@ pub fn lola(link: &mut dyn Link, limits: &SafetyLimits, cycles: u32) -> Vec<Chec
         Err(fault) => Check::new("joint readings", false, fault.to_string()),
     });
     checks.extend(robot(limits, &last));
+    checks.push(arms(&super::arms::read(&last.position), plan_arms));
     checks.push(watched.check_of(received));
     checks
+}
+
+/// Where the arms are (`now`, as LoLA reads them) and where capture will put them
+/// (`plan`, the plan's arm posture): a named posture when within a few degrees of one
+/// ([`super::arms::describe`]), else the angles. Holds unless an angle is not a number (a
+/// capture moves the arms from wherever they are, after the stiffness ramp).
+pub fn arms(now: &ArmPosture, plan: &ArmPosture) -> Check {
+    let readable = now.0.iter().all(|q| q.is_finite());
+    let detail = format!(
+        "now {}; capture puts them {} after the stiffness ramp, before the first leg move, \
+         and lays them back beside the body at the end",
+        super::arms::describe(now),
+        match super::arms::named(plan) {
+            Some(name) => name.to_string(),
+            None => format!("at {}", super::arms::describe(plan)),
+        }
+    );
+    Check::new("arms", readable, detail)
 }
 
 /// The run's watch over the dry run's messages: every condition a run stops or rests on,
@@ -412,6 +439,7 @@ pub fn dry_run(
     check_plan(plan, model, &rows, options.joint_margin)?;
     let given: Vec<CameraId> = cameras.iter().map(|(c, ..)| *c).collect();
     check_cameras(plan, &rows, &given)?;
+    let plan_arms = rows.first().map_or(ArmPosture::CAPTURE, |r| r.arms);
     let mut report = CheckReport::default();
     let used = |id: CameraId| rows.iter().filter(|r| r.camera == id).count();
     report.checks.push(Check::new(
@@ -436,9 +464,11 @@ pub fn dry_run(
         });
     }
     match Connection::connect(socket, options.safety.silent_cycles) {
-        Ok(mut link) => report
-            .checks
-            .extend(lola(&mut link, &options.safety, CHECK_CYCLES)),
+        Ok(mut link) => {
+            report
+                .checks
+                .extend(lola(&mut link, &options.safety, CHECK_CYCLES, &plan_arms))
+        }
         Err(e) => report.checks.push(Check::new("LoLA", false, lola_hint(&e))),
     }
     Ok(report)
@@ -597,6 +627,57 @@ mod tests {
             "{}",
             small.detail
         );
+    }
+
+    #[test]
+    fn the_arms_check_names_where_the_arms_are_and_where_capture_puts_them() {
+        let beside = arms(&ArmPosture::BESIDE_BODY, &ArmPosture::CAPTURE);
+        assert!(beside.holds);
+        assert!(
+            beside.detail.starts_with(
+                "now beside the body (every joint within 0.0° of it); capture puts them \
+                 beyond the head after the stiffness ramp"
+            ),
+            "{}",
+            beside.detail
+        );
+        let mut odd = ArmPosture::BESIDE_BODY;
+        odd.0[0] = 0.0;
+        let c = arms(&odd, &ArmPosture::CAPTURE);
+        assert!(
+            c.detail
+                .starts_with("now LShoulderPitch 0.0°, LShoulderRoll 8.6°"),
+            "{}",
+            c.detail
+        );
+        odd.0[3] = f64::NAN;
+        assert!(!arms(&odd, &ArmPosture::CAPTURE).holds);
+        // Read from LoLA's message by the dry run.
+        let mut link = Still(SensorMessage::on_back(crate::robot::arms::put(
+            [0.0; JOINTS],
+            &ArmPosture::CAPTURE,
+            |q| q as f32,
+        )));
+        let checks = lola(&mut link, &SafetyLimits::default(), 3, &ArmPosture::CAPTURE);
+        let line = checks.iter().find(|c| c.item == "arms").unwrap();
+        assert!(
+            line.detail.starts_with("now beyond the head"),
+            "{}",
+            line.detail
+        );
+    }
+
+    /// A robot that never changes.
+    struct Still(SensorMessage);
+
+    impl Link for Still {
+        fn receive(&mut self) -> Result<SensorMessage, LolaError> {
+            Ok(self.0.clone())
+        }
+
+        fn send(&mut self, _: &ActuatorMessage) -> Result<(), LolaError> {
+            Ok(())
+        }
     }
 
     #[test]

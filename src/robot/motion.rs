@@ -1,6 +1,7 @@
 //! Moving safely, counted in LoLA cycles: stiffness ramps, bounded-speed interpolation,
 //! settling and obstruction detection (docs/CAPTURE.md).
 
+use crate::body::ArmPosture;
 use crate::model::{Joint, JointAngles};
 
 use super::lola::CYCLE_S;
@@ -12,6 +13,8 @@ pub struct MotionOptions {
     pub leg_speed: f64,
     /// Head joint speed limit (rad/s).
     pub head_speed: f64,
+    /// Arm joint speed limit (rad/s): the arms' way to capture's posture and back.
+    pub arm_speed: f64,
     /// Stiffness of the head and leg joints while measuring (0 … 1).
     pub stiffness: f64,
     /// Cycles of a stiffness ramp up or down (at least 84, i.e. 1 s).
@@ -35,7 +38,8 @@ pub struct MotionOptions {
 }
 
 impl Default for MotionOptions {
-    /// Legs 30°/s, head 90°/s (as the plan's timing), stiffness 0.8, ramps of 100 cycles
+    /// Legs 30°/s, head 90°/s (as the plan's timing), arms 30°/s (the 180° of
+    /// ShoulderPitch from beside the body to beyond the head in 6 s), stiffness 0.8, ramps of 100 cycles
     /// (1.2 s), settled when no joint's readings spread more than 0.3° (3 encoder steps:
     /// the readings of a joint at rest flicker by a step) over 30 cycles
     /// (0.36 s) within 250 cycles (3 s), obstructed when a joint stays more than 4° from
@@ -45,6 +49,7 @@ impl Default for MotionOptions {
         MotionOptions {
             leg_speed: 30f64.to_radians(),
             head_speed: 90f64.to_radians(),
+            arm_speed: 30f64.to_radians(),
             stiffness: 0.8,
             ramp_cycles: 100,
             settle_threshold: 0.3f64.to_radians(),
@@ -78,6 +83,7 @@ impl MotionOptions {
         };
         speed(self.leg_speed, "the leg speed", 60.0)?;
         speed(self.head_speed, "the head speed", 180.0)?;
+        speed(self.arm_speed, "the arm speed", 60.0)?;
         if !(self.stiffness > 0.0 && self.stiffness <= 1.0) {
             return Err(format!(
                 "the stiffness must be above 0 and at most 1, got {}",
@@ -116,19 +122,25 @@ impl MotionOptions {
     /// `to`: all joints interpolated together, each stepping at most its speed limit per
     /// cycle.
     pub fn path(&self, from: &JointAngles, to: &JointAngles) -> Vec<JointAngles> {
-        let steps = (*to - *from)
-            .iter()
-            .map(|(j, d)| (d.abs() / (self.speed(j) * CYCLE_S)).ceil())
-            .fold(0.0, f64::max) as usize;
-        (1..=steps)
-            .map(|k| {
-                if k == steps {
-                    *to
-                } else {
-                    from.lerp(to, k as f64 / steps as f64)
-                }
-            })
-            .collect()
+        let steps = bounded_steps((*to - *from).iter().map(|(j, d)| (d, self.speed(j))));
+        interpolate(steps, to, |t| from.lerp(to, t))
+    }
+
+    /// The commanded arm postures of a move of the arms from `from` to `to`, one per
+    /// cycle, ending at `to`: as [`MotionOptions::path`], every arm joint at most
+    /// [`MotionOptions::arm_speed`].
+    pub fn arm_path(&self, from: &ArmPosture, to: &ArmPosture) -> Vec<ArmPosture> {
+        let steps = bounded_steps(
+            from.0
+                .iter()
+                .zip(to.0)
+                .map(|(a, b)| (b - a, self.arm_speed)),
+        );
+        interpolate(steps, to, |t| {
+            ArmPosture(std::array::from_fn(|k| {
+                from.0[k] + t * (to.0[k] - from.0[k])
+            }))
+        })
     }
 
     /// The stiffness in cycle `k` (0-based) of a ramp from `from` to `to` (cycle 0 is
@@ -141,6 +153,27 @@ impl MotionOptions {
     pub fn ramp_down(&self, from: f64, k: u32) -> f64 {
         from * (1.0 - (k + 1).min(self.ramp_cycles) as f64 / self.ramp_cycles as f64)
     }
+}
+
+/// The cycles of a move whose joints each go `delta` (rad) at most `speed` (rad/s): the
+/// slowest joint's, rounded up.
+fn bounded_steps(moves: impl Iterator<Item = (f64, f64)>) -> usize {
+    moves
+        .map(|(delta, speed)| (delta.abs() / (speed * CYCLE_S)).ceil())
+        .fold(0.0, f64::max) as usize
+}
+
+/// `steps` postures, the `k`th `at(k / steps)`, the last exactly `to`.
+fn interpolate<T: Copy>(steps: usize, to: &T, at: impl Fn(f64) -> T) -> Vec<T> {
+    (1..=steps)
+        .map(|k| {
+            if k == steps {
+                *to
+            } else {
+                at(k as f64 / steps as f64)
+            }
+        })
+        .collect()
 }
 
 /// Watches the readings of a stance: settled (steady over a window), obstructed (a joint
@@ -296,6 +329,30 @@ mod tests {
             prev = *p;
         }
         assert!(o.path(&to, &to).is_empty());
+    }
+
+    #[test]
+    fn arm_paths_keep_to_the_arm_speed_and_end_at_the_target() {
+        let o = MotionOptions::default();
+        let (from, to) = (ArmPosture::BESIDE_BODY, ArmPosture::CAPTURE);
+        let path = o.arm_path(&from, &to);
+        assert_eq!(*path.last().unwrap(), to);
+        // ShoulderPitch turns by 180° at 30°/s: 6 s, 500 cycles (501 by rounding).
+        assert!((500..=501).contains(&path.len()), "{}", path.len());
+        let mut prev = from;
+        for p in &path {
+            for k in 0..10 {
+                let step = (p.0[k] - prev.0[k]).abs();
+                assert!(step <= o.arm_speed * CYCLE_S * (1.0 + 1e-9), "{k} {step}");
+            }
+            prev = *p;
+        }
+        assert!(o.arm_path(&to, &to).is_empty());
+        let fast = MotionOptions {
+            arm_speed: 90f64.to_radians(),
+            ..o
+        };
+        assert!(fast.validate().unwrap_err().starts_with("the arm speed"));
     }
 
     #[test]

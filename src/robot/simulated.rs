@@ -147,6 +147,10 @@ pub struct State {
     /// it was kept).
     #[serde(default)]
     pub stiffness: Vec<f64>,
+    /// The arm joints now (rad), in [`crate::body::ARM_JOINTS`] order (empty in a state
+    /// written before they were kept: the body drawn with its own arm posture).
+    #[serde(default)]
+    pub arms: Vec<f64>,
 }
 
 /// Why the simulated robot stopped with an error.
@@ -183,9 +187,11 @@ pub enum RobotError {
     Io(#[from] std::io::Error),
 }
 
-/// The LoLA motors naocalib measures (HipYawPitch once).
+/// The LoLA motors that follow their commands: the ones naocalib measures (HipYawPitch
+/// once) and the arms'.
 fn motors() -> Vec<usize> {
     let mut out: Vec<usize> = Joint::ALL.iter().map(|&j| lola::index(j)).collect();
+    out.extend(super::arms::indices());
     out.sort();
     out.dedup();
     out
@@ -203,6 +209,7 @@ fn write_state(options: &RobotOptions, body: &Body) -> Result<(), RobotError> {
         cycle: body.cycle,
         seed: options.seed,
         stiffness: body.stiffness.to_vec(),
+        arms: body.arms().0.to_vec(),
     };
     let bytes = serde_json::to_vec(&state).expect("a state always encodes");
     Ok(write_atomic_unsynced(
@@ -349,6 +356,7 @@ fn pace(next: &mut Instant, period: Duration) {
 /// The joints and stiffness last written to the state file.
 struct Last {
     joints: JointAngles,
+    arms: crate::body::ArmPosture,
     stiffness: [f64; JOINTS],
 }
 
@@ -356,12 +364,13 @@ impl Last {
     fn of(body: &Body) -> Last {
         Last {
             joints: body.joints(),
+            arms: body.arms(),
             stiffness: body.stiffness,
         }
     }
 }
 
-/// One cycle of the body; the state written when the joints moved or the stiffness
+/// One cycle of the body; the state written when the joints or the arms moved or the stiffness
 /// changed, and every 50 cycles.
 fn tick(
     options: &RobotOptions,
@@ -371,7 +380,8 @@ fn tick(
 ) -> Result<(), RobotError> {
     body.step(&options.model, motors);
     let joints = body.joints();
-    let moved = (joints - last.joints).iter().any(|(_, d)| d.abs() > 1e-6);
+    let moved = (joints - last.joints).iter().any(|(_, d)| d.abs() > 1e-6)
+        || super::arms::distance(&body.arms(), &last.arms) > 1e-6;
     if moved || body.stiffness != last.stiffness || body.cycle.is_multiple_of(50) {
         write_state(options, body)?;
         *last = Last::of(body);

@@ -235,12 +235,14 @@ pub(crate) fn designed_plan(
     naocalib::plan::read_csv(path).unwrap()
 }
 
-/// The motors capture moves (LoLA indices, HipYawPitch once) with their speed limits.
+/// The motors capture moves (LoLA indices, HipYawPitch once, the arms) with their speed
+/// limits.
 pub(crate) fn moved_motors() -> Vec<(usize, f64)> {
     let o = MotionOptions::default();
     let mut out: Vec<(usize, f64)> = Joint::ALL
         .iter()
         .map(|&j| (lola::index(j), o.speed(j)))
+        .chain(naocalib::robot::arms::indices().map(|k| (k, o.arm_speed)))
         .collect();
     out.sort_by_key(|m| m.0);
     out.dedup_by_key(|m| m.0);
@@ -249,7 +251,7 @@ pub(crate) fn moved_motors() -> Vec<(usize, f64)> {
 
 /// The safety rules on one robot's record: stiffness ramps up from 0 over ≥ 1 s while the
 /// command holds the posture first read; no commanded step beyond the speed limits, the
-/// ramp included; the arms never stiff; with `ends_at_rest`, the run ends at rest with a
+/// ramp included; the hands never stiff; with `ends_at_rest`, the run ends at rest with a
 /// ramp down over ≥ 1 s.
 pub(crate) fn check_safety(record: &[RecordRow], ends_at_rest: bool) {
     let motors = moved_motors();
@@ -290,7 +292,7 @@ pub(crate) fn check_safety(record: &[RecordRow], ends_at_rest: bool) {
             );
         }
     }
-    // Arms and hands limp.
+    // The hands limp.
     for r in record {
         for k in 0..JOINTS {
             if !motors.iter().any(|m| m.0 == k) {

@@ -850,6 +850,7 @@ fn simulate_robot_refuses_to_overwrite_its_inputs_and_bad_options() {
         cycle: 0,
         seed: 1,
         stiffness: Vec::new(),
+        arms: Vec::new(),
     };
     let text = serde_json::to_vec(&s).unwrap();
     std::fs::write(&state, &text).unwrap();

@@ -11,6 +11,7 @@ mod util;
 mod all_or_none;
 mod batch_solve;
 mod capture;
+mod capture_arms;
 mod capture_body;
 mod capture_cameras;
 mod capture_guard;

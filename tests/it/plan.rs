@@ -322,7 +322,7 @@ fn cli_plans_simulates_and_solves() {
     let mut lines = csv.lines();
     let header = lines.next().unwrap();
     assert!(header.starts_with("capture,board,HeadYaw,HeadPitch,LHipYawPitch"));
-    assert!(header.ends_with("RAnkleRoll") && !header.contains("image"));
+    assert!(header.ends_with("RAnkleRoll,LShoulderPitch,LShoulderRoll,LElbowYaw,LElbowRoll,LWristYaw,RShoulderPitch,RShoulderRoll,RElbowYaw,RElbowRoll,RWristYaw") && !header.contains("image"));
     assert_eq!(lines.count(), 24);
 
     // Not replaced without --force.

@@ -132,7 +132,12 @@ fn upper_captures_are_planned_around_the_robots_calibration() {
     let path = dir.path().join("plan.csv");
     std::fs::write(&path, plan::render_csv(&around.captures)).unwrap();
     let text = std::fs::read_to_string(&path).unwrap();
-    assert!(text.lines().next().unwrap().ends_with(",RAnkleRoll,camera"));
+    assert!(
+        text.lines()
+            .next()
+            .unwrap()
+            .ends_with(",RElbowRoll,RWristYaw,camera")
+    );
     assert_eq!(plan::read_csv(&path).unwrap(), around.captures);
 }
 
@@ -172,7 +177,12 @@ fn cli_plans_both_cameras_when_the_dataset_names_an_upper_camera() {
     assert!(stdout.contains("upper camera: the same rules"), "{stdout}");
     assert!(stdout.contains("UpperCamYaw"), "{stdout}");
     let csv = std::fs::read_to_string(&out).unwrap();
-    assert!(csv.lines().next().unwrap().ends_with(",RAnkleRoll,camera"));
+    assert!(
+        csv.lines()
+            .next()
+            .unwrap()
+            .ends_with(",RElbowRoll,RWristYaw,camera")
+    );
     let rows: Vec<&str> = csv.lines().skip(1).collect();
     assert_eq!(rows.len(), 24);
     assert!(rows.iter().any(|r| r.ends_with(",upper")));

@@ -6,7 +6,9 @@
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use crate::body::ArmPosture;
 use crate::model::{Joint, JointAngles};
+use crate::robot::arms::{self, ArmWatch};
 use crate::robot::body::BodyWatch;
 use crate::robot::lola::{self, ActuatorMessage, JOINTS, Link, LolaError, SensorMessage};
 use crate::robot::motion::{Settle, SettleState};
@@ -54,10 +56,17 @@ pub(super) struct Drive<'a> {
     last: SensorMessage,
     /// The readings believed ([`Believed`]).
     believed: Believed,
-    /// Positions of the joints naocalib does not move (arms, hands), as first read.
+    /// Positions of the joints naocalib does not move (hands), as first read.
     base: [f32; JOINTS],
     /// The commanded posture.
     command: JointAngles,
+    /// The commanded arm posture: as first read until the arms move
+    /// ([`Drive::move_arms`]).
+    arms: ArmPosture,
+    /// Whether the arms were moved away from where they were first read.
+    arms_moved: bool,
+    /// The watch on the arm motors.
+    arm_watch: ArmWatch,
     /// The commanded stiffness of each motor (LoLA's order).
     stiffness: [f64; JOINTS],
     /// LoLA cycles so far.
@@ -92,6 +101,9 @@ impl<'a> Drive<'a> {
             body,
             base: first.position,
             command: believed.readings(),
+            arms: arms::read(&first.position),
+            arms_moved: false,
+            arm_watch: ArmWatch::default(),
             believed,
             stiffness: first.stiffness.map(f64::from),
             last: first,
@@ -102,11 +114,12 @@ impl<'a> Drive<'a> {
         })
     }
 
-    /// The command as LoLA takes it: the joints naocalib does not move where they were
-    /// first read.
+    /// The command as LoLA takes it: head, legs and arms as commanded, the hands where
+    /// they were first read.
     fn message(&self) -> ActuatorMessage {
+        let position = lola::put(self.base, &self.command, |q| q as f32);
         ActuatorMessage {
-            position: lola::put(self.base, &self.command, |q| q as f32),
+            position: arms::put(position, &self.arms, |q| q as f32),
             stiffness: self.stiffness.map(|s| s as f32),
         }
     }
@@ -149,6 +162,10 @@ impl<'a> Drive<'a> {
                 ))));
             }
         }
+        let arms_stiff = arms::indices().iter().any(|&k| self.stiffness[k] > 0.0);
+        if arms_stiff && let Err(why) = self.arm_watch.check(&self.options.safety, &self.last) {
+            return Err(Halt::Fault(CaptureError::Safety(why)));
+        }
         if let Err(stop) = self.body.check(&self.last) {
             return Err(Halt::Fault(CaptureError::Body(stop)));
         }
@@ -183,13 +200,14 @@ impl<'a> Drive<'a> {
     }
 
     /// Ramps each motor's stiffness from what the robot reported at the start to the
-    /// measuring stiffness (head and legs) or 0 (arms, hands), holding the posture measured
-    /// at the start: a leg that sags meanwhile does not drag the command along. The robot
-    /// counts as moved once the ramp is done.
+    /// measuring stiffness (head, legs and arms) or 0 (hands), holding the posture
+    /// measured at the start: a leg that sags meanwhile does not drag the command along.
+    /// The robot counts as moved once the ramp is done.
     pub(super) fn ramp_up(&mut self) -> Result<(), Halt> {
         let m = self.options.motion;
         let from = self.stiffness;
         let to = lola::put([0.0; JOINTS], &JointAngles::fill(m.stiffness), |s| s);
+        let to = arms::put(to, &ArmPosture([m.stiffness; 10]), |s| s);
         for k in 0..=m.ramp_cycles {
             self.stiffness = std::array::from_fn(|i| m.ramp(from[i], to[i], k));
             self.cycle()?;
@@ -259,6 +277,66 @@ impl<'a> Drive<'a> {
         self.move_to(&rest, false).map(|_| ())
     }
 
+    /// Moves the arms to `target` at the arm speed (`MotionOptions::arm_speed`), head
+    /// and legs holding their command, then waits until every arm joint has read within
+    /// half the obstruction gap (2°) of `target` for the settling window. An arm joint
+    /// that stays farther than the obstruction gap from its command for the obstruction
+    /// cycles, or arms that do not get there within the settling timeout after the move,
+    /// end it: the arm command comes back to where the arms are, at the arm speed, and
+    /// `Ok(Err(why))` says why. `Ok(Ok(cycles))` when the arms got there.
+    pub(super) fn move_arms(&mut self, target: &ArmPosture) -> Result<Result<u64, String>, Halt> {
+        let m = self.options.motion;
+        let path = m.arm_path(&self.arms, target);
+        let start = self.cycles;
+        let mut far = 0u32;
+        let mut near = 0u32;
+        for k in 0..path.len() + m.settle_timeout_cycles as usize {
+            if let Some(p) = path.get(k) {
+                self.arms = *p;
+                self.arms_moved = true;
+            }
+            self.cycle()?;
+            let reading = arms::read(&self.last.position);
+            let gap = arms::distance(&reading, &self.arms);
+            far = if gap > m.obstruction { far + 1 } else { 0 };
+            if far >= m.obstruction_cycles {
+                let k = (0..10)
+                    .max_by(|&a, &b| {
+                        let d = |i: usize| (reading.0[i] - self.arms.0[i]).abs();
+                        d(a).total_cmp(&d(b))
+                    })
+                    .unwrap_or(0);
+                let why = format!(
+                    "{} stayed {:.1}° from its command for {} cycles (are the arms held or \
+                     in the way of something?)",
+                    crate::body::ARM_JOINTS[k],
+                    gap.to_degrees(),
+                    m.obstruction_cycles
+                );
+                let back = if reading.0.iter().all(|q| q.is_finite()) {
+                    m.arm_path(&self.arms, &reading)
+                } else {
+                    Vec::new()
+                };
+                for p in back {
+                    self.arms = p;
+                    self.cycle()?;
+                }
+                return Ok(Err(why));
+            }
+            let there =
+                k + 1 >= path.len() && arms::distance(&reading, target) <= m.obstruction / 2.0;
+            near = if there { near + 1 } else { 0 };
+            if near >= m.settle_cycles {
+                return Ok(Ok(self.cycles - start));
+            }
+        }
+        Ok(Err(format!(
+            "the arms did not reach their posture within {} cycles",
+            m.settle_timeout_cycles
+        )))
+    }
+
     /// Rests until the head and leg motors are at or below the resume temperature and none
     /// reports a status above 0 ([`SafetyLimits::cooled`]).
     pub(super) fn cool(&mut self) -> Result<(), Halt> {
@@ -281,8 +359,9 @@ impl<'a> Drive<'a> {
     }
 
     /// The way out of a run that ends with `end`: back to rest (unless the robot never
-    /// moved: stopped during the ramp-up, it ramps down where it lies), then the stiffness
-    /// ramp-down; only a broken link stops them. When LoLA's stream cannot be trusted or
+    /// moved: stopped during the ramp-up, it ramps down where it lies), the arms, when a
+    /// completed run moved them, back beside the body ([`ArmPosture::BESIDE_BODY`]; on any
+    /// other end they stay where they are), then the stiffness ramp-down; only a broken link stops them. When LoLA's stream cannot be trusted or
     /// read (a message that did not parse, silence, a socket error) the ramp-down is sent
     /// blind, holding the posture; only a closed connection leaves nothing to send to.
     /// Whether the ramp-down was sent to its end (the robot limp).
@@ -292,8 +371,17 @@ impl<'a> Drive<'a> {
             End::Stopped(CaptureError::Lola(LolaError::Closed)) => false,
             End::Stopped(CaptureError::Lola(_)) => self.blind_ramp_down(),
             _ => {
-                let back =
-                    if self.moved { self.rest() } else { Ok(()) }.and_then(|()| self.ramp_down());
+                let arms_back = matches!(end, End::Completed) && self.arms_moved;
+                let back = if self.moved { self.rest() } else { Ok(()) }
+                    .and_then(|()| {
+                        if arms_back {
+                            // Arms that cannot get back stay where they stopped.
+                            self.move_arms(&ArmPosture::BESIDE_BODY).map(|_| ())
+                        } else {
+                            Ok(())
+                        }
+                    })
+                    .and_then(|()| self.ramp_down());
                 match back {
                     Ok(()) => true,
                     Err(Halt::Link(LolaError::Closed)) => false,

@@ -6,6 +6,7 @@
 
 use std::sync::atomic::AtomicBool;
 
+use crate::body::ArmPosture;
 use crate::model::{CameraId, Joint, Model};
 use crate::plan::collision::BodyModel;
 use crate::plan::route;
@@ -24,6 +25,15 @@ use super::{CaptureError, CaptureOptions};
 pub enum Event {
     /// The robot is stiff and about to move.
     Started,
+    /// The arms reached the plan's arm posture (before the first move of a leg or the
+    /// head): the posture in words ([`crate::robot::arms::describe`]) and the seconds the
+    /// move took.
+    ArmsPlaced {
+        /// Where the arms are.
+        posture: String,
+        /// How long the move took (s).
+        seconds: f64,
+    },
     /// A capture was written (its id; the captures in the dataset now).
     Taken {
         /// Capture id.
@@ -64,6 +74,11 @@ impl std::fmt::Display for Event {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Event::Started => write!(f, "the robot is stiff and about to move"),
+            Event::ArmsPlaced { posture, seconds } => write!(
+                f,
+                "the arms are {posture}, out of the cameras' view and the legs' reach \
+                 (moved in {seconds:.1} s)"
+            ),
             Event::Taken { id, done } => write!(f, "capture {id} written ({done} in the dataset)"),
             Event::Unreachable { id, reason } => write!(
                 f,
@@ -229,6 +244,8 @@ impl<'a> Session<'a> {
         check_options(model, options)?;
         let already = out.len();
         let todo = out.todo(rows);
+        // One arm posture for the whole run (read_plan refuses a plan with two).
+        let arms = rows.first().map_or(ArmPosture::CAPTURE, |r| r.arms);
         let given: Vec<CameraId> = cameras.iter().map(|(c, _)| *c).collect();
         if let Some(row) = missing_camera(&todo, &given) {
             return Err(CaptureError::Options(format!(
@@ -263,7 +280,15 @@ impl<'a> Session<'a> {
         };
         // A panic on the way (a bug) still ends at rest with the stiffness ramped down.
         let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            visit(model, options, &todo, &mut drive, &mut worker, &mut log)
+            visit(
+                model,
+                options,
+                &todo,
+                &arms,
+                &mut drive,
+                &mut worker,
+                &mut log,
+            )
         }))
         .unwrap_or_else(|payload| {
             let what = payload
@@ -349,18 +374,31 @@ enum Stance {
     Unsettled(Unsettled),
 }
 
-/// Visits the rows `todo` in turn: the ramp-up, then each stance, tried again after the
-/// motors cooled (at most `hot_retries` times).
+/// Visits the rows `todo` in turn: the ramp-up, the arms to `arms` (the plan's arm
+/// posture; arms that do not get there stop the run), then each stance, tried again after
+/// the motors cooled (at most `hot_retries` times).
 fn visit(
     model: &Model,
     options: &CaptureOptions,
     todo: &[PlanRow],
+    arms: &ArmPosture,
     drive: &mut Drive,
     worker: &mut Worker,
     log: &mut Log,
 ) -> Result<(), Halt> {
     drive.ramp_up()?;
     log.tell(Event::Started);
+    match drive.move_arms(arms)? {
+        Ok(cycles) => log.tell(Event::ArmsPlaced {
+            posture: crate::robot::arms::describe(arms),
+            seconds: super::cycles_to_seconds(cycles),
+        }),
+        Err(why) => {
+            return Err(Halt::Fault(CaptureError::Safety(format!(
+                "the arms did not reach the plan's arm posture: {why}"
+            ))));
+        }
+    }
     for row in todo {
         let mut tries = 0;
         loop {
@@ -543,6 +581,7 @@ mod tests {
             side: crate::model::Side::Left,
             camera: CameraId::Lower,
             joints,
+            arms: ArmPosture::CAPTURE,
             line: id + 2,
         }
     }

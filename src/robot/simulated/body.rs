@@ -29,10 +29,12 @@ pub(super) struct Body {
 
 impl Body {
     pub(super) fn new(options: &RobotOptions) -> Body {
-        let mut pos = lola::put([0.0; JOINTS], &options.start, |q| q);
-        // Arms lying beside the body.
-        pos[2] = 1.5;
-        pos[18] = 1.5;
+        // Arms lying beside the body, as the robot is laid down.
+        let pos = crate::robot::arms::put(
+            lola::put([0.0; JOINTS], &options.start, |q| q),
+            &crate::body::ArmPosture::BESIDE_BODY,
+            |q| q,
+        );
         let mut temperature: [f64; JOINTS] = std::array::from_fn(|k| 34.0 + (k % 5) as f64);
         let overheat = options.faults.overheat.map(lola::index);
         if let Some(k) = overheat {
@@ -74,6 +76,11 @@ impl Body {
 
     pub(super) fn joints(&self) -> JointAngles {
         lola::to_joint_angles(&self.pos)
+    }
+
+    /// Where the arms are.
+    pub(super) fn arms(&self) -> crate::body::ArmPosture {
+        crate::body::ArmPosture(crate::robot::arms::indices().map(|k| self.pos[k]))
     }
 
     pub(super) fn reading(&self, k: usize) -> f32 {
@@ -249,6 +256,36 @@ mod tests {
         }
         // Dithered: the mean of the readings finds the joint between the steps.
         assert!((sum / 400.0 - body.pos[k]).abs() < 0.1 * ENCODER_STEP);
+    }
+
+    #[test]
+    fn arms_lie_beside_the_body_and_follow_their_commands_like_the_legs() {
+        use crate::body::ArmPosture;
+        let o = options();
+        let motors = motors();
+        let mut body = Body::new(&o);
+        assert_eq!(body.arms(), ArmPosture::BESIDE_BODY);
+        let k = lola::index(Joint::LKneePitch);
+        let shoulder = 18; // RShoulderPitch
+        body.command[shoulder] = 0.0;
+        for _ in 0..50 {
+            body.step(&o.model, &motors);
+        }
+        assert_eq!(
+            body.arms(),
+            ArmPosture::BESIDE_BODY,
+            "no stiffness, no motion"
+        );
+        body.stiffness[shoulder] = 1.0;
+        body.stiffness[k] = 1.0;
+        for _ in 0..100 {
+            body.step(&o.model, &motors);
+        }
+        assert!(body.pos[shoulder].abs() < 1e-3, "{}", body.pos[shoulder]);
+        assert!(
+            body.arms().0[6] == ArmPosture::BESIDE_BODY.0[6],
+            "the roll stays"
+        );
     }
 
     #[test]

@@ -103,10 +103,15 @@ pub fn snap(
     let seed = state.seed
         ^ posture.wrapping_mul(0x9E37_79B9_7F4A_7C15)
         ^ (camera as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
-    let view = options
-        .body
-        .as_ref()
-        .map(|body| crate::sim::scene::body_view(&model, body, camera, side, &joints, &truth));
+    // The body drawn with its arms where the robot holds them (a state without them: the
+    // body model's own arm posture).
+    let view = options.body.as_ref().map(|body| {
+        let mut body = *body;
+        if let Ok(arms) = <[f64; 10]>::try_from(state.arms.as_slice()) {
+            body.arms = crate::body::ArmPosture(arms);
+        }
+        crate::sim::scene::body_view(&model, &body, camera, side, &joints, &truth)
+    });
     let mut image = render::render_with(&model, &pose, view.as_ref(), options, seed)?;
     let upright = crate::robot::camera::settings::CameraSettings::defaults(camera, 0, 0).flip;
     if settings.flip != upright {
@@ -150,6 +155,7 @@ mod tests {
             cycle: 0,
             seed: 3,
             stiffness: Vec::new(),
+            arms: Vec::new(),
         };
         let mut n = 0;
         let mut snap_with = |camera, flip, manual| {
