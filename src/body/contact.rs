@@ -227,9 +227,11 @@ pub fn first_blocking<'a>(
                 .any(|&t| point_segment(c, eye, t) < r + grow(p))
         })
         .collect();
-    targets
-        .iter()
-        .find_map(|&t| near.iter().find(|p| p.shape.blocks(eye, t, grow(p))).copied())
+    targets.iter().find_map(|&t| {
+        near.iter()
+            .find(|p| p.shape.blocks(eye, t, grow(p)))
+            .copied()
+    })
 }
 
 /// The first part of the body except the sandal on `side` (whose pattern the targets are)

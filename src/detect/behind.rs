@@ -98,7 +98,7 @@ mod tests {
     }
 
     #[test]
-    fn the_toe_hides_the_column_beside_it_and_a_leg_moved_between_hides_more() {
+    fn the_toe_hides_the_first_column_of_the_papers_board_and_the_chest_a_head_pitched_down() {
         let model = Model::default();
         let body = BodyModel::default();
         let zero = [0.0; PARAMETER_COUNT];
@@ -109,25 +109,35 @@ mod tests {
         raised.set(Joint::LAnklePitch, -0.9);
         raised.set(Joint::HeadPitch, 0.4);
         raised.set(Joint::HeadYaw, 0.3);
-        let seen = hidden(&model, &body, &capture(raised), &zero);
-        // The paper's board begins under the toe: its first column is hidden, and only by
-        // the own foot; the far column is not.
-        let cols = model.board.cols();
-        for row in 0..model.board.rows() {
-            let first = seen.iter().find(|h| h.vertex == Vertex { row, col: 0 });
-            assert!(
-                first.is_some_and(|h| h.side == Some(Side::Left)),
-                "{seen:?}"
-            );
-            assert!(
-                !seen.iter().any(|h| h.vertex == Vertex { row, col: cols - 1 }),
-                "{seen:?}"
-            );
-        }
-        // A board farther out clears the toe.
+        let toe = |model: &Model| -> Vec<Vertex> {
+            hidden(model, &body, &capture(raised), &zero)
+                .into_iter()
+                .filter(|h| h.kind == Kind::Toe)
+                .map(|h| {
+                    assert_eq!(h.side, Some(Side::Left), "{h:?}");
+                    h.vertex
+                })
+                .collect()
+        };
+        // The paper's board begins under the toe: the toe hides vertices of its first
+        // column, none of the others.
+        let under = toe(&model);
+        assert!(!under.is_empty());
+        assert!(under.iter().all(|v| v.col == 0), "{under:?}");
+        // A board 9 cm farther out clears the toe.
         let mut far = model.clone();
         far.board.mount_origin[0] = 260.0;
-        let far_seen = hidden(&far, &body, &capture(raised), &zero);
-        assert!(far_seen.len() < seen.len(), "{far_seen:?} vs {seen:?}");
+        assert_eq!(toe(&far), Vec::<Vertex>::new());
+        // The camera looking down at its chest: the torso hides the board's near rows.
+        let all = hidden(&model, &body, &capture(raised), &zero);
+        assert!(all.iter().any(|h| h.kind == Kind::Torso), "{all:?}");
+        let mut up = raised;
+        up.set(Joint::HeadPitch, -0.2);
+        let fewer = hidden(&model, &body, &capture(up), &zero);
+        assert!(
+            fewer.iter().filter(|h| h.kind == Kind::Torso).count()
+                < all.iter().filter(|h| h.kind == Kind::Torso).count(),
+            "{fewer:?}"
+        );
     }
 }
