@@ -125,7 +125,7 @@ mod tests {
         assert!(!under.is_empty());
         assert!(under.iter().all(|v| v.col == 0), "{under:?}");
         // A board 9 cm farther out clears the toe.
-        let mut far = model.clone();
+        let mut far = model;
         far.board.mount_origin[0] = 260.0;
         assert_eq!(toe(&far), Vec::<Vertex>::new());
         // The camera looking down at its chest: the torso hides the board's near rows.
