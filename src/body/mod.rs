@@ -427,3 +427,22 @@ fn boxed(frame: &Pose<f64>, lo: [f64; 3], hi: [f64; 3]) -> Shape {
     let hi2 = std::array::from_fn(|k| lo[k].max(hi[k]));
     Shape::Box(OrientedBox::in_frame(frame, lo2, hi2))
 }
+
+/// A posture for tests: the legs rolled 0.15 rad out, the left one raised with its sole
+/// towards the head, the head pitched down and turned to it.
+#[cfg(test)]
+pub(crate) fn raised_left() -> JointAngles {
+    let mut j = JointAngles::default();
+    for (joint, q) in [
+        (Joint::LHipRoll, 0.15),
+        (Joint::RHipRoll, -0.15),
+        (Joint::LHipPitch, -1.2),
+        (Joint::LKneePitch, 0.3),
+        (Joint::LAnklePitch, -0.9),
+        (Joint::HeadPitch, 0.4),
+        (Joint::HeadYaw, 0.3),
+    ] {
+        j.set(joint, q);
+    }
+    j
+}

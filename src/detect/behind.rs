@@ -102,13 +102,7 @@ mod tests {
         let model = Model::default();
         let body = BodyModel::default();
         let zero = [0.0; PARAMETER_COUNT];
-        // The left leg raised, sole towards the head, the head turned to it.
-        let mut raised = crate::plan::route::rest_posture();
-        raised.set(Joint::LHipPitch, -1.2);
-        raised.set(Joint::LKneePitch, 0.3);
-        raised.set(Joint::LAnklePitch, -0.9);
-        raised.set(Joint::HeadPitch, 0.4);
-        raised.set(Joint::HeadYaw, 0.3);
+        let raised = crate::body::raised_left();
         let toe = |model: &Model| -> Vec<Vertex> {
             hidden(model, &body, &capture(raised), &zero)
                 .into_iter()
