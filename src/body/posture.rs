@@ -174,4 +174,37 @@ mod tests {
             assert!(d[0].abs() < 20.0, "{d:?}");
         }
     }
+
+    #[test]
+    fn the_arms_way_beyond_the_head_and_back_clears_the_head_and_the_floor() {
+        // Capture moves the arms in a straight line of the joint angles, the head at rest.
+        let body = BodyModel::default();
+        let head = [body.head_centre[0], 0.0, 211.5 + body.head_centre[2]];
+        let (from, to) = (ArmPosture::BESIDE_BODY.0, ArmPosture::CAPTURE.0);
+        let mut least = f64::INFINITY;
+        for k in 0..=100 {
+            let t = k as f64 / 100.0;
+            let at = ArmPosture(std::array::from_fn(|i| from[i] + t * (to[i] - from[i])));
+            for side in Side::BOTH {
+                for part in arm_parts(&body, side, &at) {
+                    // Each solid is at least MARGIN larger than its part: the parts are
+                    // apart while the solids overlap by less than both margins.
+                    let gap = part.shape.distance(head) - body.head_radius;
+                    least = least.min(gap);
+                    assert!(
+                        gap > -2.0 * BodyModel::MARGIN,
+                        "{} meets the head at t = {t} ({gap:.1} mm)",
+                        part.name()
+                    );
+                    // Nothing of the arm below the floor under the back.
+                    if let Shape::Capsule(cap) = &part.shape {
+                        let low = cap.a[0].min(cap.b[0]) - cap.radius;
+                        assert!(low > body.floor_x, "{} at t = {t}: {low}", part.name());
+                    }
+                }
+            }
+        }
+        // The closest the arms come to the head on the way, in the solids' terms.
+        assert!(least < 0.0, "{least}");
+    }
 }
