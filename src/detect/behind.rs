@@ -11,8 +11,10 @@
 //! pelvis and arms (rigid with the head but for its two joints), 10 mm for the legs'
 //! other parts. A part whose grown solid holds the camera is taken as it is.
 
+use super::saddle::{Dropped, Why};
+use super::{DetectOptions, Outcome};
 use crate::body::{BodyModel, Kind, Part, first_blocking};
-use crate::dataset::Capture;
+use crate::dataset::{Capture, Dataset};
 use crate::model::{Board, JointAngles, Model, PARAMETER_COUNT, Side, Vertex};
 
 /// How much the board's own foot and toe, the torso, pelvis and arms are grown (mm).
@@ -74,6 +76,65 @@ pub fn hidden(
             })
         })
         .collect()
+}
+
+/// `outcome` without the vertices the body model puts behind a part of the robot
+/// ([`hidden`]), each named among the dropped; rejected when fewer than
+/// [`super::guided::MIN_VERTICES`] are left. Only with the model (`use_model`) and a body
+/// ([`DetectOptions::body`]).
+pub(super) fn drop_hidden(
+    dataset: &Dataset,
+    capture: &Capture,
+    options: &DetectOptions,
+    outcome: Outcome,
+) -> Outcome {
+    let Outcome::Found {
+        mut corners,
+        order,
+        whole_image,
+        numbered,
+        mut dropped,
+    } = outcome
+    else {
+        return outcome;
+    };
+    let hidden = match &options.body {
+        Some(body) if options.use_model => {
+            hidden(&dataset.model, body, capture, &options.prediction())
+        }
+        _ => Vec::new(),
+    };
+    let before = corners.len();
+    corners.retain(|c| {
+        let Some(h) = hidden.iter().find(|h| h.vertex == c.vertex) else {
+            return true;
+        };
+        dropped.push(Dropped {
+            vertex: c.vertex,
+            pixel: c.pixel,
+            why: Why::Behind {
+                kind: h.kind,
+                side: h.side,
+            },
+        });
+        false
+    });
+    if corners.len() < super::guided::MIN_VERTICES && corners.len() < before {
+        return Outcome::Rejected {
+            reason: format!(
+                "{} of the {before} vertices found lie behind the robot's body (body model)",
+                before - corners.len()
+            ),
+        };
+    }
+    dropped.sort_by_key(|d| d.vertex);
+    Outcome::Found {
+        corners,
+        order,
+        whole_image,
+        numbered,
+        dropped,
+    }
 }
 
 /// Whether `p` is the foot or toe of the leg on `side`.

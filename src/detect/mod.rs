@@ -270,7 +270,9 @@ fn detect_image(
     let mut guided_partial = None;
     if options.use_model && options.guided && grid == board_grid(model) {
         match guided_search(dataset, capture, &grey, options, mode).map_err(cv)? {
-            Guided::Done(outcome) => return Ok(drop_hidden(dataset, capture, options, outcome)),
+            Guided::Done(outcome) => {
+                return Ok(behind::drop_hidden(dataset, capture, options, outcome));
+            }
             Guided::Partial { found, half } => {
                 search = chessboard::Search::Whole { half };
                 guided_partial = Some(found);
@@ -286,7 +288,7 @@ fn detect_image(
         (other, None) => other,
     };
     let outcome = if grid == board_grid(model) {
-        drop_hidden(dataset, capture, options, outcome)
+        behind::drop_hidden(dataset, capture, options, outcome)
     } else {
         outcome
     };
@@ -302,65 +304,6 @@ fn detect_image(
         }
     }
     Ok(outcome)
-}
-
-/// `outcome` without the vertices the body model puts behind a part of the robot
-/// ([`behind`]), each named among the dropped; rejected when fewer than
-/// [`guided::MIN_VERTICES`] are left. Only with the model (`use_model`) and a body
-/// ([`DetectOptions::body`]).
-fn drop_hidden(
-    dataset: &Dataset,
-    capture: &Capture,
-    options: &DetectOptions,
-    outcome: Outcome,
-) -> Outcome {
-    let Outcome::Found {
-        mut corners,
-        order,
-        whole_image,
-        numbered,
-        mut dropped,
-    } = outcome
-    else {
-        return outcome;
-    };
-    let hidden = match &options.body {
-        Some(body) if options.use_model => {
-            behind::hidden(&dataset.model, body, capture, &options.prediction())
-        }
-        _ => Vec::new(),
-    };
-    let before = corners.len();
-    corners.retain(|c| {
-        let Some(h) = hidden.iter().find(|h| h.vertex == c.vertex) else {
-            return true;
-        };
-        dropped.push(saddle::Dropped {
-            vertex: c.vertex,
-            pixel: c.pixel,
-            why: saddle::Why::Behind {
-                kind: h.kind,
-                side: h.side,
-            },
-        });
-        false
-    });
-    if corners.len() < guided::MIN_VERTICES && corners.len() < before {
-        return Outcome::Rejected {
-            reason: format!(
-                "{} of the {before} vertices found lie behind the robot's body (body model)",
-                before - corners.len()
-            ),
-        };
-    }
-    dropped.sort_by_key(|d| d.vertex);
-    Outcome::Found {
-        corners,
-        order,
-        whole_image,
-        numbered,
-        dropped,
-    }
 }
 
 /// What the model-guided search makes of one image.

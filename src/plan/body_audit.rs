@@ -75,7 +75,9 @@ pub fn audit(
     };
     for (k, c) in captures.iter().enumerate() {
         let posed = body.pose(&model.robot, &model.board, &c.joints);
-        if let Some(what) = body::contact(&posed, body.floor_x).or(body::head_contact(&posed)) {
+        if let Some(what) =
+            body::contact(&posed, body.floor_x).or_else(|| body::head_contact(&posed))
+        {
             out.contacts.push((k, what));
         }
         let clear = body::clearance(&posed, body.floor_x);
