@@ -16,6 +16,7 @@
 mod contact;
 pub mod posture;
 pub mod shapes;
+pub mod sight;
 
 pub use contact::{
     Clearance, clearance, collision, contact, first_blocking, head_contact, sight_blocked,
@@ -102,10 +103,15 @@ pub struct Part {
 impl Part {
     /// The part's name in messages ("left thigh", "torso").
     pub fn name(&self) -> String {
-        match self.side {
-            Some(side) => format!("{} {}", side.name(), self.kind.name()),
-            None => self.kind.name().to_string(),
-        }
+        part_name(self.kind, self.side)
+    }
+}
+
+/// A part's name in messages ("left thigh", "torso").
+pub fn part_name(kind: Kind, side: Option<Side>) -> String {
+    match side {
+        Some(side) => format!("{} {}", side.name(), kind.name()),
+        None => kind.name().to_string(),
     }
 }
 

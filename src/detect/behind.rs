@@ -5,41 +5,15 @@
 //! sees an edge that crosses a square; this sees a part that stands over the window
 //! before it pulls a vertex by less than the image can tell.
 //!
-//! The lines of sight are those of the model at the prediction's parameters, the body
-//! grown for what the parameters may be off by: 3 mm for the board's own foot and toe
-//! (rigid with the board; only the camera's place moves against them) and for the torso,
-//! pelvis and arms (rigid with the head but for its two joints), 10 mm for the legs'
-//! other parts. A part whose grown solid holds the camera is taken as it is.
+//! The prediction itself is the body model's ([`crate::body::sight`]), the one the
+//! planner makes its captures by.
 
 use super::saddle::{Dropped, Why};
 use super::{DetectOptions, Outcome};
-use crate::body::{BodyModel, Kind, Part, first_blocking};
+use crate::body::BodyModel;
+pub use crate::body::sight::{GROW_OTHER, GROW_OWN, Hidden};
 use crate::dataset::{Capture, Dataset};
-use crate::model::{Board, JointAngles, Model, PARAMETER_COUNT, Side, Vertex};
-
-/// How much the board's own foot and toe, the torso, pelvis and arms are grown (mm).
-pub const GROW_OWN: f64 = 3.0;
-/// How much the legs' other parts are grown (mm).
-pub const GROW_OTHER: f64 = 10.0;
-
-/// A vertex the body hides, with the part in front of it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Hidden {
-    /// Which vertex.
-    pub vertex: Vertex,
-    /// The part of the body in front of its window.
-    pub kind: Kind,
-    /// Its side, for a part of a leg or an arm.
-    pub side: Option<Side>,
-}
-
-/// The points of `v`'s refinement window in the board frame: the vertex and the eight
-/// points half a square from it.
-fn window(board: &Board, v: Vertex) -> impl Iterator<Item = [f64; 3]> {
-    let [x, y, _] = board.vertex_position(v);
-    let h = board.square / 2.0;
-    (-1..=1).flat_map(move |i| (-1..=1).map(move |j| [x + i as f64 * h, y + j as f64 * h, 0.0]))
-}
+use crate::model::{Model, PARAMETER_COUNT};
 
 /// The vertices of `capture`'s board that `body` hides from its camera, predicted with the
 /// parameters `params` (the logged angles plus their offsets pose the body).
@@ -49,33 +23,14 @@ pub fn hidden(
     capture: &Capture,
     params: &[f64; PARAMETER_COUNT],
 ) -> Vec<Hidden> {
-    let joints = JointAngles::from_fn(|j| capture.joints.get(j) + params[j.offset().index()]);
-    let chains = model.chains_for(capture.camera, capture.side, &capture.joints);
-    let eye = chains.camera.eval(params).translation;
-    let board = chains.board.eval(params);
-    let posed = body.pose(&model.robot, &model.board, &joints);
-    let side = capture.side;
-    let grow = |p: &Part| {
-        let g = if own_foot(p, side) || !p.kind.is_leg() {
-            GROW_OWN
-        } else {
-            GROW_OTHER
-        };
-        if p.shape.distance(eye) <= g { 0.0 } else { g }
-    };
-    let carrier = |p: &Part| p.kind == Kind::Sandal && p.side == Some(side);
-    model
-        .board
-        .vertices()
-        .filter_map(|v| {
-            let targets: Vec<[f64; 3]> = window(&model.board, v).map(|p| board.apply(&p)).collect();
-            first_blocking(&posed, eye, &targets, grow, carrier).map(|part| Hidden {
-                vertex: v,
-                kind: part.kind,
-                side: part.side,
-            })
-        })
-        .collect()
+    crate::body::sight::hidden(
+        model,
+        body,
+        capture.camera,
+        capture.side,
+        &capture.joints,
+        params,
+    )
 }
 
 /// `outcome` without the vertices the body model puts behind a part of the robot
@@ -137,15 +92,11 @@ pub(super) fn drop_hidden(
     }
 }
 
-/// Whether `p` is the foot or toe of the leg on `side`.
-fn own_foot(p: &Part, side: Side) -> bool {
-    p.side == Some(side) && matches!(p.kind, Kind::Foot | Kind::Toe)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::{CameraId, Joint};
+    use crate::body::Kind;
+    use crate::model::{CameraId, Joint, JointAngles, Side, Vertex};
 
     fn capture(joints: JointAngles) -> Capture {
         Capture {

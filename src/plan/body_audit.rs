@@ -33,6 +33,9 @@ pub struct BodyAudit {
     pub hidden: Vec<HiddenBoard>,
     /// Inner vertices over all captures.
     pub vertices: usize,
+    /// The vertices whose refinement window the body leaves in plain sight, its parts grown
+    /// for the offsets ([`body::sight`]; what `detect --body` keeps), over all captures.
+    pub planned: usize,
 }
 
 impl BodyAudit {
@@ -72,6 +75,7 @@ pub fn audit(
         contacts: Vec::new(),
         hidden: Vec::new(),
         vertices: 0,
+        planned: 0,
     };
     for (k, c) in captures.iter().enumerate() {
         let posed = body.pose(&model.robot, &model.board, &c.joints);
@@ -84,6 +88,8 @@ pub fn audit(
         if out.clearance.as_ref().is_none_or(|(_, b)| clear.mm < b.mm) {
             out.clearance = Some((k, clear));
         }
+        out.planned +=
+            body::sight::in_sight(model, body, c.camera, c.side, &c.joints, centre).len();
         let chains = model.chains_for(c.camera, c.side, &c.joints);
         let eye = chains.camera.eval(centre).translation;
         let board = chains.board.eval(centre);

@@ -213,7 +213,10 @@ pub fn body_lines(audit: &BodyAudit) -> String {
         .collect();
     let _ = writeln!(
         out,
-        "body model: {hidden} of {} planned vertices hidden by the body on {} boards{}",
+        "body model: {} of {} planned vertices have their window in plain sight past the \
+         body (parts grown 3–10 mm for the offsets); {hidden} lie behind the body as it is, \
+         on {} boards{}",
+        audit.planned,
         audit.vertices,
         audit.hidden.len(),
         if parts.is_empty() {

@@ -1,0 +1,228 @@
+//! Which inner vertices of a board the body leaves in plain sight of the camera: a vertex
+//! counts only when its refinement window (the squares around it, to half a square either
+//! way) is in line of sight past every part of the body. The one prediction the planner
+//! (the vertices a capture is planned for) and detection (the vertices it drops as
+//! behind the body) both make.
+//!
+//! The lines of sight are those of the model at the given parameters, the body grown for
+//! what the parameters may be off by: 3 mm for the board's own foot and toe (rigid with
+//! the board; only the camera's place moves against them) and for the torso, pelvis and
+//! arms (rigid with the head but for its two joints), 10 mm for the legs' other parts. A
+//! part whose grown solid holds the camera is taken as it is. The sandal that carries the
+//! pattern is left out (the pattern is its top face).
+
+use super::shapes::{dot, norm, sub};
+use super::{BodyModel, Kind, Part};
+use crate::model::{Board, CameraId, JointAngles, Model, PARAMETER_COUNT, Side, Vertex};
+
+/// How much the board's own foot and toe, the torso, pelvis and arms are grown (mm).
+pub const GROW_OWN: f64 = 3.0;
+/// How much the legs' other parts are grown (mm).
+pub const GROW_OTHER: f64 = 10.0;
+
+/// A vertex the body hides, with the part in front of it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hidden {
+    /// Which vertex.
+    pub vertex: Vertex,
+    /// The part of the body in front of its window.
+    pub kind: Kind,
+    /// Its side, for a part of a leg or an arm.
+    pub side: Option<Side>,
+}
+
+impl Hidden {
+    /// The part's name ("left toe").
+    pub fn by(&self) -> String {
+        super::part_name(self.kind, self.side)
+    }
+}
+
+/// The points of `v`'s refinement window in the board frame: the vertex and the eight
+/// points half a square from it.
+pub fn window(board: &Board, v: Vertex) -> impl Iterator<Item = [f64; 3]> {
+    let [x, y, _] = board.vertex_position(v);
+    let h = board.square / 2.0;
+    (-1..=1).flat_map(move |i| (-1..=1).map(move |j| [x + i as f64 * h, y + j as f64 * h, 0.0]))
+}
+
+/// The vertices of the board of leg `side` that `body` hides from `camera` at the logged
+/// angles `logged`, predicted with the parameters `params` (the logged angles plus their
+/// offsets pose the body).
+pub fn hidden(
+    model: &Model,
+    body: &BodyModel,
+    camera: CameraId,
+    side: Side,
+    logged: &JointAngles,
+    params: &[f64; PARAMETER_COUNT],
+) -> Vec<Hidden> {
+    let joints = JointAngles::from_fn(|j| logged.get(j) + params[j.offset().index()]);
+    let chains = model.chains_for(camera, side, logged);
+    let eye = chains.camera.eval(params).translation;
+    let board = chains.board.eval(params);
+    let posed = body.pose(&model.robot, &model.board, &joints);
+    // The windows overlap: the lattice at half a square over the inner squares holds every
+    // window's points, each tested once.
+    let b = &model.board;
+    let (nx, ny) = (2 * b.cols() + 1, 2 * b.rows() + 1);
+    let first = b.vertex_position(Vertex { row: 0, col: 0 });
+    let h = b.square / 2.0;
+    let lattice: Vec<[f64; 3]> = (0..ny)
+        .flat_map(|j| (0..nx).map(move |i| (i, j)))
+        .map(|(i, j)| {
+            board.apply(&[
+                first[0] + (i as f64 - 1.0) * h,
+                first[1] + (j as f64 - 1.0) * h,
+                0.0,
+            ])
+        })
+        .collect();
+    // The parts that may stand in the way, each with its growth: not the head, not the
+    // sandal carrying the pattern, only those whose bounding sphere reaches the lines of
+    // sight to the lattice's corners' hull (the lines to any lattice point lie in the cone
+    // over the lattice's bounding sphere).
+    let (centre, reach) = bounding_sphere(&lattice);
+    let near: Vec<(&Part, f64)> = posed
+        .parts
+        .iter()
+        .filter(|p| p.kind != Kind::Head && !(p.kind == Kind::Sandal && p.side == Some(side)))
+        .map(|p| {
+            let g = if own_foot(p, side) || !p.kind.is_leg() {
+                GROW_OWN
+            } else {
+                GROW_OTHER
+            };
+            (p, if p.shape.distance(eye) <= g { 0.0 } else { g })
+        })
+        .filter(|(p, g)| {
+            let (c, r) = p.shape.bounds();
+            in_cone(eye, centre, reach, c, r + g)
+        })
+        .collect();
+    let blocked: Vec<Option<&Part>> = lattice
+        .iter()
+        .map(|&t| {
+            near.iter()
+                .find(|(p, g)| p.shape.blocks(eye, t, *g))
+                .map(|(p, _)| *p)
+        })
+        .collect();
+    b.vertices()
+        .filter_map(|v| {
+            let (i0, j0) = (2 * v.col as usize, 2 * v.row as usize);
+            (0..3)
+                .flat_map(|dj| (0..3).map(move |di| (j0 + dj) * nx as usize + i0 + di))
+                .find_map(|k| blocked[k])
+                .map(|part| Hidden {
+                    vertex: v,
+                    kind: part.kind,
+                    side: part.side,
+                })
+        })
+        .collect()
+}
+
+/// The centre and radius of a sphere holding `points` (their centroid and the farthest).
+fn bounding_sphere(points: &[[f64; 3]]) -> ([f64; 3], f64) {
+    let n = points.len().max(1) as f64;
+    let c: [f64; 3] = std::array::from_fn(|k| points.iter().map(|p| p[k]).sum::<f64>() / n);
+    let r = points.iter().map(|p| norm(sub(*p, c))).fold(0.0, f64::max);
+    (c, r)
+}
+
+/// Whether the ball `(c, r)` may meet a segment from `eye` to a point of the ball
+/// `(centre, reach)`: a point of such a segment at parameter `t` lies within `t·reach` of
+/// the segment from `eye` to `centre` at the same `t`.
+fn in_cone(eye: [f64; 3], centre: [f64; 3], reach: f64, c: [f64; 3], r: f64) -> bool {
+    let axis = sub(centre, eye);
+    let l2 = dot(axis, axis);
+    let t = if l2 < 1e-12 {
+        0.0
+    } else {
+        (dot(sub(c, eye), axis) / l2).clamp(0.0, 1.0)
+    };
+    let q: [f64; 3] = std::array::from_fn(|k| eye[k] + t * axis[k]);
+    norm(sub(c, q)) < r + reach
+}
+
+/// The inner vertices [`hidden`] leaves in plain sight, row by row.
+pub fn in_sight(
+    model: &Model,
+    body: &BodyModel,
+    camera: CameraId,
+    side: Side,
+    logged: &JointAngles,
+    params: &[f64; PARAMETER_COUNT],
+) -> Vec<Vertex> {
+    let hidden = hidden(model, body, camera, side, logged, params);
+    model
+        .board
+        .vertices()
+        .filter(|v| !hidden.iter().any(|h| h.vertex == *v))
+        .collect()
+}
+
+/// Whether `p` is the foot or toe of the leg on `side`.
+fn own_foot(p: &Part, side: Side) -> bool {
+    p.side == Some(side) && matches!(p.kind, Kind::Foot | Kind::Toe)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::body::first_blocking;
+    use crate::model::Joint;
+
+    /// The shared lattice and the cone around it find, vertex by vertex, what testing each
+    /// window's nine lines of sight against every part finds.
+    #[test]
+    fn the_lattice_finds_what_each_window_tested_alone_finds() {
+        let model = Model::default();
+        let body = BodyModel::default();
+        let params = [0.0; PARAMETER_COUNT];
+        let mut some_hidden = 0;
+        let mut some_clear = 0;
+        for (k, pitch) in [-1.4, -1.2, -0.9, -0.6].into_iter().enumerate() {
+            let mut joints = crate::body::raised_left();
+            joints.set(Joint::LHipPitch, pitch);
+            joints.set(Joint::LKneePitch, 0.2 * k as f64);
+            for camera in [CameraId::Lower, CameraId::Upper] {
+                let found = hidden(&model, &body, camera, Side::Left, &joints, &params);
+                let chains = model.chains_for(camera, Side::Left, &joints);
+                let eye = chains.camera.eval(&params).translation;
+                let board = chains.board.eval(&params);
+                let posed = body.pose(&model.robot, &model.board, &joints);
+                let grow = |p: &Part| {
+                    let g = if own_foot(p, Side::Left) || !p.kind.is_leg() {
+                        GROW_OWN
+                    } else {
+                        GROW_OTHER
+                    };
+                    if p.shape.distance(eye) <= g { 0.0 } else { g }
+                };
+                let carrier = |p: &Part| p.kind == Kind::Sandal && p.side == Some(Side::Left);
+                for v in model.board.vertices() {
+                    let targets: Vec<[f64; 3]> =
+                        window(&model.board, v).map(|p| board.apply(&p)).collect();
+                    let alone = first_blocking(&posed, eye, &targets, grow, carrier);
+                    let shared = found.iter().find(|h| h.vertex == v);
+                    assert_eq!(
+                        alone.is_some(),
+                        shared.is_some(),
+                        "{camera:?} {pitch} {v:?}"
+                    );
+                    if alone.is_some() {
+                        some_hidden += 1;
+                    } else {
+                        some_clear += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            some_hidden > 10 && some_clear > 10,
+            "{some_hidden} {some_clear}"
+        );
+    }
+}
