@@ -1,6 +1,6 @@
 //! However capture ends, the robot ends limp: capture killed by SIGKILL in every phase of a
-//! run (the stiffness ramp-up, a move, a stance settled, a picture under way, the
-//! ramp-down) leaves the simulated robot to the rest guard, which takes it to rest and
+//! run (the stiffness ramp-up, the arms on their way beyond the head, a move, a stance
+//! settled, a picture under way, the ramp-down) leaves the simulated robot to the rest guard, which takes it to rest and
 //! ramps its stiffness to 0 within 2 s; a picture whose header claims an enormous size is
 //! refused unread (no abort), and the run stops at rest.
 
@@ -22,6 +22,7 @@ use crate::util::{assert_clean_failure, stderr};
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Phase {
     RampUp,
+    ArmsMoving,
     Moving,
     Settled,
     Picture,
@@ -33,6 +34,8 @@ enum Phase {
 struct Seen {
     stiffness: f64,
     joints: JointAngles,
+    /// The arm joints, in `body::ARM_JOINTS` order.
+    arms: Vec<f64>,
     pictures: usize,
     captures: usize,
 }
@@ -53,20 +56,42 @@ fn look(b: &Bench) -> Option<Seen> {
     Some(Seen {
         stiffness,
         joints,
+        arms: state.arms,
         pictures,
         captures,
     })
 }
 
 /// Whether the run is in `phase` (stance `target`, its picture the second one begun; the
-/// first is the one checked before anything moves).
-fn in_phase(phase: Phase, s: &Seen, start: &JointAngles, target: &JointAngles) -> bool {
+/// first is the one checked before anything moves; `start` the legs' and head's posture
+/// and `arms` the arms' when the run began).
+fn in_phase(
+    phase: Phase,
+    s: &Seen,
+    (start, arms): (&JointAngles, &[f64]),
+    target: &JointAngles,
+) -> bool {
     let top = MotionOptions::default().stiffness;
     let off = |a: &JointAngles, b: &JointAngles| {
         (*a - *b).iter().map(|(_, d)| d.abs()).fold(0.0, f64::max)
     };
     match phase {
         Phase::RampUp => s.pictures == 1 && s.stiffness > 0.2 && s.stiffness < 0.6,
+        // Stiff, the arms a good way from where they lay and not yet there, the legs not
+        // yet moved.
+        Phase::ArmsMoving => {
+            let moved = s
+                .arms
+                .iter()
+                .zip(arms)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            s.pictures == 1
+                && s.stiffness > top - 1e-3
+                && moved > 0.3
+                && moved < 1.0
+                && off(&s.joints, start) < 0.01
+        }
         Phase::Moving => {
             s.pictures == 1 && s.stiffness > top - 1e-3 && off(&s.joints, start) > 0.05
         }
@@ -98,16 +123,16 @@ fn kill_in(phase: Phase) -> (Output, Vec<RecordRow>, PlannedCapture) {
         .spawn()
         .unwrap();
     let began = Instant::now();
-    let start = loop {
+    let (start, arms) = loop {
         if let Some(s) = look(&b) {
-            break s.joints;
+            break (s.joints, s.arms);
         }
         assert!(began.elapsed() < Duration::from_secs(60), "no state");
         std::thread::sleep(Duration::from_millis(5));
     };
     loop {
         if let Some(s) = look(&b)
-            && in_phase(phase, &s, &start, &row.joints)
+            && in_phase(phase, &s, (&start, &arms), &row.joints)
         {
             break;
         }
@@ -196,6 +221,18 @@ fn check_guard(phase: Phase, record: &[RecordRow]) {
             );
         }
     }
+    // The arms stay where they were read, wherever capture left them (limp, they lie
+    // on the floor).
+    for k in naocalib::robot::arms::indices() {
+        for r in &guard {
+            assert!(
+                (r.position[k] - first.position[k]).abs() < 1e-9,
+                "{phase:?}: cycle {}: the guard moved {}",
+                r.cycle,
+                lola::JOINT_NAMES[k]
+            );
+        }
+    }
     for w in guard.windows(2) {
         for k in 0..JOINTS {
             assert!(
@@ -252,6 +289,7 @@ fn check_guard(phase: Phase, record: &[RecordRow]) {
 fn capture_killed_in_any_phase_leaves_the_robot_at_rest_and_limp_within_2_s() {
     for phase in [
         Phase::RampUp,
+        Phase::ArmsMoving,
         Phase::Moving,
         Phase::Settled,
         Phase::Picture,
