@@ -19,7 +19,7 @@ use crate::body::{ARM_JOINTS, ArmPosture};
 
 use super::lola::{self, JOINTS, SensorMessage};
 use super::motion::MotionOptions;
-use super::safety::SafetyLimits;
+use super::safety::{SafetyLimits, Watch};
 
 /// Within this (rad, 5°) of a named posture in every arm joint, the arms are said to be in
 /// it ([`describe`]).
@@ -123,47 +123,30 @@ pub fn outside_limits(arms: &ArmPosture) -> Option<(usize, String)> {
 /// pause: an arm motor that heats up stops the run.
 #[derive(Debug, Clone, Default)]
 pub struct ArmWatch {
-    over_current: u32,
+    motors: Watch,
 }
 
 impl ArmWatch {
     /// Checks one message: why the run stops, naming the joint.
     pub fn check(&mut self, limits: &SafetyLimits, m: &SensorMessage) -> Result<(), String> {
-        let mut over = false;
-        for (name, k) in ARM_JOINTS.iter().zip(indices()) {
-            let (t, a, status) = (
-                f64::from(m.temperature[k]),
-                f64::from(m.current[k]),
-                m.status[k],
-            );
-            if !t.is_finite() || !a.is_finite() {
-                return Err(format!(
-                    "{name} reports a temperature of {t} and a current of {a}: its limits \
-                     cannot be watched"
-                ));
-            }
-            if t >= limits.stop_temperature {
-                return Err(format!(
-                    "{name} reached {t:.1} °C (limit {:.0} °C)",
-                    limits.stop_temperature
-                ));
-            }
-            if status >= limits.body.stop_status {
-                return Err(format!(
-                    "{name} reports status {status} (the firmware reduces its stiffness)"
-                ));
-            }
-            if a.abs() > limits.max_current {
-                over = true;
-                if self.over_current + 1 >= limits.current_cycles {
-                    return Err(format!(
-                        "{name} drew {a:.2} A for {} cycles (limit {:.2} A)",
-                        limits.current_cycles, limits.max_current
-                    ));
-                }
-            }
+        let arms = indices();
+        let verdict = self.motors.check_motors(limits, m, &arms);
+        let name = |k: usize| lola::JOINT_NAMES[k].to_string();
+        if let Some(why) = verdict.stops(limits, name) {
+            return Err(why);
         }
-        self.over_current = if over { self.over_current + 1 } else { 0 };
+        // No pause for the arms, but a status at the stop level stops the run (a hot arm
+        // motor above pauses nothing and hides no status).
+        let (k, status) = arms
+            .iter()
+            .map(|&k| (k, m.status[k]))
+            .fold((arms[0], i32::MIN), |a, b| if b.1 > a.1 { b } else { a });
+        if status >= limits.body.stop_status {
+            return Err(format!(
+                "{} reports status {status} (the firmware reduces its stiffness)",
+                name(k)
+            ));
+        }
         Ok(())
     }
 }

@@ -52,24 +52,62 @@ impl Default for SafetyLimits {
     }
 }
 
-/// What the watch concludes from one message.
+/// What the watch concludes from one message, the motor named by `M`: the head's or a
+/// leg's [`Joint`], or a LoLA index for the arms.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Verdict {
+pub enum Verdict<M = Joint> {
     /// Everything within the limits.
     Fine,
-    /// A motor is hot: pause at rest until it cools (the joint, °C).
-    Hot(Joint, f64),
+    /// A motor is hot: pause at rest until it cools (the motor, °C).
+    Hot(M, f64),
     /// A motor's status says the firmware starts reducing its stiffness (status 1, nao_lola
-    /// `JointStatuses.msg` line 3): pause at rest until it is 0 (the joint, its status, its
+    /// `JointStatuses.msg` line 3): pause at rest until it is 0 (the motor, its status, its
     /// temperature in °C, which may well be low).
-    Status(Joint, i32, f64),
-    /// Stop the run: too hot (the joint, °C).
-    Overheated(Joint, f64),
-    /// Stop the run: a motor drew too much current for too long (the joint, A).
-    Overcurrent(Joint, f64),
+    Status(M, i32, f64),
+    /// Stop the run: too hot (the motor, °C).
+    Overheated(M, f64),
+    /// Stop the run: a motor drew too much current for too long (the motor, A).
+    Overcurrent(M, f64),
     /// Stop the run: a motor's temperature or current is not a number, so the limits
-    /// above cannot be checked (the joint, `temperature` or `current`, the value).
-    Unreadable(Joint, &'static str, f64),
+    /// above cannot be checked (the motor, `temperature` or `current`, the value).
+    Unreadable(M, &'static str, f64),
+}
+
+impl<M: Copy> Verdict<M> {
+    /// The verdict with its motor renamed by `f`.
+    pub fn map<N>(self, f: impl Fn(M) -> N) -> Verdict<N> {
+        match self {
+            Verdict::Fine => Verdict::Fine,
+            Verdict::Hot(m, t) => Verdict::Hot(f(m), t),
+            Verdict::Status(m, s, t) => Verdict::Status(f(m), s, t),
+            Verdict::Overheated(m, t) => Verdict::Overheated(f(m), t),
+            Verdict::Overcurrent(m, a) => Verdict::Overcurrent(f(m), a),
+            Verdict::Unreadable(m, what, v) => Verdict::Unreadable(f(m), what, v),
+        }
+    }
+
+    /// Why the run stops, the motor named by `name`, or `None` when the verdict does not
+    /// stop it (fine, or a pause).
+    pub fn stops(&self, limits: &SafetyLimits, name: impl Fn(M) -> String) -> Option<String> {
+        match *self {
+            Verdict::Overheated(m, t) => Some(format!(
+                "{} reached {t:.1} °C (limit {:.0} °C)",
+                name(m),
+                limits.stop_temperature
+            )),
+            Verdict::Overcurrent(m, a) => Some(format!(
+                "{} drew {a:.2} A for {} cycles (limit {:.2} A)",
+                name(m),
+                limits.current_cycles,
+                limits.max_current
+            )),
+            Verdict::Unreadable(m, what, value) => Some(format!(
+                "{} reports a {what} of {value}: its limits cannot be watched",
+                name(m)
+            )),
+            Verdict::Fine | Verdict::Hot(..) | Verdict::Status(..) => None,
+        }
+    }
 }
 
 /// The motor watch, one message per cycle.
@@ -118,41 +156,68 @@ impl SafetyLimits {
 }
 
 impl Watch {
-    /// Checks one message against `limits`.
+    /// Checks one message's head and leg motors against `limits`.
     pub fn check(&mut self, limits: &SafetyLimits, message: &SensorMessage) -> Verdict {
-        let temperatures = lola::to_joint_angles(&message.temperature);
-        let currents = lola::to_joint_angles(&message.current);
-        for ((j, t), (_, a)) in temperatures.iter().zip(currents.iter()) {
-            for (what, value) in [("temperature", t), ("current", a)] {
+        let motors = Joint::ALL.map(lola::index);
+        self.check_motors(limits, message, &motors).map(|k| {
+            Joint::ALL
+                .into_iter()
+                .find(|&j| lola::index(j) == k)
+                .expect("a head or leg motor")
+        })
+    }
+
+    /// Checks one message's `motors` (LoLA indices) against `limits`: a reading that is not
+    /// a number, then the hottest, a current over the limit for its cycles, a motor hot
+    /// enough to pause, the worst status.
+    pub fn check_motors(
+        &mut self,
+        limits: &SafetyLimits,
+        message: &SensorMessage,
+        motors: &[usize],
+    ) -> Verdict<usize> {
+        if motors.is_empty() {
+            return Verdict::Fine;
+        }
+        let reading = |values: &[f32; lola::JOINTS], k: usize| f64::from(values[k]);
+        for &k in motors {
+            for (what, values) in [
+                ("temperature", &message.temperature),
+                ("current", &message.current),
+            ] {
+                let value = reading(values, k);
                 if !value.is_finite() {
-                    return Verdict::Unreadable(j, what, value);
+                    return Verdict::Unreadable(k, what, value);
                 }
             }
         }
-        let (joint, temperature) = SafetyLimits::hottest(message);
+        let most = |value: &dyn Fn(usize) -> f64| {
+            motors
+                .iter()
+                .map(|&k| (k, value(k)))
+                .fold((motors[0], f64::NEG_INFINITY), |a, b| {
+                    if b.1 > a.1 { b } else { a }
+                })
+        };
+        let (hottest, temperature) = most(&|k| reading(&message.temperature, k));
         if temperature >= limits.stop_temperature {
-            return Verdict::Overheated(joint, temperature);
+            return Verdict::Overheated(hottest, temperature);
         }
-        let (cjoint, current) = currents.iter().map(|(j, a)| (j, a.abs())).fold(
-            (Joint::HeadYaw, f64::NEG_INFINITY),
-            |a, b| {
-                if b.1 > a.1 { b } else { a }
-            },
-        );
+        let (pulling, current) = most(&|k| reading(&message.current, k).abs());
         if current > limits.max_current {
             self.over_current += 1;
             if self.over_current >= limits.current_cycles {
-                return Verdict::Overcurrent(cjoint, current);
+                return Verdict::Overcurrent(pulling, current);
             }
         } else {
             self.over_current = 0;
         }
         if temperature >= limits.pause_temperature {
-            return Verdict::Hot(joint, temperature);
+            return Verdict::Hot(hottest, temperature);
         }
-        let (sjoint, status) = worst_status(message);
-        if status >= 1 {
-            return Verdict::Status(sjoint, status, temperatures.get(sjoint));
+        let (worst, status) = most(&|k| f64::from(message.status[k]));
+        if status >= 1.0 {
+            return Verdict::Status(worst, status as i32, reading(&message.temperature, worst));
         }
         Verdict::Fine
     }

@@ -140,26 +140,11 @@ impl<'a> Drive<'a> {
             Verdict::Fine => self.hot = None,
             Verdict::Hot(j, t) => self.hot = Some((j, t, 0)),
             Verdict::Status(j, status, t) => self.hot = Some((j, t, status)),
-            Verdict::Overheated(j, t) => {
-                return Err(Halt::Fault(CaptureError::Safety(format!(
-                    "{} reached {t:.1} °C (limit {:.0} °C)",
-                    j.name(),
-                    self.options.safety.stop_temperature
-                ))));
-            }
-            Verdict::Overcurrent(j, a) => {
-                return Err(Halt::Fault(CaptureError::Safety(format!(
-                    "{} drew {a:.2} A for {} cycles (limit {:.2} A)",
-                    j.name(),
-                    self.options.safety.current_cycles,
-                    self.options.safety.max_current
-                ))));
-            }
-            Verdict::Unreadable(j, what, value) => {
-                return Err(Halt::Fault(CaptureError::Safety(format!(
-                    "{} reports a {what} of {value}: its limits cannot be watched",
-                    j.name()
-                ))));
+            stop => {
+                let name = |j: crate::model::Joint| j.name().to_string();
+                if let Some(why) = stop.stops(&self.options.safety, name) {
+                    return Err(Halt::Fault(CaptureError::Safety(why)));
+                }
             }
         }
         let arms_stiff = arms::indices().iter().any(|&k| self.stiffness[k] > 0.0);
