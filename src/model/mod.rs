@@ -23,7 +23,7 @@ pub use parameters::{
     Unit,
 };
 pub use pose::{Axis, Pose};
-pub use robot::{JOINT_COUNT, Joint, JointAngles, RobotGeometry, Side};
+pub use robot::{JOINT_COUNT, Joint, JointAngles, RobotGeometry, Side, head_pitch_limits};
 pub use scalar::Scalar;
 
 /// Everything fixed about one robot and its sandals: geometry, camera intrinsics, board.

@@ -170,6 +170,43 @@ impl Joint {
     }
 }
 
+/// The NAO documentation's head anti-collision limits: HeadPitch range (deg) by HeadYaw
+/// (deg) (the head must not hit the shoulders), interpolated linearly between rows. The
+/// same table, in radians, is B-Human's `Config/Robots/Default/headLimits.cfg` lines 2–4
+/// (`intervals`, `lowerBounds`, `upperBounds`; BHumanCodeRelease d89d603f), which
+/// `HeadLimits::getTiltBound` (`Src/Representations/Configuration/HeadLimits.cpp` lines
+/// 15–42) interpolates linearly between rows as here.
+const HEAD_PITCH_BY_YAW: [(f64, f64, f64); 13] = [
+    (-119.52, -25.73, 18.91),
+    (-87.49, -18.91, 11.46),
+    (-62.45, -24.64, 17.19),
+    (-51.74, -27.50, 18.91),
+    (-43.32, -31.40, 21.20),
+    (-27.85, -38.50, 24.18),
+    (0.0, -38.50, 29.51),
+    (27.85, -38.50, 24.18),
+    (43.32, -31.40, 21.20),
+    (51.74, -27.50, 18.91),
+    (62.45, -24.64, 17.19),
+    (87.49, -18.91, 11.46),
+    (119.52, -25.73, 18.91),
+];
+
+/// The HeadPitch range (rad) allowed at HeadYaw `yaw` (rad).
+pub fn head_pitch_limits(yaw: f64) -> (f64, f64) {
+    let y = yaw.to_degrees().clamp(-119.52, 119.52);
+    let k = HEAD_PITCH_BY_YAW
+        .windows(2)
+        .position(|w| y <= w[1].0)
+        .unwrap_or(HEAD_PITCH_BY_YAW.len() - 2);
+    let (a, b) = (HEAD_PITCH_BY_YAW[k], HEAD_PITCH_BY_YAW[k + 1]);
+    let t = (y - a.0) / (b.0 - a.0);
+    (
+        (a.1 + t * (b.1 - a.1)).to_radians(),
+        (a.2 + t * (b.2 - a.2)).to_radians(),
+    )
+}
+
 /// The measured angles of every joint of one capture, in radians.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct JointAngles(pub [f64; JOINT_COUNT]);

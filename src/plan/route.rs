@@ -16,7 +16,7 @@
 //! the rest posture.
 
 use super::collision::{self, BodyModel};
-use super::feasible::head_pitch_limits;
+use crate::model::head_pitch_limits;
 use crate::model::{Joint, JointAngles, Model, Side};
 
 /// Largest step of any joint between two collision checks along a move (rad).

@@ -173,12 +173,19 @@ impl SimRequest {
         let Some(path) = &self.stance_file else {
             return Ok((None, Vec::new()));
         };
-        let plan = crate::plan::read_csv(path)?;
+        // A plan has the columns of captures.csv without `image` (`plan::render_csv`).
+        let plan = crate::dataset::read_captures(path)?;
         if plan.is_empty() {
             return Err(SimRequestError::EmptyPlan(path.clone()));
         }
-        let (stances, cameras) = crate::plan::to_schedule(&plan);
-        Ok((Some(stances), cameras))
+        let stances = plan
+            .iter()
+            .map(|c| Stance {
+                side: c.side,
+                postures: vec![c.joints],
+            })
+            .collect();
+        Ok((Some(stances), plan.iter().map(|c| c.camera).collect()))
     }
 
     /// The simulated robot's model: the camera preset with the distortion, and the same

@@ -8,9 +8,9 @@ use std::path::Path;
 
 use crate::body::{ARM_JOINTS, ArmPosture};
 use crate::dataset::{self, DatasetError, Location};
+use crate::model::head_pitch_limits;
 use crate::model::{CameraId, Joint, JointAngles, Model, Side};
 use crate::plan::collision::{self, BodyModel};
-use crate::plan::feasible::head_pitch_limits;
 use crate::plan::route;
 
 use super::{CaptureError, CaptureOptions};
