@@ -122,6 +122,27 @@ pub fn estimate(
     Some(estimate_from(&at, fitted, given))
 }
 
+/// `problem` whitened by the noise model estimated from its residuals at the point of `at`
+/// (`given` levels taken as given), started there, with the levels; `None` when the
+/// residuals are zero (a noise-free fit has nothing to weight by).
+pub fn whiten(
+    problem: &Problem,
+    at: &Linearisation,
+    given: NoiseOptions,
+) -> Option<(Problem, NoiseLevels)> {
+    let fitted = problem.free().len();
+    let (levels, captures) = estimate_from(at, fitted, given);
+    if !(levels.px > 0.0 && levels.px.is_finite()) {
+        return None;
+    }
+    let mut weighted = problem.clone();
+    weighted.initial = *at.values();
+    for (term, cn) in weighted.captures.iter_mut().zip(captures) {
+        term.whitening = Some(cn.into_whitening(levels));
+    }
+    Some((weighted, levels))
+}
+
 /// [`estimate`] from a linearisation at the solution that differentiates by every joint
 /// offset ([`joint_offsets`]), among other parameters.
 pub fn estimate_from(

@@ -3,7 +3,6 @@
 //! (the noise model's first round, which [`super::weighting`] reuses) (docs/MODEL.md §11,
 //! "Two weightings" and "When the plain test already decides").
 
-use super::weighting::whiten;
 use super::{Point, Points, UncertaintyOptions};
 use crate::model::PARAMETER_COUNT;
 use crate::solve::backend::{Fit, fit};
@@ -62,7 +61,7 @@ pub(super) fn misfit_tests(
         }
     }
     let whitened = if options.noise_model {
-        whiten(points.problem, &plain.at, options)
+        noise::whiten(points.problem, &plain.at, options.noise)
     } else {
         None
     };

@@ -4,7 +4,6 @@
 use super::screening::Screened;
 use super::{Point, Points, UncertaintyOptions};
 use crate::solve::backend::fit;
-use crate::solve::jacobian::Linearisation;
 use crate::solve::{Backend, Misfit, Problem, SolveError, misfit, noise};
 
 /// The whitened fit may not end with an RMS (u and v together) beyond this multiple of the
@@ -72,7 +71,7 @@ pub(super) fn weigh(
     let start = match whitened {
         Some(w) => Some(w),
         None if options.noise_model && flagged && !implausible => {
-            whiten(points.problem, &plain.at, options)
+            noise::whiten(points.problem, &plain.at, options.noise)
         }
         None => None,
     };
@@ -150,27 +149,6 @@ fn keep_noise_model(
     }
 }
 
-/// `problem` whitened by the noise model estimated from its residuals at the point of `at`,
-/// started there, with the levels; `None` when the residuals are zero (a noise-free fit
-/// has nothing to weight by).
-pub(super) fn whiten(
-    problem: &Problem,
-    at: &Linearisation,
-    options: &UncertaintyOptions,
-) -> Option<(Problem, noise::NoiseLevels)> {
-    let fitted = problem.free().len();
-    let (levels, captures) = noise::estimate_from(at, fitted, options.noise);
-    if !(levels.px > 0.0 && levels.px.is_finite()) {
-        return None;
-    }
-    let mut weighted = problem.clone();
-    weighted.initial = *at.values();
-    for (term, cn) in weighted.captures.iter_mut().zip(captures) {
-        term.whitening = Some(cn.into_whitening(levels));
-    }
-    Some((weighted, levels))
-}
-
 /// The noise model from the first whitening (estimated at the plain fit): the whitened fit
 /// (`done` when made already; with a `budget`, within that many iterations), then the
 /// levels estimated again at that efficient fit — a plain fit under joint noise is
@@ -210,17 +188,19 @@ fn noise_model(
             levels,
         });
     }
-    Ok(match whiten(points.problem, &point.at, options) {
-        Some((next, levels)) => Round {
-            point,
-            whitened: next,
-            levels,
+    Ok(
+        match noise::whiten(points.problem, &point.at, options.noise) {
+            Some((next, levels)) => Round {
+                point,
+                whitened: next,
+                levels,
+            },
+            // The whitened fit leaves no residual: keep its weights.
+            None => Round {
+                point,
+                whitened,
+                levels,
+            },
         },
-        // The whitened fit leaves no residual: keep its weights.
-        None => Round {
-            point,
-            whitened,
-            levels,
-        },
-    })
+    )
 }
