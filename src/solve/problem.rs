@@ -232,6 +232,29 @@ pub struct Problem {
 }
 
 impl Problem {
+    /// Per-vertex residuals at the start values and at `values` (NaN where a vertex is behind
+    /// the camera, which [`crate::solve::validate`] rules out at the start).
+    pub fn vertex_residuals(&self, values: &[f64]) -> Vec<super::VertexResidual> {
+        let mut out = Vec::with_capacity(self.observation_count());
+        for term in &self.captures {
+            let before = term.residuals(&self.initial);
+            let after = term.residuals(values);
+            for (k, obs) in term.observations.iter().enumerate() {
+                let pick = |r: &Option<Vec<f64>>| {
+                    r.as_ref()
+                        .map_or([f64::NAN; 2], |r| [r[2 * k], r[2 * k + 1]])
+                };
+                out.push(super::VertexResidual {
+                    capture: term.capture,
+                    vertex: obs.vertex,
+                    initial: pick(&before),
+                    solved: pick(&after),
+                });
+            }
+        }
+        out
+    }
+
     /// The free parameters, in order.
     pub fn free(&self) -> Vec<Param> {
         self.fixed.free()

@@ -45,7 +45,7 @@ pub(super) fn solution(
         covariance = sandwich.clone();
     }
     let std = std::array::from_fn(|i| covariance[(i, i)].max(0.0).sqrt());
-    let residuals = vertex_residuals(problem, &last.fit.values);
+    let residuals = problem.vertex_residuals(&last.fit.values);
     let robust_fit = robust.fit.as_ref().map(|f| &f.summary);
     let mut iterations = 0;
     let mut seconds = 0.0;
@@ -106,27 +106,4 @@ fn initial_rms(residuals: &[VertexResidual]) -> [f64; 2] {
     std::array::from_fn(|k| {
         (residuals.iter().map(|r| r.initial[k].powi(2)).sum::<f64>() / n).sqrt()
     })
-}
-
-/// Per-vertex residuals at the start values and at `values` (NaN where a vertex is behind
-/// the camera, which [`crate::solve::validate`] rules out at the start).
-pub(super) fn vertex_residuals(problem: &Problem, values: &[f64]) -> Vec<VertexResidual> {
-    let mut out = Vec::with_capacity(problem.observation_count());
-    for term in &problem.captures {
-        let before = term.residuals(&problem.initial);
-        let after = term.residuals(values);
-        for (k, obs) in term.observations.iter().enumerate() {
-            let pick = |r: &Option<Vec<f64>>| {
-                r.as_ref()
-                    .map_or([f64::NAN; 2], |r| [r[2 * k], r[2 * k + 1]])
-            };
-            out.push(VertexResidual {
-                capture: term.capture,
-                vertex: obs.vertex,
-                initial: pick(&before),
-                solved: pick(&after),
-            });
-        }
-    }
-    out
 }

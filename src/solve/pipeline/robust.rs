@@ -2,7 +2,6 @@
 //! beyond the noise are listed as outliers and left out of every later fit (docs/MODEL.md
 //! §11, "The pipeline", step 2).
 
-use super::assemble::vertex_residuals;
 use crate::solve::backend::{Fit, fit};
 use crate::solve::{Backend, Loss, Outlier, Problem, SolveError};
 
@@ -32,7 +31,7 @@ pub(super) fn robust_stage(posed: Problem, backend: &dyn Backend) -> Result<Robu
         });
     }
     let robust = fit(&posed, backend)?;
-    let residuals = vertex_residuals(&posed, &robust.values);
+    let residuals = posed.vertex_residuals(&robust.values);
     let mut coords: Vec<f64> = residuals
         .iter()
         .flat_map(|r| r.solved.map(f64::abs))
