@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use super::assign;
 use super::image::{MAX_PIXELS, MAX_SIDE};
 use super::saddle::Dropped;
-use super::turned::{PictureTurn, Turned};
+use super::turned::verdict::{PictureTurn, Turned};
 use crate::dataset::Corner;
 use crate::model::CameraId;
 use crate::robot::check::MIN_BRIGHTNESS;
@@ -235,7 +235,7 @@ pub struct Summary {
     /// Boards found but not used: their camera's pictures are turned by 180°.
     pub turned: usize,
     /// The cameras (lower, upper) whose pictures are turned by 180°.
-    pub turned_cameras: [bool; 2],
+    pub cameras_turned: [bool; 2],
     /// Boards found but not used: their picture on its own is turned by 180° (a `u32`,
     /// so that the summary fits the errors that carry it).
     pub turned_alone: u32,
@@ -259,7 +259,7 @@ impl Summary {
                 Outcome::NoImage => s.no_image += 1,
                 Outcome::Turned { turned, .. } => {
                     s.turned += 1;
-                    s.turned_cameras[turned.camera as usize] = true;
+                    s.cameras_turned[turned.camera as usize] = true;
                 }
                 Outcome::TurnedAlone { .. } => s.turned_alone += 1,
             }
@@ -288,7 +288,7 @@ impl fmt::Display for Summary {
         if self.turned > 0 {
             let cameras: Vec<&str> = CameraId::ALL
                 .into_iter()
-                .filter(|c| self.turned_cameras[*c as usize])
+                .filter(|c| self.cameras_turned[*c as usize])
                 .map(CameraId::name)
                 .collect();
             write!(
