@@ -11,7 +11,7 @@
 //! capsule's segment (at most a few millimetres closer than the exact test), box against
 //! box with the separating-axis test.
 
-use super::shapes::{Shape, dot, norm, segment_distance, sub};
+use super::shapes::{Shape, norm, point_segment_distance, segment_distance, sub};
 use super::{BodyModel, Kind, Part, PosedBody};
 use crate::model::{Board, JointAngles, RobotGeometry, Side};
 
@@ -224,7 +224,7 @@ pub fn first_blocking<'a>(
             let (c, r) = p.shape.bounds();
             targets
                 .iter()
-                .any(|&t| point_segment(c, eye, t) < r + grow(p))
+                .any(|&t| point_segment_distance(c, eye, t) < r + grow(p))
         })
         .collect();
     targets.iter().find_map(|&t| {
@@ -250,19 +250,6 @@ pub fn sight_blocked(
         |_| grow,
         |p| p.kind == Kind::Sandal && p.side == Some(side),
     )
-}
-
-/// Distance of `p` from the segment `a–b`.
-fn point_segment(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> f64 {
-    let ab = sub(b, a);
-    let l2 = dot(ab, ab);
-    let t = if l2 < 1e-12 {
-        0.0
-    } else {
-        (dot(sub(p, a), ab) / l2).clamp(0.0, 1.0)
-    };
-    let q: [f64; 3] = std::array::from_fn(|i| a[i] + t * ab[i]);
-    norm(sub(p, q))
 }
 
 #[cfg(test)]

@@ -357,6 +357,11 @@ fn closest_on_segment(a: [f64; 3], b: [f64; 3], p: [f64; 3]) -> [f64; 3] {
     along(a, ab, t)
 }
 
+/// Distance of `p` from the segment `a–b`.
+pub fn point_segment_distance(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> f64 {
+    norm(sub(p, closest_on_segment(a, b, p)))
+}
+
 /// Smallest distance between the segments `p0–p1` and `q0–q1`.
 pub fn segment_distance(p0: [f64; 3], p1: [f64; 3], q0: [f64; 3], q1: [f64; 3]) -> f64 {
     let d1 = sub(p1, p0);

@@ -11,7 +11,7 @@
 //! part whose grown solid holds the camera is taken as it is. The sandal that carries the
 //! pattern is left out (the pattern is its top face).
 
-use super::shapes::{dot, norm, sub};
+use super::shapes::{norm, point_segment_distance, sub};
 use super::{BodyModel, Kind, Part};
 use crate::model::{Board, CameraId, JointAngles, Model, PARAMETER_COUNT, Side, Vertex};
 
@@ -135,15 +135,7 @@ fn bounding_sphere(points: &[[f64; 3]]) -> ([f64; 3], f64) {
 /// `(centre, reach)`: a point of such a segment at parameter `t` lies within `t·reach` of
 /// the segment from `eye` to `centre` at the same `t`.
 fn in_cone(eye: [f64; 3], centre: [f64; 3], reach: f64, c: [f64; 3], r: f64) -> bool {
-    let axis = sub(centre, eye);
-    let l2 = dot(axis, axis);
-    let t = if l2 < 1e-12 {
-        0.0
-    } else {
-        (dot(sub(c, eye), axis) / l2).clamp(0.0, 1.0)
-    };
-    let q: [f64; 3] = std::array::from_fn(|k| eye[k] + t * axis[k]);
-    norm(sub(c, q)) < r + reach
+    point_segment_distance(c, eye, centre) < r + reach
 }
 
 /// The inner vertices [`hidden`] leaves in plain sight, row by row.
