@@ -419,22 +419,13 @@ pub fn read_csv(path: &Path) -> Result<Vec<PlannedCapture>, crate::dataset::Data
 
 /// The plan's captures as the simulator's stances (one posture each), in plan order.
 pub fn to_stances(captures: &[PlannedCapture]) -> Vec<Stance> {
-    captures
-        .iter()
-        .map(|c| Stance {
-            side: c.side,
-            postures: vec![c.joints],
-        })
-        .collect()
+    to_schedule(captures).0
 }
 
 /// The plan as the simulator's schedule: its stances ([`to_stances`]) and the camera of
-/// each (`SimOptions::schedule` and `schedule_cameras`).
+/// each ([`crate::sim::schedule`]).
 pub fn to_schedule(captures: &[PlannedCapture]) -> (Vec<Stance>, Vec<CameraId>) {
-    (
-        to_stances(captures),
-        captures.iter().map(|c| c.camera).collect(),
-    )
+    crate::sim::schedule(captures.iter().map(|c| (c.camera, c.side, c.joints)))
 }
 
 #[cfg(test)]

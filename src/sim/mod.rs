@@ -260,6 +260,26 @@ pub struct Stance {
     pub postures: Vec<JointAngles>,
 }
 
+/// A schedule of captures `(camera, side, joints)` as the simulator's stances (one
+/// posture each, in order) and the camera of each (`SimOptions::schedule` and
+/// `schedule_cameras`).
+pub fn schedule(
+    captures: impl IntoIterator<Item = (CameraId, Side, JointAngles)>,
+) -> (Vec<Stance>, Vec<CameraId>) {
+    captures
+        .into_iter()
+        .map(|(camera, side, joints)| {
+            (
+                Stance {
+                    side,
+                    postures: vec![joints],
+                },
+                camera,
+            )
+        })
+        .unzip()
+}
+
 /// Smallest distance of a vertex from the image border (px).
 const MARGIN: f64 = 12.0;
 /// Smallest projected square edge (px), so that detection is realistic.

@@ -178,14 +178,9 @@ impl SimRequest {
         if plan.is_empty() {
             return Err(SimRequestError::EmptyPlan(path.clone()));
         }
-        let stances = plan
-            .iter()
-            .map(|c| Stance {
-                side: c.side,
-                postures: vec![c.joints],
-            })
-            .collect();
-        Ok((Some(stances), plan.iter().map(|c| c.camera).collect()))
+        let (stances, cameras) =
+            super::schedule(plan.into_iter().map(|c| (c.camera, c.side, c.joints)));
+        Ok((Some(stances), cameras))
     }
 
     /// The simulated robot's model: the camera preset with the distortion, and the same
