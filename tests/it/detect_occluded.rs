@@ -517,6 +517,31 @@ fn clean_boards_lose_no_vertex_also_under_shading() {
     assert_eq!(found, vertices);
 }
 
+/// Asserts that no vertex reported in `results` is one the body model, predicted with
+/// `params`, puts behind the body; the vertices predicted behind and those reported.
+fn assert_none_reported_behind(
+    dataset: &Dataset,
+    results: &[ImageResult],
+    body: &naocalib::body::BodyModel,
+    params: &[f64; naocalib::model::PARAMETER_COUNT],
+) -> (usize, usize) {
+    let (mut behind, mut found) = (0, 0);
+    for (r, c) in results.iter().zip(&dataset.captures) {
+        let hidden = detect::behind::hidden(&dataset.model, body, c, params);
+        let got = reported(r);
+        for h in &hidden {
+            assert!(
+                !got.iter().any(|g| g.vertex == h.vertex),
+                "capture {}: {h:?} reported",
+                c.id
+            );
+        }
+        behind += hidden.len();
+        found += got.len();
+    }
+    (behind, found)
+}
+
 /// Robots drawn with their bodies by the simulator (`simulate --images`: legs, feet with
 /// toes, arms in front of the boards): no vertex reported off, and nearly every vertex
 /// whose line of sight the body leaves free found.
@@ -565,20 +590,10 @@ fn robots_drawn_with_their_bodies() {
         };
         let behind = detect::detect_dataset(&dataset, &with_body, &|_| {});
         worst = worst.max(assert_accurate(&dataset, &behind));
-        for (r, c) in behind.iter().zip(&dataset.captures) {
-            let zero = [0.0; naocalib::model::PARAMETER_COUNT];
-            let hidden = detect::behind::hidden(&dataset.model, &body, c, &zero);
-            let got = reported(r);
-            predicted_behind += hidden.len();
-            for h in &hidden {
-                assert!(
-                    !got.iter().any(|g| g.vertex == h.vertex),
-                    "capture {}: {h:?} reported",
-                    c.id
-                );
-            }
-            found_with_body += got.len();
-        }
+        let zero = [0.0; naocalib::model::PARAMETER_COUNT];
+        let (hidden, got) = assert_none_reported_behind(&dataset, &behind, &body, &zero);
+        predicted_behind += hidden;
+        found_with_body += got;
         for (r, c) in results.iter().zip(&dataset.captures) {
             let model = &dataset.model;
             let camera = model.intrinsics_at(c.camera, &truth);
@@ -679,20 +694,10 @@ fn team_sized_robots_drawn_with_their_bodies() {
         };
         let results = detect::detect_dataset(&dataset, &with_body, &|_| {});
         worst = worst.max(assert_accurate(&dataset, &results));
-        for (r, c) in results.iter().zip(&dataset.captures) {
-            let hidden = detect::behind::hidden(&dataset.model, &body, c, &files);
-            let got = reported(r);
-            for h in &hidden {
-                assert!(
-                    !got.iter().any(|g| g.vertex == h.vertex),
-                    "capture {}: {h:?} reported",
-                    c.id
-                );
-            }
-            behind += hidden.len();
-            found += got.len();
-            all += dataset.model.board.vertices().count();
-        }
+        let (hidden, got) = assert_none_reported_behind(&dataset, &results, &body, &files);
+        behind += hidden;
+        found += got;
+        all += dataset.captures.len() * dataset.model.board.vertices().count();
     }
     eprintln!(
         "team-sized robots drawn with their bodies: {found} of {all} vertices found, \
