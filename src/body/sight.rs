@@ -13,7 +13,7 @@
 
 use super::shapes::{norm, point_segment_distance, sub};
 use super::{BodyModel, Kind, Part};
-use crate::model::{Board, CameraId, JointAngles, Model, PARAMETER_COUNT, Side, Vertex};
+use crate::model::{CameraId, JointAngles, Model, PARAMETER_COUNT, Side, Vertex};
 
 /// How much the board's own foot and toe, the torso, pelvis and arms are grown (mm).
 pub const GROW_OWN: f64 = 3.0;
@@ -36,14 +36,6 @@ impl Hidden {
     pub fn by(&self) -> String {
         super::part_name(self.kind, self.side)
     }
-}
-
-/// The points of `v`'s refinement window in the board frame: the vertex and the eight
-/// points half a square from it.
-pub fn window(board: &Board, v: Vertex) -> impl Iterator<Item = [f64; 3]> {
-    let [x, y, _] = board.vertex_position(v);
-    let h = board.square / 2.0;
-    (-1..=1).flat_map(move |i| (-1..=1).map(move |j| [x + i as f64 * h, y + j as f64 * h, 0.0]))
 }
 
 /// The vertices of the board of leg `side` that `body` hides from `camera` at the logged
@@ -164,7 +156,15 @@ fn own_foot(p: &Part, side: Side) -> bool {
 mod tests {
     use super::*;
     use crate::body::first_blocking;
-    use crate::model::Joint;
+    use crate::model::{Board, Joint};
+
+    /// The points of `v`'s refinement window in the board frame: the vertex and the eight
+    /// points half a square from it.
+    fn window(board: &Board, v: Vertex) -> impl Iterator<Item = [f64; 3]> {
+        let [x, y, _] = board.vertex_position(v);
+        let h = board.square / 2.0;
+        (-1..=1).flat_map(move |i| (-1..=1).map(move |j| [x + i as f64 * h, y + j as f64 * h, 0.0]))
+    }
 
     /// The shared lattice and the cone around it find, vertex by vertex, what testing each
     /// window's nine lines of sight against every part finds.
