@@ -20,6 +20,44 @@ pub const GROW_OWN: f64 = 3.0;
 /// How much the legs' other parts are grown (mm).
 pub const GROW_OTHER: f64 = 10.0;
 
+/// How much the parts are grown for what the parameters may be off by (mm).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Growth {
+    /// The board's own foot and toe, the torso, pelvis and arms.
+    pub own: f64,
+    /// The legs' other parts.
+    pub other: f64,
+}
+
+impl Growth {
+    /// For a prediction from parameters that may be off by a robot's offsets:
+    /// [`GROW_OWN`] and [`GROW_OTHER`].
+    pub const FOR_OFFSETS: Growth = Growth {
+        own: GROW_OWN,
+        other: GROW_OTHER,
+    };
+    /// The body as it is, for parameters known exactly (the simulator's truth).
+    pub const NONE: Growth = Growth {
+        own: 0.0,
+        other: 0.0,
+    };
+
+    /// The growth of `part` for the board of leg `side` seen from `eye`: none for a part
+    /// whose grown solid holds the camera.
+    fn of(&self, part: &Part, side: Side, eye: [f64; 3]) -> f64 {
+        let g = if own_foot(part, side) || !part.kind.is_leg() {
+            self.own
+        } else {
+            self.other
+        };
+        if part.shape.distance(eye) <= g {
+            0.0
+        } else {
+            g
+        }
+    }
+}
+
 /// A vertex the body hides, with the part in front of it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Hidden {
@@ -40,7 +78,7 @@ impl Hidden {
 
 /// The vertices of the board of leg `side` that `body` hides from `camera` at the logged
 /// angles `logged`, predicted with the parameters `params` (the logged angles plus their
-/// offsets pose the body).
+/// offsets pose the body), the parts grown for the offsets ([`Growth::FOR_OFFSETS`]).
 pub fn hidden(
     model: &Model,
     body: &BodyModel,
@@ -48,6 +86,27 @@ pub fn hidden(
     side: Side,
     logged: &JointAngles,
     params: &[f64; PARAMETER_COUNT],
+) -> Vec<Hidden> {
+    hidden_grown(
+        model,
+        body,
+        camera,
+        side,
+        logged,
+        params,
+        Growth::FOR_OFFSETS,
+    )
+}
+
+/// [`hidden`] with the parts grown by `growth`.
+pub fn hidden_grown(
+    model: &Model,
+    body: &BodyModel,
+    camera: CameraId,
+    side: Side,
+    logged: &JointAngles,
+    params: &[f64; PARAMETER_COUNT],
+    growth: Growth,
 ) -> Vec<Hidden> {
     let joints = JointAngles::from_fn(|j| logged.get(j) + params[j.offset().index()]);
     let chains = model.chains_for(camera, side, logged);
@@ -79,14 +138,7 @@ pub fn hidden(
         .parts
         .iter()
         .filter(|p| p.kind != Kind::Head && !(p.kind == Kind::Sandal && p.side == Some(side)))
-        .map(|p| {
-            let g = if own_foot(p, side) || !p.kind.is_leg() {
-                GROW_OWN
-            } else {
-                GROW_OTHER
-            };
-            (p, if p.shape.distance(eye) <= g { 0.0 } else { g })
-        })
+        .map(|p| (p, growth.of(p, side, eye)))
         .filter(|(p, g)| {
             let (c, r) = p.shape.bounds();
             in_cone(eye, centre, reach, c, r + g)
@@ -185,14 +237,7 @@ mod tests {
                 let eye = chains.camera.eval(&params).translation;
                 let board = chains.board.eval(&params);
                 let posed = body.pose(&model.robot, &model.board, &joints);
-                let grow = |p: &Part| {
-                    let g = if own_foot(p, Side::Left) || !p.kind.is_leg() {
-                        GROW_OWN
-                    } else {
-                        GROW_OTHER
-                    };
-                    if p.shape.distance(eye) <= g { 0.0 } else { g }
-                };
+                let grow = |p: &Part| Growth::FOR_OFFSETS.of(p, Side::Left, eye);
                 let carrier = |p: &Part| p.kind == Kind::Sandal && p.side == Some(Side::Left);
                 for v in model.board.vertices() {
                     let targets: Vec<[f64; 3]> =

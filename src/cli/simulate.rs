@@ -64,10 +64,11 @@ pub struct SimulateArgs {
     /// Image vignetting: relative loss of brightness in the corners (with --images).
     #[arg(long, default_value_t = 0.3, requires = "images")]
     vignetting: f64,
-    /// Draw the robot's own body in front of the boards (with --images): legs, each foot
-    /// standing on its sandal, torso, pelvis and the arms spread as capture holds them,
-    /// from the body model (docs/BODY.md).
-    #[arg(long, requires = "images")]
+    /// The robot's own body in front of the boards (the body model, docs/BODY.md): legs,
+    /// each foot standing on its sandal, torso, pelvis and the arms as capture holds them.
+    /// A vertex whose refinement window it covers gives no corner; with --images it is
+    /// drawn.
+    #[arg(long)]
     body: bool,
     /// The simulated lower camera: v4 (the paper's: 640×480, f 562.5 px), v6 (V6 field of
     /// view 56.3°×43.7° at 640×480) or v6-1280x960; its intrinsics go into dataset.toml.

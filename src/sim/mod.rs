@@ -60,6 +60,11 @@ pub struct SimOptions {
     /// board partly outside is kept when [`MIN_VISIBLE`] vertices are in view. Only
     /// vertices in the image become corners.
     pub near_border: bool,
+    /// The robot's own body between the cameras and the boards: a vertex whose refinement
+    /// window a part of it covers, at the true offsets and the actual angles, gives no
+    /// corner, as a camera would not see it whole (images draw it with their own
+    /// [`render::RenderOptions::body`]).
+    pub body: Option<crate::body::BodyModel>,
 }
 
 impl Default for SimOptions {
@@ -79,6 +84,7 @@ impl Default for SimOptions {
             schedule_cameras: Vec::new(),
             team_offsets: false,
             near_border: false,
+            body: None,
         }
     }
 }
@@ -619,8 +625,23 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
             let actual = logged.map(|q| q + joint.sample(&mut noise_rng));
             let chains = model.chains_for(camera, stance.side, &actual);
             let projected = model.project(&chains, &truth, &vertices);
+            let hidden = match &options.body {
+                Some(body) => crate::body::sight::hidden_grown(
+                    model,
+                    body,
+                    camera,
+                    stance.side,
+                    &actual,
+                    &truth,
+                    crate::body::sight::Growth::NONE,
+                ),
+                None => Vec::new(),
+            };
             for (v, uv) in vertices.iter().zip(projected) {
                 let Some(uv) = uv else { continue };
+                if hidden.iter().any(|h| h.vertex == *v) {
+                    continue;
+                }
                 if options.near_border && !model.intrinsics(camera).contains(uv, 0.0) {
                     continue;
                 }
@@ -687,6 +708,9 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
     }
     if options.near_border {
         simulation.insert("near_border".into(), toml::Value::Boolean(true));
+    }
+    if options.body.is_some() {
+        simulation.insert("body".into(), toml::Value::Boolean(true));
     }
     if options.images.is_none() {
         simulation.insert("px_noise".into(), toml::Value::Float(options.px_noise));

@@ -48,7 +48,8 @@ pub struct SimRequest {
     pub grey_noise: f64,
     /// Image vignetting.
     pub vignetting: f64,
-    /// Draw the robot's own body in front of the boards.
+    /// The robot's own body in front of the boards: the vertices it hides give no corner,
+    /// and images draw it.
     pub body: bool,
     /// The simulated lower camera (and the upper one, the same model).
     pub camera: CameraPreset,
@@ -236,6 +237,7 @@ impl SimRequest {
             }),
             upper_stances: self.upper_stances,
             team_offsets: self.team_offsets,
+            body: self.body.then(crate::body::BodyModel::default),
             schedule_cameras,
             schedule,
         }

@@ -392,3 +392,69 @@ fn cli_refuses_bad_input_cleanly() {
     assert_clean_failure(&sim, &["plan.csv", "line 2", "LKneePitch"]);
     assert!(!dir.path().join("data").exists());
 }
+
+/// The default plan photographed by robots whose own body stands between the camera and
+/// the boards (`simulate --body`): every vertex the plan's audit predicts in plain sight
+/// (`body::sight`, the parts grown for the offsets, at the nominal model) is seen on
+/// robots with hidden offsets, the body hides most of the rest, and the calibration on
+/// the partial boards left stays honest (its offsets within their σ).
+#[test]
+fn the_body_hides_the_plans_vertices_as_predicted_and_the_fit_stays_honest() {
+    use naocalib::body::{BodyModel, sight};
+    use std::collections::HashSet;
+    let plan = paper_plan();
+    let model = Model::default();
+    let body = BodyModel::default();
+    let solver = backend(backend_names()[0], false).expect("a backend");
+    let zero = [0.0; PARAMETER_COUNT];
+    let mut z2 = Vec::new();
+    for seed in [21, 22, 23] {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let truth = sim::draw_truth(&mut rng);
+        let options = SimOptions {
+            seed,
+            truth: Some(truth),
+            px_noise: 0.1,
+            schedule: Some(plan::to_stances(&plan.captures)),
+            body: Some(body),
+            ..SimOptions::default()
+        };
+        let dataset = sim::simulate(&model, &options).expect("simulate");
+        let seen: HashSet<_> = dataset
+            .corners
+            .iter()
+            .map(|c| (c.capture, c.vertex))
+            .collect();
+        let all = dataset.captures.len() * model.board.vertices().count();
+        let mut predicted = 0;
+        for c in &dataset.captures {
+            for v in sight::in_sight(&model, &body, c.camera, c.side, &c.joints, &zero) {
+                predicted += 1;
+                assert!(
+                    seen.contains(&(c.id, v)),
+                    "seed {seed}: capture {} vertex {v:?} predicted in sight, hidden",
+                    c.id
+                );
+            }
+        }
+        eprintln!(
+            "seed {seed}: {} of {all} vertices seen past the body, {predicted} predicted in sight",
+            seen.len()
+        );
+        assert!(
+            predicted > 300 && seen.len() < all / 2,
+            "{predicted} {}",
+            seen.len()
+        );
+        let problem = Problem::from_dataset(&dataset, FixedSet::default()).expect("problem");
+        let solution =
+            calibrate(&problem, solver.as_ref(), &UncertaintyOptions::default()).expect("solve");
+        for p in solution.fixed.free() {
+            let z = (solution.values[p.index()] - truth[p.index()]) / solution.std[p.index()];
+            z2.push(z * z);
+        }
+    }
+    let rms_z = (z2.iter().sum::<f64>() / z2.len() as f64).sqrt();
+    eprintln!("RMS z of {} offsets: {rms_z:.2}", z2.len());
+    assert!(rms_z <= 1.5, "RMS z {rms_z}");
+}
