@@ -81,6 +81,11 @@ pub struct PlanArgs {
     /// are raw, as LoLA reports them).
     #[arg(long, value_name = "CAL.toml")]
     around: Option<PathBuf>,
+    /// Plan past the robot's own body (docs/BODY.md): keep a capture only when at least
+    /// half of its board's vertices have their window in plain sight past the body model,
+    /// and design by the information of those alone.
+    #[arg(long)]
+    sight: bool,
 }
 
 /// `--families`' help, with the registry's families.
@@ -154,6 +159,7 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
         upper_sigma_ratio: args.upper_sigma_ratio,
         pool: args.pool,
         around: args.around.clone(),
+        sight: args.sight,
     };
     let planned = request::run(&request)?;
     super::print_out(report::summary(&request, &planned))?;

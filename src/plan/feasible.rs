@@ -54,6 +54,13 @@ pub struct Feasibility {
     pub upper_head_margin: f64,
     /// The collision model.
     pub body: BodyModel,
+    /// Plan past the robot's own body (`naocalib plan --sight`): a capture is kept only
+    /// when at least [`MIN_IN_SIGHT`] of its board's vertices have their refinement window
+    /// in plain sight past this body model ([`crate::body::sight`], at
+    /// [`Feasibility::centre`]), and only those vertices count in its information. `None`
+    /// (the default): every vertex counts, and only the resting leg is held against the
+    /// lines of sight.
+    pub sight: Option<crate::body::BodyModel>,
     /// The robot's current calibration (internal units) the box of offsets is centred on
     /// (`naocalib plan --around`); zero by default. Real lower-camera tilt corrections of
     /// −2° to −8° lie outside a ±3° box around zero.
@@ -76,12 +83,27 @@ impl Default for Feasibility {
             upper_offset: 0.5f64.to_radians(),
             upper_head_margin: 2f64.to_radians(),
             body: BodyModel::default(),
+            sight: None,
             centre: [0.0; PARAMETER_COUNT],
         }
     }
 }
 
+/// The fraction of a board's vertices a capture planned past the body
+/// ([`Feasibility::sight`]) must leave in plain sight.
+pub const MIN_IN_SIGHT: f64 = 0.5;
+
 impl Feasibility {
+    /// The body the camera sees the boards past, at the centre, when planning past it.
+    pub fn past_body(&self) -> Option<super::information::PastBody<'_>> {
+        self.sight
+            .as_ref()
+            .map(|body| super::information::PastBody {
+                body,
+                params: &self.centre,
+            })
+    }
+
     /// The distance of `joint` from its limits for a capture by `camera`:
     /// [`Feasibility::upper_head_margin`] for the head in upper-camera captures,
     /// [`Feasibility::joint_margin`] otherwise.
@@ -106,6 +128,14 @@ pub enum Infeasible {
     View,
     /// The resting leg stands between the camera and the board (named).
     Occluded(String),
+    /// Planning past the body: it leaves fewer than [`MIN_IN_SIGHT`] of the vertices in
+    /// plain sight.
+    Hidden {
+        /// Vertices in plain sight.
+        seen: usize,
+        /// The board's vertices.
+        of: usize,
+    },
     /// The straight move between the rest posture and the capture collides.
     Unreachable,
 }
@@ -117,6 +147,12 @@ impl std::fmt::Display for Infeasible {
             Infeasible::HipYawPitch => f.write_str("LHipYawPitch and RHipYawPitch differ"),
             Infeasible::Collision(what) => write!(f, "collision: {what}"),
             Infeasible::Occluded(what) => write!(f, "the {what} hides the board"),
+            Infeasible::Hidden { seen, of } => {
+                write!(
+                    f,
+                    "the body leaves {seen} of the board's {of} vertices in plain sight"
+                )
+            }
             Infeasible::Unreachable => {
                 f.write_str("the straight move between the rest posture and it collides")
             }
@@ -222,6 +258,13 @@ fn in_view_and_reach(
         collision::sight_blocked(&model.robot, &f.body, joints, resting, eye, &vertices)
     {
         return Err(Infeasible::Occluded(what));
+    }
+    if let Some(past) = f.past_body() {
+        let seen = past.in_sight(model, camera, side, joints).len();
+        let of = model.board.vertices().count();
+        if (seen as f64) < MIN_IN_SIGHT * of as f64 {
+            return Err(Infeasible::Hidden { seen, of });
+        }
     }
     // Reachable straight from rest and back: then every order of the captures has a way
     // for every move (through rest, if nothing shorter), and any capture can end the phase.

@@ -5,6 +5,7 @@
 
 use nalgebra::DMatrix;
 
+use crate::body::BodyModel;
 use crate::model::{CameraId, FixedSet, JointAngles, Model, PARAMETER_COUNT, Side, Vertex};
 use crate::solve::jacobian::Evaluator;
 use crate::solve::noise::{self, NoiseLevels, NoiseOptions};
@@ -17,6 +18,30 @@ pub struct CaptureInformation {
     pub columns: Vec<usize>,
     /// `k × columns.len()` factor with `k` the rank of the capture's information.
     pub factor: DMatrix<f64>,
+}
+
+/// The body the camera sees the boards past, and the parameters its lines of sight are
+/// predicted at: only the vertices it leaves in plain sight inform
+/// ([`crate::body::sight::in_sight`]).
+#[derive(Debug, Clone, Copy)]
+pub struct PastBody<'a> {
+    /// The body model.
+    pub body: &'a BodyModel,
+    /// The parameters (internal units) the lines of sight are predicted at.
+    pub params: &'a [f64; PARAMETER_COUNT],
+}
+
+impl PastBody<'_> {
+    /// The vertices of the board of leg `side` in plain sight of `camera` at `joints`.
+    pub fn in_sight(
+        &self,
+        model: &Model,
+        camera: CameraId,
+        side: Side,
+        joints: &JointAngles,
+    ) -> Vec<Vertex> {
+        crate::body::sight::in_sight(model, self.body, camera, side, joints, self.params)
+    }
 }
 
 /// The Fisher information of each capture `(side, joints)` about the parameters left free
@@ -33,18 +58,20 @@ pub fn capture_information(
         .iter()
         .map(|(side, joints)| (CameraId::Lower, *side, *joints))
         .collect();
-    capture_information_for(model, &lower, fixed, levels)
+    capture_information_for(model, &lower, fixed, levels, None)
 }
 
-/// [`capture_information`] of captures `(camera, side, joints)`, each through its camera.
+/// [`capture_information`] of captures `(camera, side, joints)`, each through its camera,
+/// of the vertices `past` leaves in plain sight (all when `None`).
 pub fn capture_information_for(
     model: &Model,
     captures: &[(CameraId, Side, JointAngles)],
     fixed: &FixedSet,
     levels: NoiseLevels,
+    past: Option<PastBody>,
 ) -> Vec<Option<CaptureInformation>> {
     let zero = [0.0; PARAMETER_COUNT];
-    let (mut problem, index) = problem_of(model, captures, fixed);
+    let (mut problem, index) = problem_of(model, captures, fixed, past);
     // The noise model's whitening at the given levels (nothing is estimated when both are
     // given; the residuals are zero here).
     let given = NoiseOptions {
@@ -88,18 +115,28 @@ pub fn capture_information_for(
 
 /// The least-squares problem `solve` poses for the captures `(camera, side, joints)` at
 /// the nominal model (every offset zero), the pixels those it predicts, without noise
-/// model; and for each capture its index among the problem's (`None` for a board (partly)
-/// behind the camera).
+/// model, of the vertices `past` leaves in plain sight (all when `None`); and for each
+/// capture its index among the problem's (`None` for a board (partly) behind the camera,
+/// or wholly behind the body).
 fn problem_of(
     model: &Model,
     captures: &[(CameraId, Side, JointAngles)],
     fixed: &FixedSet,
+    past: Option<PastBody>,
 ) -> (Problem, Vec<Option<usize>>) {
     let zero = [0.0; PARAMETER_COUNT];
-    let vertices: Vec<Vertex> = model.board.vertices().collect();
+    let all: Vec<Vertex> = model.board.vertices().collect();
     let mut terms = Vec::with_capacity(captures.len());
     let mut index = Vec::with_capacity(captures.len());
     for (camera, side, joints) in captures {
+        let vertices = match past {
+            Some(past) => past.in_sight(model, *camera, *side, joints),
+            None => all.clone(),
+        };
+        if vertices.is_empty() {
+            index.push(None);
+            continue;
+        }
         let chains = model.chains_for(*camera, *side, joints);
         let Some(pixels) = model
             .project(&chains, &zero, &vertices)
@@ -146,8 +183,9 @@ pub fn held_by_solve(
     model: &Model,
     captures: &[(CameraId, Side, JointAngles)],
     fixed: &FixedSet,
+    past: Option<PastBody>,
 ) -> Vec<crate::solve::identify::Undetermined> {
-    let (problem, _) = problem_of(model, captures, fixed);
+    let (problem, _) = problem_of(model, captures, fixed, past);
     crate::solve::identify::undetermined(&problem).unwrap_or_default()
 }
 

@@ -11,7 +11,6 @@ use super::{
     feasible, is_angle_offset, order, random_stances, route,
 };
 use crate::model::{CameraId, FixedSet, JointAngles, Model, Side};
-use crate::solve::noise::NoiseLevels;
 
 /// The feasible captures to design from, with the information each carries.
 pub(super) struct Pool {
@@ -152,7 +151,7 @@ impl Pool {
     fn admit(&mut self, model: &Model, options: &PlanOptions, new: Vec<feasible::Candidate>) {
         let pairs: Vec<(CameraId, Side, JointAngles)> =
             new.iter().map(|c| (c.camera, c.side, c.joints)).collect();
-        let infos = information_parallel(model, &pairs, &self.fixed, options.levels);
+        let infos = information_parallel(model, &pairs, &self.fixed, options);
         for (c, info) in new.into_iter().zip(infos) {
             if let Some(info) = info {
                 self.candidates.push(c);
@@ -318,7 +317,7 @@ impl Pool {
             .collect();
         // The random stances are the lower camera's: the upper camera's offsets stay out.
         let lower_fixed = options.fixed.clone().for_upper_camera(false);
-        let random_infos = information_parallel(model, &random, &lower_fixed, options.levels);
+        let random_infos = information_parallel(model, &random, &lower_fixed, options);
         let random_refs: Vec<&design::CaptureInformation> = random_infos.iter().flatten().collect();
         let baseline = honest_prediction(model, options, &random, &lower_fixed, &random_refs);
         let body = &options.feasibility.body;
@@ -364,7 +363,7 @@ fn honest_prediction(
     infos: &[&design::CaptureInformation],
 ) -> Prediction {
     let free = fixed.free();
-    let held = design::held_by_solve(model, captures, fixed);
+    let held = design::held_by_solve(model, captures, fixed, options.feasibility.past_body());
     if held.is_empty() {
         return design::predict(&free, infos);
     }
@@ -372,7 +371,7 @@ fn honest_prediction(
     for u in &held {
         kept_fixed.set(u.param, true);
     }
-    let infos = information_parallel(model, captures, &kept_fixed, options.levels);
+    let infos = information_parallel(model, captures, &kept_fixed, options);
     let kept = design::predict(
         &kept_fixed.free(),
         &infos.iter().flatten().collect::<Vec<_>>(),
@@ -401,13 +400,14 @@ fn information_parallel(
     model: &Model,
     captures: &[(CameraId, Side, JointAngles)],
     fixed: &FixedSet,
-    levels: NoiseLevels,
+    options: &PlanOptions,
 ) -> Vec<Option<design::CaptureInformation>> {
+    let (levels, past) = (options.levels, options.feasibility.past_body());
     let half = captures.len() / 2;
     let (a, b) = captures.split_at(half);
     std::thread::scope(|scope| {
-        let first = scope.spawn(|| design::capture_information_for(model, a, fixed, levels));
-        let mut second = design::capture_information_for(model, b, fixed, levels);
+        let first = scope.spawn(|| design::capture_information_for(model, a, fixed, levels, past));
+        let mut second = design::capture_information_for(model, b, fixed, levels, past);
         let mut out = first.join().expect("information thread");
         out.append(&mut second);
         out

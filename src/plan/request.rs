@@ -50,6 +50,8 @@ pub struct PlanRequest {
     pub pool: usize,
     /// The robot's current calibration, the centre of the box of offsets.
     pub around: Option<PathBuf>,
+    /// Plan past the robot's own body ([`crate::plan::Feasibility::sight`]).
+    pub sight: bool,
 }
 
 /// Why a plan could not be made or written.
@@ -185,6 +187,7 @@ impl PlanRequest {
             .upper_offset_deg
             .unwrap_or(UPPER_OFFSET_DEG)
             .to_radians();
+        options.feasibility.sight = self.sight.then(crate::body::BodyModel::default);
         if let Some(current) = around {
             for (p, value) in current.start_values(model) {
                 options.feasibility.centre[p.index()] = p.unit().from_report(value);
@@ -356,6 +359,7 @@ mod tests {
             upper_sigma_ratio: 0.9,
             pool: 40,
             around: None,
+            sight: false,
         }
     }
 

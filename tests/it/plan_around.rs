@@ -136,6 +136,7 @@ fn the_upper_cameras_box_is_narrowed_only_when_no_capture_stays_in_view() {
         upper_sigma_ratio: 0.88,
         pool: 40,
         around: Some(around.clone()),
+        sight: false,
     };
     let asked = run(&request(Some(0.5))).expect_err("no capture in view over ±0.5°");
     let text = asked.to_string();
