@@ -78,28 +78,8 @@ impl Hidden {
 
 /// The vertices of the board of leg `side` that `body` hides from `camera` at the logged
 /// angles `logged`, predicted with the parameters `params` (the logged angles plus their
-/// offsets pose the body), the parts grown for the offsets ([`Growth::FOR_OFFSETS`]).
+/// offsets pose the body), the parts grown by `growth`.
 pub fn hidden(
-    model: &Model,
-    body: &BodyModel,
-    camera: CameraId,
-    side: Side,
-    logged: &JointAngles,
-    params: &[f64; PARAMETER_COUNT],
-) -> Vec<Hidden> {
-    hidden_grown(
-        model,
-        body,
-        camera,
-        side,
-        logged,
-        params,
-        Growth::FOR_OFFSETS,
-    )
-}
-
-/// [`hidden`] with the parts grown by `growth`.
-pub fn hidden_grown(
     model: &Model,
     body: &BodyModel,
     camera: CameraId,
@@ -182,7 +162,8 @@ fn in_cone(eye: [f64; 3], centre: [f64; 3], reach: f64, c: [f64; 3], r: f64) -> 
     point_segment_distance(c, eye, centre) < r + reach
 }
 
-/// The inner vertices [`hidden`] leaves in plain sight, row by row.
+/// The inner vertices [`hidden`] leaves in plain sight, row by row, the parts grown for the
+/// offsets ([`Growth::FOR_OFFSETS`]).
 pub fn in_sight(
     model: &Model,
     body: &BodyModel,
@@ -191,7 +172,15 @@ pub fn in_sight(
     logged: &JointAngles,
     params: &[f64; PARAMETER_COUNT],
 ) -> Vec<Vertex> {
-    let hidden = hidden(model, body, camera, side, logged, params);
+    let hidden = hidden(
+        model,
+        body,
+        camera,
+        side,
+        logged,
+        params,
+        Growth::FOR_OFFSETS,
+    );
     model
         .board
         .vertices()
@@ -232,7 +221,15 @@ mod tests {
             joints.set(Joint::LHipPitch, pitch);
             joints.set(Joint::LKneePitch, 0.2 * k as f64);
             for camera in [CameraId::Lower, CameraId::Upper] {
-                let found = hidden(&model, &body, camera, Side::Left, &joints, &params);
+                let found = hidden(
+                    &model,
+                    &body,
+                    camera,
+                    Side::Left,
+                    &joints,
+                    &params,
+                    Growth::FOR_OFFSETS,
+                );
                 let chains = model.chains_for(camera, Side::Left, &joints);
                 let eye = chains.camera.eval(&params).translation;
                 let board = chains.board.eval(&params);

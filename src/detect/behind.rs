@@ -30,6 +30,7 @@ pub fn hidden(
         capture.side,
         &capture.joints,
         params,
+        crate::body::sight::Growth::FOR_OFFSETS,
     )
 }
 

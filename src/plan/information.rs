@@ -129,9 +129,13 @@ fn problem_of(
     let mut terms = Vec::with_capacity(captures.len());
     let mut index = Vec::with_capacity(captures.len());
     for (camera, side, joints) in captures {
-        let vertices = match past {
-            Some(past) => past.in_sight(model, *camera, *side, joints),
-            None => all.clone(),
+        let sighted;
+        let vertices: &[Vertex] = match past {
+            Some(past) => {
+                sighted = past.in_sight(model, *camera, *side, joints);
+                &sighted
+            }
+            None => &all,
         };
         if vertices.is_empty() {
             index.push(None);
@@ -139,7 +143,7 @@ fn problem_of(
         }
         let chains = model.chains_for(*camera, *side, joints);
         let Some(pixels) = model
-            .project(&chains, &zero, &vertices)
+            .project(&chains, &zero, vertices)
             .into_iter()
             .collect::<Option<Vec<_>>>()
         else {

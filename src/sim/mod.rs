@@ -626,7 +626,7 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
             let chains = model.chains_for(camera, stance.side, &actual);
             let projected = model.project(&chains, &truth, &vertices);
             let hidden = match &options.body {
-                Some(body) => crate::body::sight::hidden_grown(
+                Some(body) => crate::body::sight::hidden(
                     model,
                     body,
                     camera,
