@@ -93,7 +93,7 @@ impl BatchFiles {
             ));
         }
         if let Some(path) = &self.report {
-            crate::report::html::write_batch_report(batch, drift, path, &options)
+            super::html::write_batch_report(batch, drift, path, &options)
                 .map_err(BatchFilesError::Report)?;
             note(&format!("wrote {}", path.display()));
         }

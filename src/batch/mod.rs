@@ -40,6 +40,7 @@
 
 pub mod drift;
 mod files;
+mod html;
 mod report;
 pub mod request;
 pub mod stats;

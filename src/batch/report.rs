@@ -399,7 +399,7 @@ impl Batch {
         let stage = crate::output::Staged::new(dir, &options)?;
         let staged = stage.options();
         let solutions: Vec<_> = self.runs.iter().map(|r| &r.solution).collect();
-        let named = |e| crate::run::files::staged_plot_error(e, &stage);
+        let named = |e| crate::report::files::staged_plot_error(e, &stage);
         if !solutions.is_empty() {
             plot::parameter_estimates(&solutions, &stage.dir().join("parameters"), &staged)
                 .map_err(named)?;

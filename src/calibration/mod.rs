@@ -6,6 +6,7 @@
 
 pub mod file;
 pub mod intrinsics;
+pub mod result_json;
 pub mod standing;
 
 use std::collections::BTreeMap;

@@ -203,3 +203,55 @@ impl Calibration {
         Some(alpha + kappa * tau + 0.5 * play * sign)
     }
 }
+
+impl Calibration {
+    /// The leg offsets for a robot in the standard stand beside the lying ones (when
+    /// compliance or play have values; empty otherwise): `(offset, lying α, standing α +
+    /// κ·τ_stand + ½π·sgn τ_stand, its one-sigma)` ([`Calibration::standing_offset`],
+    /// [`Calibration::standing_std`]).
+    pub fn standing_rows(&self) -> Vec<(Param, f64, f64, Option<f64>)> {
+        self.parameters
+            .iter()
+            .filter_map(|e| {
+                let s = self.standing_offset(e.param)?;
+                Some((e.param, e.value, s, self.standing_std(e.param)))
+            })
+            .collect()
+    }
+
+    /// [`Calibration::standing_rows`] in one line, `LHipPitch 0.1234 ± 0.0100°, …` (`None`
+    /// when there are none): what `export` and `solve --export` log for the team files.
+    pub fn standing_summary(&self) -> Option<String> {
+        let rows = self.standing_rows();
+        (!rows.is_empty()).then(|| {
+            rows.iter()
+                .map(|(p, _, v, s)| match s {
+                    Some(s) => format!("{p} {v:.4} ± {s:.4}°"),
+                    None => format!("{p} {v:.4}°"),
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        })
+    }
+
+    /// What `export` and `solve --export` say of the standing leg offsets before writing
+    /// team files: the [`Calibration::standing_summary`] and a warning for every
+    /// [`Calibration::standing_caveats`], one line each.
+    pub fn standing_notes(&self) -> Vec<String> {
+        let mut notes: Vec<String> = self
+            .standing_summary()
+            .map(|summary| {
+                format!(
+                    "standing leg offsets for the team files (α + κ·τ_stand + ½π·sgn τ_stand): {summary}"
+                )
+            })
+            .into_iter()
+            .collect();
+        notes.extend(
+            self.standing_caveats()
+                .into_iter()
+                .map(|caveat| format!("warning: standing leg offset {caveat}")),
+        );
+        notes
+    }
+}

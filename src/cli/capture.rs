@@ -8,9 +8,9 @@ use std::sync::mpsc;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 
+use naocalib::dataset::settings::{self, SettingsChanges};
 use naocalib::model::CameraId;
 use naocalib::robot::camera::guard;
-use naocalib::robot::camera::settings::{self, SettingsChanges};
 use naocalib::robot::capture::request::{self, CaptureRequest};
 use naocalib::robot::capture::{self, CaptureError, Forecast};
 use naocalib::robot::check::{self, CheckReport};

@@ -9,8 +9,9 @@ use clap::Args;
 
 use super::options::{ProblemArgs, SolverArgs, UncertaintyArgs, run_options};
 use naocalib::dataset::Dataset;
+use naocalib::report::RunFiles;
 use naocalib::report::printed;
-use naocalib::run::{self, Run, RunError, RunFiles, RunOptions};
+use naocalib::run::{self, Run, RunError, RunOptions};
 use naocalib::solve::{self, uncertainty::with_bootstrap_progress};
 
 #[derive(Debug, Args)]

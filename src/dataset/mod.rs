@@ -12,6 +12,7 @@ mod config;
 mod corners;
 mod csv_table;
 mod error;
+pub mod settings;
 mod text;
 mod toml_doc;
 mod truth;
@@ -401,14 +402,14 @@ pub fn read_model(path: &Path) -> Result<Model, DatasetError> {
 
 /// `dataset.toml` as `naocalib capture` writes it: `model` (validated; raw joint angles)
 /// with the capture settings each camera was driven with in its table (`settings`, the
-/// keys of [`crate::robot::camera::settings::SETTING_KEYS`]) and `notes` as comment lines
+/// keys of [`crate::dataset::settings::SETTING_KEYS`]) and `notes` as comment lines
 /// under the header. `path` names the file in errors.
 pub fn render_captured(
     path: &Path,
     model: &Model,
     settings: &[(
         crate::model::CameraId,
-        crate::robot::camera::settings::SettingsChanges,
+        crate::dataset::settings::SettingsChanges,
     )],
     notes: &[String],
 ) -> Result<String, DatasetError> {
@@ -423,13 +424,13 @@ pub fn render_captured(
 
 /// Reads the capture settings of a `dataset.toml` (`[camera]` and `[upper_camera]`'s
 /// `flip`, `exposure`, `gain`, `white_balance_k`, `fps`): per camera with a table, what it
-/// changes of the defaults ([`crate::robot::camera::settings::CameraSettings::defaults`]).
+/// changes of the team defaults capture starts from.
 pub fn read_camera_settings(
     path: &Path,
 ) -> Result<
     Vec<(
         crate::model::CameraId,
-        crate::robot::camera::settings::SettingsChanges,
+        crate::dataset::settings::SettingsChanges,
     )>,
     DatasetError,
 > {

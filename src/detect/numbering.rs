@@ -22,7 +22,7 @@
 use nalgebra::Matrix3;
 
 use super::assign;
-use super::guided::{self, Integral, is_black};
+use super::guided::pattern::{self, Integral, is_black};
 use crate::model::{Camera, Model};
 
 /// What the image shows at one lattice point.
@@ -121,7 +121,7 @@ fn lattice(model: &Model, i: i32, j: i32) -> [f64; 2] {
 
 /// The (distorted) pixel of undistorted pixel `p`, or `None` when it is not finite.
 fn distorted(camera: &Camera, p: [f64; 2]) -> Option<[f64; 2]> {
-    guided::distorted(camera, p).filter(|q| q[0].is_finite() && q[1].is_finite())
+    pattern::distorted(camera, p).filter(|q| q[0].is_finite() && q[1].is_finite())
 }
 
 /// What the image shows at lattice point `(i, j)` of the board mapped by `h` (board plane

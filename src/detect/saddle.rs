@@ -25,7 +25,7 @@ use std::fmt;
 use nalgebra::{Matrix3, Vector3};
 
 use super::assign;
-use super::guided::{distorted, is_black, undistorted};
+use super::guided::pattern::{distorted, is_black, undistorted};
 use crate::model::{Camera, Model, Vertex};
 use crate::sim::render::GreyImage;
 

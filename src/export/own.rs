@@ -43,13 +43,13 @@ use serde_json::Value;
 
 use super::format::{DocRow, Format, NameRule};
 use super::{ExportError, parse_error};
+use crate::calibration::result_json::ResultJson;
 use crate::calibration::{
     COMPENSATION, Calibration, Entry, IMPORT_SOLVER, Origin, Posture, Prior, Standing,
     StandingFile, StandingIn, UniqueMap, stand_torque,
 };
 use crate::dataset::{AngleKind, AngleSource};
 use crate::model::{CameraId, PAPER_PARAMETERS, Param};
-use crate::report::ResultJson;
 
 /// The `format` key of the TOML and JSON calibration files.
 pub const FORMAT: &str = "naocalib-calibration";

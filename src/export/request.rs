@@ -81,7 +81,7 @@ pub fn run(
         ));
     }
     if calibration.posture == Posture::Standing {
-        for line in crate::report::standing_notes(&calibration) {
+        for line in calibration.standing_notes() {
             note(&line);
         }
     }

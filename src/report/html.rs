@@ -7,7 +7,7 @@
 //! model red, the calibrated model blue) as embedded PNG.
 //!
 //! `naocalib solve DATASET --report FILE.html` writes [`solve_page`]; `naocalib batch
-//! --report FILE.html` writes [`batch_page`].
+//! --report FILE.html` writes a page of the same parts, one [`run_section`] per run.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -16,8 +16,6 @@ use std::path::Path;
 use plotters::prelude::*;
 
 use super::plot::{self, PlotError};
-use crate::batch::Batch;
-use crate::batch::drift::DriftOptions;
 use crate::dataset::Dataset;
 use crate::model::{Side, Vertex};
 use crate::output::{WriteError, WriteOptions, write_atomic};
@@ -183,7 +181,8 @@ fn intrinsics_tables(out: &mut String, cameras: &[crate::run::CameraIntrinsics],
     }
 }
 
-fn page_start(out: &mut String, title: &str) {
+/// Opens a report page titled `title`: the XHTML head, the style and the sign convention.
+pub(crate) fn page_start(out: &mut String, title: &str) {
     let _ = write!(
         out,
         "<!DOCTYPE html>\n<html xmlns=\"http://www.w3.org/1999/xhtml\" lang=\"en\">\n<head>\n\
@@ -198,12 +197,13 @@ fn page_start(out: &mut String, title: &str) {
     );
 }
 
-fn page_end(out: &mut String) {
+/// Closes a page [`page_start`] opened.
+pub(crate) fn page_end(out: &mut String) {
     out.push_str("</body>\n</html>\n");
 }
 
 /// Inline SVG from plotters, without its XML prologue (if any).
-fn inline_svg(svg: &str) -> &str {
+pub(crate) fn inline_svg(svg: &str) -> &str {
     svg.find("<svg").map_or(svg, |i| &svg[i..])
 }
 
@@ -477,44 +477,23 @@ pub fn solve_page(run: &Run, dataset: &Dataset) -> Result<String, ReportError> {
     Ok(out)
 }
 
-/// The report of a batch: the summary table, the estimates across runs, and each run's
-/// section (without overlays, which would need every dataset's images).
-pub fn batch_page(batch: &Batch, drift: &DriftOptions) -> Result<String, ReportError> {
-    let mut out = String::new();
-    page_start(
-        &mut out,
-        &format!(
-            "naocalib batch of {} datasets",
-            batch.runs.len() + batch.failures.len()
-        ),
-    );
-    out.push_str("<h2>Summary</h2>\n<div class=\"diag\">");
-    out.push_str(&escape(&batch.table(drift)));
-    out.push_str("</div>\n");
-    if !batch.runs.is_empty() {
-        let runs: Vec<&Solution> = batch.runs.iter().map(|r| &r.solution).collect();
-        let svg = plot::parameter_estimates_svg(&runs)?;
-        let _ = writeln!(
-            out,
-            "<figure id=\"estimates\">{}<figcaption>Estimates of every run with ±1σ.\
-             </figcaption></figure>",
-            inline_svg(&svg)
-        );
-    }
-    for (k, run) in batch.runs.iter().enumerate() {
-        section(
-            &mut out,
-            &Section {
-                title: run.dataset().display().to_string(),
-                run,
-                dataset: None,
-                overlays: false,
-                id_suffix: format!("-{}", k + 1),
-            },
-        )?;
-    }
-    page_end(&mut out);
-    Ok(out)
+/// One run's section of a page of many runs (a batch's): titled by its dataset, ids
+/// suffixed with `id_suffix`, without overlays (which would need every dataset's images).
+pub(crate) fn run_section(
+    out: &mut String,
+    run: &Run,
+    id_suffix: String,
+) -> Result<(), ReportError> {
+    section(
+        out,
+        &Section {
+            title: run.dataset().display().to_string(),
+            run,
+            dataset: None,
+            overlays: false,
+            id_suffix,
+        },
+    )
 }
 
 /// Writes [`solve_page`] to `path` (atomically; never over an input).
@@ -525,16 +504,5 @@ pub fn write_report(
     options: &WriteOptions,
 ) -> Result<(), ReportError> {
     let page = solve_page(run, dataset)?;
-    Ok(write_atomic(path, page.as_bytes(), options)?)
-}
-
-/// Writes [`batch_page`] to `path` (atomically; never over an input).
-pub fn write_batch_report(
-    batch: &Batch,
-    drift: &DriftOptions,
-    path: &Path,
-    options: &WriteOptions,
-) -> Result<(), ReportError> {
-    let page = batch_page(batch, drift)?;
     Ok(write_atomic(path, page.as_bytes(), options)?)
 }

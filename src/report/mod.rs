@@ -4,13 +4,15 @@
 //! run or a solution, never a solver.
 
 pub mod compare;
+pub(crate) mod files;
 pub mod html;
 pub mod misfit_plot;
 pub mod plot;
 pub mod printed;
 pub mod result_json;
 
-pub use result_json::ResultJson;
+pub use crate::calibration::result_json::ResultJson;
+pub use files::{FilesError, RunFiles};
 
 use std::fmt::Write as _;
 
@@ -474,62 +476,11 @@ pub fn changes_table(changes: &[Change]) -> String {
     out
 }
 
-/// The leg offsets for a robot in the standard stand beside the lying ones (when compliance
-/// or play have values; empty otherwise): `(offset, lying α, standing α + κ·τ_stand +
-/// ½π·sgn τ_stand, its one-sigma)` ([`crate::calibration::Calibration::standing_offset`],
-/// [`crate::calibration::Calibration::standing_std`]).
-pub fn standing_offsets(
-    cal: &crate::calibration::Calibration,
-) -> Vec<(Param, f64, f64, Option<f64>)> {
-    cal.parameters
-        .iter()
-        .filter_map(|e| {
-            let s = cal.standing_offset(e.param)?;
-            Some((e.param, e.value, s, cal.standing_std(e.param)))
-        })
-        .collect()
-}
-
-/// [`standing_offsets`] in one line, `LHipPitch 0.1234 ± 0.0100°, …` (`None` when there
-/// are none): what `export` and `solve --export` log for the team files.
-pub fn standing_summary(cal: &crate::calibration::Calibration) -> Option<String> {
-    let rows = standing_offsets(cal);
-    (!rows.is_empty()).then(|| {
-        rows.iter()
-            .map(|(p, _, v, s)| match s {
-                Some(s) => format!("{p} {v:.4} ± {s:.4}°"),
-                None => format!("{p} {v:.4}°"),
-            })
-            .collect::<Vec<_>>()
-            .join(", ")
-    })
-}
-
-/// What `export` and `solve --export` say of the standing leg offsets before writing team
-/// files: the [`standing_summary`] and a warning for every
-/// [`crate::calibration::Calibration::standing_caveats`], one line each.
-pub fn standing_notes(cal: &crate::calibration::Calibration) -> Vec<String> {
-    let mut notes: Vec<String> = standing_summary(cal)
-        .map(|summary| {
-            format!(
-                "standing leg offsets for the team files (α + κ·τ_stand + ½π·sgn τ_stand): {summary}"
-            )
-        })
-        .into_iter()
-        .collect();
-    notes.extend(
-        cal.standing_caveats()
-            .into_iter()
-            .map(|caveat| format!("warning: standing leg offset {caveat}")),
-    );
-    notes
-}
-
-/// [`standing_offsets`] as a text table (empty when there are none), with the joints
-/// whose standing offset is uncertain beyond the target or extrapolated named below it
-/// ([`crate::calibration::Calibration::standing_caveats`]).
+/// [`crate::calibration::Calibration::standing_rows`] as a text table (empty when there
+/// are none), with the joints whose standing offset is uncertain beyond the target or
+/// extrapolated named below it ([`crate::calibration::Calibration::standing_caveats`]).
 pub fn standing_table(cal: &crate::calibration::Calibration) -> String {
-    let rows = standing_offsets(cal);
+    let rows = cal.standing_rows();
     if rows.is_empty() {
         return String::new();
     }

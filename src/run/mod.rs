@@ -4,10 +4,9 @@
 //! offsets and the dataset's joint-angle source included), the change since the robot's
 //! previous calibration (`--start-from`) and the run's [`Provenance`].
 //!
-//! Every output reads the run: the table ([`crate::report::run_text`]), the result JSON
-//! ([`crate::report::ResultJson::from_run`]), the HTML report
-//! ([`crate::report::html::solve_page`]), plots, the calibration files and the policy of
-//! `naocalib solve`'s files ([`RunFiles`]), and [`crate::batch`], whose runs are these.
+//! Every output reads the run: the table, the result JSON, the HTML report, plots, the
+//! calibration files and the policy of `naocalib solve`'s files (all in `report`, which
+//! reads this module, never the other way), and `batch`, whose runs are these.
 //!
 //! ```
 //! use std::path::Path;
@@ -26,7 +25,6 @@
 //! ```
 
 mod change;
-pub(crate) mod files;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -38,7 +36,6 @@ use crate::model::{FixedSet, PARAMETER_COUNT, Side};
 use crate::solve::{Loss, Problem, Solution, SolveError, UncertaintyOptions};
 
 pub use change::{CameraIntrinsics, Change, changes, intrinsics_of};
-pub use files::{FilesError, RunFiles};
 
 /// How a run solves its dataset: what `naocalib solve` and `naocalib batch` take from their
 /// flags.

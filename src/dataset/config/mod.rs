@@ -12,8 +12,8 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use crate::dataset::settings::SettingsChanges;
 use crate::model::{Board, Camera, CameraId, Model, RobotGeometry};
-use crate::robot::camera::settings::SettingsChanges;
 
 use super::error::{DatasetError, Location};
 use super::toml_doc::TomlDoc;

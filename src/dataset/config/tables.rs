@@ -7,9 +7,9 @@ use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use serde::{Deserialize, Serialize, Serializer};
 
 use crate::dataset::AngleKind;
+use crate::dataset::settings::SettingsChanges;
 use crate::dataset::units::degrees_for;
 use crate::model::{Board, Camera, RobotGeometry};
-use crate::robot::camera::settings::SettingsChanges;
 
 /// `[joints]`: whether `captures.csv` holds raw encoder readings or angles a framework has
 /// already corrected with the robot's joint calibration (docs/MODEL.md §7).

@@ -29,7 +29,7 @@
 //! Vertices too close to the image border for a window of [`MIN_HALF_WINDOW`] pixels are
 //! left out rather than kept biased.
 
-mod pattern;
+pub(in crate::detect) mod pattern;
 
 use crate::detect::cv;
 use crate::detect::find::{SUBPIX_EPS, SUBPIX_ITERATIONS};
@@ -41,8 +41,7 @@ use crate::model::{Camera, Model, Pose, Vertex};
 use super::saddle::{Dropped, Saddles};
 use super::{assign, numbering};
 pub use pattern::Integral;
-use pattern::{MIN_SCORE, Predicted, median_square, predict, reshape};
-pub(super) use pattern::{distorted, is_black, undistorted};
+use pattern::{MIN_SCORE, Predicted, distorted, median_square, predict, reshape, undistorted};
 
 /// Vertices by index into the prediction, with their pixels.
 type Indexed = Vec<(usize, [f64; 2])>;

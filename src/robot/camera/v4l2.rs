@@ -360,19 +360,19 @@ impl V4l2Camera {
             "exposure",
             CID_EXPOSURE_ABSOLUTE,
             s.exposure as i32,
-            other(s.exposure, super::settings::MAX_EXPOSURE),
+            other(s.exposure, crate::dataset::settings::MAX_EXPOSURE),
         )?;
         self.write(
             "gain",
             CID_GAIN,
             s.gain as i32,
-            other(s.gain, super::settings::MAX_GAIN),
+            other(s.gain, crate::dataset::settings::MAX_GAIN),
         )?;
         match s.white_balance {
             None => self.write("white_balance (auto)", CID_AUTO_WHITE_BALANCE, 1, None),
             Some(k) => {
                 self.write("white_balance (auto)", CID_AUTO_WHITE_BALANCE, 0, None)?;
-                let (lo, hi) = super::settings::WHITE_BALANCE_K;
+                let (lo, hi) = crate::dataset::settings::WHITE_BALANCE_K;
                 let other = if k < hi { k + 1 } else { lo };
                 self.write(
                     "white_balance_k",

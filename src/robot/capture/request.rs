@@ -7,8 +7,9 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use crate::dataset::DatasetError;
+use crate::dataset::settings::SettingsChanges;
 use crate::model::{CameraId, Model};
-use crate::robot::camera::settings::{SettingsChanges, settings_for};
+use crate::robot::camera::settings::settings_for;
 use crate::robot::camera::{Camera, CameraError, CameraSpec, Setup};
 use crate::robot::check::{self, CheckReport};
 

@@ -5,12 +5,12 @@
 
 use std::path::{Path, PathBuf};
 
-use super::Run;
+use super::html::ReportError;
+use super::plot::{self, PlotError};
 use crate::dataset::Dataset;
 use crate::export::{self, ExportError, Withheld};
 use crate::output::{Staged, WriteError, WriteOptions};
-use crate::report::html::ReportError;
-use crate::report::plot::{self, PlotError};
+use crate::run::Run;
 
 /// Why a run's files could not be written (each names its flag).
 #[derive(Debug, thiserror::Error)]
@@ -88,7 +88,7 @@ impl RunFiles {
         }
         if let Some(dir) = &self.export {
             let calibration = &run.calibration;
-            for line in crate::report::standing_notes(calibration) {
+            for line in calibration.standing_notes() {
                 note(&line);
             }
             let (files, withheld) = export::dir_files(calibration, dir);
@@ -112,8 +112,7 @@ impl RunFiles {
             }
         }
         if let Some(path) = &self.report {
-            crate::report::html::write_report(run, dataset, path, &options)
-                .map_err(FilesError::Report)?;
+            super::html::write_report(run, dataset, path, &options).map_err(FilesError::Report)?;
             note(&format!("wrote {}", path.display()));
         }
         Ok(())
@@ -151,13 +150,7 @@ fn plots(
         &staged,
     )
     .map_err(|e| staged_plot_error(e, &stage))?;
-    crate::report::misfit_plot::misfit_plots(
-        &run.solution,
-        dataset,
-        stage.dir(),
-        "misfit",
-        &staged,
-    )
-    .map_err(|e| staged_plot_error(e, &stage))?;
+    super::misfit_plot::misfit_plots(&run.solution, dataset, stage.dir(), "misfit", &staged)
+        .map_err(|e| staged_plot_error(e, &stage))?;
     Ok(stage.publish()?)
 }
