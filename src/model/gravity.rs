@@ -5,8 +5,9 @@
 use std::f64::consts::FRAC_PI_4;
 
 use super::board::Board;
+use super::joint::JointAngles;
 use super::pose::{Axis, Pose};
-use super::robot::{JointAngles, RobotGeometry, Side};
+use super::robot::{RobotGeometry, Side};
 
 /// Standard gravity (m/s²).
 pub const G: f64 = 9.81;

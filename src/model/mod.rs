@@ -10,6 +10,7 @@ pub mod camera;
 pub mod chain;
 pub mod gravity;
 pub mod held;
+pub mod joint;
 pub mod parameters;
 pub mod pose;
 pub mod robot;
@@ -18,12 +19,13 @@ pub mod scalar;
 pub use board::{Board, Vertex};
 pub use camera::{Camera, CameraId, Projection};
 pub use chain::{Affine, Chain, Step};
+pub use joint::{JOINT_COUNT, Joint, JointAngles, head_pitch_limits};
 pub use parameters::{
     FAMILIES, Family, FamilyInfo, FixedSet, PAPER_PARAMETERS, PARAMETER_COUNT, Param, ParamGroup,
     Unit,
 };
 pub use pose::{Axis, Pose};
-pub use robot::{JOINT_COUNT, Joint, JointAngles, RobotGeometry, Side, head_pitch_limits};
+pub use robot::{RobotGeometry, Side};
 pub use scalar::Scalar;
 
 /// Everything fixed about one robot and its sandals: geometry, camera intrinsics, board.

@@ -2,7 +2,7 @@
 //! unit and solver block (docs/MODEL.md lists them). Adding a parameter is one line here
 //! plus its place in the model.
 
-use super::robot::Joint;
+use super::joint::{JOINT_COUNT, Joint};
 use std::fmt;
 
 /// The unit a parameter is reported in. Inside the code and files, angles are radians.
@@ -295,7 +295,7 @@ macro_rules! parameters {
             pub const ALL: [Param; [$(Param::$name),*].len()] = [$(Param::$name),*];
 
             /// The parameter's name as in the result JSON and truth.toml.
-            pub fn name(self) -> &'static str {
+            pub const fn name(self) -> &'static str {
                 match self { $(Param::$name => stringify!($name),)* }
             }
 
@@ -600,6 +600,55 @@ pub fn parse_param_list(list: &str) -> Result<Vec<Param>, String> {
     }
     Ok(out)
 }
+
+impl Joint {
+    /// The calibration parameter that offsets this joint (`q = θ + α`): the registry's
+    /// parameter of the joint's name.
+    pub fn offset(self) -> Param {
+        JOINT_OFFSETS[self.index()]
+    }
+
+    /// The joint's compliance parameter (leg joints only), from the parameter registry.
+    pub fn compliance(self) -> Option<Param> {
+        Param::of_joint(Family::Compliance, self)
+    }
+
+    /// The joint's play parameter (leg joints only), from the parameter registry.
+    pub fn play(self) -> Option<Param> {
+        Param::of_joint(Family::Play, self)
+    }
+}
+
+/// Each joint's offset parameter, in [`Joint::ALL`] order: the registry's parameter named
+/// as the joint, found when compiling (a joint without one does not compile).
+const JOINT_OFFSETS: [Param; JOINT_COUNT] = {
+    const fn same(a: &str, b: &str) -> bool {
+        let (a, b) = (a.as_bytes(), b.as_bytes());
+        if a.len() != b.len() {
+            return false;
+        }
+        let mut i = 0;
+        while i < a.len() {
+            if a[i] != b[i] {
+                return false;
+            }
+            i += 1;
+        }
+        true
+    }
+    let mut offsets = [Param::CamYaw; JOINT_COUNT];
+    let mut j = 0;
+    while j < JOINT_COUNT {
+        let name = Joint::ALL[j].name();
+        let mut k = 0;
+        while !same(Param::ALL[k].name(), name) {
+            k += 1; // past the registry's end: no offset for this joint, a compile error
+        }
+        offsets[j] = Param::ALL[k];
+        j += 1;
+    }
+    offsets
+};
 
 #[cfg(test)]
 mod tests {
