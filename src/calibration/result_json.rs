@@ -268,7 +268,7 @@ pub struct OutlierJson {
     pub row: u32,
 }
 
-/// A parameter's change since the previous calibration ([`Change`]).
+/// A parameter's change since the previous calibration (a run's `Change`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ChangeJson {
     /// `value − previous`.

@@ -7,7 +7,7 @@
 //! model red, the calibrated model blue) as embedded PNG.
 //!
 //! `naocalib solve DATASET --report FILE.html` writes [`solve_page`]; `naocalib batch
-//! --report FILE.html` writes a page of the same parts, one [`run_section`] per run.
+//! --report FILE.html` writes a page of the same parts, one section per run.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;

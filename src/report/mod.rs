@@ -1,7 +1,8 @@
 //! Reports of a run ([`crate::run::Run`]) and its [`Solution`]: the paper's Table 2 as text
 //! ([`run_text`], [`table`]), the result JSON of docs/MODEL.md §8 ([`ResultJson`]), the HTML
-//! report ([`html`]), plots, and the comparison of solvers ([`compare`]). A report sees a
-//! run or a solution, never a solver.
+//! report ([`html`]), plots, the comparison of solvers ([`compare`]), and the files
+//! `naocalib solve` writes beside its printout ([`RunFiles`]). A report sees a run or a
+//! solution, never a solver.
 
 pub mod compare;
 pub(crate) mod files;
