@@ -202,9 +202,7 @@ impl Calibration {
         };
         Some(alpha + kappa * tau + 0.5 * play * sign)
     }
-}
 
-impl Calibration {
     /// The leg offsets for a robot in the standard stand beside the lying ones (when
     /// compliance or play have values; empty otherwise): `(offset, lying α, standing α +
     /// κ·τ_stand + ½π·sgn τ_stand, its one-sigma)` ([`Calibration::standing_offset`],
