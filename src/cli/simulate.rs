@@ -87,6 +87,10 @@ pub struct SimulateArgs {
     /// Lens distortion k1,k2,p1,p2,k3 (OpenCV order) of the simulated camera.
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     distortion: Option<Vec<f64>>,
+    /// The sandals of this dataset.toml's [board] (`naocalib sandal --config`'s; default:
+    /// the paper's board, 7 × 5 squares of 25 mm centred 170 mm ahead of the ankle).
+    #[arg(long, value_name = "DATASET_TOML")]
+    board: Option<PathBuf>,
 }
 
 /// Runs `naocalib simulate`.
@@ -112,6 +116,7 @@ pub fn run(args: &SimulateArgs) -> Result<ExitCode> {
         stance_file: args.stance_file.clone(),
         near_border: args.near_border,
         distortion: args.distortion.clone(),
+        board: args.board.clone(),
     };
     let simulated = request::run(&request)?;
     super::print_out(request::summary(&request, &simulated))?;

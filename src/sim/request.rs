@@ -59,6 +59,8 @@ pub struct SimRequest {
     pub near_border: bool,
     /// Lens distortion k1, k2, p1, p2, k3 of the simulated cameras.
     pub distortion: Option<Vec<f64>>,
+    /// A dataset.toml whose `[board]` the sandals are (the paper's board without it).
+    pub board: Option<PathBuf>,
 }
 
 /// Why a dataset could not be simulated or written.
@@ -191,6 +193,9 @@ impl SimRequest {
             camera: self.camera.camera(),
             ..Model::default()
         };
+        if let Some(path) = &self.board {
+            model.board = crate::dataset::read_model(path)?.board;
+        }
         if let Some(d) = &self.distortion {
             if d.len() != 5 {
                 return Err(SimRequestError::Bounds(
@@ -257,6 +262,7 @@ pub fn run(request: &SimRequest) -> Result<Simulated, SimRequestError> {
         .truth
         .iter()
         .chain(&request.stance_file)
+        .chain(&request.board)
         .cloned()
         .collect();
     let write_options = WriteOptions::new(request.force).protecting(inputs);
@@ -415,6 +421,7 @@ mod tests {
             stance_file: None,
             near_border: false,
             distortion: None,
+            board: None,
         }
     }
 
