@@ -14,7 +14,7 @@
 # SANDAL: paper (7 × 5 squares centred 170 mm ahead of the ankle) or turned (the same
 # board turned by 90°, centred 200 mm ahead); CAMERAS: lower, both (an upper camera with
 # the lower one's intrinsics) or intrinsics (both, their intrinsics free: plan
-# --families paper,intrinsics, robots with intrinsics offsets, solve --free intrinsics).
+# --families paper,intrinsics, robots with intrinsics offsets, solve --model auto --free intrinsics).
 # Default: turned lower 3 4 5. Needs python3 for the comparison.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -52,7 +52,7 @@ both | intrinsics)
     if [ "$cameras" = intrinsics ]; then
         plan_flags+=(--families paper,intrinsics)
         sim_flags+=(--effects intrinsics)
-        solve_flags=(--free intrinsics)
+        solve_flags+=(--free intrinsics)
     fi
     ;;
 *) echo "unknown cameras '$cameras' (lower, both, intrinsics)" >&2; exit 2 ;;

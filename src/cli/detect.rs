@@ -71,15 +71,17 @@ fn progress_bar(images: usize) -> Option<indicatif::ProgressBar> {
 
 /// For `naocalib solve --detect`: detects the vertices in `dataset`'s images with the
 /// defaults of `naocalib detect` and puts them in place of its corners (nothing is
-/// written), the board predicted with the calibration in `start_from` when given. Prints
+/// written), the board predicted with the calibration in `start_from` when given, the
+/// vertices behind the body dropped with `body` (`detect --body`). Prints
 /// the images that gave no vertices (every image with `verbose`) and the summary line on
 /// stderr.
 pub fn detect_for_solve(
     dataset: &mut Dataset,
     verbose: bool,
     start_from: Option<&Path>,
+    body: bool,
 ) -> Result<()> {
-    let options = request::options_for_solve(dataset, start_from)?;
+    let options = request::options_for_solve(dataset, start_from, body)?;
     let bar = progress_bar(dataset.captures.len());
     let detection = request::detect_for_solve(dataset, &options, &|_| {
         if let Some(bar) = &bar {

@@ -22,6 +22,10 @@ pub struct SolveArgs {
     /// and solve with them instead of corners.csv, which is neither needed nor written.
     #[arg(long)]
     detect: bool,
+    /// With --detect: the pictures show the robot lying on its back; drop every vertex its
+    /// body (docs/BODY.md) stands in front of, as `naocalib detect --body` does.
+    #[arg(long, requires = "detect")]
+    body: bool,
     /// Print the result as JSON (docs/MODEL.md §8).
     #[arg(long)]
     json: bool,
@@ -54,14 +58,19 @@ pub struct SolveArgs {
 
 /// The dataset with the vertices detected in its images instead of its corners.csv.
 #[cfg(feature = "detect")]
-fn load_detected(path: &Path, verbose: bool, start_from: Option<&Path>) -> Result<Dataset> {
+fn load_detected(
+    path: &Path,
+    verbose: bool,
+    start_from: Option<&Path>,
+    body: bool,
+) -> Result<Dataset> {
     let mut dataset = Dataset::load_without_corners(path)?;
-    super::detect::detect_for_solve(&mut dataset, verbose, start_from)?;
+    super::detect::detect_for_solve(&mut dataset, verbose, start_from, body)?;
     Ok(dataset)
 }
 
 #[cfg(not(feature = "detect"))]
-fn load_detected(_: &Path, _: bool, _: Option<&Path>) -> Result<Dataset> {
+fn load_detected(_: &Path, _: bool, _: Option<&Path>, _: bool) -> Result<Dataset> {
     anyhow::bail!(
         "--detect needs naocalib built with the `detect` feature (OpenCV), which this build \
          lacks; rebuild with default features, or run `naocalib detect` elsewhere and solve \
@@ -93,7 +102,12 @@ pub fn run(args: &SolveArgs, verbose: bool) -> Result<ExitCode> {
     };
     files.check(&args.dataset)?;
     let dataset = if args.detect {
-        load_detected(&args.dataset, verbose, args.start_from.as_deref())?
+        load_detected(
+            &args.dataset,
+            verbose,
+            args.start_from.as_deref(),
+            args.body,
+        )?
     } else {
         Dataset::load(&args.dataset)?
     };

@@ -378,10 +378,19 @@ fn guided_search(
     };
     let found = outcome_of(&board);
     // Part of the board: OpenCV's chessboard finder may still find all of it, but only
-    // where every vertex is in view, and it gives up slowly where one is not.
+    // where every vertex is in view, and it gives up slowly where one is not: not where
+    // the body model (`--body`) puts a vertex the search missed behind the body.
     let intrinsics = model.intrinsics(capture.camera);
+    let missed_behind_body = || {
+        options.body.as_ref().is_some_and(|body| {
+            behind::hidden(model, body, capture, &params)
+                .iter()
+                .any(|h| !board.vertices.iter().any(|(v, _)| *v == h.vertex))
+        })
+    };
     if board.vertices.len() == board_grid(model).len()
         || !chessboard::worth_trying(&board, intrinsics, options.subpix_factor)
+        || missed_behind_body()
     {
         return Ok(Guided::Done(found));
     }

@@ -299,15 +299,18 @@ pub struct ForSolve {
 }
 
 /// The options of `naocalib detect`'s defaults for `solve --detect`, the board predicted
-/// with the calibration in `start_from` (`solve --start-from CAL.toml`) when given.
+/// with the calibration in `start_from` (`solve --start-from CAL.toml`) when given, the
+/// body model with `body` (`solve --detect --body`).
 pub fn options_for_solve(
     dataset: &Dataset,
     start_from: Option<&Path>,
+    body: bool,
 ) -> Result<DetectOptions, ForSolveError> {
     Ok(DetectOptions {
         params: start_from
             .map(|p| prediction::start_values_for(p, dataset))
             .transpose()?,
+        body: body.then(crate::body::BodyModel::default),
         ..DetectOptions::default()
     })
 }

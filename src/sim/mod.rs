@@ -639,9 +639,6 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
             };
             for (v, uv) in vertices.iter().zip(projected) {
                 let Some(uv) = uv else { continue };
-                if hidden.iter().any(|h| h.vertex == *v) {
-                    continue;
-                }
                 if options.near_border && !model.intrinsics(camera).contains(uv, 0.0) {
                     continue;
                 }
@@ -649,6 +646,11 @@ pub fn simulate(model: &Model, options: &SimOptions) -> Result<Dataset, SimError
                     uv[0] + px.sample(&mut noise_rng),
                     uv[1] + px.sample(&mut noise_rng),
                 ];
+                // Drawn before the body's test: the body decides which vertices are seen,
+                // not the noise of the others (the same robot with and without it).
+                if hidden.iter().any(|h| h.vertex == *v) {
+                    continue;
+                }
                 corners.push(Corner {
                     capture: id,
                     vertex: *v,

@@ -492,6 +492,44 @@ mod tests {
         ));
     }
 
+    /// `--board` takes the sandals of a dataset.toml's `[board]`, writes them into the
+    /// simulated dataset, and is never replaced by it.
+    #[test]
+    fn the_board_is_the_one_of_the_dataset_toml_given() {
+        let dir = tempfile::tempdir().unwrap();
+        let config = dir.path().join("dataset.toml");
+        let turned = "[camera]\nwidth = 640\nheight = 480\nfx = 562.5\nfy = 562.5\n\
+                      cx = 320.0\ncy = 240.0\n[board]\nsquares_x = 7\nsquares_y = 5\nsquare_mm = 25.0\n\
+                      mount_origin_mm = [200.0, 0.0, 0.0]\nmount_rpy_deg = [0.0, 0.0, 90.0]\n";
+        std::fs::write(&config, turned).unwrap();
+        let out = dir.path().join("ds");
+        let r = SimRequest {
+            board: Some(config.clone()),
+            ..request(&out)
+        };
+        let board = r.model(false).unwrap().board;
+        assert_eq!(board.mount_origin, [200.0, 0.0, 0.0]);
+        assert!((board.mount_rpy[2] - 90f64.to_radians()).abs() < 1e-12);
+        run(&r).unwrap();
+        let written = crate::dataset::read_model(&out.join("dataset.toml")).unwrap();
+        assert_eq!(written.board, board);
+        assert_eq!(std::fs::read_to_string(&config).unwrap(), turned);
+        // The dataset.toml given is an input: never the one written.
+        let over = SimRequest {
+            out: dir.path().to_path_buf(),
+            force: true,
+            board: Some(config.clone()),
+            ..request(&out)
+        };
+        assert!(run(&over).is_err());
+        assert_eq!(std::fs::read_to_string(&config).unwrap(), turned);
+        let missing = SimRequest {
+            board: Some(dir.path().join("none.toml")),
+            ..request(&out)
+        };
+        assert!(missing.model(false).unwrap_err().to_string().contains("none.toml"));
+    }
+
     #[test]
     fn a_dataset_is_written_and_told_and_its_truth_never_replaced() {
         let dir = tempfile::tempdir().unwrap();

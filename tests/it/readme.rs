@@ -13,7 +13,7 @@ const README: &str = include_str!("../../README.md");
 
 /// The quick start's commands, exactly (CI runs `scripts/test.sh`).
 const QUICK_START: [&str; 2] = [
-    "scripts/install-deps.sh && cargo run --release -- solve --detect data/sample",
+    "scripts/install-deps.sh && cargo run --release -- solve --detect --body data/sample",
     "scripts/test.sh",
 ];
 
