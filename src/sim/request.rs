@@ -527,7 +527,13 @@ mod tests {
             board: Some(dir.path().join("none.toml")),
             ..request(&out)
         };
-        assert!(missing.model(false).unwrap_err().to_string().contains("none.toml"));
+        assert!(
+            missing
+                .model(false)
+                .unwrap_err()
+                .to_string()
+                .contains("none.toml")
+        );
     }
 
     #[test]
