@@ -424,9 +424,15 @@ mod tests {
         let mut notes = Vec::new();
         let mut note = |l: &str| notes.push(l.to_string());
         let held = request(&sample).prepare(&mut note).unwrap_err();
+        let rows = std::fs::read_to_string(sample.join("corners.csv"))
+            .unwrap()
+            .lines()
+            .count();
         assert!(
-            held.to_string()
-                .ends_with("already holds 720 vertices; use --force to overwrite"),
+            held.to_string().ends_with(&format!(
+                "already holds {} vertices; use --force to overwrite",
+                rows - 1
+            )),
             "{held}"
         );
         let forced = DetectRequest {
