@@ -429,7 +429,8 @@ impl Sandal {
             notes.push(format!(
                 "the {} sole reaches onto the pattern's squares (its outline to x = {reach:.1} \
                  mm; the squares begin at x = {:.1} mm): the toes stand on the print and hide \
-                 part of the outer squares",
+                 part of the outer squares; a board turned by 90° and centred 200 mm ahead of \
+                 the ankle clears them (docs/SANDALS.md)",
                 self.side.name(),
                 self.pattern_outline()
                     .iter()
@@ -553,5 +554,34 @@ mod tests {
         let p = [3.0, -7.5];
         let q = s.sole_to_board(s.board_to_sole(p));
         assert!((q[0] - p[0]).abs() < 1e-12 && (q[1] - p[1]).abs() < 1e-12);
+    }
+
+    /// The paper's board lies under the toes of both feet, and the note says so and names
+    /// the board that clears them; that board, turned by 90° and centred 200 mm ahead of
+    /// the ankle, gets no such note.
+    #[test]
+    fn the_toes_on_the_papers_board_are_noted_and_the_turned_board_clears_them() {
+        for side in Side::BOTH {
+            let paper = Sandal::new(&Board::default(), side, PlateParams::default()).unwrap();
+            let notes = paper.notes();
+            assert!(
+                notes
+                    .iter()
+                    .any(|n| n.contains("the toes stand on the print")
+                        && n.contains("turned by 90° and centred 200 mm")),
+                "{notes:?}"
+            );
+            let turned = Board {
+                mount_origin: [200.0, 0.0, 0.0],
+                mount_rpy: [0.0, 0.0, 90f64.to_radians()],
+                ..Board::default()
+            };
+            let turned = Sandal::new(&turned, side, PlateParams::default()).unwrap();
+            assert!(
+                !turned.notes().iter().any(|n| n.contains("toes")),
+                "{:?}",
+                turned.notes()
+            );
+        }
     }
 }
