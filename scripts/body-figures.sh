@@ -6,15 +6,16 @@
 # the planned vertices (in plain sight past the body, as `plan` predicts them at zero),
 # the vertices the body as it is leaves in sight (the simulator's truth), the vertices
 # found, the worst distance of a found vertex from the truth (any found vertex whose window
-# the body covers is named), and the RMS and largest
-# err/σ of the fitted parameters. docs/BODY.md quotes its output.
+# the body covers is named), and the RMS and largest err/σ of the fitted parameters.
+# docs/PERFORMANCE.md ("The robot in its own pictures") quotes its output.
 #
 #   scripts/body-figures.sh [SANDAL] [CAMERAS] [SEEDS...]
 #
 # SANDAL: paper (7 × 5 squares centred 170 mm ahead of the ankle) or turned (the same
 # board turned by 90°, centred 200 mm ahead); CAMERAS: lower, both (an upper camera with
 # the lower one's intrinsics) or intrinsics (both, their intrinsics free: plan
-# --families paper,intrinsics, robots with intrinsics offsets, solve --model auto --free intrinsics).
+# --families paper,intrinsics, robots with intrinsics offsets, solve --model auto
+# --free intrinsics).
 # Default: turned lower 3 4 5. Needs python3 for the comparison.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -59,10 +60,13 @@ both | intrinsics)
 esac
 
 "$naocalib" plan "$work/plan.csv" --camera "$config" "${plan_flags[@]}" >"$work/plan.txt"
-planned=$(grep -o '[0-9]* of [0-9]* planned vertices have their window in plain sight' "$work/plan.txt" | cut -d' ' -f1)
+planned=$(grep -o '[0-9]* of [0-9]* planned vertices have their window in plain sight' \
+    "$work/plan.txt" | cut -d' ' -f1)
 captures=$(($(wc -l <"$work/plan.csv") - 1))
-echo "sandal $sandal, cameras $cameras: plan --sight of $captures captures, $planned vertices planned in plain sight past the body"
-printf '%-5s %8s %8s %8s %8s %10s %8s %8s %s\n' seed planned visible found dropped "worst px" "RMS z" "max |z|" families
+echo "sandal $sandal, cameras $cameras: plan --sight of $captures captures," \
+    "$planned vertices planned in plain sight past the body"
+printf '%-5s %8s %8s %8s %8s %10s %8s %8s %s\n' \
+    seed planned visible found dropped "worst px" "RMS z" "max |z|" families
 for seed in "${seeds[@]}"; do
     robot=(--stance-file "$work/plan.csv" --board "$config" --team-offsets
         --joint-noise-deg 0.1 --seed "$seed" "${sim_flags[@]}")
@@ -73,8 +77,10 @@ for seed in "${seeds[@]}"; do
     "$naocalib" simulate "$work/all-$seed" "${robot[@]}" --px-noise 0 >/dev/null
     detected=$("$naocalib" detect "$work/images-$seed" --body 2>&1 | tail -1)
     dropped=$(grep -o '[0-9]* vertices dropped' <<<"$detected" | cut -d' ' -f1)
-    "$naocalib" solve "$work/images-$seed" "${solve_flags[@]}" --json >"$work/fit-$seed.json" 2>/dev/null || true
-    python3 - "$work/all-$seed" "$work/truth-$seed" "$work/images-$seed" "$work/fit-$seed.json" "$seed" "$planned" "${dropped:-0}" <<'EOF'
+    "$naocalib" solve "$work/images-$seed" "${solve_flags[@]}" --json \
+        >"$work/fit-$seed.json" 2>/dev/null || true
+    python3 - "$work/all-$seed" "$work/truth-$seed" "$work/images-$seed" \
+        "$work/fit-$seed.json" "$seed" "$planned" "${dropped:-0}" <<'EOF'
 import csv, json, math, sys
 all_dir, truth_dir, found_dir, fit, seed, planned, dropped = sys.argv[1:]
 def corners(d):
