@@ -34,16 +34,25 @@ pub fn hidden(
     )
 }
 
-/// `outcome` without the vertices the body model puts behind a part of the robot
-/// ([`hidden`]), each named among the dropped; rejected when fewer than
-/// [`super::guided::MIN_VERTICES`] are left. Only with the model (`use_model`) and a body
+/// The vertices of `capture`'s board the body model puts behind a part of the robot
+/// ([`hidden`]) at `options`' prediction; none without the model (`use_model`) or a body
 /// ([`DetectOptions::body`]).
-pub(super) fn drop_hidden(
+pub(super) fn predicted(
     dataset: &Dataset,
     capture: &Capture,
     options: &DetectOptions,
-    outcome: Outcome,
-) -> Outcome {
+) -> Vec<Hidden> {
+    match &options.body {
+        Some(body) if options.use_model => {
+            hidden(&dataset.model, body, capture, &options.prediction())
+        }
+        _ => Vec::new(),
+    }
+}
+
+/// `outcome` without the vertices `hidden` ([`predicted`]), each named among the dropped;
+/// rejected when fewer than [`super::guided::MIN_VERTICES`] are left.
+pub(super) fn drop_hidden(hidden: &[Hidden], outcome: Outcome) -> Outcome {
     let Outcome::Found {
         mut corners,
         order,
@@ -53,12 +62,6 @@ pub(super) fn drop_hidden(
     } = outcome
     else {
         return outcome;
-    };
-    let hidden = match &options.body {
-        Some(body) if options.use_model => {
-            hidden(&dataset.model, body, capture, &options.prediction())
-        }
-        _ => Vec::new(),
     };
     let before = corners.len();
     corners.retain(|c| {

@@ -266,12 +266,14 @@ fn detect_image(
         message: e.message,
     };
     let grid = options.pattern.unwrap_or_else(|| board_grid(model));
+    // What the body hides (with `--body`), predicted once for the search and the outcome.
+    let hidden = behind::predicted(dataset, capture, options);
     let mut search = chessboard::Search::Predicted;
     let mut guided_partial = None;
     if options.use_model && options.guided && grid == board_grid(model) {
-        match guided_search(dataset, capture, &grey, options, mode).map_err(cv)? {
+        match guided_search(dataset, capture, &grey, options, mode, &hidden).map_err(cv)? {
             Guided::Done(outcome) => {
-                return Ok(behind::drop_hidden(dataset, capture, options, outcome));
+                return Ok(behind::drop_hidden(&hidden, outcome));
             }
             Guided::Partial { found, half } => {
                 search = chessboard::Search::Whole { half };
@@ -288,7 +290,7 @@ fn detect_image(
         (other, None) => other,
     };
     let outcome = if grid == board_grid(model) {
-        behind::drop_hidden(dataset, capture, options, outcome)
+        behind::drop_hidden(&hidden, outcome)
     } else {
         outcome
     };
@@ -323,13 +325,15 @@ enum Guided {
 }
 
 /// The model-guided search ([`guided::detect`]) in `grey`, the image of `capture`; in the
-/// quick `mode`, its outcome is final.
+/// quick `mode`, its outcome is final. `hidden`: the vertices the body model puts behind
+/// the body ([`behind::predicted`]).
 fn guided_search(
     dataset: &Dataset,
     capture: &Capture,
     grey: &GreyImage,
     options: &DetectOptions,
     mode: Mode,
+    hidden: &[behind::Hidden],
 ) -> cv::Result<Guided> {
     let model = &dataset.model;
     let params = options.prediction();
@@ -381,16 +385,12 @@ fn guided_search(
     // where every vertex is in view, and it gives up slowly where one is not: not where
     // the body model (`--body`) puts a vertex the search missed behind the body.
     let intrinsics = model.intrinsics(capture.camera);
-    let missed_behind_body = || {
-        options.body.as_ref().is_some_and(|body| {
-            behind::hidden(model, body, capture, &params)
-                .iter()
-                .any(|h| !board.vertices.iter().any(|(v, _)| *v == h.vertex))
-        })
-    };
+    let missed_behind_body = hidden
+        .iter()
+        .any(|h| !board.vertices.iter().any(|(v, _)| *v == h.vertex));
     if board.vertices.len() == board_grid(model).len()
         || !chessboard::worth_trying(&board, intrinsics, options.subpix_factor)
-        || missed_behind_body()
+        || missed_behind_body
     {
         return Ok(Guided::Done(found));
     }
