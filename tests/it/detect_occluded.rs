@@ -542,13 +542,30 @@ fn assert_none_reported_behind(
     (behind, found)
 }
 
+/// A simulation's images rendered into `dir` with `body` drawn in front of the boards
+/// (the renderer's defaults otherwise; `seed` its noise's).
+fn drawn_with_body(
+    dir: &Path,
+    seed: u64,
+    body: naocalib::body::BodyModel,
+) -> Option<naocalib::sim::render::ImageOutput> {
+    Some(naocalib::sim::render::ImageOutput {
+        dir: dir.to_path_buf(),
+        options: RenderOptions {
+            seed,
+            body: Some(body),
+            ..RenderOptions::default()
+        },
+        force: false,
+    })
+}
+
 /// Robots drawn with their bodies by the simulator (`simulate --images`: legs, feet with
 /// toes, arms in front of the boards): no vertex reported off, and nearly every vertex
 /// whose line of sight the body leaves free found.
 #[test]
 fn robots_drawn_with_their_bodies() {
     use naocalib::body::BodyModel;
-    use naocalib::sim::render::ImageOutput;
     use naocalib::sim::scene::body_view;
 
     let tmp = tempfile::tempdir().unwrap();
@@ -563,15 +580,7 @@ fn robots_drawn_with_their_bodies() {
             heads: 2,
             px_noise: 0.0,
             joint_noise: 0.0,
-            images: Some(ImageOutput {
-                dir: dir.clone(),
-                options: RenderOptions {
-                    seed,
-                    body: Some(BodyModel::default()),
-                    ..RenderOptions::default()
-                },
-                force: false,
-            }),
+            images: drawn_with_body(&dir, seed, BodyModel::default()),
             ..SimOptions::default()
         };
         let mut dataset = simulate(&Model::default(), &options).expect("simulated");
@@ -645,7 +654,6 @@ fn robots_drawn_with_their_bodies() {
 fn team_sized_robots_drawn_with_their_bodies() {
     use naocalib::body::BodyModel;
     use naocalib::model::{PARAMETER_COUNT, Param};
-    use naocalib::sim::render::ImageOutput;
 
     let tmp = tempfile::tempdir().unwrap();
     let body = BodyModel::default();
@@ -661,15 +669,7 @@ fn team_sized_robots_drawn_with_their_bodies() {
             px_noise: 0.0,
             joint_noise: 0.0,
             truth: Some(truth),
-            images: Some(ImageOutput {
-                dir: dir.clone(),
-                options: RenderOptions {
-                    seed,
-                    body: Some(body),
-                    ..RenderOptions::default()
-                },
-                force: false,
-            }),
+            images: drawn_with_body(&dir, seed, body),
             ..SimOptions::default()
         };
         let mut dataset = simulate(&Model::default(), &options).expect("simulated");
@@ -723,7 +723,6 @@ fn a_plan_past_the_body_is_found_in_pictures_drawn_with_the_body() {
     use naocalib::body::{BodyModel, sight};
     use naocalib::model::{Board, FixedSet, PARAMETER_COUNT, Param};
     use naocalib::plan::{self, PlanOptions};
-    use naocalib::sim::render::ImageOutput;
     use naocalib::solve::{Problem, UncertaintyOptions, backend, backend_names, calibrate};
 
     let model = Model {
@@ -751,15 +750,7 @@ fn a_plan_past_the_body_is_found_in_pictures_drawn_with_the_body() {
         joint_noise: 0.1f64.to_radians(),
         truth: Some(truth),
         schedule: Some(plan::to_stances(&planned.captures)),
-        images: Some(ImageOutput {
-            dir: tmp.path().to_path_buf(),
-            options: RenderOptions {
-                seed,
-                body: Some(body),
-                ..RenderOptions::default()
-            },
-            force: false,
-        }),
+        images: drawn_with_body(tmp.path(), seed, body),
         ..SimOptions::default()
     };
     let mut dataset = simulate(&model, &sim).expect("simulated");
