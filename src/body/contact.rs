@@ -124,8 +124,15 @@ pub fn contact(posed: &PosedBody, floor_x: f64) -> Option<String> {
         }
     }
     pairs(posed)
-        .find(|(a, b)| touch(&a.shape, &b.shape))
+        .find(|(a, b)| apart_bounds(a, b) <= 0.0 && touch(&a.shape, &b.shape))
         .map(|(a, b)| format!("{} / {}", a.name(), b.name()))
+}
+
+/// How far apart the bounding spheres of two parts are (negative where they overlap): a
+/// lower bound of their distance.
+fn apart_bounds(a: &Part, b: &Part) -> f64 {
+    let ((ca, ra), (cb, rb)) = (a.shape.bounds(), b.shape.bounds());
+    norm(sub(ca, cb)) - ra - rb
 }
 
 /// The first contact of the head with a leg part, named, or `None`.
@@ -178,8 +185,7 @@ pub fn clearance(posed: &PosedBody, floor_x: f64) -> Clearance {
     }
     for (a, b) in pairs(posed) {
         // A pair farther apart than their bounding spheres allow cannot set the minimum.
-        let ((ca, ra), (cb, rb)) = (a.shape.bounds(), b.shape.bounds());
-        if norm(sub(ca, cb)) - ra - rb >= best.mm {
+        if apart_bounds(a, b) >= best.mm {
             continue;
         }
         let d = gap(&a.shape, &b.shape);

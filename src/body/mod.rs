@@ -119,20 +119,16 @@ pub fn part_name(kind: Kind, side: Option<Side>) -> String {
 /// [`BodyModel::MARGIN`] over the real part (docs/BODY.md).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BodyModel {
-    /// Thigh box in the left HipPitch frame (origin at the hip joints): low corner
-    /// (mirrored in y for the right leg).
-    pub thigh_lo: [f64; 3],
-    /// Thigh box: high corner.
-    pub thigh_hi: [f64; 3],
+    /// The thigh as boxes in the left HipPitch frame (origin at the hip joints; mirrored in
+    /// y for the right leg), the knee's end and the hip's end: `(lo, hi)` each.
+    pub thighs: [([f64; 3], [f64; 3]); 2],
     /// Tibia box in the left KneePitch frame (origin at the knee): low corner.
     pub tibia_lo: [f64; 3],
     /// Tibia box: high corner.
     pub tibia_hi: [f64; 3],
-    /// Foot box (heel to the ball, with the ankle's housing) in the left sole frame: low
-    /// corner.
-    pub foot_lo: [f64; 3],
-    /// Foot box: high corner.
-    pub foot_hi: [f64; 3],
+    /// The foot as boxes in the left sole frame, from the sole's plane: the plate from the
+    /// heel to the ball, and the ankle's housing above it: `(lo, hi)` each.
+    pub feet: [([f64; 3], [f64; 3]); 2],
     /// The toe, lower than the foot and lowest at its tip, as boxes in the left sole frame:
     /// `(lo, hi)` each.
     pub toes: [([f64; 3], [f64; 3]); 2],
@@ -192,29 +188,36 @@ impl Default for BodyModel {
         let m = BodyModel::MARGIN;
         let grow = |lo: [f64; 3], hi: [f64; 3]| (lo.map(|x| x - m), hi.map(|x| x + m));
         // The thigh below the hip's axis; above it (at most 19 mm), the HipPitch motor's
-        // round housing is the pelvis box's.
-        let (thigh_lo, mut thigh_hi) = grow([-44.7, -41.3, -124.2], [51.2, 48.8, 19.0]);
-        thigh_hi[2] = 0.7;
+        // round housing is the pelvis box's. Two boxes overlapping by 10 mm: the knee's end
+        // (z below −80) reaches 20 mm less far back than the hip's end.
+        let thigh = |lo: [f64; 3], hi: [f64; 3]| {
+            let (lo, mut hi) = grow(lo, hi);
+            hi[2] = hi[2].min(0.7);
+            (lo, hi)
+        };
         // With the AnklePitch bracket at any ankle pitch.
         let (tibia_lo, tibia_hi) = grow([-47.0, -41.3, -129.7], [50.1, 52.0, 21.8]);
-        // The sole stands on the sandal: the foot's boxes start at the sole's plane.
-        let (mut foot_lo, foot_hi) = grow([-59.4, -38.8, 0.0], [60.0, 51.7, 65.0]);
-        foot_lo[2] = 0.0;
-        let toe = |lo: [f64; 3], hi: [f64; 3]| {
+        // The sole stands on the sandal: the foot's boxes start at the sole's plane. Above
+        // 33.5 mm only the ankle's housing (y −25.8 … 20.6 mm, with the AnklePitch bracket) rises, to 65.8 mm.
+        let on_sole = |lo: [f64; 3], hi: [f64; 3]| {
             let (mut lo, hi) = grow(lo, hi);
             lo[2] = 0.0;
             (lo, hi)
         };
         BodyModel {
-            thigh_lo,
-            thigh_hi,
+            thighs: [
+                thigh([-26.1, -41.3, -124.2], [51.2, 48.8, -80.0]),
+                thigh([-44.7, -41.3, -90.0], [49.6, 44.8, 19.0]),
+            ],
             tibia_lo,
             tibia_hi,
-            foot_lo,
-            foot_hi,
+            feet: [
+                on_sole([-59.4, -38.8, 0.0], [60.0, 51.7, 33.5]),
+                on_sole([-50.7, -25.8, 0.0], [44.4, 20.6, 65.8]),
+            ],
             toes: [
-                toe([55.0, -38.8, 0.0], [85.0, 48.2, 33.5]),
-                toe([80.0, -37.3, 0.0], [102.4, 42.7, 28.7]),
+                on_sole([55.0, -38.8, 0.0], [85.0, 48.2, 33.5]),
+                on_sole([80.0, -37.3, 0.0], [102.4, 42.7, 28.7]),
             ],
             sandal_heel: -64.4,
             sandal_thickness: 8.0,
@@ -377,16 +380,16 @@ impl BodyModel {
             let sole = &soles[k];
             let board_frame = sole.compose(&board.mount());
             let (sandal_lo, sandal_hi) = sandal_in_board(self, board);
-            let (tl, th) = (mirror(self.thigh_lo), mirror(self.thigh_hi));
             let (kl, kh) = (mirror(self.tibia_lo), mirror(self.tibia_hi));
-            let mut leg = vec![
-                (Kind::Thigh, boxed(&frames.hip, tl, th)),
-                (Kind::Tibia, boxed(&frames.knee, kl, kh)),
-                (
-                    Kind::Foot,
-                    boxed(sole, mirror(self.foot_lo), mirror(self.foot_hi)),
-                ),
-            ];
+            let mut leg: Vec<(Kind, Shape)> = self
+                .thighs
+                .iter()
+                .map(|(lo, hi)| (Kind::Thigh, boxed(&frames.hip, mirror(*lo), mirror(*hi))))
+                .collect();
+            leg.extend([(Kind::Tibia, boxed(&frames.knee, kl, kh))]);
+            for (lo, hi) in self.feet {
+                leg.push((Kind::Foot, boxed(sole, mirror(lo), mirror(hi))));
+            }
             for (lo, hi) in self.toes {
                 leg.push((Kind::Toe, boxed(sole, mirror(lo), mirror(hi))));
             }

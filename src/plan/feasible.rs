@@ -57,7 +57,9 @@ pub struct Feasibility {
     /// Plan past the robot's own body (`naocalib plan --sight`): a capture is kept only
     /// when at least [`MIN_IN_SIGHT`] of its board's vertices have their refinement window
     /// in plain sight past this body model ([`crate::body::sight`], at
-    /// [`Feasibility::centre`]), and only those vertices count in its information. `None`
+    /// [`Feasibility::centre`]), and only those vertices count in its information; and
+    /// its posture touches nothing in this model (the resting leg parked where it does
+    /// not). `None`
     /// (the default): every vertex counts, and only the resting leg is held against the
     /// lines of sight.
     pub sight: Option<crate::body::BodyModel>,
@@ -183,14 +185,26 @@ pub fn check_for(
     f: &Feasibility,
 ) -> Result<(), Infeasible> {
     within_margins(camera, joints, f)?;
-    if let Some(what) = collision::collision(&model.robot, &f.body, joints) {
+    if let Some(what) = collision(model, f, joints) {
         return Err(Infeasible::Collision(what));
     }
     in_view_and_reach(model, camera, side, joints, f)
 }
 
+/// The first collision of the posture `joints`, named: in the collision model, and when
+/// planning past the body ([`Feasibility::sight`]) any contact of the whole body model
+/// (two parts, a leg and the floor, the head and a leg).
+fn collision(model: &Model, f: &Feasibility, joints: &JointAngles) -> Option<String> {
+    collision::collision(&model.robot, &f.body, joints).or_else(|| {
+        let body = f.sight.as_ref()?;
+        let posed = body.pose(&model.robot, &model.board, joints);
+        crate::body::contact(&posed, body.floor_x).or_else(|| crate::body::head_contact(&posed))
+    })
+}
+
 /// [`check_for`] of a posture whose legs are known to be free of collision (the head
-/// moves no part of the collision model).
+/// moves no part of the collision model, and only the head itself in the whole body
+/// model).
 fn check_legs_free(
     model: &Model,
     camera: CameraId,
@@ -199,6 +213,12 @@ fn check_legs_free(
     f: &Feasibility,
 ) -> Result<(), Infeasible> {
     within_margins(camera, joints, f)?;
+    if let Some(body) = &f.sight
+        && let Some(what) =
+            crate::body::head_contact(&body.pose(&model.robot, &model.board, joints))
+    {
+        return Err(Infeasible::Collision(what));
+    }
     in_view_and_reach(model, camera, side, joints, f)
 }
 
@@ -514,7 +534,7 @@ fn aimed_postures(
             park(other, &mut parked, k);
             parked
         })
-        .find(|parked| collision::collision(&model.robot, &f.body, parked).is_none())
+        .find(|parked| collision(model, f, parked).is_none())
     else {
         return Vec::new();
     };

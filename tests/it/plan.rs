@@ -163,6 +163,43 @@ fn known_colliding_and_unseen_stances_are_refused() {
     );
 }
 
+#[test]
+fn planning_past_the_body_refuses_a_posture_the_body_model_puts_in_contact() {
+    use Joint::*;
+    let model = Model::default();
+    // The left leg raised and rolled out, the right one parked flexed: the collision
+    // model's capsules pass, the body model's thighs touch.
+    let mut joints = JointAngles::default();
+    for (joint, q) in [
+        (LHipYawPitch, 0.0451),
+        (RHipYawPitch, 0.0451),
+        (LHipRoll, 0.4576),
+        (LHipPitch, -0.7102),
+        (LAnklePitch, -0.393),
+        (LAnkleRoll, 0.5269),
+        (RHipRoll, -0.3),
+        (RHipPitch, -0.9),
+        (RKneePitch, 1.6),
+        (RAnklePitch, -0.7),
+    ] {
+        joints.set(joint, q);
+    }
+    let plain = Feasibility::default();
+    let refused = feasible::check(&model, Side::Left, &joints, &plain);
+    assert!(
+        !matches!(refused, Err(Infeasible::Collision(_))),
+        "{refused:?}"
+    );
+    let past = Feasibility {
+        sight: Some(naocalib::body::BodyModel::default()),
+        ..Feasibility::default()
+    };
+    match feasible::check(&model, Side::Left, &joints, &past) {
+        Err(Infeasible::Collision(what)) => assert!(what.contains("thigh"), "{what}"),
+        other => panic!("{other:?}"),
+    }
+}
+
 /// The scatter (robust std across runs, degrees) of each of the 15 angle offsets over
 /// `runs` calibrations of datasets simulated with `options` and new noise each time.
 fn scatter(options: &SimOptions, runs: u64) -> Vec<f64> {
@@ -477,6 +514,14 @@ fn a_plan_past_the_body_is_seen_and_determines_the_offsets_as_predicted() {
         let seen = sight::in_sight(&model, &body, c.camera, c.side, &c.joints, &zero).len();
         assert!(2 * seen >= of, "capture {k}: {seen} of {of} in sight");
     }
+    // Planned past the body, no capture brings two of its parts into contact (the default
+    // plan, held against the same body, does: see docs/BODY.md).
+    assert!(
+        planned.body.contacts.is_empty(),
+        "{:?}",
+        planned.body.contacts
+    );
+    assert!(!paper_plan().body.contacts.is_empty());
     let mut rng = ChaCha8Rng::seed_from_u64(11);
     let truth = sim::draw_truth(&mut rng);
     let past_body = |captures: &[plan::PlannedCapture]| SimOptions {
