@@ -63,6 +63,16 @@ pub fn summary(request: &PlanRequest, planned: &Planned) -> String {
         request.offset_deg,
         request.offset_deg
     );
+    if f.sight.is_some() {
+        let _ = writeln!(
+            out,
+            "past the body (--sight): at least {:.0} % of each board's vertices with their \
+             refinement window in plain sight past the body model, only those counted; no \
+             contact in the body model (its parts, the floor, the head), the resting leg \
+             parked where it touches nothing",
+            100.0 * super::feasible::MIN_IN_SIGHT
+        );
+    }
     if upper {
         let _ = writeln!(
             out,
