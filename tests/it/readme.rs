@@ -1,7 +1,8 @@
-//! The README against the command line: every `naocalib SUBCOMMAND … --flag` it names is a
-//! subcommand and a flag of that subcommand as its `--help` (derived from clap) lists them,
-//! every inline `--flag` is a flag of some subcommand, the quick start's two commands are
-//! there, and every link into the repository points at a file that exists.
+//! The user's guide (the README and docs/COMMANDS.md) against the command line: every
+//! `naocalib SUBCOMMAND … --flag` it names is a subcommand and a flag of that subcommand as
+//! its `--help` (derived from clap) lists them, every inline `--flag` is a flag of some
+//! subcommand, the quick start's two commands are there, and every link into the repository
+//! points at a file that exists.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
@@ -11,16 +12,23 @@ use crate::util::{naocalib, stderr};
 /// The README as the repository has it.
 const README: &str = include_str!("../../README.md");
 
+/// The guide's pages whose command lines and links are checked: path and text.
+const GUIDE: [(&str, &str); 2] = [
+    ("README.md", README),
+    ("docs/COMMANDS.md", include_str!("../../docs/COMMANDS.md")),
+];
+
 /// The quick start's commands, exactly (CI runs `scripts/test.sh`).
 const QUICK_START: [&str; 2] = [
     "scripts/install-deps.sh && cargo run --release -- solve --detect --body data/sample",
     "scripts/test.sh",
 ];
 
-/// One command line the README names: where (line number), the subcommand path
-/// (`["simulate-robot", "snap"]`) and the words after `naocalib`.
+/// One command line the guide names: where (page and line number) and the words after
+/// `naocalib`.
 #[derive(Debug)]
 struct Mention {
+    page: &'static str,
     line: usize,
     words: Vec<String>,
 }
@@ -115,10 +123,19 @@ fn naocalib_words(command: &str) -> Option<Vec<String>> {
     (start < words.len()).then(|| words[start..].iter().map(|w| w.to_string()).collect())
 }
 
-/// Every command line the README names: in code blocks (a line with `naocalib`, continued
+/// Every command line the guide names: in code blocks (a line with `naocalib`, continued
 /// by a trailing `\` or by indented lines), and in inline code (`` `naocalib solve --json` ``
 /// or `` `solve --json` `` with a subcommand first).
 fn mentions(subcommands: &BTreeSet<String>) -> Vec<Mention> {
+    let mut found = Vec::new();
+    for (page, text) in GUIDE {
+        found.extend(page_mentions(page, text, subcommands));
+    }
+    found
+}
+
+/// [`mentions`] on one page.
+fn page_mentions(page: &'static str, text: &str, subcommands: &BTreeSet<String>) -> Vec<Mention> {
     let mut found = Vec::new();
     let mut in_code = false;
     let mut current: Option<(usize, String)> = None;
@@ -126,10 +143,10 @@ fn mentions(subcommands: &BTreeSet<String>) -> Vec<Mention> {
         if let Some((line, text)) = current.take()
             && let Some(words) = naocalib_words(&text)
         {
-            found.push(Mention { line, words });
+            found.push(Mention { page, line, words });
         }
     };
-    for (i, line) in README.lines().enumerate() {
+    for (i, line) in text.lines().enumerate() {
         let number = i + 1;
         if line.trim_start().starts_with("```") {
             flush(&mut current, &mut found);
@@ -165,6 +182,7 @@ fn mentions(subcommands: &BTreeSet<String>) -> Vec<Mention> {
             };
             if let Some(words) = words {
                 found.push(Mention {
+                    page,
                     line: number,
                     words,
                 });
@@ -175,24 +193,27 @@ fn mentions(subcommands: &BTreeSet<String>) -> Vec<Mention> {
     found
 }
 
-/// The flags the inline code of the README names on their own (`` `--plots DIR` ``).
-fn bare_flags() -> Vec<(usize, String)> {
+/// The flags the inline code of the guide names on their own (`` `--plots DIR` ``): page,
+/// line, flag.
+fn bare_flags() -> Vec<(&'static str, usize, String)> {
     let mut found = Vec::new();
-    let mut in_code = false;
-    for (i, line) in README.lines().enumerate() {
-        if line.trim_start().starts_with("```") {
-            in_code = !in_code;
-            continue;
-        }
-        if in_code {
-            continue;
-        }
-        for (k, span) in line.split('`').enumerate() {
-            if k % 2 == 1
-                && span.starts_with('-')
-                && let Some(flag) = span.split_whitespace().next().and_then(flag_of)
-            {
-                found.push((i + 1, flag));
+    for (page, text) in GUIDE {
+        let mut in_code = false;
+        for (i, line) in text.lines().enumerate() {
+            if line.trim_start().starts_with("```") {
+                in_code = !in_code;
+                continue;
+            }
+            if in_code {
+                continue;
+            }
+            for (k, span) in line.split('`').enumerate() {
+                if k % 2 == 1
+                    && span.starts_with('-')
+                    && let Some(flag) = span.split_whitespace().next().and_then(flag_of)
+                {
+                    found.push((page, i + 1, flag));
+                }
             }
         }
     }
@@ -219,8 +240,8 @@ fn every_flag_the_readme_names_exists() {
         }
         if !top.subcommands.contains(sub) {
             problems.push(format!(
-                "README line {}: `naocalib {sub}` is no subcommand",
-                mention.line
+                "{} line {}: `naocalib {sub}` is no subcommand",
+                mention.page, mention.line
             ));
             continue;
         }
@@ -242,7 +263,8 @@ fn every_flag_the_readme_names_exists() {
             checked.insert((path.join(" "), flag.clone()));
             if !help.flags.contains(&flag) {
                 problems.push(format!(
-                    "README line {}: `naocalib {} {flag}`: no such flag (it has {})",
+                    "{} line {}: `naocalib {} {flag}`: no such flag (it has {})",
+                    mention.page,
                     mention.line,
                     path.join(" "),
                     help.flags.iter().cloned().collect::<Vec<_>>().join(" ")
@@ -263,10 +285,10 @@ fn every_flag_the_readme_names_exists() {
                 .clone()
         })
         .collect();
-    for (line, flag) in bare_flags() {
+    for (page, line, flag) in bare_flags() {
         if !all_flags.contains(&flag) {
             problems.push(format!(
-                "README line {line}: `{flag}` is no subcommand's flag"
+                "{page} line {line}: `{flag}` is no subcommand's flag"
             ));
         }
     }
@@ -279,12 +301,12 @@ fn every_flag_the_readme_names_exists() {
     ] {
         assert!(
             subcommands_checked.contains(sub),
-            "the README names no flag of `naocalib {sub}` (checked: {subcommands_checked:?})"
+            "the guide names no flag of `naocalib {sub}` (checked: {subcommands_checked:?})"
         );
     }
     assert!(
         checked.len() >= 40,
-        "only {} subcommand flags found in the README",
+        "only {} subcommand flags found in the guide",
         checked.len()
     );
 }
@@ -299,23 +321,34 @@ fn readme_has_the_quick_start_and_its_links_exist() {
     }
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut missing = Vec::new();
-    for (i, line) in README.lines().enumerate() {
-        for target in line.split("](").skip(1) {
-            let target = target.split(')').next().unwrap_or("");
-            let (file, anchor) = target.split_once('#').unwrap_or((target, ""));
-            if file.is_empty() || file.contains("://") {
-                continue;
-            }
-            let path = root.join(file);
-            if !path.exists() {
-                missing.push(format!("README line {}: {target}", i + 1));
-            } else if !anchor.is_empty() {
-                let text = std::fs::read_to_string(&path).expect("readable");
-                if !text
-                    .lines()
-                    .any(|l| l.starts_with('#') && slug(l) == anchor)
-                {
-                    missing.push(format!("README line {}: {target} (no such heading)", i + 1));
+    for (page, text) in GUIDE {
+        let dir = root
+            .join(page)
+            .parent()
+            .expect("a page's folder")
+            .to_path_buf();
+        for (i, line) in text.lines().enumerate() {
+            for target in line.split("](").skip(1) {
+                let target = target.split(')').next().unwrap_or("");
+                let (file, anchor) = target.split_once('#').unwrap_or((target, ""));
+                if file.contains("://") {
+                    continue;
+                }
+                let path = if file.is_empty() {
+                    root.join(page)
+                } else {
+                    dir.join(file)
+                };
+                if !path.exists() {
+                    missing.push(format!("{page} line {}: {target}", i + 1));
+                } else if !anchor.is_empty() {
+                    let text = std::fs::read_to_string(&path).expect("readable");
+                    if !text
+                        .lines()
+                        .any(|l| l.starts_with('#') && slug(l) == anchor)
+                    {
+                        missing.push(format!("{page} line {}: {target} (no such heading)", i + 1));
+                    }
                 }
             }
         }
