@@ -189,7 +189,7 @@ impl Default for BodyModel {
         let grow = |lo: [f64; 3], hi: [f64; 3]| (lo.map(|x| x - m), hi.map(|x| x + m));
         // The thigh below the hip's axis; above it (at most 19 mm), the HipPitch motor's
         // round housing is the pelvis box's. Two boxes overlapping by 10 mm: the knee's end
-        // (z below −80) reaches 20 mm less far back than the hip's end.
+        // (z below −80) reaches 18.6 mm less far back than the hip's end.
         let thigh = |lo: [f64; 3], hi: [f64; 3]| {
             let (lo, mut hi) = grow(lo, hi);
             hi[2] = hi[2].min(0.7);
@@ -198,7 +198,8 @@ impl Default for BodyModel {
         // With the AnklePitch bracket at any ankle pitch.
         let (tibia_lo, tibia_hi) = grow([-47.0, -41.3, -129.7], [50.1, 52.0, 21.8]);
         // The sole stands on the sandal: the foot's boxes start at the sole's plane. Above
-        // 33.5 mm only the ankle's housing (y −25.8 … 20.6 mm, with the AnklePitch bracket) rises, to 65.8 mm.
+        // 33.5 mm only the ankle's housing rises, to 65.8 mm (y −25.8 … 20.6 mm, with the
+        // AnklePitch bracket).
         let on_sole = |lo: [f64; 3], hi: [f64; 3]| {
             let (mut lo, hi) = grow(lo, hi);
             lo[2] = 0.0;
@@ -386,7 +387,7 @@ impl BodyModel {
                 .iter()
                 .map(|(lo, hi)| (Kind::Thigh, boxed(&frames.hip, mirror(*lo), mirror(*hi))))
                 .collect();
-            leg.extend([(Kind::Tibia, boxed(&frames.knee, kl, kh))]);
+            leg.push((Kind::Tibia, boxed(&frames.knee, kl, kh)));
             for (lo, hi) in self.feet {
                 leg.push((Kind::Foot, boxed(sole, mirror(lo), mirror(hi))));
             }
