@@ -146,6 +146,12 @@ pub fn head_contact(posed: &PosedBody) -> Option<String> {
         .map(|p| format!("{} / head", p.name()))
 }
 
+/// The first contact of any kind a plan is held against, named: two parts or a leg and
+/// the floor ([`contact`]), the head and a leg ([`head_contact`]).
+pub fn any_contact(posed: &PosedBody, floor_x: f64) -> Option<String> {
+    contact(posed, floor_x).or_else(|| head_contact(posed))
+}
+
 /// The first collision of the robot at the leg and head angles `joints` (the arms where
 /// `body` holds them) with the sandals of `board`, named, or `None` when the posture is free
 /// of it.

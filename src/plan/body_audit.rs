@@ -79,9 +79,7 @@ pub fn audit(
     };
     for (k, c) in captures.iter().enumerate() {
         let posed = body.pose(&model.robot, &model.board, &c.joints);
-        if let Some(what) =
-            body::contact(&posed, body.floor_x).or_else(|| body::head_contact(&posed))
-        {
+        if let Some(what) = body::any_contact(&posed, body.floor_x) {
             out.contacts.push((k, what));
         }
         let clear = body::clearance(&posed, body.floor_x);

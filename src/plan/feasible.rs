@@ -198,7 +198,7 @@ fn collision(model: &Model, f: &Feasibility, joints: &JointAngles) -> Option<Str
     collision::collision(&model.robot, &f.body, joints).or_else(|| {
         let body = f.sight.as_ref()?;
         let posed = body.pose(&model.robot, &model.board, joints);
-        crate::body::contact(&posed, body.floor_x).or_else(|| crate::body::head_contact(&posed))
+        crate::body::any_contact(&posed, body.floor_x)
     })
 }
 
