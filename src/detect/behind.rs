@@ -35,8 +35,8 @@ pub fn hidden(
 }
 
 /// The vertices of `capture`'s board the body model puts behind a part of the robot
-/// ([`hidden`]) at `options`' prediction; none without the model (`use_model`) or a body
-/// ([`DetectOptions::body`]).
+/// ([`hidden`]) posed with [`DetectOptions::body_prediction`]; none without the model
+/// (`use_model`) or a body ([`DetectOptions::body`]).
 pub(super) fn predicted(
     dataset: &Dataset,
     capture: &Capture,
@@ -44,7 +44,7 @@ pub(super) fn predicted(
 ) -> Vec<Hidden> {
     match &options.body {
         Some(body) if options.use_model => {
-            hidden(&dataset.model, body, capture, &options.prediction())
+            hidden(&dataset.model, body, capture, &options.body_prediction())
         }
         _ => Vec::new(),
     }

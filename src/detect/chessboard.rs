@@ -272,7 +272,7 @@ impl Finder<'_> {
         // It is slow where there is no board, so not tried on the nominal model's word.
         let found = match found {
             None if options.use_model
-                && options.params.is_some()
+                && options.is_calibrated()
                 && search == Search::Predicted
                 && wholly_in_view(self.dataset, self.capture, grid, options) =>
             {

@@ -21,10 +21,11 @@
 //! ([`DetectOptions::params`], `--start-from`), else the nominal model; then (with
 //! [`DetectOptions::repredict`]) the paper's calibration from the boards found predicts
 //! again, and the images without a whole board are searched again, until nothing
-//! changes. An image with no board that is too dark to show one says so (its camera and
-//! brightness). A camera whose boards the model explains only with its pictures turned
-//! by 180° (its sensor's flip not as it needs, [`turned`]) is said so, and its boards are
-//! not used. Nothing here stops a run: every image gets an [`Outcome`] (`outcome.rs`);
+//! changes; the body (`--body`) stays posed with the prediction given
+//! ([`DetectOptions::body_prediction`]). An image with no board that is too dark to show
+//! one says so (its camera and brightness). A camera whose boards the model explains only
+//! with its pictures turned by 180° (its sensor's flip not as it needs, [`turned`]) is
+//! said so, and its boards are not used. Nothing here stops a run: every image gets an [`Outcome`] (`outcome.rs`);
 //! [`guard`] names the captures whose residuals after a fit stand out.
 
 pub mod assign;
@@ -76,6 +77,10 @@ pub struct DetectOptions {
     /// The parameters (internal units) the board is predicted with: the robot's current
     /// calibration (`--start-from`); `None` for the nominal model (all offsets zero).
     pub params: Option<[f64; PARAMETER_COUNT]>,
+    /// The re-predict loop's calibration from the boards found: where the images are
+    /// searched once it is made, in place of `params`. The body is still posed with
+    /// `params` ([`DetectOptions::body_prediction`]).
+    pub calibrated: Option<[f64; PARAMETER_COUNT]>,
     /// With the model: calibrate from the boards found (numbered by the image), predict
     /// again with that calibration and detect again where no whole board was found, until
     /// nothing changes ([`MAX_PASSES`] at most).
@@ -98,14 +103,32 @@ pub const NOMINAL_UNCERTAINTY_DEG: f64 = 10.0;
 pub const CALIBRATED_UNCERTAINTY_DEG: f64 = 2.0;
 
 impl DetectOptions {
-    /// The parameters the board is predicted with.
+    /// The parameters the board is predicted with in the image.
     pub fn prediction(&self) -> [f64; PARAMETER_COUNT] {
+        self.calibrated
+            .or(self.params)
+            .unwrap_or([0.0; PARAMETER_COUNT])
+    }
+
+    /// The parameters the body is posed with against the board ([`behind`]): the
+    /// prediction given (`--start-from`, else the nominal model), the one a plan counts its
+    /// vertices in plain sight by. Not the re-predict loop's calibration: that fits the
+    /// paper's model, which matches the boards in the image also where the robot has
+    /// effects it lacks (a head offset taken up by the camera's and the legs'), and places
+    /// the legs against the torso worse than the nominal model.
+    pub fn body_prediction(&self) -> [f64; PARAMETER_COUNT] {
         self.params.unwrap_or([0.0; PARAMETER_COUNT])
+    }
+
+    /// Whether the board is predicted with a calibration (`--start-from`, or the
+    /// re-predict loop's), not the nominal model.
+    pub fn is_calibrated(&self) -> bool {
+        self.calibrated.is_some() || self.params.is_some()
     }
 
     /// How far (deg) the prediction may be off: it sets the guided search's widest window.
     pub fn uncertainty_deg(&self) -> f64 {
-        if self.params.is_some() {
+        if self.is_calibrated() {
             CALIBRATED_UNCERTAINTY_DEG
         } else {
             NOMINAL_UNCERTAINTY_DEG
@@ -125,6 +148,7 @@ impl Default for DetectOptions {
                 .map(|n| n.get())
                 .unwrap_or(1),
             params: None,
+            calibrated: None,
             repredict: true,
             body: None,
         }
@@ -520,7 +544,7 @@ impl Passes<'_> {
             let Some(params) = calibrate_from(self.dataset, results, turned) else {
                 break;
             };
-            options.params = Some(params);
+            options.calibrated = Some(params);
             if !self.again(&options, results, &mut quick) {
                 break;
             }
