@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
-# The robot in its own pictures, measured as a team would meet it: a plan made past the
-# body (`plan --sight`), photographed by simulated robots with team-sized hidden offsets
-# whose pictures draw their bodies (`simulate --images --body --team-offsets`), the
-# vertices found by `detect --body`, and the fit `solve --model auto`. Per robot it prints
-# the planned vertices (in plain sight past the body, as `plan` predicts them at zero),
+# The robot in its own pictures, measured as a team would meet it (the README's day): per
+# simulated robot with team-sized hidden offsets, its files (the truth with the cameras'
+# angles 0.3° and the legs' 0.5° off, alternately up and down; the head's as they are),
+# a plan made past the body around them (`plan --sight --around`), its pictures drawn
+# with its body (`simulate --images --body --team-offsets`), the vertices found by
+# `detect --body --start-from` its files, and the fit `solve --model auto --start-from`
+# its files (the head's offsets held at the files'). Per robot it prints
+# the planned vertices (in plain sight past the body, as `plan` predicts them),
 # the vertices the body as it is leaves in sight (the simulator's truth), the vertices
 # found, the worst distance of a found vertex from the truth (any found vertex whose window
 # the body covers is named), and the RMS and largest err/σ of the fitted parameters.
@@ -59,25 +62,55 @@ both | intrinsics)
 *) echo "unknown cameras '$cameras' (lower, both, intrinsics)" >&2; exit 2 ;;
 esac
 
-"$naocalib" plan "$work/plan.csv" --camera "$config" "${plan_flags[@]}" >"$work/plan.txt"
-planned=$(grep -o '[0-9]* of [0-9]* planned vertices have their window in plain sight' \
-    "$work/plan.txt" | cut -d' ' -f1)
-captures=$(($(wc -l <"$work/plan.csv") - 1))
-echo "sandal $sandal, cameras $cameras: plan --sight of $captures captures," \
-    "$planned vertices planned in plain sight past the body"
+# The robot's files: its true offsets, the cameras' angles 0.3° and the legs' 0.5° off,
+# alternately up and down, in naocalib's calibration TOML (`naocalib import`'s). The head's
+# offsets are as the files hold them: the framework applies them before the camera's
+# correction, so a calibration is for the files' head offsets (`solve --start-from`).
+files() {
+    python3 - "$1" "$2" <<'EOF'
+import re, sys
+truth, out = sys.argv[1:]
+values = dict(re.findall(r"^(\w+) = (\S+)", open(truth).read(), re.M))
+legs = [f"{s}{j}" for s in "LR" for j in
+        ["HipYawPitch", "HipRoll", "HipPitch", "KneePitch", "AnklePitch", "AnkleRoll"]]
+angles = ["CamYaw", "CamPitch", "CamRoll", "UpperCamYaw", "UpperCamPitch", "UpperCamRoll"]
+units = dict(re.findall(r"^(\w+) = \S+ +# (\S+)", open(truth).read(), re.M))
+with open(out, "w") as f:
+    f.write('format = "naocalib-calibration"\nversion = 1\nsolver = "naocalib import"\n')
+    for name, unit in units.items():
+        # What the files do not hold (the sandals' mounting, the intrinsics' corrections,
+        # …) is zero.
+        value = float(values[name]) if name.startswith("Head") else 0.0
+        if name in angles + legs:
+            k = (angles + legs).index(name)
+            value = float(values[name]) + (0.3 if name in angles else 0.5) * (-1) ** k
+        f.write(f'\n[parameters.{name}]\nvalue = {value!r}\nstd = 0.0\nunit = "{unit}"\n')
+EOF
+}
+
+echo "sandal $sandal, cameras $cameras: plan --sight around each robot's files"
 printf '%-5s %8s %8s %8s %8s %10s %8s %8s %s\n' \
     seed planned visible found dropped "worst px" "RMS z" "max |z|" families
 for seed in "${seeds[@]}"; do
-    robot=(--stance-file "$work/plan.csv" --board "$config" --team-offsets
-        --joint-noise-deg 0.1 --seed "$seed" "${sim_flags[@]}")
+    drawn=(--board "$config" --team-offsets --seed "$seed" "${sim_flags[@]}")
+    "$naocalib" simulate "$work/drawn-$seed" "${drawn[@]}" --stances 1 --heads 1 >/dev/null
+    files "$work/drawn-$seed/truth.toml" "$work/files-$seed.toml"
+    "$naocalib" plan "$work/plan-$seed.csv" --camera "$config" "${plan_flags[@]}" \
+        --around "$work/files-$seed.toml" >"$work/plan-$seed.txt"
+    planned=$(grep -o '[0-9]* of [0-9]* planned vertices have their window in plain sight' \
+        "$work/plan-$seed.txt" | cut -d' ' -f1)
+    robot=(--stance-file "$work/plan-$seed.csv" --truth "$work/drawn-$seed/truth.toml"
+        --board "$config" --joint-noise-deg 0.1 --seed "$seed")
     # The same robot, stances and joint noise twice: its pictures, and its true vertices.
     "$naocalib" simulate "$work/images-$seed" "${robot[@]}" --body --images >/dev/null
     "$naocalib" simulate "$work/truth-$seed" "${robot[@]}" --body --px-noise 0 >/dev/null
     # Where every vertex in the image truly is, hidden or not.
     "$naocalib" simulate "$work/all-$seed" "${robot[@]}" --px-noise 0 >/dev/null
-    detected=$("$naocalib" detect "$work/images-$seed" --body 2>&1 | tail -1)
+    detected=$("$naocalib" detect "$work/images-$seed" --body \
+        --start-from "$work/files-$seed.toml" 2>&1 | tail -1)
     dropped=$(grep -o '[0-9]* vertices dropped' <<<"$detected" | cut -d' ' -f1)
     "$naocalib" solve "$work/images-$seed" "${solve_flags[@]}" --json \
+        --start-from "$work/files-$seed.toml" \
         >"$work/fit-$seed.json" 2>/dev/null || true
     python3 - "$work/all-$seed" "$work/truth-$seed" "$work/images-$seed" \
         "$work/fit-$seed.json" "$seed" "$planned" "${dropped:-0}" <<'EOF'
