@@ -13,7 +13,7 @@
 
 use super::shapes::{Shape, norm, point_segment_distance, segment_distance, sub};
 use super::{BodyModel, Kind, Part, PosedBody};
-use crate::model::{Board, JointAngles, RobotGeometry, Side};
+use crate::model::{Board, JointAngles, Model, RobotGeometry, Side};
 
 /// Whether two solids touch.
 fn touch(a: &Shape, b: &Shape) -> bool {
@@ -150,6 +150,31 @@ pub fn head_contact(posed: &PosedBody) -> Option<String> {
 /// the floor ([`contact`]), the head and a leg ([`head_contact`]).
 pub fn any_contact(posed: &PosedBody, floor_x: f64) -> Option<String> {
     contact(posed, floor_x).or_else(|| head_contact(posed))
+}
+
+/// Largest step of any joint between two postures checked along a move (rad).
+pub const MOVE_STEP: f64 = 0.03;
+
+/// The first posture strictly between `from` and `to` on the straight move (checked every
+/// [`MOVE_STEP`]) that brings two parts of `body` into contact, named; `None` when the
+/// move stays free, or when an end is in contact already (a contact of the posture itself).
+pub fn move_contact(
+    model: &Model,
+    body: &BodyModel,
+    from: &JointAngles,
+    to: &JointAngles,
+) -> Option<String> {
+    let touch =
+        |a: &JointAngles| any_contact(&body.pose(&model.robot, &model.board, a), body.floor_x);
+    let widest = (*to - *from)
+        .iter()
+        .map(|(_, d)| d.abs())
+        .fold(0.0, f64::max);
+    let n = (widest / MOVE_STEP).ceil() as usize;
+    if n < 2 || touch(from).is_some() || touch(to).is_some() {
+        return None;
+    }
+    (1..n).find_map(|k| touch(&from.lerp(to, k as f64 / n as f64)))
 }
 
 /// The first collision of the robot at the leg and head angles `joints` (the arms where

@@ -19,8 +19,8 @@ pub mod shapes;
 pub mod sight;
 
 pub use contact::{
-    Clearance, any_contact, clearance, collision, contact, first_blocking, head_contact,
-    sight_blocked, sight_blocked_by_body,
+    Clearance, MOVE_STEP, any_contact, clearance, collision, contact, first_blocking, head_contact,
+    move_contact, sight_blocked, sight_blocked_by_body,
 };
 pub use posture::{ARM_JOINTS, ArmPosture};
 pub use shapes::{Capsule, OrientedBox, Shape, Sphere};

@@ -1,15 +1,17 @@
 //! The plan held against the body model (docs/BODY.md): for every capture, the whole body
 //! posed with the arms where capture puts them, its smallest clearance (between parts the
 //! model checks, or from the floor), any contact, and which planned vertices a part of the
-//! body hides from the camera. What `naocalib plan` prints beside the rules its captures
-//! were chosen by.
+//! body hides from the camera; and every move of the plan (the ways the planner's own
+//! collision model lets through) walked in the body model. What `naocalib plan` prints
+//! beside the rules its captures were chosen by.
 
 use std::collections::BTreeMap;
 
-use crate::body::{self, BodyModel, Clearance};
-use crate::model::{Model, PARAMETER_COUNT};
+use crate::body::{self, BodyModel, Clearance, move_contact};
+use crate::model::{JointAngles, Model, PARAMETER_COUNT};
 
 use super::PlannedCapture;
+use super::route::NoRoute;
 
 /// A board whose pattern the body hides in part.
 #[derive(Debug, Clone, PartialEq)]
@@ -36,6 +38,11 @@ pub struct BodyAudit {
     /// The vertices whose refinement window the body leaves in plain sight, its parts grown
     /// for the offsets ([`body::sight`]; what `detect --body` keeps), over all captures.
     pub planned: usize,
+    /// The moves checked: from rest to every capture with a way, and back.
+    pub moves: usize,
+    /// The moves that bring two parts into contact between postures free of it
+    /// ([`body::move_contact`]), by the capture they lead to (`None`: the return to rest), named.
+    pub moves_through_contact: Vec<(Option<usize>, String)>,
 }
 
 impl BodyAudit {
@@ -63,12 +70,15 @@ impl BodyAudit {
 
 /// Holds every capture of `captures` against `body` (nominal model at the offsets
 /// `centre`): clearance, contact and the line of sight from the camera to each inner vertex
-/// (every part but the sandal that carries the pattern).
+/// (every part but the sandal that carries the pattern); and the moves `ways` (the
+/// planner's [`super::route::moves`] from `rest`) walked in the body model.
 pub fn audit(
     model: &Model,
     body: &BodyModel,
     captures: &[PlannedCapture],
     centre: &[f64; PARAMETER_COUNT],
+    rest: &JointAngles,
+    ways: &[Result<Vec<JointAngles>, NoRoute>],
 ) -> BodyAudit {
     let mut out = BodyAudit {
         clearance: None,
@@ -76,7 +86,23 @@ pub fn audit(
         hidden: Vec::new(),
         vertices: 0,
         planned: 0,
+        moves: 0,
+        moves_through_contact: Vec::new(),
     };
+    let mut at = *rest;
+    for (k, way) in ways.iter().enumerate() {
+        let Ok(way) = way else { continue };
+        out.moves += 1;
+        let mut touched = None;
+        for next in way {
+            touched = touched.or_else(|| move_contact(model, body, &at, next));
+            at = *next;
+        }
+        if let Some(what) = touched {
+            out.moves_through_contact
+                .push(((k < captures.len()).then_some(k), what));
+        }
+    }
     for (k, c) in captures.iter().enumerate() {
         let posed = body.pose(&model.robot, &model.board, &c.joints);
         if let Some(what) = body::any_contact(&posed, body.floor_x) {
@@ -138,7 +164,8 @@ mod tests {
         let mut low = crate::plan::route::rest_posture();
         low.set(Joint::LHipPitch, 0.45);
         let captures = [capture(raised), capture(both), capture(low)];
-        let a = audit(&model, &body, &captures, &centre);
+        let rest = crate::plan::route::rest_posture();
+        let a = audit(&model, &body, &captures, &centre, &rest, &[]);
         assert_eq!(a.vertices, 3 * 24);
         assert!(
             a.contacts
@@ -186,5 +213,89 @@ mod tests {
             a.by_part().iter().map(|p| p.1).sum::<usize>(),
             a.hidden_vertices()
         );
+    }
+
+    #[test]
+    fn a_move_between_postures_free_of_contact_is_walked_and_its_contact_named() {
+        let model = Model::default();
+        let body = BodyModel::default();
+        let rest = crate::plan::route::rest_posture();
+        let touch = |a: &JointAngles| {
+            body::any_contact(&body.pose(&model.robot, &model.board, a), body.floor_x)
+        };
+        // The left leg raised or not, rolled from out to in, its knee straight or bent;
+        // the right leg at rest.
+        let mut postures = Vec::new();
+        for pitch in [0.0, -0.6, -1.2] {
+            for roll in [-0.3, -0.1, 0.15, 0.4] {
+                for knee in [0.0, 1.2] {
+                    let mut p = rest;
+                    p.set(Joint::LHipPitch, pitch);
+                    p.set(Joint::LHipRoll, roll);
+                    p.set(Joint::LKneePitch, knee);
+                    if touch(&p).is_none() {
+                        postures.push(p);
+                    }
+                }
+            }
+        }
+        // Every pair of them: a contact the audit names is one a walk in a third of its
+        // steps finds too, and most moves such a walk finds in contact the audit names.
+        let (mut through, mut finer) = (0, 0);
+        for a in &postures {
+            for b in &postures {
+                let named = move_contact(&model, &body, a, b);
+                let widest = (*b - *a).iter().map(|(_, d)| d.abs()).fold(0.0, f64::max);
+                let n = 3 * (widest / body::MOVE_STEP).ceil() as usize;
+                let walked = (1..n).any(|k| touch(&a.lerp(b, k as f64 / n as f64)).is_some());
+                assert!(named.is_none() || walked, "{named:?}");
+                through += named.is_some() as usize;
+                finer += walked as usize;
+            }
+        }
+        assert!(postures.len() >= 10, "{} free postures", postures.len());
+        assert!(
+            through > 0,
+            "no move between free postures passes through contact"
+        );
+        assert!(10 * through >= 9 * finer, "{through} of {finer} named");
+        // The audit counts the moves with a way and names those through contact by the
+        // capture they lead to.
+        let captures: Vec<PlannedCapture> = postures.iter().map(|p| capture(*p)).collect();
+        let ways: Vec<Result<Vec<JointAngles>, NoRoute>> = postures
+            .iter()
+            .map(|p| Ok(vec![*p]))
+            .chain([Err(NoRoute), Ok(vec![rest])])
+            .collect();
+        let a = audit(
+            &model,
+            &body,
+            &captures,
+            &[0.0; PARAMETER_COUNT],
+            &rest,
+            &ways,
+        );
+        assert_eq!(a.moves, postures.len() + 1);
+        let mut at = rest;
+        let expected: Vec<usize> = (0..=postures.len() + 1)
+            .filter(|&k| {
+                let to = if k < postures.len() {
+                    postures[k]
+                } else if k == postures.len() {
+                    return false;
+                } else {
+                    rest
+                };
+                let hit = move_contact(&model, &body, &at, &to).is_some();
+                at = to;
+                hit
+            })
+            .collect();
+        let got: Vec<usize> = a
+            .moves_through_contact
+            .iter()
+            .map(|m| m.0.unwrap_or(postures.len() + 1))
+            .collect();
+        assert_eq!(got, expected);
     }
 }

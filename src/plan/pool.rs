@@ -328,11 +328,16 @@ impl Pool {
             route::duration_of(&options.timing, &rest, &random_postures, &random_moves);
         let baseline_blocked = random_moves.iter().filter(|m| m.is_err()).count();
         let coverage = coverage::coverage(model, &design.captures, &options.feasibility.centre);
+        // The plan's own moves, as `capture` drives them, walked in the body model too.
+        let postures: Vec<JointAngles> = design.captures.iter().map(|c| c.joints).collect();
+        let ways = route::moves(model, body, &rest, &postures);
         let body = body_audit::audit(
             model,
             &crate::body::BodyModel::default(),
             &design.captures,
             &options.feasibility.centre,
+            &rest,
+            &ways,
         );
         Ok(Plan {
             captures: design.captures,

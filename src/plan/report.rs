@@ -215,6 +215,32 @@ pub fn body_lines(audit: &BodyAudit) -> String {
             }
         );
     }
+    let through = &audit.moves_through_contact;
+    let shown: Vec<String> = through
+        .iter()
+        .take(3)
+        .map(|(k, what)| match k {
+            Some(k) => format!("to capture {k}: {what}"),
+            None => format!("back to rest: {what}"),
+        })
+        .collect();
+    let _ = writeln!(
+        out,
+        "body model: {} of {} moves bring two parts into contact between postures free of \
+         it, walked every {} rad{}",
+        through.len(),
+        audit.moves,
+        crate::body::MOVE_STEP,
+        if shown.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " ({}{})",
+                shown.join("; "),
+                if through.len() > 3 { "; …" } else { "" }
+            )
+        }
+    );
     let hidden = audit.hidden_vertices();
     let parts: Vec<String> = audit
         .by_part()
