@@ -50,7 +50,7 @@ impl Lazy<'_> {
         if i == j {
             0.0
         } else if j == n {
-            if route::move_is_free(self.model, self.body, from, rest) {
+            if route::move_is_clear(self.model, self.body, from, rest) {
                 self.timing.motion(from, rest)
             } else {
                 BLOCKED

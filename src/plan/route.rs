@@ -4,7 +4,10 @@
 //!
 //! A move interpolates all joints together in a straight line from one posture to the next
 //! (as `capture` commands it), checked every [`CHECK_STEP`] rad against
-//! [`collision::collision`]. When the straight move collides, [`route`] tries, in turn:
+//! [`collision::collision`], and, where both postures are free of contact in the whole body
+//! model (docs/BODY.md; a plan made past the body, `plan --sight`), every
+//! [`crate::body::MOVE_STEP`] rad against it ([`move_is_clear`]). When the straight move
+//! collides, [`route`] tries, in turn:
 //! the HipYawPitch motor first or last; one leg (with the head) first; through the rest
 //! posture; through both legs raised ([`tucked`]); through rest and then both legs raised.
 //!
@@ -86,6 +89,19 @@ pub fn move_is_free(model: &Model, body: &BodyModel, from: &JointAngles, to: &Jo
     }) && parted
 }
 
+/// Whether the straight move from `from` to `to` is free of collisions
+/// ([`move_is_free`]) and, between postures the whole body model (docs/BODY.md) finds free
+/// of contact, free of contact in it too ([`crate::body::move_contact`]).
+pub fn move_is_clear(
+    model: &Model,
+    body: &BodyModel,
+    from: &JointAngles,
+    to: &JointAngles,
+) -> bool {
+    move_is_free(model, body, from, to)
+        && crate::body::move_contact(model, &crate::body::BodyModel::default(), from, to).is_none()
+}
+
 /// The number of checked steps of the move from `from` to `to` (at least 1).
 fn steps(from: &JointAngles, to: &JointAngles) -> usize {
     (*to - *from)
@@ -157,7 +173,7 @@ pub fn route(
         .find(|way| {
             let mut at = *from;
             way.iter().all(|next| {
-                let ok = within_limits(next) && move_is_free(model, body, &at, next);
+                let ok = within_limits(next) && move_is_clear(model, body, &at, next);
                 at = *next;
                 ok
             })
@@ -244,7 +260,8 @@ impl Timing {
 
 /// The moves of executing `captures` in order from `rest` and back to it: the way to each
 /// capture ([`route`], from where the previous move ended; the robot stays where it is
-/// when there is none) and, last, the straight move back to rest (`Err` when it collides).
+/// when there is none) and, last, the straight move back to rest (`Err` when it collides,
+/// [`move_is_clear`]).
 /// `n + 1` entries for `n` captures.
 pub fn moves(
     model: &Model,
@@ -261,7 +278,7 @@ pub fn moves(
         }
         out.push(way);
     }
-    out.push(if move_is_free(model, body, &at, rest) {
+    out.push(if move_is_clear(model, body, &at, rest) {
         Ok(vec![*rest])
     } else {
         Err(NoRoute)

@@ -522,6 +522,13 @@ fn a_plan_past_the_body_is_seen_and_determines_the_offsets_as_predicted() {
         planned.body.contacts
     );
     assert!(!paper_plan().body.contacts.is_empty());
+    // Nor does any move between them, walked in the body model.
+    assert_eq!(planned.body.moves, planned.captures.len() + 1);
+    assert!(
+        planned.body.moves_through_contact.is_empty(),
+        "{:?}",
+        planned.body.moves_through_contact
+    );
     let mut rng = ChaCha8Rng::seed_from_u64(11);
     let truth = sim::draw_truth(&mut rng);
     let past_body = |captures: &[plan::PlannedCapture]| SimOptions {
