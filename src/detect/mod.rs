@@ -25,8 +25,9 @@
 //! ([`DetectOptions::body_prediction`]). An image with no board that is too dark to show
 //! one says so (its camera and brightness). A camera whose boards the model explains only
 //! with its pictures turned by 180° (its sensor's flip not as it needs, [`turned`]) is
-//! said so, and its boards are not used. Nothing here stops a run: every image gets an [`Outcome`] (`outcome.rs`);
-//! [`guard`] names the captures whose residuals after a fit stand out.
+//! said so, and its boards are not used. Nothing here stops a run: every image gets an
+//! [`Outcome`] (`outcome.rs`); [`guard`] names the captures whose residuals after a fit
+//! stand out.
 
 pub mod assign;
 pub mod behind;

@@ -41,7 +41,8 @@ pub struct BodyAudit {
     /// The moves checked: from rest to every capture with a way, and back.
     pub moves: usize,
     /// The moves that bring two parts into contact between postures free of it
-    /// ([`body::move_contact`]), by the capture they lead to (`None`: the return to rest), named.
+    /// ([`body::move_contact`]), by the capture they lead to (`None`: the return to rest),
+    /// named.
     pub moves_through_contact: Vec<(Option<usize>, String)>,
 }
 

@@ -35,6 +35,8 @@ pub(super) struct Design {
     prediction: Prediction,
     pub(super) duration: f64,
     via: usize,
+    /// The way to each capture and back to rest ([`route::moves`]).
+    moves: Vec<Result<Vec<JointAngles>, route::NoRoute>>,
     pool: usize,
     stances: usize,
 }
@@ -297,6 +299,7 @@ impl Pool {
             prediction,
             duration,
             via,
+            moves,
             pool: pool.candidates.len(),
             stances: stances.len(),
         })
@@ -329,15 +332,13 @@ impl Pool {
         let baseline_blocked = random_moves.iter().filter(|m| m.is_err()).count();
         let coverage = coverage::coverage(model, &design.captures, &options.feasibility.centre);
         // The plan's own moves, as `capture` drives them, walked in the body model too.
-        let postures: Vec<JointAngles> = design.captures.iter().map(|c| c.joints).collect();
-        let ways = route::moves(model, body, &rest, &postures);
         let body = body_audit::audit(
             model,
             &crate::body::BodyModel::default(),
             &design.captures,
             &options.feasibility.centre,
             &rest,
-            &ways,
+            &design.moves,
         );
         Ok(Plan {
             captures: design.captures,
