@@ -49,21 +49,28 @@ impl OrientedBox {
         })
     }
 
-    /// Whether two boxes overlap (separating-axis test).
+    /// Whether two boxes overlap (separating-axis test). Boxes whose bounding spheres lie
+    /// apart (by more than a micrometre, for rounding) are apart without it.
     pub fn overlaps(&self, other: &OrientedBox) -> bool {
-        let mut axes: Vec<[f64; 3]> = Vec::with_capacity(15);
-        axes.extend(self.axes);
-        axes.extend(other.axes);
+        let d = sub(other.centre, self.centre);
+        let reach = norm(self.half) + norm(other.half);
+        if dot(d, d) > (reach + 1e-3) * (reach + 1e-3) {
+            return false;
+        }
+        let mut axes = [[0.0; 3]; 15];
+        axes[..3].copy_from_slice(&self.axes);
+        axes[3..6].copy_from_slice(&other.axes);
+        let mut n = 6;
         for a in self.axes {
             for b in other.axes {
                 let c = cross(a, b);
                 if dot(c, c) > 1e-12 {
-                    axes.push(c);
+                    axes[n] = c;
+                    n += 1;
                 }
             }
         }
-        let d = sub(other.centre, self.centre);
-        axes.iter().all(|axis| {
+        axes[..n].iter().all(|axis| {
             let radius = |b: &OrientedBox| {
                 (0..3)
                     .map(|k| b.half[k] * dot(b.axes[k], *axis).abs())

@@ -42,6 +42,12 @@ fn view(model: &Model, chains: &StanceChains, params: &[f64]) -> Option<(Vec<[f6
     Some((uv, angle))
 }
 
+/// Rounding the early exits of [`board_in_view_of`] allow for: a partial spread summed in
+/// another order than the whole may differ from it in its last bits, so an exit needs the
+/// board beyond the border by more than this (px; rad for the view angle).
+const ROUNDING_PX: f64 = 1e-6;
+const ROUNDING_RAD: f64 = 1e-9;
+
 /// Whether the board on `side` stays fully in the image (with the margin) and facing the
 /// camera for every combination of offsets within the bounds around
 /// [`Feasibility::centre`], at the logged angles `joints`.
@@ -86,11 +92,20 @@ pub fn board_in_view_of(
         return false;
     }
     let bounds = uncertain(camera, side, f);
-    // Derivatives by central differences (the model is smooth; h of 1e-5 rad or mm).
+    let (w, hgt) = (intrinsics.width as f64, intrinsics.height as f64);
+    let (lo, hi) = (
+        [f.margin_px; 2],
+        [w - 1.0 - f.margin_px, hgt - 1.0 - f.margin_px],
+    );
+    // Derivatives by central differences (the model is smooth; h of 1e-5 rad or mm). The
+    // spread the offsets met so far already give only grows with the rest, so a board it
+    // pushes out of the image (beyond rounding) is out without the others' derivatives.
     let h = 1e-5;
     let mut d_uv = vec![vec![[0.0; 2]; uv.len()]; bounds.len()];
     let mut d_angle = vec![0.0; bounds.len()];
-    for (k, (p, _)) in bounds.iter().enumerate() {
+    let mut spread_so_far = vec![[0.0; 2]; uv.len()];
+    let mut angle_spread_so_far = 0.0;
+    for (k, (p, b)) in bounds.iter().enumerate() {
         let mut plus = zero;
         let mut minus = zero;
         plus[p.index()] += h;
@@ -105,14 +120,22 @@ pub fn board_in_view_of(
                 (up[v][0] - um[v][0]) / (2.0 * h),
                 (up[v][1] - um[v][1]) / (2.0 * h),
             ];
+            for axis in 0..2 {
+                spread_so_far[v][axis] += d_uv[k][v][axis].abs() * b;
+                let s = spread_so_far[v][axis];
+                if uv[v][axis] - s - lo[axis] < -ROUNDING_PX
+                    || hi[axis] - (uv[v][axis] + s) < -ROUNDING_PX
+                {
+                    return false;
+                }
+            }
         }
         d_angle[k] = (ap - am) / (2.0 * h);
+        angle_spread_so_far += d_angle[k].abs() * b;
+        if angle + angle_spread_so_far > f.max_view_angle + ROUNDING_RAD {
+            return false;
+        }
     }
-    let (w, hgt) = (intrinsics.width as f64, intrinsics.height as f64);
-    let (lo, hi) = (
-        [f.margin_px; 2],
-        [w - 1.0 - f.margin_px, hgt - 1.0 - f.margin_px],
-    );
     // Linear bounds; remember the vertex closest to each border.
     let mut worst: [(f64, usize); 4] = [(f64::INFINITY, 0); 4];
     for v in 0..uv.len() {
