@@ -4,7 +4,7 @@
 
 use super::feasible::Feasibility;
 use crate::model::{
-    CameraId, Joint, JointAngles, Model, PARAMETER_COUNT, Param, Side, StanceChains,
+    CameraId, Joint, JointAngles, Model, PARAMETER_COUNT, Param, Pose, Side, StanceChains,
 };
 
 /// The offsets whose unknown values the view must tolerate for a capture of `side` by
@@ -29,15 +29,77 @@ fn uncertain(camera: CameraId, side: Side, f: &Feasibility) -> Vec<(Param, f64)>
     out
 }
 
+/// The camera's and the board's poses in `O` at the parameters a view starts from, and
+/// which parameters each chain depends on: a view at parameters that differ in one
+/// parameter evaluates again only the chain that depends on it (the same arithmetic as
+/// evaluating both).
+struct Posed<'a> {
+    chains: &'a StanceChains,
+    params: [f64; PARAMETER_COUNT],
+    camera: Pose<f64>,
+    board: Pose<f64>,
+    in_camera: [bool; PARAMETER_COUNT],
+    in_board: [bool; PARAMETER_COUNT],
+}
+
+impl<'a> Posed<'a> {
+    fn new(chains: &'a StanceChains, params: [f64; PARAMETER_COUNT]) -> Self {
+        let mask = |ps: Vec<Param>| {
+            let mut m = [false; PARAMETER_COUNT];
+            for p in ps {
+                m[p.index()] = true;
+            }
+            m
+        };
+        Posed {
+            chains,
+            params,
+            camera: chains.camera.eval(&params),
+            board: chains.board.eval(&params),
+            in_camera: mask(chains.camera.params()),
+            in_board: mask(chains.board.params()),
+        }
+    }
+
+    /// [`view`] at the start's parameters with parameter `p` moved by `by`.
+    fn moved(&self, model: &Model, p: Param, by: f64) -> Option<(Vec<[f64; 2]>, f64)> {
+        let mut params = self.params;
+        params[p.index()] += by;
+        let (camera_moved, board_moved);
+        let camera = if self.in_camera[p.index()] {
+            camera_moved = self.chains.camera.eval(&params);
+            &camera_moved
+        } else {
+            &self.camera
+        };
+        let board = if self.in_board[p.index()] {
+            board_moved = self.chains.board.eval(&params);
+            &board_moved
+        } else {
+            &self.board
+        };
+        view_posed(model, self.chains, &camera.inverse_then(board), &params)
+    }
+}
+
 /// The projected vertices and the angle between the board normal and the line of sight
 /// for parameters `params`; `None` when a vertex is behind the camera.
 fn view(model: &Model, chains: &StanceChains, params: &[f64]) -> Option<(Vec<[f64; 2]>, f64)> {
-    let pose = chains.camera_to_board(params);
-    let to_camera = crate::sim::line_of_sight(&pose);
+    view_posed(model, chains, &chains.camera_to_board(params), params)
+}
+
+/// [`view`] with the board's pose in the camera frame, `pose`, already found.
+fn view_posed(
+    model: &Model,
+    chains: &StanceChains,
+    pose: &Pose<f64>,
+    params: &[f64],
+) -> Option<(Vec<[f64; 2]>, f64)> {
+    let to_camera = crate::sim::line_of_sight(pose);
     let dist = to_camera.iter().map(|x| x * x).sum::<f64>().sqrt();
     let angle = (to_camera[2] / dist).clamp(-1.0, 1.0).acos();
     let uv = model
-        .project_posed(chains, &pose, params, model.board.vertices())
+        .project_posed(chains, pose, params, model.board.vertices())
         .collect::<Option<Vec<_>>>()?;
     Some((uv, angle))
 }
@@ -77,7 +139,9 @@ pub fn board_in_view_of(
     let chains = model.chains_for(camera, side, joints);
     let intrinsics = model.intrinsics(camera);
     let zero = f.centre;
-    let Some((uv, angle)) = view(model, &chains, &zero) else {
+    let posed = Posed::new(&chains, zero);
+    let at_centre = posed.camera.inverse_then(&posed.board);
+    let Some((uv, angle)) = view_posed(model, &chains, &at_centre, &zero) else {
         return false;
     };
     if angle > f.max_view_angle {
@@ -106,12 +170,8 @@ pub fn board_in_view_of(
     let mut spread_so_far = vec![[0.0; 2]; uv.len()];
     let mut angle_spread_so_far = 0.0;
     for (k, (p, b)) in bounds.iter().enumerate() {
-        let mut plus = zero;
-        let mut minus = zero;
-        plus[p.index()] += h;
-        minus[p.index()] -= h;
         let (Some((up, ap)), Some((um, am))) =
-            (view(model, &chains, &plus), view(model, &chains, &minus))
+            (posed.moved(model, *p, h), posed.moved(model, *p, -h))
         else {
             return false;
         };
