@@ -89,62 +89,141 @@ pub fn hidden(
     growth: Growth,
 ) -> Vec<Hidden> {
     let joints = JointAngles::from_fn(|j| logged.get(j) + params[j.offset().index()]);
-    let chains = model.chains_for(camera, side, logged);
-    let eye = chains.camera.eval(params).translation;
-    let board = chains.board.eval(params);
     let posed = body.pose(&model.robot, &model.board, &joints);
-    // The windows overlap: the lattice at half a square over the inner squares holds every
-    // window's points, each tested once.
+    let lines = Sightlines::new(model, &posed, camera, side, logged, params, growth);
+    let blocked: Vec<Option<&Part>> = (0..lines.lattice.len()).map(|k| lines.blocked(k)).collect();
     let b = &model.board;
-    let (nx, ny) = (2 * b.cols() + 1, 2 * b.rows() + 1);
-    let first = b.vertex_position(Vertex { row: 0, col: 0 });
-    let h = b.square / 2.0;
-    let lattice: Vec<[f64; 3]> = (0..ny)
-        .flat_map(|j| (0..nx).map(move |i| (i, j)))
-        .map(|(i, j)| {
-            board.apply(&[
-                first[0] + (i as f64 - 1.0) * h,
-                first[1] + (j as f64 - 1.0) * h,
-                0.0,
-            ])
-        })
-        .collect();
-    // The parts that may stand in the way, each with its growth: not the head, not the
-    // sandal carrying the pattern, only those whose bounding sphere reaches the lines of
-    // sight to the lattice's corners' hull (the lines to any lattice point lie in the cone
-    // over the lattice's bounding sphere).
-    let (centre, reach) = bounding_sphere(&lattice);
-    let near: Vec<(&Part, f64)> = posed
-        .parts
-        .iter()
-        .filter(|p| p.kind != Kind::Head && !(p.kind == Kind::Sandal && p.side == Some(side)))
-        .map(|p| (p, growth.of(p, side, eye)))
-        .filter(|(p, g)| {
-            let (c, r) = p.shape.bounds();
-            in_cone(eye, centre, reach, c, r + g)
-        })
-        .collect();
-    let blocked: Vec<Option<&Part>> = lattice
-        .iter()
-        .map(|&t| {
-            near.iter()
-                .find(|(p, g)| p.shape.blocks(eye, t, *g))
-                .map(|(p, _)| *p)
-        })
-        .collect();
     b.vertices()
         .filter_map(|v| {
-            let (i0, j0) = (2 * v.col as usize, 2 * v.row as usize);
-            (0..3)
-                .flat_map(|dj| (0..3).map(move |di| (j0 + dj) * nx as usize + i0 + di))
-                .find_map(|k| blocked[k])
-                .map(|part| Hidden {
-                    vertex: v,
-                    kind: part.kind,
-                    side: part.side,
-                })
+            lines.window(v).find_map(|k| blocked[k]).map(|part| Hidden {
+                vertex: v,
+                kind: part.kind,
+                side: part.side,
+            })
         })
         .collect()
+}
+
+/// Whether at least `need` inner vertices of the board of leg `side` are in plain sight
+/// ([`in_sight`]`.len() >= need`), found without testing every line of sight: the count
+/// stops once it decides.
+#[allow(clippy::too_many_arguments)] // in_sight's arguments and the count
+pub fn at_least_in_sight(
+    model: &Model,
+    body: &BodyModel,
+    camera: CameraId,
+    side: Side,
+    logged: &JointAngles,
+    params: &[f64; PARAMETER_COUNT],
+    need: usize,
+) -> bool {
+    let joints = JointAngles::from_fn(|j| logged.get(j) + params[j.offset().index()]);
+    let posed = body.pose(&model.robot, &model.board, &joints);
+    let lines = Sightlines::new(
+        model,
+        &posed,
+        camera,
+        side,
+        logged,
+        params,
+        Growth::FOR_OFFSETS,
+    );
+    let mut known: Vec<Option<bool>> = vec![None; lines.lattice.len()];
+    let mut blocked = |k: usize| *known[k].get_or_insert_with(|| lines.blocked(k).is_some());
+    let of = model.board.vertices().count();
+    let (mut seen, mut hidden) = (0, 0);
+    for v in model.board.vertices() {
+        if seen >= need {
+            return true;
+        }
+        if of - hidden < need {
+            return false;
+        }
+        if lines.window(v).any(&mut blocked) {
+            hidden += 1;
+        } else {
+            seen += 1;
+        }
+    }
+    seen >= need
+}
+
+/// The lines of sight from the camera to the lattice at half a square over a board's
+/// inner squares (the windows overlap: the lattice holds every window's points, each
+/// tested once), with the parts that may stand in the way.
+struct Sightlines<'a> {
+    eye: [f64; 3],
+    /// The lattice's points in `O`, row by row.
+    lattice: Vec<[f64; 3]>,
+    /// Points per lattice row.
+    nx: usize,
+    /// The parts that may stand in the way, each with its growth.
+    near: Vec<(&'a Part, f64)>,
+}
+
+impl<'a> Sightlines<'a> {
+    fn new(
+        model: &Model,
+        posed: &'a super::PosedBody,
+        camera: CameraId,
+        side: Side,
+        logged: &JointAngles,
+        params: &[f64; PARAMETER_COUNT],
+        growth: Growth,
+    ) -> Self {
+        let chains = model.chains_for(camera, side, logged);
+        let eye = chains.camera.eval(params).translation;
+        let board = chains.board.eval(params);
+        let b = &model.board;
+        let (nx, ny) = (2 * b.cols() + 1, 2 * b.rows() + 1);
+        let first = b.vertex_position(Vertex { row: 0, col: 0 });
+        let h = b.square / 2.0;
+        let lattice: Vec<[f64; 3]> = (0..ny)
+            .flat_map(|j| (0..nx).map(move |i| (i, j)))
+            .map(|(i, j)| {
+                board.apply(&[
+                    first[0] + (i as f64 - 1.0) * h,
+                    first[1] + (j as f64 - 1.0) * h,
+                    0.0,
+                ])
+            })
+            .collect();
+        // Not the head, not the sandal carrying the pattern, only the parts whose bounding
+        // sphere reaches the lines of sight to the lattice's corners' hull (the lines to
+        // any lattice point lie in the cone over the lattice's bounding sphere).
+        let (centre, reach) = bounding_sphere(&lattice);
+        let near: Vec<(&Part, f64)> = posed
+            .parts
+            .iter()
+            .filter(|p| p.kind != Kind::Head && !(p.kind == Kind::Sandal && p.side == Some(side)))
+            .map(|p| (p, growth.of(p, side, eye)))
+            .filter(|(p, g)| {
+                let (c, r) = p.shape.bounds();
+                in_cone(eye, centre, reach, c, r + g)
+            })
+            .collect();
+        Sightlines {
+            eye,
+            lattice,
+            nx: nx as usize,
+            near,
+        }
+    }
+
+    /// The first part in the way of the line of sight to lattice point `k`.
+    fn blocked(&self, k: usize) -> Option<&'a Part> {
+        self.near
+            .iter()
+            .find(|(p, g)| p.shape.blocks(self.eye, self.lattice[k], *g))
+            .map(|(p, _)| *p)
+    }
+
+    /// The lattice points of vertex `v`'s refinement window.
+    fn window(&self, v: Vertex) -> impl Iterator<Item = usize> + use<'_> {
+        let (i0, j0) = (2 * v.col as usize, 2 * v.row as usize);
+        let nx = self.nx;
+        (0..3).flat_map(move |dj| (0..3).map(move |di| (j0 + dj) * nx + i0 + di))
+    }
 }
 
 /// The centre and radius of a sphere holding `points` (their centroid and the farthest).

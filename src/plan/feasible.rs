@@ -133,8 +133,8 @@ pub enum Infeasible {
     /// Planning past the body: it leaves fewer than [`MIN_IN_SIGHT`] of the vertices in
     /// plain sight.
     Hidden {
-        /// Vertices in plain sight.
-        seen: usize,
+        /// The vertices that must be in plain sight.
+        need: usize,
         /// The board's vertices.
         of: usize,
     },
@@ -149,10 +149,11 @@ impl std::fmt::Display for Infeasible {
             Infeasible::HipYawPitch => f.write_str("LHipYawPitch and RHipYawPitch differ"),
             Infeasible::Collision(what) => write!(f, "collision: {what}"),
             Infeasible::Occluded(what) => write!(f, "the {what} hides the board"),
-            Infeasible::Hidden { seen, of } => {
+            Infeasible::Hidden { need, of } => {
                 write!(
                     f,
-                    "the body leaves {seen} of the board's {of} vertices in plain sight"
+                    "the body leaves fewer than {need} of the board's {of} vertices in plain \
+                     sight"
                 )
             }
             Infeasible::Unreachable => {
@@ -280,10 +281,10 @@ fn in_view_and_reach(
         return Err(Infeasible::Occluded(what));
     }
     if let Some(past) = f.past_body() {
-        let seen = past.in_sight(model, camera, side, joints).len();
         let of = model.board.vertices().count();
-        if (seen as f64) < MIN_IN_SIGHT * of as f64 {
-            return Err(Infeasible::Hidden { seen, of });
+        let need = (MIN_IN_SIGHT * of as f64).ceil() as usize;
+        if !past.at_least_in_sight(model, camera, side, joints, need) {
+            return Err(Infeasible::Hidden { need, of });
         }
     }
     // Reachable straight from rest and back: then every order of the captures has a way

@@ -32,6 +32,27 @@ pub struct PastBody<'a> {
 }
 
 impl PastBody<'_> {
+    /// Whether at least `need` vertices of the board of leg `side` are in plain sight of
+    /// `camera` at `joints` (the count stops once it decides).
+    pub fn at_least_in_sight(
+        &self,
+        model: &Model,
+        camera: CameraId,
+        side: Side,
+        joints: &JointAngles,
+        need: usize,
+    ) -> bool {
+        crate::body::sight::at_least_in_sight(
+            model,
+            self.body,
+            camera,
+            side,
+            joints,
+            self.params,
+            need,
+        )
+    }
+
     /// The vertices of the board of leg `side` in plain sight of `camera` at `joints`.
     pub fn in_sight(
         &self,
