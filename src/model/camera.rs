@@ -309,8 +309,13 @@ impl Projection {
     /// (indexed by [`Param::index`]; may be empty when no coefficient depends on one).
     /// `None` when the point is not in front of the camera (`x ≤ 0`).
     pub fn project<T: Scalar>(&self, params: &[T], p: &[T; 3]) -> Option<[T; 2]> {
-        let coefficients = self.coefficients().map(|a| a.eval(params));
-        self.project_with(&coefficients, p)
+        self.project_with(&self.coefficients_at(params), p)
+    }
+
+    /// The six coefficients (fx, fy, cx, cy, k1, k2) at `params`: evaluated once for many
+    /// points ([`Projection::project_with`]).
+    pub fn coefficients_at<T: Scalar>(&self, params: &[T]) -> [T; 6] {
+        self.coefficients().map(|a| a.eval(params))
     }
 
     /// [`Projection::project`] with the six coefficients (fx, fy, cx, cy, k1, k2) given as

@@ -146,9 +146,12 @@ impl Model {
         params: &'a [T],
         vertices: impl IntoIterator<Item = Vertex> + 'a,
     ) -> impl Iterator<Item = Option<[T; 2]>> + 'a {
+        let coefficients = chains.projection.coefficients_at(params);
         vertices.into_iter().map(move |v| {
             let p = self.board.vertex_position(v).map(scalar::lift::<T>);
-            chains.projection.project(params, &pose.apply(&p))
+            chains
+                .projection
+                .project_with(&coefficients, &pose.apply(&p))
         })
     }
 

@@ -531,8 +531,12 @@ impl<'a> Evaluator<'a> {
         r: &mut [f64],
     ) -> Option<()> {
         let pose = term.chains.camera_to_board::<f64>(params);
+        let coefficients = term.chains.projection.coefficients_at(params);
         for (k, (p, px)) in term.points.iter().zip(&term.pixels).enumerate() {
-            let [u, v] = term.chains.projection.project(params, &pose.apply(p))?;
+            let [u, v] = term
+                .chains
+                .projection
+                .project_with(&coefficients, &pose.apply(p))?;
             r[2 * k] = u - px[0];
             r[2 * k + 1] = v - px[1];
         }

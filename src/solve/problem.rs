@@ -146,10 +146,11 @@ impl CaptureTerm {
     pub fn residuals<T: Scalar>(&self, params: &[T]) -> Option<Vec<T>> {
         let pose = self.chains.camera_to_board(params);
         let projection = &self.chains.projection;
+        let coefficients = projection.coefficients_at(params);
         let mut out = Vec::with_capacity(self.residual_count());
         for obs in &self.observations {
             let p = obs.point.map(crate::model::scalar::lift::<T>);
-            let [u, v] = projection.project(params, &pose.apply(&p))?;
+            let [u, v] = projection.project_with(&coefficients, &pose.apply(&p))?;
             out.push(u - obs.pixel[0]);
             out.push(v - obs.pixel[1]);
         }
@@ -161,9 +162,10 @@ impl CaptureTerm {
     pub fn behind_camera(&self, params: &[f64]) -> Option<usize> {
         let pose = self.chains.camera_to_board(params);
         let projection = &self.chains.projection;
+        let coefficients = projection.coefficients_at(params);
         self.observations.iter().position(|obs| {
             projection
-                .project(params, &pose.apply(&obs.point))
+                .project_with(&coefficients, &pose.apply(&obs.point))
                 .is_none()
         })
     }
