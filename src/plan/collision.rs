@@ -14,8 +14,8 @@
 //! segment (at most a few millimetres closer than the exact test), box against box with the
 //! separating-axis test.
 
-use crate::body::shapes::{norm, point_segment_distance, segment_distance};
 pub use crate::body::shapes::{Capsule, OrientedBox};
+use crate::body::shapes::{norm, point_segment_distance, segment_distance};
 use crate::model::{JointAngles, Pose, RobotGeometry, Side};
 
 /// Sizes of the collision model (mm).
