@@ -98,9 +98,10 @@ fn view_posed(
     let to_camera = crate::sim::line_of_sight(pose);
     let dist = to_camera.iter().map(|x| x * x).sum::<f64>().sqrt();
     let angle = (to_camera[2] / dist).clamp(-1.0, 1.0).acos();
-    let uv = model
-        .project_posed(chains, pose, params, model.board.vertices())
-        .collect::<Option<Vec<_>>>()?;
+    let mut uv = Vec::with_capacity((model.board.rows() * model.board.cols()) as usize);
+    for p in model.project_posed(chains, pose, params, model.board.vertices()) {
+        uv.push(p?);
+    }
     Some((uv, angle))
 }
 
