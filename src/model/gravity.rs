@@ -160,27 +160,15 @@ pub fn leg_torques(
     let norm = dot(robot.gravity, robot.gravity).sqrt();
     let d = robot.gravity.map(|x| x / norm);
     let mirror = |c: [f64; 3]| [c[0], s * c[1], c[2]];
-    // Every mass with its position in O [mm] and the index of the frame it hangs from.
-    let mut masses: Vec<(f64, [f64; 3], usize)> = LEG_LINKS
-        .iter()
-        .enumerate()
-        .map(|(i, link)| (link.mass_g, frames[i].apply(&mirror(link.com_mm)), i))
-        .collect();
+    // Every mass with its position in O [mm], in the order of the frames they hang from
+    // (the sandal's from the last).
     let [cx, cy, cz] = mirror(board.com_mm);
-    masses.push((
-        board.mass_g,
-        frames[5].apply(&[cx, cy, cz - robot.foot_height]),
-        5,
-    ));
-
-    std::array::from_fn(|j| {
-        let distal: Vec<(f64, [f64; 3])> = masses
-            .iter()
-            .filter(|(_, _, i)| *i >= j)
-            .map(|(m, c, _)| (*m, *c))
-            .collect();
-        moment_about(axes[j], points[j], &distal, d)
-    })
+    let masses: [(f64, [f64; 3]); 7] = std::array::from_fn(|i| match LEG_LINKS.get(i) {
+        Some(link) => (link.mass_g, frames[i].apply(&mirror(link.com_mm))),
+        None => (board.mass_g, frames[5].apply(&[cx, cy, cz - robot.foot_height])),
+    });
+    // The masses distal of joint j: the links from frame j on, and the sandal.
+    std::array::from_fn(|j| moment_about(axes[j], points[j], &masses[j..], d))
 }
 
 /// naocalib's standard stand, the posture a robot plays in (deg), the same for both legs:
