@@ -165,7 +165,10 @@ pub fn leg_torques(
     let [cx, cy, cz] = mirror(board.com_mm);
     let masses: [(f64, [f64; 3]); 7] = std::array::from_fn(|i| match LEG_LINKS.get(i) {
         Some(link) => (link.mass_g, frames[i].apply(&mirror(link.com_mm))),
-        None => (board.mass_g, frames[5].apply(&[cx, cy, cz - robot.foot_height])),
+        None => (
+            board.mass_g,
+            frames[5].apply(&[cx, cy, cz - robot.foot_height]),
+        ),
     });
     // The masses distal of joint j: the links from frame j on, and the sandal.
     std::array::from_fn(|j| moment_about(axes[j], points[j], &masses[j..], d))
