@@ -88,8 +88,7 @@ pub fn hidden(
     params: &[f64; PARAMETER_COUNT],
     growth: Growth,
 ) -> Vec<Hidden> {
-    let joints = JointAngles::from_fn(|j| logged.get(j) + params[j.offset().index()]);
-    let posed = body.pose(&model.robot, &model.board, &joints);
+    let posed = pose_at(model, body, logged, params);
     let lines = Sightlines::new(model, &posed, camera, side, logged, params, growth);
     let blocked: Vec<Option<&Part>> = (0..lines.lattice.len()).map(|k| lines.blocked(k)).collect();
     let b = &model.board;
@@ -117,8 +116,7 @@ pub fn at_least_in_sight(
     params: &[f64; PARAMETER_COUNT],
     need: usize,
 ) -> bool {
-    let joints = JointAngles::from_fn(|j| logged.get(j) + params[j.offset().index()]);
-    let posed = body.pose(&model.robot, &model.board, &joints);
+    let posed = pose_at(model, body, logged, params);
     let lines = Sightlines::new(
         model,
         &posed,
@@ -224,6 +222,17 @@ impl<'a> Sightlines<'a> {
         let nx = self.nx;
         (0..3).flat_map(move |dj| (0..3).map(move |di| (j0 + dj) * nx + i0 + di))
     }
+}
+
+/// The body posed at the logged angles `logged` plus the offsets of `params`.
+fn pose_at(
+    model: &Model,
+    body: &BodyModel,
+    logged: &JointAngles,
+    params: &[f64; PARAMETER_COUNT],
+) -> super::PosedBody {
+    let joints = JointAngles::from_fn(|j| logged.get(j) + params[j.offset().index()]);
+    body.pose(&model.robot, &model.board, &joints)
 }
 
 /// The centre and radius of a sphere holding `points` (their centroid and the farthest).
