@@ -105,10 +105,11 @@ fn view_posed(
     Some((uv, angle))
 }
 
-/// Rounding the early exits of [`board_in_view_of`] allow for: a partial spread summed in
-/// another order than the whole may differ from it in its last bits, so an exit needs the
-/// board beyond the border by more than this (px; rad for the view angle).
+/// How far beyond a border (px) the spread summed so far must push a vertex for
+/// [`board_in_view_of`] to stop early. The partial sum is a prefix of the whole, so it never
+/// exceeds it; the allowance leaves every case within rounding of a border to the full test.
 const ROUNDING_PX: f64 = 1e-6;
+/// The same allowance for the view angle (rad).
 const ROUNDING_RAD: f64 = 1e-9;
 
 /// Whether the board on `side` stays fully in the image (with the margin) and facing the
