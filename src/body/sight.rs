@@ -88,87 +88,42 @@ pub fn hidden(
     params: &[f64; PARAMETER_COUNT],
     growth: Growth,
 ) -> Vec<Hidden> {
-    let posed = pose_at(model, body, logged, params);
-    let lines = Sightlines::new(model, &posed, camera, side, logged, params, growth);
-    let blocked: Vec<Option<&Part>> = (0..lines.lattice.len()).map(|k| lines.blocked(k)).collect();
-    let b = &model.board;
-    b.vertices()
-        .filter_map(|v| {
-            lines.window(v).find_map(|k| blocked[k]).map(|part| Hidden {
-                vertex: v,
-                kind: part.kind,
-                side: part.side,
-            })
-        })
-        .collect()
-}
-
-/// Whether at least `need` inner vertices of the board of leg `side` are in plain sight
-/// ([`in_sight`]`.len() >= need`), found without testing every line of sight: the count
-/// stops once it decides.
-#[allow(clippy::too_many_arguments)] // in_sight's arguments and the count
-pub fn at_least_in_sight(
-    model: &Model,
-    body: &BodyModel,
-    camera: CameraId,
-    side: Side,
-    logged: &JointAngles,
-    params: &[f64; PARAMETER_COUNT],
-    need: usize,
-) -> bool {
-    let posed = pose_at(model, body, logged, params);
-    let lines = Sightlines::new(
-        model,
-        &posed,
-        camera,
-        side,
-        logged,
-        params,
-        Growth::FOR_OFFSETS,
-    );
-    let mut known: Vec<Option<bool>> = vec![None; lines.lattice.len()];
-    let mut blocked = |k: usize| *known[k].get_or_insert_with(|| lines.blocked(k).is_some());
-    let of = model.board.vertices().count();
-    let (mut seen, mut hidden) = (0, 0);
-    for v in model.board.vertices() {
-        if seen >= need {
-            return true;
-        }
-        if of - hidden < need {
-            return false;
-        }
-        if lines.window(v).any(&mut blocked) {
-            hidden += 1;
-        } else {
-            seen += 1;
-        }
-    }
-    seen >= need
+    Sightlines::new(model, body, camera, side, logged, params, growth).hidden()
 }
 
 /// The lines of sight from the camera to the lattice at half a square over a board's
 /// inner squares (the windows overlap: the lattice holds every window's points, each
-/// tested once), with the parts that may stand in the way.
-struct Sightlines<'a> {
+/// tested once), with the posed body's parts that may stand in the way: what [`hidden`]
+/// and the planner's count ([`Sightlines::at_least_in_sight`]) test.
+pub struct Sightlines {
     eye: [f64; 3],
     /// The lattice's points in `O`, row by row.
     lattice: Vec<[f64; 3]>,
     /// Points per lattice row.
     nx: usize,
-    /// The parts that may stand in the way, each with its growth.
-    near: Vec<(&'a Part, f64)>,
+    /// The board's inner vertices.
+    vertices: Vec<Vertex>,
+    posed: super::PosedBody,
+    /// The parts that may stand in the way (indices into `posed.parts`), each with its
+    /// growth.
+    near: Vec<(usize, f64)>,
 }
 
-impl<'a> Sightlines<'a> {
-    fn new(
+impl Sightlines {
+    /// The lines of sight to the board of leg `side` from `camera` at the logged angles
+    /// `logged`, predicted with the parameters `params` (the logged angles plus their
+    /// offsets pose the body), the parts grown by `growth`.
+    pub fn new(
         model: &Model,
-        posed: &'a super::PosedBody,
+        body: &BodyModel,
         camera: CameraId,
         side: Side,
         logged: &JointAngles,
         params: &[f64; PARAMETER_COUNT],
         growth: Growth,
     ) -> Self {
+        let joints = JointAngles::from_fn(|j| logged.get(j) + params[j.offset().index()]);
+        let posed = body.pose(&model.robot, &model.board, &joints);
         let chains = model.chains_for(camera, side, logged);
         let eye = chains.camera.eval(params).translation;
         let board = chains.board.eval(params);
@@ -190,13 +145,16 @@ impl<'a> Sightlines<'a> {
         // sphere reaches the lines of sight to the lattice's corners' hull (the lines to
         // any lattice point lie in the cone over the lattice's bounding sphere).
         let (centre, reach) = bounding_sphere(&lattice);
-        let near: Vec<(&Part, f64)> = posed
+        let near: Vec<(usize, f64)> = posed
             .parts
             .iter()
-            .filter(|p| p.kind != Kind::Head && !(p.kind == Kind::Sandal && p.side == Some(side)))
-            .map(|p| (p, growth.of(p, side, eye)))
-            .filter(|(p, g)| {
-                let (c, r) = p.shape.bounds();
+            .enumerate()
+            .filter(|(_, p)| {
+                p.kind != Kind::Head && !(p.kind == Kind::Sandal && p.side == Some(side))
+            })
+            .map(|(k, p)| (k, growth.of(p, side, eye)))
+            .filter(|(k, g)| {
+                let (c, r) = posed.parts[*k].shape.bounds();
                 in_cone(eye, centre, reach, c, r + g)
             })
             .collect();
@@ -204,35 +162,66 @@ impl<'a> Sightlines<'a> {
             eye,
             lattice,
             nx: nx as usize,
+            vertices: b.vertices().collect(),
+            posed,
             near,
         }
     }
 
+    /// The vertices whose window a part hides, each with the part.
+    pub fn hidden(&self) -> Vec<Hidden> {
+        let blocked: Vec<Option<&Part>> =
+            (0..self.lattice.len()).map(|k| self.blocked(k)).collect();
+        self.vertices
+            .iter()
+            .filter_map(|&v| {
+                self.window(v).find_map(|k| blocked[k]).map(|part| Hidden {
+                    vertex: v,
+                    kind: part.kind,
+                    side: part.side,
+                })
+            })
+            .collect()
+    }
+
+    /// Whether at least `need` vertices are in plain sight (`need` of those [`hidden`]
+    /// leaves), found without testing every line of sight: the count stops once it decides.
+    pub fn at_least_in_sight(&self, need: usize) -> bool {
+        let mut known: Vec<Option<bool>> = vec![None; self.lattice.len()];
+        let mut blocked = |k: usize| *known[k].get_or_insert_with(|| self.blocked(k).is_some());
+        let of = self.vertices.len();
+        let (mut seen, mut hidden) = (0, 0);
+        for &v in &self.vertices {
+            if seen >= need {
+                return true;
+            }
+            if of - hidden < need {
+                return false;
+            }
+            if self.window(v).any(&mut blocked) {
+                hidden += 1;
+            } else {
+                seen += 1;
+            }
+        }
+        seen >= need
+    }
+
     /// The first part in the way of the line of sight to lattice point `k`.
-    fn blocked(&self, k: usize) -> Option<&'a Part> {
+    fn blocked(&self, k: usize) -> Option<&Part> {
         self.near
             .iter()
+            .map(|&(i, g)| (&self.posed.parts[i], g))
             .find(|(p, g)| p.shape.blocks(self.eye, self.lattice[k], *g))
-            .map(|(p, _)| *p)
+            .map(|(p, _)| p)
     }
 
     /// The lattice points of vertex `v`'s refinement window.
-    fn window(&self, v: Vertex) -> impl Iterator<Item = usize> + use<'_> {
+    fn window(&self, v: Vertex) -> impl Iterator<Item = usize> + use<> {
         let (i0, j0) = (2 * v.col as usize, 2 * v.row as usize);
         let nx = self.nx;
         (0..3).flat_map(move |dj| (0..3).map(move |di| (j0 + dj) * nx + i0 + di))
     }
-}
-
-/// The body posed at the logged angles `logged` plus the offsets of `params`.
-fn pose_at(
-    model: &Model,
-    body: &BodyModel,
-    logged: &JointAngles,
-    params: &[f64; PARAMETER_COUNT],
-) -> super::PosedBody {
-    let joints = JointAngles::from_fn(|j| logged.get(j) + params[j.offset().index()]);
-    body.pose(&model.robot, &model.board, &joints)
 }
 
 /// The centre and radius of a sphere holding `points` (their centroid and the farthest).

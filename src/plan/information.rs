@@ -42,15 +42,16 @@ impl PastBody<'_> {
         joints: &JointAngles,
         need: usize,
     ) -> bool {
-        crate::body::sight::at_least_in_sight(
+        crate::body::sight::Sightlines::new(
             model,
             self.body,
             camera,
             side,
             joints,
             self.params,
-            need,
+            crate::body::sight::Growth::FOR_OFFSETS,
         )
+        .at_least_in_sight(need)
     }
 
     /// The vertices of the board of leg `side` in plain sight of `camera` at `joints`.
