@@ -54,7 +54,7 @@ pub struct Feasibility {
     pub upper_head_margin: f64,
     /// The collision model.
     pub body: BodyModel,
-    /// Plan past the robot's own body (`naocalib plan --sight`): a capture is kept only
+    /// Plan past the robot's own body (`naocalib plan`, unless `--ignore-body`): a capture is kept only
     /// when at least [`MIN_IN_SIGHT`] of its board's vertices have their refinement window
     /// in plain sight past this body model ([`crate::body::sight`], at
     /// [`Feasibility::centre`]), and only those vertices count in its information; and
@@ -289,8 +289,13 @@ fn in_view_and_reach(
     }
     // Reachable straight from rest and back: then every order of the captures has a way
     // for every move (through rest, if nothing shorter), and any capture can end the phase.
+    // Past the body, the move is walked in the body model too, as the plan's moves are.
     let rest = super::route::rest_posture();
-    if !super::route::move_is_free(model, &f.body, &rest, joints) {
+    let reach = match f.sight {
+        Some(_) => super::route::move_is_clear,
+        None => super::route::move_is_free,
+    };
+    if !reach(model, &f.body, &rest, joints) {
         return Err(Infeasible::Unreachable);
     }
     Ok(())
