@@ -2,7 +2,7 @@
 # The robot in its own pictures, measured as a team would meet it (the README's day): per
 # simulated robot with team-sized hidden offsets, its files (the truth with the cameras'
 # angles 0.3° and the legs' 0.5° off, alternately up and down; the head's as they are),
-# a plan made past the body around them (`plan --sight --around`), its pictures drawn
+# a plan made past the body around them (`plan --around`), its pictures drawn
 # with its body (`simulate --images --body --team-offsets`), the vertices found by
 # `detect --body --start-from` its files, and the fit `solve --model auto --start-from`
 # its files (the head's offsets held at the files'). Per robot it prints
@@ -14,8 +14,8 @@
 #
 #   scripts/body-figures.sh [SANDAL] [CAMERAS] [SEEDS...]
 #
-# SANDAL: paper (7 × 5 squares centred 170 mm ahead of the ankle) or turned (the same
-# board turned by 90°, centred 200 mm ahead); CAMERAS: lower, both (an upper camera with
+# SANDAL: turned (naocalib's: 7 × 5 squares turned by 90°, centred 200 mm ahead of the
+# ankle) or paper (the same board along the foot, centred 170 mm ahead); CAMERAS: lower, both (an upper camera with
 # the lower one's intrinsics) or intrinsics (both, their intrinsics free: plan
 # --families paper,intrinsics, robots with intrinsics offsets, solve --model auto
 # --free intrinsics).
@@ -37,15 +37,19 @@ trap 'rm -rf "$work"' EXIT
 "$naocalib" simulate "$work/base" --stances 1 --heads 1 >/dev/null
 config=$work/config.toml
 case $sandal in
-paper) cp "$work/base/dataset.toml" "$config" ;;
 turned)
     sed -e 's/^mount_origin_mm = .*/mount_origin_mm = [200.0, 0.0, 0.0]/' \
         -e 's/^mount_rpy_deg = .*/mount_rpy_deg = [0.0, 0.0, 90.0]/' \
         "$work/base/dataset.toml" >"$config"
     ;;
+paper)
+    sed -e 's/^mount_origin_mm = .*/mount_origin_mm = [170.0, 0.0, 0.0]/' \
+        -e 's/^mount_rpy_deg = .*/mount_rpy_deg = [0.0, 0.0, 0.0]/' \
+        "$work/base/dataset.toml" >"$config"
+    ;;
 *) echo "unknown sandal '$sandal' (paper, turned)" >&2; exit 2 ;;
 esac
-plan_flags=(--sight)
+plan_flags=()
 sim_flags=()
 solve_flags=(--model auto)
 case $cameras in
@@ -90,7 +94,7 @@ with open(out, "w") as f:
 EOF
 }
 
-echo "sandal $sandal, cameras $cameras: plan --sight around each robot's files"
+echo "sandal $sandal, cameras $cameras: plan around each robot's files"
 printf '%-5s %8s %8s %8s %8s %10s %8s %8s %s\n' \
     seed planned visible found dropped "worst px" "RMS z" "max |z|" families
 for seed in "${seeds[@]}"; do

@@ -41,8 +41,9 @@ pub struct PlanArgs {
     /// Seed of the random candidate pool.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// The robot's dataset.toml (camera intrinsics, board, robot geometry); the defaults
-    /// when not given.
+    /// The robot's dataset.toml (camera intrinsics, board, robot geometry); without it the
+    /// defaults with naocalib's sandal (docs/SANDALS.md; a dataset.toml without [board]
+    /// means the paper's).
     #[arg(long, value_name = "DATASET_TOML")]
     camera: Option<PathBuf>,
     /// The board must stay in view for every angle offset within ± this (deg, 0 … 30) (and
@@ -81,11 +82,13 @@ pub struct PlanArgs {
     /// are raw, as LoLA reports them).
     #[arg(long, value_name = "CAL.toml")]
     around: Option<PathBuf>,
-    /// Plan past the robot's own body (docs/BODY.md): keep a capture only when at least
-    /// half of its board's vertices have their window in plain sight past the body model,
-    /// and design by the information of those alone.
+    /// Plan as though the robot's body hid nothing and touched nothing (the paper's
+    /// planner). Without it the plan sees past the body (docs/BODY.md): a capture is kept
+    /// only when at least half of its board's vertices have their window in plain sight
+    /// past the body model, its posture and every move to it touch nothing, and the design
+    /// weighs those vertices alone.
     #[arg(long)]
-    sight: bool,
+    ignore_body: bool,
 }
 
 /// `--families`' help, with the registry's families.
@@ -159,7 +162,7 @@ pub fn run(args: &PlanArgs) -> Result<ExitCode> {
         upper_sigma_ratio: args.upper_sigma_ratio,
         pool: args.pool,
         around: args.around.clone(),
-        sight: args.sight,
+        sight: !args.ignore_body,
     };
     let planned = request::run(&request)?;
     super::print_out(report::summary(&request, &planned))?;

@@ -14,8 +14,9 @@ use super::print_out;
 pub struct SandalArgs {
     /// Directory to write the files into (created if missing).
     out_dir: PathBuf,
-    /// The dataset.toml whose [board] describes the sandals (default: the paper's board,
-    /// 7 × 5 squares of 25 mm centred 170 mm ahead of the ankle).
+    /// The dataset.toml whose [board] describes the sandals (default: naocalib's sandal,
+    /// 7 × 5 squares of 25 mm with its seven columns across the foot, centred 200 mm ahead
+    /// of the ankle; a file without [board] means the paper's board).
     #[arg(long, value_name = "DATASET_TOML")]
     config: Option<PathBuf>,
     /// Replace the files of an earlier run in OUT_DIR.

@@ -88,7 +88,8 @@ pub struct SimulateArgs {
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     distortion: Option<Vec<f64>>,
     /// The sandals of this dataset.toml's [board] (`naocalib sandal --config`'s; default:
-    /// the paper's board, 7 × 5 squares of 25 mm centred 170 mm ahead of the ankle).
+    /// naocalib's sandal, 7 × 5 squares of 25 mm with its seven columns across the foot,
+    /// centred 200 mm ahead of the ankle; a file without [board] means the paper's).
     #[arg(long, value_name = "DATASET_TOML")]
     board: Option<PathBuf>,
 }

@@ -24,7 +24,8 @@ pub struct SimulateRobotArgs {
     /// The socket to serve LoLA on.
     #[arg(long, value_name = "SOCKET")]
     lola: Option<PathBuf>,
-    /// The robot's dataset.toml (camera, sandals, geometry); the defaults when not given.
+    /// The robot's dataset.toml (camera, sandals, geometry); the defaults with naocalib's
+    /// sandal when not given.
     #[arg(long, value_name = "DATASET_TOML")]
     config: Option<PathBuf>,
     /// Seed of the true offsets drawn (camera ±3°, leg joints σ 1°, sandals).

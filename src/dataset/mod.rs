@@ -400,6 +400,11 @@ pub fn read_model(path: &Path) -> Result<Model, DatasetError> {
     config::parse(path, &bytes.unwrap_or_default())
 }
 
+/// The model of `path` when given, else [`Model::unconfigured`] (naocalib's sandal).
+pub fn read_model_or_unconfigured(path: Option<&Path>) -> Result<Model, DatasetError> {
+    path.map_or_else(|| Ok(Model::unconfigured()), read_model)
+}
+
 /// `dataset.toml` as `naocalib capture` writes it: `model` (validated; raw joint angles)
 /// with the capture settings each camera was driven with in its table (`settings`, the
 /// keys of [`crate::dataset::settings::SETTING_KEYS`]) and `notes` as comment lines

@@ -22,7 +22,9 @@ pub struct Board {
 }
 
 impl Default for Board {
-    /// The paper's sandal: 7 × 5 squares of 25 mm, centred 17 cm ahead of the ankle.
+    /// The paper's sandal: 7 × 5 squares of 25 mm, centred 17 cm ahead of the ankle, its
+    /// seven columns along the foot. This is what a `dataset.toml` without `[board]` means
+    /// (SPEC §4); the toes stand on its first column ([`Board::turned`] is naocalib's).
     fn default() -> Self {
         Board {
             squares_x: 7,
@@ -32,6 +34,20 @@ impl Default for Board {
             mount_rpy: [0.0; 3],
             mass_g: 120.0,
             com_mm: [150.0, 0.0, 0.0],
+        }
+    }
+}
+
+impl Board {
+    /// naocalib's sandal: the paper's pattern turned by 90° in the sole's plane (seven
+    /// columns across the foot) and centred 200 mm ahead of the ankle, its squares 35 mm
+    /// clear of the toes (docs/SANDALS.md). What `sandal`, `plan`, `simulate` and
+    /// `simulate-robot` make and assume when no `dataset.toml` is given.
+    pub fn turned() -> Self {
+        Board {
+            mount_origin: [200.0, 0.0, 0.0],
+            mount_rpy: [0.0, 0.0, 90f64.to_radians()],
+            ..Board::default()
         }
     }
 }

@@ -41,6 +41,17 @@ pub struct Model {
     pub upper_camera: Option<Camera>,
 }
 
+impl Model {
+    /// The robot no `dataset.toml` describes: the defaults (SPEC §2–4) wearing naocalib's
+    /// sandal, [`Board::turned`].
+    pub fn unconfigured() -> Self {
+        Model {
+            board: Board::turned(),
+            ..Model::default()
+        }
+    }
+}
+
 /// The chains of one capture, origin → camera and origin → board of the leg in view, and
 /// the projection of the camera that took it.
 #[derive(Debug, Clone, PartialEq)]

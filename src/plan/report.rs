@@ -63,10 +63,16 @@ pub fn summary(request: &PlanRequest, planned: &Planned) -> String {
         request.offset_deg,
         request.offset_deg
     );
-    if f.sight.is_some() {
+    if f.sight.is_none() {
         let _ = writeln!(
             out,
-            "past the body (--sight): at least {:.0} % of each board's vertices with their \
+            "--ignore-body: planned as though the body hid nothing and touched nothing (the \
+             body model's verdict on the plan below)"
+        );
+    } else {
+        let _ = writeln!(
+            out,
+            "past the body: at least {:.0} % of each board's vertices with their \
              refinement window in plain sight past the body model, only those counted; no \
              contact in the body model (its parts, the floor, the head), the resting leg \
              parked where it touches nothing",

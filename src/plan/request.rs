@@ -119,12 +119,11 @@ impl PlanRequest {
         Ok(options)
     }
 
-    /// The robot's model: `camera`'s, or the default.
+    /// The robot's model: `camera`'s, or [`Model::unconfigured`] (naocalib's sandal).
     pub fn model(&self) -> Result<Model, PlanRequestError> {
-        Ok(match &self.camera {
-            Some(path) => crate::dataset::read_model(path)?,
-            None => Model::default(),
-        })
+        Ok(crate::dataset::read_model_or_unconfigured(
+            self.camera.as_deref(),
+        )?)
     }
 
     /// The cameras to plan for: those asked for, else both when `model` has an upper

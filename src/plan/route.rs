@@ -5,7 +5,7 @@
 //! A move interpolates all joints together in a straight line from one posture to the next
 //! (as `capture` commands it), checked every [`CHECK_STEP`] rad against
 //! [`collision::collision`], and, where both postures are free of contact in the whole body
-//! model (docs/BODY.md; a plan made past the body, `plan --sight`), every
+//! model (docs/BODY.md; a plan made past the body, as `naocalib plan` makes it), every
 //! [`crate::body::MOVE_STEP`] rad against it ([`move_is_clear`]). When the straight move
 //! collides, [`route`] tries, in turn:
 //! the HipYawPitch motor first or last; one leg (with the head) first; through the rest

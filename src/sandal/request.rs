@@ -36,7 +36,7 @@ pub struct Made {
 pub fn run(request: &SandalRequest) -> Result<Made, SandalError> {
     let board = match &request.config {
         Some(path) => crate::dataset::read_model(path)?.board,
-        None => Board::default(),
+        None => Board::turned(),
     };
     let plate = PlateParams::default();
     let in_file = |e: SandalError| match &request.config {
@@ -72,7 +72,24 @@ pub fn summary(request: &SandalRequest, made: &Made) -> String {
         "Print at 100 % (actual size) and check both 100 mm bars before gluing; \
          docs/SANDALS.md says how to make, mount and check them.\n",
     );
+    if request.config.is_none() {
+        text.push_str(&board_table(board));
+    }
     text
+}
+
+/// The `[board]` table to put into the robot's `dataset.toml` for sandals made without
+/// `--config` (naocalib's: a `dataset.toml` without `[board]` means the paper's board).
+fn board_table(board: &Board) -> String {
+    let [x, y, z] = board.mount_origin;
+    let [roll, pitch, yaw] = board.mount_rpy.map(f64::to_degrees);
+    format!(
+        "These are naocalib's sandals: put their [board] into the robot's dataset.toml (one \
+         without [board] means the paper's board):\n[board]\nsquares_x = {}\n\
+         squares_y = {}\nsquare_mm = {:?}\nmount_origin_mm = [{x:?}, {y:?}, {z:?}]\n\
+         mount_rpy_deg = [{roll:?}, {pitch:?}, {yaw:?}]\n",
+        board.squares_x, board.squares_y, board.square
+    )
 }
 
 #[cfg(test)]
@@ -91,7 +108,18 @@ mod tests {
         let text = summary(&request, &made);
         let lines: Vec<&str> = text.lines().collect();
         assert!(lines[0].starts_with("Wrote the sandals for a board of 7 × 5 squares of 25 mm"));
-        assert_eq!(lines.len(), made.files.len() + 2);
+        // The files, the printing advice, and naocalib's [board] to put into dataset.toml.
+        assert_eq!(made.board, Board::turned());
+        let table = &text[text.find("[board]\n").expect("[board]")..];
+        assert_eq!(lines.len(), made.files.len() + 3 + table.lines().count());
+        let config = dir.path().join("dataset.toml");
+        let camera =
+            "[camera]\nwidth = 640\nheight = 480\nfx = 562.5\nfy = 562.5\ncx = 320.0\ncy = 240.0\n";
+        std::fs::write(&config, format!("{camera}{table}")).unwrap();
+        assert_eq!(
+            crate::dataset::read_model(&config).unwrap().board,
+            made.board
+        );
         for f in &made.files {
             assert!(request.out_dir.join(&f.name).is_file(), "{}", f.name);
             assert!(text.contains(&format!("  {}", f.name)));

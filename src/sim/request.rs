@@ -59,7 +59,8 @@ pub struct SimRequest {
     pub near_border: bool,
     /// Lens distortion k1, k2, p1, p2, k3 of the simulated cameras.
     pub distortion: Option<Vec<f64>>,
-    /// A dataset.toml whose `[board]` the sandals are (the paper's board without it).
+    /// A dataset.toml whose `[board]` the sandals are (naocalib's, [`crate::model::Board::turned`], without
+    /// it; the paper's when the file has no `[board]`).
     pub board: Option<PathBuf>,
 }
 
@@ -191,7 +192,7 @@ impl SimRequest {
     pub fn model(&self, upper: bool) -> Result<Model, SimRequestError> {
         let mut model = Model {
             camera: self.camera.camera(),
-            ..Model::default()
+            ..Model::unconfigured()
         };
         if let Some(path) = &self.board {
             model.board = crate::dataset::read_model(path)?.board;
@@ -500,7 +501,7 @@ mod tests {
         let config = dir.path().join("dataset.toml");
         let turned = "[camera]\nwidth = 640\nheight = 480\nfx = 562.5\nfy = 562.5\n\
                       cx = 320.0\ncy = 240.0\n[board]\nsquares_x = 7\nsquares_y = 5\nsquare_mm = 25.0\n\
-                      mount_origin_mm = [200.0, 0.0, 0.0]\nmount_rpy_deg = [0.0, 0.0, 90.0]\n";
+                      mount_origin_mm = [210.0, 0.0, 0.0]\nmount_rpy_deg = [0.0, 0.0, -90.0]\n";
         std::fs::write(&config, turned).unwrap();
         let out = dir.path().join("ds");
         let r = SimRequest {
@@ -508,8 +509,13 @@ mod tests {
             ..request(&out)
         };
         let board = r.model(false).unwrap().board;
-        assert_eq!(board.mount_origin, [200.0, 0.0, 0.0]);
-        assert!((board.mount_rpy[2] - 90f64.to_radians()).abs() < 1e-12);
+        assert_eq!(board.mount_origin, [210.0, 0.0, 0.0]);
+        assert!((board.mount_rpy[2] + 90f64.to_radians()).abs() < 1e-12);
+        // Without --board: naocalib's sandal.
+        assert_eq!(
+            request(&out).model(false).unwrap().board,
+            crate::model::Board::turned()
+        );
         run(&r).unwrap();
         let written = crate::dataset::read_model(&out.join("dataset.toml")).unwrap();
         assert_eq!(written.board, board);

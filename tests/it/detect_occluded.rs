@@ -713,7 +713,7 @@ fn team_sized_robots_drawn_with_their_bodies() {
     );
 }
 
-/// A plan made past the body (`plan --sight`) for the sandal turned by 90° and centred
+/// A plan made past the body (`naocalib plan`) for the sandal turned by 90° and centred
 /// 200 mm ahead of the ankle, photographed by a robot with team-sized offsets whose
 /// pictures draw its body, 0.1° joint noise: `detect --body` from the nominal model finds
 /// nearly every vertex the plan counts in plain sight, none off by more than 0.3 px, and

@@ -496,7 +496,7 @@ fn the_body_hides_the_plans_vertices_as_predicted_and_the_fit_stays_honest() {
     assert!(rms_z <= 1.5, "RMS z {rms_z}");
 }
 
-/// A plan made past the body (`plan --sight`) keeps at least half of every board in plain
+/// A plan made past the body (`naocalib plan`) keeps at least half of every board in plain
 /// sight, and photographed by a robot whose body stands in its own way (`simulate
 /// --body`) it determines the offsets as it predicts, many times better than the default
 /// plan photographed the same way.

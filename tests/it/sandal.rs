@@ -444,7 +444,7 @@ fn check_pdfs(dir: &Path, side: Side, board: &Board) -> (f64, Vec<usize>) {
         let (w, _) = match_vertices(&points, board);
         assert!(w <= TOLERANCE_MM, "{paper}: a vertex {w} mm off");
         worst = worst.max(w);
-        if *board == Board::default() {
+        if *board == Board::turned() {
             assert!(
                 unique.iter().all(|(_, k)| *k == unique[0].1),
                 "{paper}: the pattern is split across sheets"
@@ -463,7 +463,7 @@ fn vertices_and_pins_in_the_files_are_the_models() {
     let config = write_config(dir.path(), &format!("{CAMERA}{OTHER_BOARD}"));
     let other = dir.path().join("other");
     make(&other, Some(&config));
-    for (out, board) in [(&out, Board::default()), (&other, other_board())] {
+    for (out, board) in [(&out, Board::turned()), (&other, other_board())] {
         for side in Side::BOTH {
             let svg = check_svg(out, side, &board);
             let (pdf, sheets) = check_pdfs(out, side, &board);
@@ -655,7 +655,7 @@ fn detection_finds_the_rendered_pattern_with_the_models_numbering() {
 
     let dir = tempfile::tempdir().unwrap();
     make(dir.path(), None);
-    let board = Board::default();
+    let board = Board::turned();
     let mut worst = 0.0f64;
     for side in Side::BOTH {
         let path = dir.path().join(format!("sandal-{}.svg", side.name()));

@@ -497,6 +497,8 @@ fn simulate_follows_a_plans_camera_column() {
     let out = naocalib()
         .args(["simulate", "--stance-file"])
         .arg(&plan)
+        .arg("--board")
+        .arg(source.join("dataset.toml"))
         .arg(&dir)
         .output()
         .unwrap();

@@ -8,7 +8,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use crate::dataset::DatasetError;
-use crate::model::{Family, Joint, JointAngles, Model, PARAMETER_COUNT};
+use crate::model::{Family, Joint, JointAngles, PARAMETER_COUNT};
 
 use super::super::body::Lying;
 use super::{Faults, RobotError, RobotOptions, serve};
@@ -88,10 +88,7 @@ impl RobotRequest {
                 self.speed
             )));
         }
-        let model = match &self.config {
-            Some(path) => crate::dataset::read_model(path)?,
-            None => Model::default(),
-        };
+        let model = crate::dataset::read_model_or_unconfigured(self.config.as_deref())?;
         let truth = match &self.truth {
             Some(path) => crate::dataset::read_truth(path)?.values,
             None => draw_truth(self.seed, &self.effects)?,

@@ -52,10 +52,7 @@ pub fn snap(
         .protecting([state_path.to_path_buf()])
         .protecting(state.config.clone());
     crate::output::check_writable(out, &write)?;
-    let model = match &state.config {
-        Some(path) => crate::dataset::read_model(path)?,
-        None => Model::default(),
-    };
+    let model = crate::dataset::read_model_or_unconfigured(state.config.as_deref())?;
     if camera == CameraId::Upper && model.upper_camera.is_none() {
         return Err(RobotError::Read {
             path: state
