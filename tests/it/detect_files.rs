@@ -299,6 +299,8 @@ fn a_wrong_sized_picture_names_the_table_of_the_camera_that_took_it() {
     let out = naocalib()
         .args(["simulate", "--images", "--stances", "1", "--heads", "1"])
         .args(["--upper-stances", "1", "--seed", "2"])
+        .arg("--board")
+        .arg(crate::util::paper_board())
         .arg(&base)
         .output()
         .unwrap();

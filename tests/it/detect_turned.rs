@@ -44,7 +44,8 @@ fn render(dir: &Path, seed: u64, how: &[&str]) {
     render_upper(dir, seed, how, 2, 2);
 }
 
-/// [`render`] with `upper` upper stances and `heads` head postures.
+/// [`render`] with `upper` upper stances and `heads` head postures, on the paper's board
+/// (the seeds' counts of turned pictures named were drawn for it).
 fn render_upper(dir: &Path, seed: u64, how: &[&str], upper: usize, heads: usize) {
     let out = naocalib()
         .args([
@@ -57,6 +58,8 @@ fn render_upper(dir: &Path, seed: u64, how: &[&str], upper: usize, heads: usize)
         ])
         .args(["--heads", &heads.to_string(), "--seed", &seed.to_string()])
         .args(how)
+        .arg("--board")
+        .arg(crate::util::paper_board())
         .arg(dir)
         .output()
         .unwrap();

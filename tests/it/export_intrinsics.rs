@@ -730,7 +730,9 @@ fn robot_dataset(tmp: &Path) -> std::path::PathBuf {
             "--heads",
             "2",
         ])
-        .args(["--upper-stances", "2", "--seed", "5"]);
+        .args(["--upper-stances", "2", "--seed", "5"])
+        .arg("--board")
+        .arg(crate::util::paper_board());
         if let Some(truth) = truth {
             cmd.arg("--truth").arg(truth);
         }

@@ -162,6 +162,8 @@ fn non_identifiable_families_exit_cleanly_with_named_directions() {
             "--px-noise",
             "0.05",
         ])
+        .arg("--board")
+        .arg(crate::util::paper_board())
         .arg(&dir)
         .output()
         .expect("ran");
