@@ -54,14 +54,14 @@ pub struct Feasibility {
     pub upper_head_margin: f64,
     /// The collision model.
     pub body: BodyModel,
-    /// Plan past the robot's own body (`naocalib plan`, unless `--ignore-body`): a capture is kept only
-    /// when at least [`MIN_IN_SIGHT`] of its board's vertices have their refinement window
-    /// in plain sight past this body model ([`crate::body::sight`], at
-    /// [`Feasibility::centre`]), and only those vertices count in its information; and
-    /// its posture touches nothing in this model (the resting leg parked where it does
-    /// not). `None`
-    /// (the default): every vertex counts, and only the resting leg is held against the
-    /// lines of sight.
+    /// Plan past the robot's own body (`naocalib plan`, unless `--ignore-body`): a capture
+    /// is kept only when at least [`MIN_IN_SIGHT`] of its board's vertices have their
+    /// refinement window in plain sight past this body model ([`crate::body::sight`], at
+    /// [`Feasibility::centre`]), and only those vertices count in its information; its
+    /// posture touches nothing in this model (the resting leg parked where it does not),
+    /// and the straight move from rest touches nothing either. `None` (the default here,
+    /// `plan --ignore-body`): every vertex counts, and only the resting leg is held
+    /// against the lines of sight.
     pub sight: Option<crate::body::BodyModel>,
     /// The robot's current calibration (internal units) the box of offsets is centred on
     /// (`naocalib plan --around`); zero by default. Real lower-camera tilt corrections of

@@ -59,8 +59,8 @@ pub struct SimRequest {
     pub near_border: bool,
     /// Lens distortion k1, k2, p1, p2, k3 of the simulated cameras.
     pub distortion: Option<Vec<f64>>,
-    /// A dataset.toml whose `[board]` the sandals are (naocalib's, [`crate::model::Board::turned`], without
-    /// it; the paper's when the file has no `[board]`).
+    /// A dataset.toml whose `[board]` the sandals are (without it naocalib's,
+    /// [`crate::model::Board::turned`]; the paper's when the file has no `[board]`).
     pub board: Option<PathBuf>,
 }
 
