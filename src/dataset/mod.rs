@@ -22,7 +22,7 @@ mod write;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-pub use config::camera_table;
+pub use config::{camera_table, render_board};
 pub use error::{DatasetError, Location};
 
 use crate::model::{CameraId, JointAngles, Model, PARAMETER_COUNT, Param, Side, Vertex};

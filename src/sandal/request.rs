@@ -78,17 +78,15 @@ pub fn summary(request: &SandalRequest, made: &Made) -> String {
     text
 }
 
-/// The `[board]` table to put into the robot's `dataset.toml` for sandals made without
-/// `--config` (naocalib's: a `dataset.toml` without `[board]` means the paper's board).
+/// What to put into the robot's `dataset.toml` for sandals made without `--config`
+/// (naocalib's: a `dataset.toml` without `[board]` means the paper's board): their
+/// `[board]` table, as `dataset.toml` is written.
 fn board_table(board: &Board) -> String {
-    let [x, y, z] = board.mount_origin;
-    let [roll, pitch, yaw] = board.mount_rpy.map(f64::to_degrees);
+    let table = crate::dataset::render_board(board)
+        .expect("a board's table is plain numbers and serialises");
     format!(
         "These are naocalib's sandals: put their [board] into the robot's dataset.toml (one \
-         without [board] means the paper's board):\n[board]\nsquares_x = {}\n\
-         squares_y = {}\nsquare_mm = {:?}\nmount_origin_mm = [{x:?}, {y:?}, {z:?}]\n\
-         mount_rpy_deg = [{roll:?}, {pitch:?}, {yaw:?}]\n",
-        board.squares_x, board.squares_y, board.square
+         without [board] means the paper's board):\n{table}"
     )
 }
 

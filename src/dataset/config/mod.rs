@@ -51,6 +51,17 @@ pub fn camera_table(camera: CameraId) -> &'static str {
     }
 }
 
+/// `board` as the `[board]` table of `dataset.toml`, written as [`render`] writes it.
+pub fn render_board(board: &Board) -> Result<String, toml::ser::Error> {
+    #[derive(Serialize)]
+    struct OnlyBoard {
+        board: BoardToml,
+    }
+    toml::to_string(&OnlyBoard {
+        board: BoardToml::from(board),
+    })
+}
+
 /// A problem with one key: its TOML key path and what is wrong.
 type KeyError = (String, String);
 
