@@ -211,7 +211,7 @@ fn opencv_is_loaded_only_to_detect_and_its_absence_is_named() {
     let solved = naocalib()
         .env("NAOCALIB_OPENCV_PLUGIN", &missing)
         .arg("solve")
-        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sample"))
+        .arg(crate::util::sample())
         .output()
         .unwrap();
     assert!(solved.status.success(), "{}", stderr(&solved));

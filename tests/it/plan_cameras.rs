@@ -143,7 +143,7 @@ fn upper_captures_are_planned_around_the_robots_calibration() {
 
 /// Writes the sample's dataset.toml, with an `[upper_camera]` table when `upper`.
 fn dataset_toml(dir: &std::path::Path, upper: bool) -> std::path::PathBuf {
-    let mut text = std::fs::read_to_string("data/sample/dataset.toml").unwrap();
+    let mut text = std::fs::read_to_string(crate::util::sample().join("dataset.toml")).unwrap();
     if upper {
         text.push_str(
             "\n[upper_camera]\nwidth = 640\nheight = 480\nfx = 562.5\nfy = 562.5\ncx = 320.0\n\

@@ -166,7 +166,7 @@ fn a_planned_session_recovers_both_cameras_intrinsics_on_team_sized_robots() {
 fn a_plan_that_cannot_sweep_the_image_says_how_to_plan_one_that_does() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("plan.csv");
-    let config = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sample/dataset.toml");
+    let config = crate::util::sample().join("dataset.toml");
     let run = |offset: &str| {
         let o = crate::util::naocalib()
             .args(["plan", out.to_str().unwrap(), "--force", "--camera"])

@@ -1,19 +1,13 @@
 //! The HTML report of the sample dataset: well-formed, self-contained (no external
 //! resource), and holding every parameter, the diagnosis, the residual plot and overlays.
 
-use std::path::PathBuf;
-
 use naocalib::dataset::Dataset;
 use naocalib::model::FixedSet;
 use naocalib::report::{self, html, shown_parameters};
 use naocalib::run::Run;
 use naocalib::solve::{Problem, UncertaintyOptions, backend, calibrate};
 
-use crate::util::{naocalib, stderr};
-
-fn sample() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/sample")
-}
+use crate::util::{naocalib, sample, stderr};
 
 /// Every `src`/`href` value of the document, and whether it has other ways to load
 /// something (`<link>`, `<script>`, `@import`, `url(`).

@@ -11,11 +11,7 @@ use naocalib::export::{Entry, Posture};
 use naocalib::model::Param;
 
 use crate::capture::{Bench, plan_file};
-use crate::util::{assert_clean_failure, naocalib, stderr};
-
-fn sample() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sample")
-}
+use crate::util::{assert_clean_failure, naocalib, sample, stderr};
 
 /// `text` (a CSV) with a column `name` holding `value` in every row added at the end.
 fn with_column(text: &str, name: &str, value: &str) -> String {

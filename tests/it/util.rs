@@ -225,8 +225,13 @@ pub fn missed_by_a_team(
     out
 }
 
+/// The bundled sample, `data/sample`.
+pub fn sample() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sample")
+}
+
 /// A `dataset.toml` whose `[board]` is the paper's (the bundled sample's), for
 /// `simulate --board`: the tests whose few random stances were drawn for that board.
 pub fn paper_board() -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sample/dataset.toml")
+    sample().join("dataset.toml")
 }
