@@ -16,9 +16,10 @@ fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("plan");
     group.sample_size(10);
     group.bench_function("plan_144_past_the_body", |b| {
+        let sandal = Model::unconfigured();
         let mut options = PlanOptions::default();
         options.feasibility.sight = Some(naocalib::body::BodyModel::default());
-        b.iter(|| plan(&Model::unconfigured(), &options).expect("plan"));
+        b.iter(|| plan(&sandal, &options).expect("plan"));
     });
     group.bench_function("plan_144_paper", |b| {
         let options = PlanOptions::default();

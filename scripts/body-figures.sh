@@ -15,10 +15,10 @@
 #   scripts/body-figures.sh [SANDAL] [CAMERAS] [SEEDS...]
 #
 # SANDAL: turned (naocalib's: 7 × 5 squares turned by 90°, centred 200 mm ahead of the
-# ankle) or paper (the same board along the foot, centred 170 mm ahead); CAMERAS: lower, both (an upper camera with
-# the lower one's intrinsics) or intrinsics (both, their intrinsics free: plan
-# --families paper,intrinsics, robots with intrinsics offsets, solve --model auto
-# --free intrinsics).
+# ankle) or paper (the same board along the foot, centred 170 mm ahead); CAMERAS: lower,
+# both (an upper camera with the lower one's intrinsics) or intrinsics (both, their
+# intrinsics free: plan --families paper,intrinsics, robots with intrinsics offsets, solve
+# --model auto --free intrinsics).
 # Default: turned lower 3 4 5. Needs python3 for the comparison.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -33,15 +33,12 @@ naocalib=$PWD/target/release/naocalib
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
-# The camera and sandal: the simulator's V4 camera (`simulate`'s dataset.toml).
+# The camera and sandal: the simulator's V4 camera and naocalib's sandal (`simulate`'s
+# dataset.toml), or the paper's board on it.
 "$naocalib" simulate "$work/base" --stances 1 --heads 1 >/dev/null
 config=$work/config.toml
 case $sandal in
-turned)
-    sed -e 's/^mount_origin_mm = .*/mount_origin_mm = [200.0, 0.0, 0.0]/' \
-        -e 's/^mount_rpy_deg = .*/mount_rpy_deg = [0.0, 0.0, 90.0]/' \
-        "$work/base/dataset.toml" >"$config"
-    ;;
+turned) cp "$work/base/dataset.toml" "$config" ;;
 paper)
     sed -e 's/^mount_origin_mm = .*/mount_origin_mm = [170.0, 0.0, 0.0]/' \
         -e 's/^mount_rpy_deg = .*/mount_rpy_deg = [0.0, 0.0, 0.0]/' \
