@@ -51,7 +51,7 @@ pub fn camera_table(camera: CameraId) -> &'static str {
     }
 }
 
-/// `board` as the `[board]` table of `dataset.toml`, written as [`render`] writes it.
+/// `board` as the `[board]` table of `dataset.toml`, written as a dataset writes it.
 pub fn render_board(board: &Board) -> Result<String, toml::ser::Error> {
     #[derive(Serialize)]
     struct OnlyBoard {
