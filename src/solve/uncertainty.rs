@@ -7,7 +7,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::covariance::{self, Spectrum};
-use super::jacobian::{CaptureSlice, Linearisation, NormalSums};
+use super::jacobian::{self, CaptureSlice, Linearisation, NormalSums};
 use super::{Backend, Problem, SolveError};
 use crate::model::{PARAMETER_COUNT, Param};
 
@@ -125,19 +125,39 @@ pub fn statistics(
     debug_assert_eq!(problem.loss, super::Loss::Squared);
     let free = problem.free();
     let n = free.len();
-    let slices: Vec<CaptureSlice> = problem
+    let mut index = [None; PARAMETER_COUNT];
+    for (k, p) in free.iter().enumerate() {
+        index[p.index()] = Some(k);
+    }
+    // Each capture over its own free parameters (a dozen of the free ones at most).
+    let slices: Vec<OwnSlice> = problem
         .captures
         .iter()
         .enumerate()
-        .map(|(c, term)| at.capture(c, &free, term.whitening.as_ref()))
+        .map(|(c, term)| {
+            let (params, columns): (Vec<Param>, Vec<usize>) = at
+                .capture_params(c)
+                .iter()
+                .filter_map(|p| index[p.index()].map(|k| (*p, k)))
+                .unzip();
+            OwnSlice {
+                slice: at.capture(c, &params, term.whitening.as_ref()),
+                columns,
+            }
+        })
         .collect();
-    let mut gram = DMatrix::zeros(n, n);
+    let mut gram: DMatrix<f64> = DMatrix::zeros(n, n);
     let mut rss = 0.0;
     let mut rows = 0;
-    for slice in &slices {
-        gram += slice.jacobian.transpose() * &slice.jacobian;
-        rss += slice.residuals.norm_squared();
-        rows += slice.residuals.len();
+    for own in &slices {
+        let block = jacobian::gram(&own.slice.jacobian);
+        for (b, &cb) in own.columns.iter().enumerate() {
+            for (a, &ca) in own.columns.iter().enumerate() {
+                gram[(ca, cb)] += block[(a, b)];
+            }
+        }
+        rss += own.slice.residuals.norm_squared();
+        rows += own.slice.residuals.len();
     }
     if n == 0 {
         return Err(super::SolveError::Invalid(
@@ -156,9 +176,12 @@ pub fn statistics(
         // Near the rank threshold: decide on the stacked Jacobian itself.
         let mut jac = DMatrix::zeros(rows, n);
         let mut row = 0;
-        for slice in &slices {
-            let m = slice.residuals.len();
-            jac.rows_mut(row, m).copy_from(&slice.jacobian);
+        for own in &slices {
+            let m = own.slice.residuals.len();
+            for (a, &ca) in own.columns.iter().enumerate() {
+                jac.view_mut((row, ca), (m, 1))
+                    .copy_from(&own.slice.jacobian.column(a));
+            }
             row += m;
         }
         Spectrum::of_jacobian(&jac)
@@ -343,27 +366,29 @@ pub fn identifiability_from(
 /// `H_cc = J_c H⁺ J_cᵀ`, since a fitted capture's residuals are smaller than its errors):
 /// robust to any correlation of the residuals within a capture. Full PARAMETER_COUNT²
 /// matrix.
-pub fn sandwich_of(
-    free: &[Param],
-    captures: &[CaptureSlice],
-    h_inv: &DMatrix<f64>,
-) -> DMatrix<f64> {
+pub fn sandwich_of(free: &[Param], captures: &[OwnSlice], h_inv: &DMatrix<f64>) -> DMatrix<f64> {
     let n = free.len();
     let mut meat = DMatrix::zeros(n, n);
-    for capture in captures {
-        let j_c = &capture.jacobian;
-        // The capture's own columns: at most a dozen of the free parameters.
-        let cols: Vec<usize> = (0..n)
+    for own in captures {
+        let j_c = &own.slice.jacobian;
+        // The columns the capture's residuals move with (a parameter it depends on may
+        // still have a zero derivative).
+        let local: Vec<usize> = (0..j_c.ncols())
             .filter(|&j| j_c.column(j).iter().any(|v| *v != 0.0))
             .collect();
-        if cols.is_empty() {
+        if local.is_empty() {
             // The capture does not depend on any free parameter: it adds nothing (and an
             // empty matrix has no eigen-decomposition).
             continue;
         }
-        let b = j_c.select_columns(&cols);
-        let p = h_inv.select_rows(&cols).select_columns(&cols);
-        let r_c = leverage_corrected(&b, &p, &capture.residuals);
+        let cols: Vec<usize> = local.iter().map(|&j| own.columns[j]).collect();
+        let b = if local.len() == j_c.ncols() {
+            j_c.clone()
+        } else {
+            j_c.select_columns(&local)
+        };
+        let p = DMatrix::from_fn(cols.len(), cols.len(), |i, j| h_inv[(cols[i], cols[j])]);
+        let r_c = leverage_corrected(&b, &p, &own.slice.residuals);
         let g: DVector<f64> = b.tr_mul(&r_c);
         for (a, &ia) in cols.iter().enumerate() {
             for (c, &ic) in cols.iter().enumerate() {
@@ -373,6 +398,15 @@ pub fn sandwich_of(
     }
     let cov = h_inv * meat * h_inv;
     covariance::embed(free, &cov, 1.0)
+}
+
+/// One capture's weighted residuals and Jacobian over its own free parameters, and where
+/// each of its columns is among the free parameters.
+pub struct OwnSlice {
+    /// The residuals and the Jacobian's columns.
+    pub slice: CaptureSlice,
+    /// Per column of the slice, its index among the free parameters.
+    pub columns: Vec<usize>,
 }
 
 /// `(I − H_cc)^{-1/2} r_c` with the leverage `H_cc = B P Bᵀ` of one capture (`B` its
@@ -393,7 +427,7 @@ fn leverage_corrected(b: &DMatrix<f64>, p: &DMatrix<f64>, r_c: &DVector<f64>) ->
         &pe.eigenvectors * DMatrix::from_diagonal(&root) * pe.eigenvectors.transpose()
     });
     let bs = b * s;
-    let m = bs.transpose() * &bs;
+    let m = jacobian::gram(&bs);
     let me = m.symmetric_eigen();
     let mut out = r_c.clone();
     for (k, &l) in me.eigenvalues.iter().enumerate() {
