@@ -13,7 +13,7 @@
 
 use super::shapes::{norm, point_segment_distance, sub};
 use super::{BodyModel, Kind, Part};
-use crate::model::{CameraId, JointAngles, Model, PARAMETER_COUNT, Side, Vertex};
+use crate::model::{CameraId, JointAngles, Model, PARAMETER_COUNT, Side, StanceChains, Vertex};
 
 /// How much the board's own foot and toe, the torso, pelvis and arms are grown (mm).
 pub const GROW_OWN: f64 = 3.0;
@@ -122,9 +122,23 @@ impl Sightlines {
         params: &[f64; PARAMETER_COUNT],
         growth: Growth,
     ) -> Self {
+        let chains = model.chains_for(camera, side, logged);
+        Self::with_chains(model, body, side, logged, &chains, params, growth)
+    }
+
+    /// [`Sightlines::new`] with the stance's chains ([`Model::chains_for`] of the camera,
+    /// `side` and `logged`) already built.
+    pub fn with_chains(
+        model: &Model,
+        body: &BodyModel,
+        side: Side,
+        logged: &JointAngles,
+        chains: &StanceChains,
+        params: &[f64; PARAMETER_COUNT],
+        growth: Growth,
+    ) -> Self {
         let joints = JointAngles::from_fn(|j| logged.get(j) + params[j.offset().index()]);
         let posed = body.pose(&model.robot, &model.board, &joints);
-        let chains = model.chains_for(camera, side, logged);
         let eye = chains.camera.eval(params).translation;
         let board = chains.board.eval(params);
         let b = &model.board;

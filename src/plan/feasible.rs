@@ -258,11 +258,11 @@ fn in_view_and_reach(
     joints: &JointAngles,
     f: &Feasibility,
 ) -> Result<(), Infeasible> {
-    if !board_in_view_of(model, camera, side, joints, f) {
+    let chains = model.chains_for(camera, side, joints);
+    if !super::view::board_in_view_with(model, camera, side, &chains, f) {
         return Err(Infeasible::View);
     }
     // Every vertex in plain sight of the camera past the resting leg (at the centre).
-    let chains = model.chains_for(camera, side, joints);
     let zero = f.centre;
     let eye = chains.camera.eval(&zero).translation;
     let board = chains.board.eval(&zero);
@@ -283,7 +283,7 @@ fn in_view_and_reach(
     if let Some(past) = f.past_body() {
         let of = model.board.vertices().count();
         let need = (MIN_IN_SIGHT * of as f64).ceil() as usize;
-        if !past.at_least_in_sight(model, camera, side, joints, need) {
+        if !past.at_least_in_sight(model, side, joints, &chains, need) {
             return Err(Infeasible::Hidden { need, of });
         }
     }

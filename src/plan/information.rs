@@ -6,7 +6,9 @@
 use nalgebra::DMatrix;
 
 use crate::body::BodyModel;
-use crate::model::{CameraId, FixedSet, JointAngles, Model, PARAMETER_COUNT, Side, Vertex};
+use crate::model::{
+    CameraId, FixedSet, JointAngles, Model, PARAMETER_COUNT, Side, StanceChains, Vertex,
+};
 use crate::solve::jacobian::Evaluator;
 use crate::solve::noise::{self, NoiseLevels, NoiseOptions};
 use crate::solve::{CaptureTerm, Loss, Observation, Problem, Tolerances};
@@ -33,21 +35,22 @@ pub struct PastBody<'a> {
 
 impl PastBody<'_> {
     /// Whether at least `need` vertices of the board of leg `side` are in plain sight of
-    /// `camera` at `joints` (the count stops once it decides).
+    /// the camera of `chains` (the stance's, [`Model::chains_for`]) at `joints` (the count
+    /// stops once it decides).
     pub fn at_least_in_sight(
         &self,
         model: &Model,
-        camera: CameraId,
         side: Side,
         joints: &JointAngles,
+        chains: &StanceChains,
         need: usize,
     ) -> bool {
-        crate::body::sight::Sightlines::new(
+        crate::body::sight::Sightlines::with_chains(
             model,
             self.body,
-            camera,
             side,
             joints,
+            chains,
             self.params,
             crate::body::sight::Growth::FOR_OFFSETS,
         )

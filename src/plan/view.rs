@@ -138,12 +138,28 @@ pub fn board_in_view_of(
     joints: &JointAngles,
     f: &Feasibility,
 ) -> bool {
-    let chains = model.chains_for(camera, side, joints);
+    board_in_view_with(
+        model,
+        camera,
+        side,
+        &model.chains_for(camera, side, joints),
+        f,
+    )
+}
+
+/// [`board_in_view_of`] with the stance's chains ([`Model::chains_for`]) already built.
+pub fn board_in_view_with(
+    model: &Model,
+    camera: CameraId,
+    side: Side,
+    chains: &StanceChains,
+    f: &Feasibility,
+) -> bool {
     let intrinsics = model.intrinsics(camera);
     let zero = f.centre;
-    let posed = Posed::new(&chains, zero);
+    let posed = Posed::new(chains, zero);
     let at_centre = posed.camera.inverse_then(&posed.board);
-    let Some((uv, angle)) = view_posed(model, &chains, &at_centre, &zero) else {
+    let Some((uv, angle)) = view_posed(model, chains, &at_centre, &zero) else {
         return false;
     };
     if angle > f.max_view_angle {
@@ -235,7 +251,7 @@ pub fn board_in_view_of(
         }
         params
     };
-    let inside = |params: &[f64; PARAMETER_COUNT]| match view(model, &chains, params) {
+    let inside = |params: &[f64; PARAMETER_COUNT]| match view(model, chains, params) {
         Some((uv, angle)) => {
             angle <= f.max_view_angle && uv.iter().all(|p| intrinsics.contains(*p, f.margin_px))
         }
