@@ -236,8 +236,12 @@ pub fn plan(model: &Model, options: &PlanOptions) -> Result<Plan, PlanError> {
         return Err(PlanError::Options("--captures must be at least 2".into()));
     }
     let pool = Pool::new(model, options)?;
-    let design = pool.design(model, options, options.captures)?;
-    pool.finish(model, options, design)
+    // The random stances it is compared with depend on the count alone: found beside the
+    // design's order.
+    let (design, baseline) = pool.design_beside(model, options, options.captures, || {
+        pool::Baseline::of(model, options, options.captures)
+    });
+    pool.finish(model, options, design?, Some(baseline?))
 }
 
 /// Makes a plan for `model` whose measurement phase, every move included
@@ -320,7 +324,7 @@ pub fn plan_within(
         .find(|(m, _)| *m == n)
         .map(|(_, d)| d)
         .expect("planned");
-    pool.finish(model, options, design)
+    pool.finish(model, options, design, None)
 }
 
 /// The most captures a budgeted plan takes without `--captures`.

@@ -170,6 +170,36 @@ impl Pool {
         options: &PlanOptions,
         count: usize,
     ) -> Result<Design, PlanError> {
+        self.design_beside(model, options, count, || ()).0
+    }
+
+    /// [`Pool::design`], with `beside` run on a second core while the captures are put in
+    /// order (the design's one step on one core).
+    pub(super) fn design_beside<T: Send>(
+        &self,
+        model: &Model,
+        options: &PlanOptions,
+        count: usize,
+        beside: impl FnOnce() -> T + Send,
+    ) -> (Result<Design, PlanError>, T) {
+        let selected = match self.select(model, options, count) {
+            Ok(selected) => selected,
+            Err(e) => return (Err(e), beside()),
+        };
+        std::thread::scope(|scope| {
+            let other = scope.spawn(beside);
+            let design = selected.arrange(model, options);
+            (design, other.join().expect("thread beside the order"))
+        })
+    }
+
+    /// The captures of the design of `count` (steps 1–3), with their prediction.
+    fn select(
+        &self,
+        model: &Model,
+        options: &PlanOptions,
+        count: usize,
+    ) -> Result<Selected, PlanError> {
         // Lower captures must fill a quarter of the plan per leg.
         if options.cameras.contains(&CameraId::Lower) {
             for (side, found) in Side::BOTH.iter().zip(self.lower) {
@@ -269,6 +299,30 @@ impl Pool {
             &pool.fixed,
             &chosen.iter().map(|&k| &pool.infos[k]).collect::<Vec<_>>(),
         );
+        Ok(Selected {
+            pool,
+            chosen,
+            prediction,
+        })
+    }
+}
+
+/// The captures a design picked from its (refined) pool, before their order.
+struct Selected {
+    pool: Pool,
+    /// Indices into the pool's candidates.
+    chosen: Vec<usize>,
+    prediction: Prediction,
+}
+
+impl Selected {
+    /// The design in execution order (step 4), with every move's way.
+    fn arrange(self, model: &Model, options: &PlanOptions) -> Result<Design, PlanError> {
+        let Selected {
+            pool,
+            chosen,
+            prediction,
+        } = self;
         let angles: Vec<JointAngles> = chosen.iter().map(|&k| pool.candidates[k].joints).collect();
         let body = &options.feasibility.body;
         let rest = route::rest_posture();
@@ -304,32 +358,28 @@ impl Pool {
             stances: stances.len(),
         })
     }
+}
 
+impl Pool {
     /// The plan of `design`: compared with the simulator's random stances at its count.
     pub(super) fn finish(
         &self,
         model: &Model,
         options: &PlanOptions,
         design: Design,
+        baseline: Option<Baseline>,
     ) -> Result<Plan, PlanError> {
         let count = design.captures.len();
-        let random = random_stances(model, count, 3, options.seed)?;
-        let random: Vec<(CameraId, Side, JointAngles)> = random
-            .into_iter()
-            .map(|(side, joints)| (CameraId::Lower, side, joints))
-            .collect();
-        // The random stances are the lower camera's: the upper camera's offsets stay out.
-        let lower_fixed = options.fixed.clone().for_upper_camera(false);
-        let random_infos = information_parallel(model, &random, &lower_fixed, options);
-        let random_refs: Vec<&design::CaptureInformation> = random_infos.iter().flatten().collect();
-        let baseline = honest_prediction(model, options, &random, &lower_fixed, &random_refs);
-        let body = &options.feasibility.body;
+        let Baseline {
+            prediction: baseline,
+            duration: baseline_duration,
+            blocked: baseline_blocked,
+            ..
+        } = match baseline {
+            Some(b) if b.count == count => b,
+            _ => Baseline::of(model, options, count)?,
+        };
         let rest = route::rest_posture();
-        let random_postures: Vec<JointAngles> = random.iter().map(|c| c.2).collect();
-        let random_moves = route::moves(model, body, &rest, &random_postures);
-        let baseline_duration =
-            route::duration_of(&options.timing, &rest, &random_postures, &random_moves);
-        let baseline_blocked = random_moves.iter().filter(|m| m.is_err()).count();
         let coverage = coverage::coverage(model, &design.captures, &options.feasibility.centre);
         // The plan's own moves, as `capture` drives them, walked in the body model too.
         let body = body_audit::audit(
@@ -352,6 +402,46 @@ impl Pool {
             stances: design.stances,
             coverage,
             body,
+        })
+    }
+}
+
+/// The simulator's random stances at a plan's capture count, as the plan is compared with
+/// them: their prediction, measurement phase and moves without a way. It depends on the
+/// count alone, so [`super::plan`] finds it beside the design.
+pub(super) struct Baseline {
+    count: usize,
+    prediction: Prediction,
+    duration: f64,
+    blocked: usize,
+}
+
+impl Baseline {
+    /// The random stances of `count` captures (the lower camera's, seeded by the plan's
+    /// seed).
+    pub(super) fn of(
+        model: &Model,
+        options: &PlanOptions,
+        count: usize,
+    ) -> Result<Self, PlanError> {
+        let random = random_stances(model, count, 3, options.seed)?;
+        let random: Vec<(CameraId, Side, JointAngles)> = random
+            .into_iter()
+            .map(|(side, joints)| (CameraId::Lower, side, joints))
+            .collect();
+        // The random stances are the lower camera's: the upper camera's offsets stay out.
+        let lower_fixed = options.fixed.clone().for_upper_camera(false);
+        let random_infos = information_parallel(model, &random, &lower_fixed, options);
+        let random_refs: Vec<&design::CaptureInformation> = random_infos.iter().flatten().collect();
+        let prediction = honest_prediction(model, options, &random, &lower_fixed, &random_refs);
+        let rest = route::rest_posture();
+        let postures: Vec<JointAngles> = random.iter().map(|c| c.2).collect();
+        let moves = route::moves(model, &options.feasibility.body, &rest, &postures);
+        Ok(Baseline {
+            count,
+            prediction,
+            duration: route::duration_of(&options.timing, &rest, &postures, &moves),
+            blocked: moves.iter().filter(|m| m.is_err()).count(),
         })
     }
 }
