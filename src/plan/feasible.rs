@@ -7,7 +7,7 @@
 
 use rand::Rng;
 
-pub use super::view::{board_in_view_for_all_offsets, board_in_view_of};
+pub use super::view::{board_in_view_for_all_offsets, board_in_view_of, board_in_view_with};
 
 use super::collision::{self, BodyModel};
 use crate::model::{
@@ -259,7 +259,7 @@ fn in_view_and_reach(
     f: &Feasibility,
 ) -> Result<(), Infeasible> {
     let chains = model.chains_for(camera, side, joints);
-    if !super::view::board_in_view_with(model, camera, side, &chains, f) {
+    if !board_in_view_with(model, camera, side, &chains, f) {
         return Err(Infeasible::View);
     }
     // Every vertex in plain sight of the camera past the resting leg (at the centre).

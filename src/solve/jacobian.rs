@@ -329,44 +329,6 @@ impl Linearisation {
     }
 }
 
-/// `JᵀJ` of a small Jacobian (a capture's rows): each product of two columns once, by
-/// their dot product, and mirrored. At these sizes (a few dozen rows, a dozen columns) this
-/// is several times quicker than a general matrix product, which packs its operands first.
-pub fn gram(jacobian: &DMatrix<f64>) -> DMatrix<f64> {
-    let (m, n) = jacobian.shape();
-    let mut out = DMatrix::zeros(n, n);
-    if m == 0 {
-        return out;
-    }
-    let columns: Vec<&[f64]> = jacobian.as_slice().chunks_exact(m).collect();
-    for b in 0..n {
-        for a in 0..=b {
-            let v = dot(columns[a], columns[b]);
-            out[(a, b)] = v;
-            out[(b, a)] = v;
-        }
-    }
-    out
-}
-
-/// `x·y`, summed in four lanes (which the compiler keeps in vector registers).
-fn dot(x: &[f64], y: &[f64]) -> f64 {
-    let mut lanes = [0.0; 4];
-    let (xs, ys) = (x.chunks_exact(4), y.chunks_exact(4));
-    let tail: f64 = xs
-        .remainder()
-        .iter()
-        .zip(ys.remainder())
-        .map(|(a, b)| a * b)
-        .sum();
-    for (a, b) in xs.zip(ys) {
-        for k in 0..4 {
-            lanes[k] += a[k] * b[k];
-        }
-    }
-    (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]) + tail
-}
-
 /// Per free parameter of `projection` (those with a `column`): its coefficient in fx, fy,
 /// cx, cy, k1, k2.
 fn projection_scales(

@@ -7,7 +7,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::covariance::{self, Spectrum};
-use super::jacobian::{self, CaptureSlice, Linearisation, NormalSums};
+use super::jacobian::{CaptureSlice, Linearisation, NormalSums};
 use super::{Backend, Problem, SolveError};
 use crate::model::{PARAMETER_COUNT, Param};
 
@@ -150,7 +150,7 @@ pub fn statistics(
     let mut rss = 0.0;
     let mut rows = 0;
     for own in &slices {
-        let block = jacobian::gram(&own.slice.jacobian);
+        let block = covariance::gram(&own.slice.jacobian);
         for (b, &cb) in own.columns.iter().enumerate() {
             for (a, &ca) in own.columns.iter().enumerate() {
                 gram[(ca, cb)] += block[(a, b)];
@@ -427,7 +427,7 @@ fn leverage_corrected(b: &DMatrix<f64>, p: &DMatrix<f64>, r_c: &DVector<f64>) ->
         &pe.eigenvectors * DMatrix::from_diagonal(&root) * pe.eigenvectors.transpose()
     });
     let bs = b * s;
-    let m = jacobian::gram(&bs);
+    let m = covariance::gram(&bs);
     let me = m.symmetric_eigen();
     let mut out = r_c.clone();
     for (k, &l) in me.eigenvalues.iter().enumerate() {
