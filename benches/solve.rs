@@ -138,7 +138,7 @@ fn bench_calibrate(c: &mut Criterion) {
 /// plain and on the whitened residuals (`tests_plain_and_whitened`), and one evaluation
 /// with and without the candidate columns. Added cost = tests + 2 × (with − without).
 fn bench_misfit(c: &mut Criterion) {
-    use naocalib::solve::jacobian::Linearisation;
+    use naocalib::solve::linearisation::Linearisation;
     use naocalib::solve::{misfit, noise};
     let problem = paper_sized();
     let backend = backend(backend_names()[0], false).expect("listed backend");

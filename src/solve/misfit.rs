@@ -20,7 +20,7 @@ use nalgebra::{DMatrix, DVector};
 use statrs::distribution::{ContinuousCDF, FisherSnedecor};
 
 use super::identify::threshold;
-use super::jacobian::Linearisation;
+use super::linearisation::Linearisation;
 use super::problem::Problem;
 use crate::model::{Family, PARAMETER_COUNT, Param};
 

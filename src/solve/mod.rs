@@ -12,7 +12,9 @@
 //!   [`covariance`]) — and `--model auto`'s choice of families ([`ModelChoice::Auto`]);
 //! - `result`: the [`Solution`], its [`Summary`] and [`SolveError`];
 //! - [`jacobian`]: residuals and exact Jacobians in Rust, for the pure-Rust backends and
-//!   the statistics; [`compare`]: every backend on one problem.
+//!   the statistics; [`linearisation`]: one evaluation of every capture at a fit, which the
+//!   misfit tests, the noise model and the statistics share, and their normal equations;
+//!   [`compare`]: every backend on one problem.
 
 mod backend;
 #[cfg(feature = "ceres")]
@@ -22,6 +24,7 @@ pub mod compare;
 pub mod covariance;
 pub mod identify;
 pub mod jacobian;
+pub mod linearisation;
 pub mod lm;
 pub mod misfit;
 pub mod noise;

@@ -8,7 +8,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::jacobian::{CaptureSlice, Linearisation};
+use super::linearisation::{CaptureSlice, Linearisation};
 use super::problem::{Problem, Whitening};
 use crate::model::{Joint, PARAMETER_COUNT, Param};
 

@@ -7,7 +7,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::covariance::{self, Spectrum};
-use super::jacobian::{CaptureSlice, Linearisation, NormalSums};
+use super::linearisation::{self, Linearisation, NormalSums, OwnSlice};
 use super::{Backend, Problem, SolveError};
 use crate::model::{PARAMETER_COUNT, Param};
 
@@ -125,37 +125,17 @@ pub fn statistics(
     debug_assert_eq!(problem.loss, super::Loss::Squared);
     let free = problem.free();
     let n = free.len();
-    let mut index = [None; PARAMETER_COUNT];
-    for (k, p) in free.iter().enumerate() {
-        index[p.index()] = Some(k);
-    }
     // Each capture over its own free parameters (a dozen of the free ones at most).
-    let slices: Vec<OwnSlice> = problem
-        .captures
-        .iter()
-        .enumerate()
-        .map(|(c, term)| {
-            let (params, columns): (Vec<Param>, Vec<usize>) = at
-                .capture_params(c)
-                .iter()
-                .filter_map(|p| index[p.index()].map(|k| (*p, k)))
-                .unzip();
-            OwnSlice {
-                slice: at.capture(c, &params, term.whitening.as_ref()),
-                columns,
-            }
-        })
-        .collect();
-    let mut gram: DMatrix<f64> = DMatrix::zeros(n, n);
+    let slices = at.own_slices(problem, &free);
+    let mut gram = DMatrix::zeros(n, n);
     let mut rss = 0.0;
     let mut rows = 0;
     for own in &slices {
-        let block = covariance::gram(&own.slice.jacobian);
-        for (b, &cb) in own.columns.iter().enumerate() {
-            for (a, &ca) in own.columns.iter().enumerate() {
-                gram[(ca, cb)] += block[(a, b)];
-            }
-        }
+        linearisation::add_block(
+            &mut gram,
+            &own.columns,
+            &covariance::gram(&own.slice.jacobian),
+        );
         rss += own.slice.residuals.norm_squared();
         rows += own.slice.residuals.len();
     }
@@ -382,11 +362,7 @@ pub fn sandwich_of(free: &[Param], captures: &[OwnSlice], h_inv: &DMatrix<f64>) 
             continue;
         }
         let cols: Vec<usize> = local.iter().map(|&j| own.columns[j]).collect();
-        let b = if local.len() == j_c.ncols() {
-            j_c.clone()
-        } else {
-            j_c.select_columns(&local)
-        };
+        let b = j_c.select_columns(&local);
         let p = DMatrix::from_fn(cols.len(), cols.len(), |i, j| h_inv[(cols[i], cols[j])]);
         let r_c = leverage_corrected(&b, &p, &own.slice.residuals);
         let g: DVector<f64> = b.tr_mul(&r_c);
@@ -398,15 +374,6 @@ pub fn sandwich_of(free: &[Param], captures: &[OwnSlice], h_inv: &DMatrix<f64>) 
     }
     let cov = h_inv * meat * h_inv;
     covariance::embed(free, &cov, 1.0)
-}
-
-/// One capture's weighted residuals and Jacobian over its own free parameters, and where
-/// each of its columns is among the free parameters.
-pub struct OwnSlice {
-    /// The residuals and the Jacobian's columns.
-    pub slice: CaptureSlice,
-    /// Per column of the slice, its index among the free parameters.
-    pub columns: Vec<usize>,
 }
 
 /// `(I − H_cc)^{-1/2} r_c` with the leverage `H_cc = B P Bᵀ` of one capture (`B` its

@@ -29,7 +29,7 @@ use std::time::Instant;
 pub use robust::OUTLIER_SIGMAS;
 
 use super::backend::Fit;
-use super::jacobian::Linearisation;
+use super::linearisation::Linearisation;
 use super::{Backend, FamilyTest, Problem, Solution, SolveError, misfit, noise};
 use crate::model::{PARAMETER_COUNT, Param};
 
