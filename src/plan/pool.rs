@@ -170,7 +170,7 @@ impl Pool {
         options: &PlanOptions,
         count: usize,
     ) -> Result<Design, PlanError> {
-        self.design_beside(model, options, count, || ()).0
+        self.select(model, options, count)?.arrange(model, options)
     }
 
     /// [`Pool::design`], with `beside` run on a second core while the captures are put in
