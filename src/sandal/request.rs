@@ -34,10 +34,7 @@ pub struct Made {
 /// `config` input); a board that cannot be a sandal is placed on its key's line of the
 /// file.
 pub fn run(request: &SandalRequest) -> Result<Made, SandalError> {
-    let board = match &request.config {
-        Some(path) => crate::dataset::read_model(path)?.board,
-        None => Board::turned(),
-    };
+    let board = crate::dataset::read_model_or_unconfigured(request.config.as_deref())?.board;
     let plate = PlateParams::default();
     let in_file = |e: SandalError| match &request.config {
         Some(config) => e.in_file(config),
