@@ -36,6 +36,7 @@ pub mod body_audit;
 pub mod collision;
 pub mod coverage;
 pub mod design;
+pub mod feasibility;
 pub mod feasible;
 pub mod information;
 pub mod order;

@@ -2,7 +2,7 @@
 //! facing the camera, for every offset within the bounds of [`Feasibility`] — the check
 //! [`super::feasible`] applies to every planned capture.
 
-use super::feasible::Feasibility;
+use super::feasibility::Feasibility;
 use crate::model::{
     CameraId, Joint, JointAngles, Model, PARAMETER_COUNT, Param, Pose, Side, StanceChains,
 };
