@@ -11,7 +11,7 @@
 //! part whose grown solid holds the camera is taken as it is. The sandal that carries the
 //! pattern is left out (the pattern is its top face).
 
-use super::shapes::{norm, point_segment_distance, sub};
+use super::shapes::{dot, norm, point_segment_distance, sub};
 use super::{BodyModel, Kind, Part};
 use crate::model::{CameraId, JointAngles, Model, PARAMETER_COUNT, Side, StanceChains, Vertex};
 
@@ -105,8 +105,41 @@ pub struct Sightlines {
     vertices: Vec<Vertex>,
     posed: super::PosedBody,
     /// The parts that may stand in the way (indices into `posed.parts`), each with its
-    /// growth.
-    near: Vec<(usize, f64)>,
+    /// growth and the cone from the eye that holds it grown ([`Cone`]).
+    near: Vec<(usize, f64, Option<Cone>)>,
+}
+
+/// The cone from the eye that holds a part's bounding sphere: a line of sight outside it
+/// cannot meet the part (a test of one product instead of the part's distance).
+#[derive(Debug, Clone, Copy)]
+struct Cone {
+    /// The unit direction from the eye to the sphere's centre.
+    axis: [f64; 3],
+    /// The cosine of the cone's half-angle, lowered a little against rounding.
+    cos_half: f64,
+}
+
+impl Cone {
+    /// The cone of the ball `(centre, radius)` seen from `eye`; `None` when the eye is in
+    /// it or next to it (every direction then may meet it).
+    fn of(eye: [f64; 3], centre: [f64; 3], radius: f64) -> Option<Cone> {
+        let to = sub(centre, eye);
+        let d = norm(to);
+        if d <= 1.01 * radius {
+            return None;
+        }
+        let sin_half = radius / d;
+        Some(Cone {
+            axis: to.map(|x| x / d),
+            cos_half: (1.0 - sin_half * sin_half).sqrt() - 1e-9,
+        })
+    }
+
+    /// Whether the unit direction `dir` lies outside the cone: every point along it is
+    /// farther from the sphere's centre than its radius.
+    fn misses(&self, dir: [f64; 3]) -> bool {
+        dot(self.axis, dir) < self.cos_half
+    }
 }
 
 impl Sightlines {
@@ -159,17 +192,17 @@ impl Sightlines {
         // sphere reaches the lines of sight to the lattice's corners' hull (the lines to
         // any lattice point lie in the cone over the lattice's bounding sphere).
         let (centre, reach) = bounding_sphere(&lattice);
-        let near: Vec<(usize, f64)> = posed
+        let near: Vec<(usize, f64, Option<Cone>)> = posed
             .parts
             .iter()
             .enumerate()
             .filter(|(_, p)| {
                 p.kind != Kind::Head && !(p.kind == Kind::Sandal && p.side == Some(side))
             })
-            .map(|(k, p)| (k, growth.of(p, side, eye)))
-            .filter(|(k, g)| {
-                let (c, r) = posed.parts[*k].shape.bounds();
-                in_cone(eye, centre, reach, c, r + g)
+            .filter_map(|(k, p)| {
+                let g = growth.of(p, side, eye);
+                let (c, r) = p.shape.bounds();
+                in_cone(eye, centre, reach, c, r + g).then(|| (k, g, Cone::of(eye, c, r + g)))
             })
             .collect();
         Sightlines {
@@ -223,9 +256,13 @@ impl Sightlines {
 
     /// The first part in the way of the line of sight to lattice point `k`.
     fn blocked(&self, k: usize) -> Option<&Part> {
+        let to = sub(self.lattice[k], self.eye);
+        let length = norm(to);
+        let dir = to.map(|x| x / length);
         self.near
             .iter()
-            .map(|&(i, g)| (&self.posed.parts[i], g))
+            .filter(|(_, _, cone)| length == 0.0 || !cone.is_some_and(|c| c.misses(dir)))
+            .map(|&(i, g, _)| (&self.posed.parts[i], g))
             .find(|(p, g)| p.shape.blocks(self.eye, self.lattice[k], *g))
             .map(|(p, _)| p)
     }
@@ -298,8 +335,8 @@ mod tests {
         (-1..=1).flat_map(move |i| (-1..=1).map(move |j| [x + i as f64 * h, y + j as f64 * h, 0.0]))
     }
 
-    /// The shared lattice and the cone around it find, vertex by vertex, what testing each
-    /// window's nine lines of sight against every part finds.
+    /// The shared lattice, the cone around it and the cones around the parts find, vertex
+    /// by vertex, what testing each window's nine lines of sight against every part finds.
     #[test]
     fn the_lattice_finds_what_each_window_tested_alone_finds() {
         let model = Model::default();
@@ -349,5 +386,39 @@ mod tests {
             some_hidden > 10 && some_clear > 10,
             "{some_hidden} {some_clear}"
         );
+    }
+
+    /// A direction a part's cone misses passes the part's bounding ball at every distance
+    /// from the eye; and directions that pass near it are not missed.
+    #[test]
+    fn a_cone_misses_only_directions_that_pass_the_ball() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let (mut missed, mut kept) = (0, 0);
+        for _ in 0..20_000 {
+            let eye = std::array::from_fn(|_| rng.random_range(-100.0..100.0));
+            let centre = std::array::from_fn(|_| rng.random_range(-300.0..300.0));
+            let radius = rng.random_range(1.0..80.0);
+            let Some(cone) = Cone::of(eye, centre, radius) else {
+                continue;
+            };
+            // Directions towards points near the ball, so that both outcomes occur.
+            let target: [f64; 3] =
+                std::array::from_fn(|i| centre[i] + rng.random_range(-3.0..3.0) * radius);
+            let to = sub(target, eye);
+            let dir = to.map(|x| x / norm(to));
+            let far: [f64; 3] = std::array::from_fn(|i| eye[i] + 2000.0 * dir[i]);
+            let nearest = point_segment_distance(centre, eye, far);
+            if cone.misses(dir) {
+                missed += 1;
+                assert!(
+                    nearest > radius,
+                    "missed but {nearest} from a ball of {radius}"
+                );
+            } else {
+                kept += 1;
+            }
+        }
+        assert!(missed > 1000 && kept > 1000, "{missed} {kept}");
     }
 }
