@@ -32,6 +32,9 @@ struct Lazy<'a> {
     timing: &'a Timing,
     /// Row-major, `NaN` where not found yet.
     known: Vec<f64>,
+    /// The lower bounds ([`Moves::bound`]) as computed, `NaN` where not yet: the search
+    /// asks for each many times.
+    bounds: Vec<f64>,
 }
 
 impl Lazy<'_> {
@@ -41,6 +44,22 @@ impl Lazy<'_> {
         } else {
             &self.captures[i]
         }
+    }
+
+    /// The straight move's time from node `i` to node `j`, less a nanosecond.
+    fn straight(&self, i: usize, j: usize) -> f64 {
+        let n = self.captures.len();
+        let (from, t) = (self.node(i), self.timing);
+        let straight = if i == j {
+            return 0.0;
+        } else if j == n {
+            t.motion(from, self.rest)
+        } else if t.leg_settle >= t.head_settle {
+            t.step(from, self.node(j))
+        } else {
+            t.motion(from, self.node(j)) + t.leg_settle.min(t.head_settle) + t.capture
+        };
+        straight - 1e-9
     }
 
     /// The time of the move, from its way.
@@ -81,17 +100,10 @@ impl Moves for Lazy<'_> {
         if !self.known[at].is_nan() {
             return self.known[at];
         }
-        let (from, t) = (self.node(i), self.timing);
-        let straight = if i == j {
-            return 0.0;
-        } else if j == n {
-            t.motion(from, self.rest)
-        } else if t.leg_settle >= t.head_settle {
-            t.step(from, self.node(j))
-        } else {
-            t.motion(from, self.node(j)) + t.leg_settle.min(t.head_settle) + t.capture
-        };
-        straight - 1e-9
+        if self.bounds[at].is_nan() {
+            self.bounds[at] = self.straight(i, j);
+        }
+        self.bounds[at]
     }
 }
 
@@ -122,6 +134,7 @@ pub fn order(
         captures,
         timing,
         known: vec![f64::NAN; (n + 1) * (n + 1)],
+        bounds: vec![f64::NAN; (n + 1) * (n + 1)],
     };
     tour(&mut moves, n)
 }
