@@ -5,8 +5,8 @@
 //! foot and toe of the board's own leg miss it (the solids are already 5 mm larger than
 //! the real foot: docs/BODY.md). Per sandal: the smallest such clearance over the plan, the
 //! capture and vertex where it falls, how many of the plan's vertex windows the foot or toe
-//! covers and how many it misses by less than 10 mm. naocalib's sandal (`Board::turned`) against the paper's board, each with
-//! its own plan, at zero offsets.
+//! covers and how many it misses by less than 10 mm. naocalib's sandal (`Board::turned`)
+//! against the paper's board, each with its own plan, at zero offsets.
 //!
 //!     cargo run --release --example sandal_clearance
 
