@@ -48,11 +48,11 @@ impl Lazy<'_> {
 
     /// The straight move's time from node `i` to node `j`, less a nanosecond.
     fn straight(&self, i: usize, j: usize) -> f64 {
-        let n = self.captures.len();
-        let (from, t) = (self.node(i), self.timing);
-        let straight = if i == j {
+        if i == j {
             return 0.0;
-        } else if j == n {
+        }
+        let (from, t) = (self.node(i), self.timing);
+        let straight = if j == self.captures.len() {
             t.motion(from, self.rest)
         } else if t.leg_settle >= t.head_settle {
             t.step(from, self.node(j))
