@@ -1,7 +1,8 @@
 //! However capture ends, the robot ends limp: capture killed by SIGKILL in every phase of a
 //! run (the stiffness ramp-up, the arms on their way beyond the head, a move, a stance
-//! settled, a picture under way, the ramp-down) leaves the simulated robot to the rest guard, which takes it to rest and
-//! ramps its stiffness to 0 within 2 s; a picture whose header claims an enormous size is
+//! settled, a picture under way, the ramp-down) or aborted in a move or a picture leaves the
+//! simulated robot to the rest guard, which takes it to rest and ramps its stiffness to 0
+//! within 2 s; a picture whose header claims an enormous size is
 //! refused unread (no abort), and the run stops at rest.
 
 use std::process::{Child, Output, Stdio};
@@ -27,6 +28,15 @@ enum Phase {
     Settled,
     Picture,
     RampDown,
+}
+
+/// How capture is ended from outside.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Death {
+    /// SIGKILL, as the kernel's out-of-memory killer sends it.
+    Kill,
+    /// SIGABRT, what `abort()` raises.
+    Abort,
 }
 
 /// What the test sees of the run from outside: the robot's state file, the camera's log
@@ -103,9 +113,9 @@ fn in_phase(
 
 /// Capture of a one-stance plan against a robot at twice real time that serves two
 /// clients (capture, then the guard), its camera logging each picture it begins and taking
-/// 0.6 s over it; capture killed with SIGKILL as soon as the run is in `phase`. Capture's
+/// 0.6 s over it; capture ended by `death` as soon as the run is in `phase`. Capture's
 /// output and the robot's record.
-fn kill_in(phase: Phase) -> (Output, Vec<RecordRow>, PlannedCapture) {
+fn kill_in(phase: Phase, death: Death) -> (Output, Vec<RecordRow>, PlannedCapture) {
     let b = Bench::new();
     let plan = b.path("plan.csv");
     let row = plan_file(&plan, 1, 7).remove(0);
@@ -146,7 +156,14 @@ fn kill_in(phase: Phase) -> (Output, Vec<RecordRow>, PlannedCapture) {
         );
         std::thread::sleep(Duration::from_millis(1));
     }
-    capture.kill().unwrap();
+    match death {
+        Death::Kill => capture.kill().unwrap(),
+        // SAFETY: a signal to the child this test started and has not yet reaped.
+        Death::Abort => assert_eq!(
+            unsafe { libc::kill(capture.id() as libc::pid_t, libc::SIGABRT) },
+            0
+        ),
+    }
     let out = capture.wait_with_output().unwrap();
     finish_robot(robot);
     (out, read_record(&b.path("a.csv")).unwrap(), row)
@@ -295,11 +312,35 @@ fn capture_killed_in_any_phase_leaves_the_robot_at_rest_and_limp_within_2_s() {
         Phase::Picture,
         Phase::RampDown,
     ] {
-        let (out, record, _) = kill_in(phase);
+        let (out, record, _) = kill_in(phase, Death::Kill);
         use std::os::unix::process::ExitStatusExt as _;
         assert_eq!(out.status.signal(), Some(libc::SIGKILL), "{phase:?}");
         check_guard(phase, &record);
         let err = stderr(&out);
+        assert!(
+            err.contains("the rest guard took it over"),
+            "{phase:?}: {err}"
+        );
+    }
+}
+
+/// An abort (SIGABRT: what `abort()` raises, and how a Rust process ends when an
+/// allocation fails) while a leg moves and while a picture is under way: the guard takes
+/// the robot to rest and ramps its stiffness to 0 within 2 s, as after SIGKILL (how the
+/// kernel's out-of-memory killer ends a process).
+#[test]
+fn capture_aborted_in_a_move_or_a_picture_leaves_the_robot_at_rest_and_limp_within_2_s() {
+    use std::os::unix::process::ExitStatusExt as _;
+    for phase in [Phase::Moving, Phase::Picture] {
+        let (out, record, _) = kill_in(phase, Death::Abort);
+        let err = stderr(&out);
+        assert_eq!(
+            out.status.signal(),
+            Some(libc::SIGABRT),
+            "{phase:?}: {:?} {err}",
+            out.status
+        );
+        check_guard(phase, &record);
         assert!(
             err.contains("the rest guard took it over"),
             "{phase:?}: {err}"
